@@ -1,0 +1,64 @@
+"""Effects: named, composable physical add-ons to any friction model (models.md 1.8).
+
+``model.with_effects("pressure-dependence", "dwell-time")`` adds effects by
+name; :func:`register_effect` adds a user's own (an :class:`Effect` subclass);
+:func:`load_effects_module` imports a user's ``.py`` file that registers
+effects (the CLI's ``--effects path/to/module.py``).
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import sys
+from pathlib import Path
+from typing import Any
+
+from fcomp.effects.base import Effect, scale_levels
+from fcomp.effects.catalogue import CATALOGUE
+from fcomp.errors import FcompError
+from fcomp.registry import Registry
+
+EFFECTS: Registry[type[Effect]] = Registry("effect")
+for _cls in CATALOGUE:
+    EFFECTS.register(_cls.name, _cls)
+
+
+def register_effect(cls: type[Effect], *, replace: bool = False) -> type[Effect]:
+    """Register a user effect class under ``cls.name`` (usable as a decorator)."""
+    if not (isinstance(cls, type) and issubclass(cls, Effect)):
+        raise ValueError(f"{cls!r} is not an Effect subclass")
+    if not cls.name:
+        raise ValueError(f"effect class {cls.__name__} has no name")
+    for attr in ("Params",):
+        if not hasattr(cls, attr):
+            raise ValueError(f"effect {cls.name!r} must define {attr}")
+    EFFECTS.register(cls.name, cls, replace=replace)
+    return cls
+
+
+def make_effect(name: str, params: Any = None, **config: Any) -> Effect:
+    """An effect instance by name, with parameters (defaults: a no-op)."""
+    return EFFECTS.get(name)(params, **config)
+
+
+def load_effects_module(path: str | Path) -> list[str]:
+    """Import a user module (a ``.py`` file) that registers effects; return the new names."""
+    p = Path(path)
+    if not p.is_file():
+        raise FcompError(f"{p}: effects module not found")
+    before = set(EFFECTS.names())
+    spec = importlib.util.spec_from_file_location(f"fcomp_user_effects_{p.stem}", p)
+    if spec is None or spec.loader is None:
+        raise FcompError(f"{p}: cannot import as a Python module")
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module
+    try:
+        spec.loader.exec_module(module)
+    except Exception as exc:  # a user's module: report in one line
+        raise FcompError(f"{p}: importing the effects module failed: {exc}") from exc
+    return sorted(set(EFFECTS.names()) - before)
+
+
+__all__ = [
+    "EFFECTS", "Effect", "load_effects_module", "make_effect", "register_effect", "scale_levels",
+]

@@ -1,0 +1,122 @@
+"""The effect base class: a named, switchable physical effect added to any model.
+
+Implementer's contract
+======================
+An effect is a subclass of :class:`Effect` with
+
+``name``
+    its public name (the catalogue of models.md 1.8, or the user's own);
+``Params``
+    a frozen :class:`~fcomp.parameters.ParamSet` whose *defaults make the
+    effect a no-op* (the model's force is unchanged);
+``states`` / ``initial``
+    names and rest values of any states it adds (e.g. the dwell state);
+``signature``
+    one line: the residual signature it explains (used by diagnosis);
+``experiment``
+    one line: the experiment that isolates it (used for confounded ties);
+
+and overrides whichever hooks it needs, each written once against the
+backend ``be`` (so it works numerically and symbolically):
+
+:meth:`modify_levels` ``(be, L, w, sig, P) -> L``
+    scale or shift the force levels ``L = {"Fc": .., "Fs": ..}``;
+:meth:`rhs` ``(be, w, sig, P) -> list``
+    derivatives of its own states ``w``;
+:meth:`extra_force` ``(be, sig, P) -> (F0, c_a)``
+    an additive force ``F0 + c_a*a``;
+:meth:`steady_state` ``(be, sig, P) -> list``
+    its states at constant velocity.
+
+*Structural* effects (terms of the LuGre family itself: ``stribeck``,
+``viscous``, ``viscous-lead``, ``presliding``, ``frictional-lag``,
+``nonlocal-memory``) override :meth:`attach` to return the richer model
+instead of riding along.
+
+The class docstring of each effect is its physical explanation: what it is
+and what it leaves in a residual when a model lacks it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import TYPE_CHECKING, Any, ClassVar
+
+from fcomp.backend import Backend
+from fcomp.parameters import ParamSet, ParamValues
+
+if TYPE_CHECKING:
+    from fcomp.models.base import FrictionModel, Signals
+
+
+class Effect:
+    """Base class of effects (see the module docstring for the contract).
+
+    Parameters
+    ----------
+    params
+        Effect parameters (instance of ``Params`` or mapping of flat names);
+        defaults (a no-op) where omitted.
+    """
+
+    name: ClassVar[str] = ""
+    Params: ClassVar[type[ParamSet]]
+    states: ClassVar[tuple[str, ...]] = ()
+    initial: ClassVar[tuple[float, ...]] = ()
+    signature: ClassVar[str] = ""
+    experiment: ClassVar[str] = ""
+    #: signals the effect reads besides v (diagnosis checks the data has them)
+    needs: ClassVar[tuple[str, ...]] = ()
+
+    def __init__(self, params: ParamSet | Mapping[str, Any] | None = None, **config: Any) -> None:
+        if params is None:
+            params = self.Params()
+        elif isinstance(params, Mapping):
+            params = self.Params.from_flat(params)
+        elif not isinstance(params, self.Params):
+            raise ValueError(f"effect {self.name}: expected {self.Params.__name__}")
+        self.params: ParamSet = params
+        self.config: dict[str, Any] = dict(config)
+
+    def with_params(self, **flat: float) -> Effect:
+        new = object.__new__(type(self))
+        new.__dict__.update(self.__dict__)
+        new.params = self.Params.from_flat(flat, base=self.params)
+        return new
+
+    # ------------------------------------------------------------------ hooks
+    def attach(self, model: FrictionModel) -> FrictionModel:
+        """Return ``model`` with this effect (add-on effects ride along)."""
+        if any(e.name == self.name for e in model.effects):
+            raise ValueError(f"model {model.describe()!r} already has effect {self.name!r}")
+        return model._rebuild(model.params, (*model.effects, self))
+
+    def applies_to(self, model: FrictionModel) -> bool:
+        """Whether adding this effect to ``model`` changes its structure."""
+        return all(e.name != self.name for e in model.effects)
+
+    def modify_levels(
+        self, be: Backend, L: dict, w: list[Any], sig: Signals, P: ParamValues
+    ) -> dict:
+        return L
+
+    def rhs(self, be: Backend, w: list[Any], sig: Signals, P: ParamValues) -> list:
+        return []
+
+    def extra_force(self, be: Backend, sig: Signals, P: ParamValues) -> tuple[Any, Any]:
+        return 0.0, 0.0
+
+    def steady_state(self, be: Backend, sig: Signals, P: ParamValues) -> list:
+        return list(self.initial)
+
+    def __repr__(self) -> str:
+        return f"<effect {self.name} {self.params}>"
+
+
+def scale_levels(L: dict, factor: Any, names: tuple[str, ...] = ("Fc", "Fs")) -> dict:
+    """``L`` with the named levels multiplied by ``factor``."""
+    out = dict(L)
+    for n in names:
+        if n in out:
+            out[n] = out[n] * factor
+    return out

@@ -1,0 +1,382 @@
+"""The effect catalogue of models.md section 1.8.
+
+Each class docstring is the effect's physical explanation: what it is and
+what it leaves in the residual of a model that lacks it. Defaults are
+no-ops: adding an effect with default parameters does not change the force.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING, Any, ClassVar
+
+from fcomp.backend import Backend
+from fcomp.effects.base import Effect, scale_levels
+from fcomp.parameters import ParamValues, make_params_class, spec
+
+if TYPE_CHECKING:
+    from fcomp.models.base import FrictionModel, Signals
+
+INF = math.inf
+
+
+def _family(model: FrictionModel, effect: str):  # -> LuGreFamily
+    from fcomp.models.lugre_family import LuGreFamily
+
+    if not isinstance(model, LuGreFamily):
+        raise ValueError(
+            f"effect {effect!r} is a term of the LuGre family and does not apply to "
+            f"model {model.describe()!r}"
+        )
+    return model
+
+
+class StructuralEffect(Effect):
+    """An effect that is a term of the LuGre family: attaching it changes the model class."""
+
+    adds: ClassVar[frozenset[str]] = frozenset()
+    requires: ClassVar[frozenset[str]] = frozenset()
+
+    def applies_to(self, model: FrictionModel) -> bool:
+        from fcomp.models.lugre_family import LuGreFamily
+
+        return isinstance(model, LuGreFamily) and not self.adds <= model.features
+
+    def new_values(self, model: FrictionModel) -> dict[str, float]:
+        """Parameter values of the added terms (from this effect's parameters)."""
+        return dict(self.params.flat())
+
+    def attach(self, model: FrictionModel) -> FrictionModel:
+        fam = _family(model, self.name)
+        if self.adds <= fam.features:
+            raise ValueError(f"model {fam.describe()!r} already has effect {self.name!r}")
+        missing = self.requires - fam.features
+        if missing:
+            raise ValueError(
+                f"effect {self.name!r} needs {', '.join(sorted(missing))} in the model "
+                f"{fam.describe()!r} first"
+            )
+        new = fam.with_features(set(self.adds), self.new_values(fam))
+        new.lineage = (*(fam.lineage or (fam.name,)), self.name)
+        return new
+
+
+# ----------------------------------------------------------------- structural
+class Viscous(StructuralEffect):
+    """Viscous friction ``sigma2*v``: shear of the lubricant film between seal and bore.
+
+    The force grows linearly with sliding speed. A model without it leaves a
+    residual that is a straight line through the origin against ``v``
+    (odd in ``v``, growing with speed, unrelated to position or pressure).
+    """
+
+    name = "viscous"
+    adds = frozenset({"viscous"})
+    Params = make_params_class("ViscousParams", [
+        spec("sigma2", "Ns/m", 0.0, 0.0, INF, "viscous coefficient")], owner="effect viscous")
+    signature = "residual linear and odd in v, largest at high speed"
+    experiment = "constant-speed runs at several speeds in both directions"
+
+    def new_values(self, model: FrictionModel) -> dict[str, float]:
+        return {model.viscous_name: self.params.sigma2}  # type: ignore[attr-defined]
+
+
+class Stribeck(StructuralEffect):
+    """Stribeck effect: friction falls from the break-away level ``Fs`` to ``Fc`` with speed.
+
+    At low speed the seal rides on boundary contacts; as speed grows a
+    hydrodynamic film carries part of the load and friction drops over a
+    characteristic speed ``vs``. A model without it under-predicts the force
+    at low speed and at break-away: the residual is a hump at small ``|v|``
+    decaying over a few ``vs``, with peaks right after each start.
+    """
+
+    name = "stribeck"
+    adds = frozenset({"stribeck"})
+    Params = make_params_class("StribeckEffectParams", [
+        spec("Fs_excess", "N", 0.0, 0.0, INF, "Fs - Fc, break-away excess over Coulomb"),
+        spec("vs", "m/s", 0.01, 0.0, INF, "Stribeck velocity", lower_open=True),
+        spec("n", "-", 2.0, 0.0, 10.0, "Stribeck exponent", lower_open=True),
+    ], owner="effect stribeck")
+    signature = "residual hump at low |v| decaying with speed; peaks after starts"
+    experiment = "slow constant-speed runs (0.1-10 vs) in both directions"
+
+    def new_values(self, model: FrictionModel) -> dict[str, float]:
+        flat = model.params.flat()
+        exc = self.params.Fs_excess  # type: ignore[attr-defined]
+        out: dict[str, float] = {"vs": self.params.vs, "n": self.params.n}  # type: ignore[attr-defined]
+        if "Fc" in flat:
+            out["Fs"] = flat["Fc"] + exc
+        else:
+            out["Fs_pos"] = flat["Fc_pos"] + exc
+            out["Fs_neg"] = flat["Fc_neg"] + exc
+        return out
+
+
+class ViscousLead(StructuralEffect):
+    """Lead of fluid friction, ``sigma2*(v + T*dv/dt)`` (NMLGM, seed 000 Eq. 8).
+
+    The film does not respond instantly: in the fluid-lubrication regime the
+    viscous force leads the velocity, so the force-velocity plot shows a
+    hysteresis loop at high speed whose width grows with acceleration. A
+    model without it leaves a residual proportional to the acceleration ``a``
+    during fast sliding.
+    """
+
+    name = "viscous-lead"
+    adds = frozenset({"lead"})
+    requires = frozenset({"viscous"})
+    Params = make_params_class("ViscousLeadParams", [
+        spec("T", "s", 0.0, 0.0, INF, "time constant of the fluid-friction lead",
+             directional=False)], owner="effect viscous-lead")
+    signature = "residual proportional to acceleration while sliding fast"
+    experiment = "sinusoidal velocity at two or more frequencies, same amplitude"
+
+
+class FrictionalLag(StructuralEffect):
+    """Frictional lag: the lubricant-film state ``h`` (modified LuGre, models.md 1.4).
+
+    The film thickens while sliding and drains while decelerating or resting,
+    with different time constants, so the Stribeck curve lags the velocity:
+    friction on the accelerating branch is higher than on the decelerating
+    one, and break-away after a dwell is higher than after a short stop. A
+    model without it leaves a residual that is a loop against ``v`` (sign
+    depending on whether ``|v|`` rises or falls) and that grows with time
+    since the last reversal. Defaults ``vb = inf`` make ``h`` identically zero.
+    """
+
+    name = "frictional-lag"
+    adds = frozenset({"film", "film-lag"})
+    requires = frozenset({"stribeck"})
+    Params = make_params_class("FrictionalLagParams", [
+        spec("vb", "m/s", INF, 0.0, INF, "velocity up to which the film thickens",
+             lower_open=True),
+        spec("tau_hp", "s", 0.02, 0.0, INF, "film time constant, acceleration",
+             lower_open=True, directional=False),
+        spec("tau_hn", "s", 0.12, 0.0, INF, "film time constant, deceleration",
+             lower_open=True, directional=False),
+        spec("tau_h0", "s", 10.0, 0.0, INF, "film time constant, dwell",
+             lower_open=True, directional=False),
+    ], owner="effect frictional-lag")
+    signature = "residual loop against v: rising and falling |v| branches differ"
+    experiment = "velocity sweeps up and down at several rates; dwell before restart"
+
+    def applies_to(self, model: FrictionModel) -> bool:
+        from fcomp.models.lugre_family import LuGreFamily
+
+        return isinstance(model, LuGreFamily) and "film-lag" not in model.features
+
+    def attach(self, model: FrictionModel) -> FrictionModel:
+        fam = _family(model, self.name)
+        if "film-lag" in fam.features:
+            raise ValueError(f"model {fam.describe()!r} already has effect {self.name!r}")
+        if "stribeck" not in fam.features:
+            raise ValueError(
+                f"effect 'frictional-lag' needs the Stribeck term: add 'stribeck' to "
+                f"{fam.describe()!r} first"
+            )
+        values = dict(self.params.flat())
+        if "film" in fam.features:  # static film already present: keep its vb
+            values = {k: v for k, v in values.items() if not k.startswith("vb")}
+        new = fam.with_features({"film", "film-lag"}, values)
+        new.lineage = (*(fam.lineage or (fam.name,)), self.name)
+        return new
+
+
+class Presliding(StructuralEffect):
+    """Pre-sliding: bristle compliance ``sigma0`` (the step from a static map to LuGre).
+
+    Before gross sliding the seal deforms elastically: the force builds up
+    over micrometres of displacement instead of jumping at ``v = 0``. A
+    static model leaves residual spikes at every velocity reversal and a
+    force-displacement loop (instead of a step) at small amplitude; the
+    residual follows displacement since reversal, not velocity. The default
+    ``sigma0 = inf`` is the rigid limit (the static map itself: a no-op).
+    """
+
+    name = "presliding"
+    adds = frozenset({"presliding", "damping"})
+    Params = make_params_class("PreslidingParams", [
+        spec("sigma0", "N/m", INF, 0.0, INF, "bristle stiffness (inf: rigid, no-op)",
+             lower_open=True, directional=False),
+        spec("sigma1", "Ns/m", 0.0, 0.0, INF, "bristle damping", directional=False),
+    ], owner="effect presliding")
+    signature = "residual spikes at reversals that follow displacement since reversal"
+    experiment = "small-amplitude displacement cycles (well below break-away)"
+
+    def attach(self, model: FrictionModel) -> FrictionModel:
+        if math.isinf(self.params.sigma0):  # type: ignore[attr-defined]
+            fam = _family(model, self.name)
+            if "presliding" in fam.features:
+                raise ValueError(f"model {fam.describe()!r} already has effect {self.name!r}")
+            return Effect.attach(self, model)  # rigid bristles: the static map, unchanged
+        return super().attach(model)
+
+
+# --------------------------------------------------------------------- add-ons
+class PressureDependence(Effect):
+    """Pressure dependence: ``(Fc, Fs) -> (Fc, Fs)*(1 + kp*(p1 + p2 - p_ref))`` (gauge).
+
+    Chamber pressure energises lip seals: the normal force on the seal, and
+    so the friction, grows with pressure (seed 000 Fig. 12, seed 001 Eq. 1).
+    A model without it leaves a residual whose magnitude follows ``p1 + p2``:
+    runs at high pressure sit above the fit, runs at low pressure below, with
+    the same sign as the friction. ``p_ref`` is held fixed (not fitted).
+    """
+
+    name = "pressure-dependence"
+    Params = make_params_class("PressureDependenceParams", [
+        spec("kp", "1/Pa", 0.0, -1e-3, 1e-3, "relative level change per pascal"),
+        spec("p_ref", "Pa", 0.0, -INF, INF, "reference gauge pressure sum (fixed)",
+             directional=False),
+    ], owner="effect pressure-dependence")
+    fixed: ClassVar[tuple[str, ...]] = ("p_ref",)
+    needs = ("p1", "p2")
+    signature = "residual magnitude correlates with p1 + p2, sign follows friction"
+    experiment = "identical motions at two or more chamber pressure levels"
+
+    def modify_levels(self, be: Backend, L: dict, w: list[Any], sig: Signals,
+                      P: ParamValues) -> dict:
+        return scale_levels(L, 1.0 + P("kp", sig.s) * (sig.p1 + sig.p2 - P("p_ref")))
+
+
+class DirectionAsymmetry(Effect):
+    """Direction asymmetry: a separate friction level for ``v < 0``.
+
+    Rod and piston seals are not symmetric (lip direction, rod seal only on
+    one side, seed 002 Fig. 4): extending and retracting friction differ. A
+    symmetric model leaves a residual that is a constant of one sign while
+    extending and of the same sign (not the friction's) while retracting: an
+    even function of ``v``, a step at every reversal.
+    """
+
+    name = "direction-asymmetry"
+    Params = make_params_class("DirectionAsymmetryParams", [
+        spec("r_neg", "-", 1.0, 0.0, 10.0, "ratio of the v < 0 levels to the v > 0 levels",
+             lower_open=True, directional=False),
+    ], owner="effect direction-asymmetry")
+    signature = "residual even in v: same-sign offset in both directions, step at reversals"
+    experiment = "the same speed profile extending and retracting"
+
+    def modify_levels(self, be: Backend, L: dict, w: list[Any], sig: Signals,
+                      P: ParamValues) -> dict:
+        return scale_levels(L, be.if_else(sig.s > 0, 1.0, P("r_neg")))
+
+
+class PositionDependence(Effect):
+    """Position dependence: levels scaled by a smooth function of the stroke position ``x``.
+
+    Bore tolerance, wear, rod bending and seal squeeze vary along the stroke,
+    so friction does too (seed 001 measured break-away at 12 positions).
+    The scale is ``1 + kx1*P1(xi) + kx2*P2(xi) + kx3*P3(xi)`` with Legendre
+    polynomials of ``xi = 2*(x - x_min)/(x_max - x_min) - 1`` (``x_min``,
+    ``x_max`` are configuration, default 0..0.3 m). A model without it leaves
+    a residual that is a smooth function of ``x``, repeated on every stroke.
+    """
+
+    name = "position-dependence"
+    Params = make_params_class("PositionDependenceParams", [
+        spec("kx1", "-", 0.0, -1.0, 1.0, "linear Legendre coefficient", directional=False),
+        spec("kx2", "-", 0.0, -1.0, 1.0, "quadratic Legendre coefficient", directional=False),
+        spec("kx3", "-", 0.0, -1.0, 1.0, "cubic Legendre coefficient", directional=False),
+    ], owner="effect position-dependence")
+    needs = ("x",)
+    signature = "residual a smooth function of x, repeated stroke after stroke"
+    experiment = "the same slow stroke repeated, break-away measured along the stroke"
+
+    def modify_levels(self, be: Backend, L: dict, w: list[Any], sig: Signals,
+                      P: ParamValues) -> dict:
+        x_min = float(self.config.get("x_min", 0.0))
+        x_max = float(self.config.get("x_max", 0.3))
+        xi = 2.0 * (sig.x - x_min) / (x_max - x_min) - 1.0
+        p2 = 0.5 * (3.0 * xi * xi - 1.0)
+        p3 = 0.5 * (5.0 * xi * xi * xi - 3.0 * xi)
+        return scale_levels(L, 1.0 + P("kx1") * xi + P("kx2") * p2 + P("kx3") * p3)
+
+
+class DwellTime(Effect):
+    """Dwell-time dependence: static friction rising with time at rest.
+
+    At rest, seal asperities creep and the rubber settles into the surface
+    texture; the longer the stop the higher the next break-away force. The
+    contact "age" ``w`` in [0, 1] follows the ageing law
+    ``dw/dt = (1 - w)/tau_dwell - w*|v|/L_dwell`` (Dieterich-Ruina form):
+    it grows towards 1 at rest and is erased over a sliding distance
+    ``L_dwell``; ``Fs -> Fs + dFs*w`` (``Fc`` for models without ``Fs``).
+    A model without it leaves positive spikes at break-away whose height
+    grows with the dwell time before the start.
+    """
+
+    name = "dwell-time"
+    states = ("w",)
+    initial = (0.0,)
+    Params = make_params_class("DwellTimeParams", [
+        spec("dFs", "N", 0.0, 0.0, INF, "break-away increase after a long dwell"),
+        spec("tau_dwell", "s", 1.0, 0.0, INF, "ageing time constant", lower_open=True,
+             directional=False),
+        spec("L_dwell", "m", 1e-4, 0.0, INF, "sliding distance that erases the age",
+             lower_open=True, directional=False),
+    ], owner="effect dwell-time")
+    signature = "break-away spikes growing with the dwell time before the start"
+    experiment = "starts after dwells of different lengths (0.1 s to 10 s)"
+
+    def modify_levels(self, be: Backend, L: dict, w: list[Any], sig: Signals,
+                      P: ParamValues) -> dict:
+        out = dict(L)
+        key = "Fs" if "Fs" in out else "Fc"
+        out[key] = out[key] + P("dFs", sig.s) * w[0]
+        return out
+
+    def rhs(self, be: Backend, w: list[Any], sig: Signals, P: ParamValues) -> list:
+        return [(1.0 - w[0]) / P("tau_dwell") - w[0] * be.abs(sig.v) / P("L_dwell")]
+
+    def steady_state(self, be: Backend, sig: Signals, P: ParamValues) -> list:
+        L, tau = P("L_dwell"), P("tau_dwell")
+        return [L / (L + be.abs(sig.v) * tau)]
+
+
+class InertiaError(Effect):
+    """Inertia error: a mass correction ``dm*a`` in the reconstructed force.
+
+    The friction force reconstructed as ``p1*A1 - p2*A2 - m*a`` carries
+    ``-(m_true - m)*a`` when the moving mass is wrong (forgotten fittings,
+    oil in the rod, a load). A model without it leaves a residual
+    proportional to the acceleration at every speed, largest at reversals of
+    a fast sine, independent of the friction's sign.
+    """
+
+    name = "inertia-error"
+    Params = make_params_class("InertiaErrorParams", [
+        spec("dm", "kg", 0.0, -INF, INF, "mass error (true minus assumed)", directional=False),
+    ], owner="effect inertia-error")
+    signature = "residual proportional to acceleration at all speeds"
+    experiment = "the same motion with a known added mass"
+
+    def extra_force(self, be: Backend, sig: Signals, P: ParamValues) -> tuple[Any, Any]:
+        return 0.0, P("dm")
+
+
+class ForceOffset(Effect):
+    """Force offset: a constant bias of the force sensor or pressure transducers.
+
+    Load-cell zero drift or a pressure-sensor offset adds a constant to the
+    measured force. A model without it leaves a residual with a non-zero
+    mean of the same sign in both directions, unrelated to ``v``, ``x`` or
+    the pressures.
+    """
+
+    name = "force-offset"
+    Params = make_params_class("ForceOffsetParams", [
+        spec("offset", "N", 0.0, -INF, INF, "constant force offset", directional=False),
+    ], owner="effect force-offset")
+    signature = "residual with a constant non-zero mean in both directions"
+    experiment = "a zero-force reading at rest with the chambers vented"
+
+    def extra_force(self, be: Backend, sig: Signals, P: ParamValues) -> tuple[Any, Any]:
+        return P("offset"), 0.0
+
+
+CATALOGUE: tuple[type[Effect], ...] = (
+    Viscous, Stribeck, Presliding, FrictionalLag, DwellTime, DirectionAsymmetry,
+    PressureDependence, PositionDependence, ViscousLead, InertiaError, ForceOffset,
+)

@@ -1,0 +1,403 @@
+"""The friction-model base class and the signals a model reads.
+
+Implementer's contract
+======================
+A friction model is a subclass of :class:`FrictionModel` that defines
+
+``name``
+    its public name (class attribute), registered in :data:`fcomp.models.MODELS`;
+``Params``
+    a frozen :class:`~fcomp.parameters.ParamSet` dataclass of its parameters;
+``base_states`` and :meth:`base_initial_state`
+    the names and initial values of its own continuous states;
+:meth:`base_rhs` ``(be, x, sig, P, L) -> list``
+    the time derivatives of its states;
+:meth:`base_force` ``(be, x, dx, sig, P, L) -> (F0, c_a)``
+    the friction force split as ``F = F0 + c_a * a`` where ``a = dv/dt``;
+    plants move ``c_a`` to the mass side so that terms like NMLGM's
+    ``sigma2*T*dv/dt`` are solved exactly instead of lagged;
+:meth:`base_steady_state` ``(be, sig, P, L) -> list``
+    the states reached at constant velocity ``sig.v`` (used for the
+    steady-state map and tests).
+
+Each of these is written *once* against the backend ``be``
+(:mod:`fcomp.backend`), so it evaluates numerically (numpy) and symbolically
+(CasADi) from the same code. ``x`` is the list of the model's states,
+``sig`` the :class:`Signals`, ``P`` the :class:`~fcomp.parameters.ParamValues`
+view of all parameters (model and effects), ``L`` the *levels* (``Fc``,
+``Fs`` and the other force levels after the effects modified them, see
+:meth:`levels`).
+
+Effects (:mod:`fcomp.effects`) add states, modify the levels and add force
+terms; :meth:`FrictionModel.with_effects` composes them. Everything the
+simulation engine, identification, EKF and MPC need is derived here:
+:meth:`rhs`, :meth:`force`, :meth:`steady_state`, :meth:`casadi_functions`.
+
+Models whose memory is discrete (the turning-point stack of
+``nmlgm-hysteresis``) set ``symbolic = False`` and implement
+:meth:`step_memory`; asking them for a symbolic form raises
+:class:`NotSymbolicError`.
+"""
+
+from __future__ import annotations
+
+import math
+from abc import ABC, abstractmethod
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, ClassVar
+
+import casadi as ca
+import numpy as np
+
+from fcomp.backend import CASADI, NUMPY, Backend
+from fcomp.errors import FcompError
+from fcomp.parameters import ParamSet, ParamValues
+
+if TYPE_CHECKING:
+    from fcomp.effects.base import Effect
+
+
+class NotSymbolicError(FcompError):
+    """A model without a symbolic (CasADi) form was asked for one."""
+
+
+SIGNAL_NAMES: tuple[str, ...] = ("v", "a", "x", "p1", "p2", "s")
+
+
+@dataclass(frozen=True)
+class Signals:
+    """The measured or simulated quantities a friction model may read (SI).
+
+    Attributes
+    ----------
+    v : m/s
+        Piston velocity, positive extending.
+    a : m/s^2
+        Piston acceleration ``dv/dt`` (only the ``c_a`` split of the force uses it).
+    x : m
+        Piston position from the cap end.
+    p1, p2 : Pa
+        Chamber pressures, *gauge* (effects such as ``pressure-dependence`` read them).
+    s : -
+        Side of the direction-dependent parameters: ``+1`` uses the ``v > 0``
+        values, ``-1`` the ``v < 0`` ones. At ``v = 0`` the last side used is
+        kept (models.md section 1); :func:`side_of` computes it.
+    """
+
+    v: Any
+    a: Any = 0.0
+    x: Any = 0.0
+    p1: Any = 0.0
+    p2: Any = 0.0
+    s: Any = 1.0
+
+    @classmethod
+    def symbolic(cls) -> tuple[Signals, ca.SX]:
+        """Signals made of CasADi symbols, and their stacked vector."""
+        syms = [ca.SX.sym(n) for n in SIGNAL_NAMES]
+        return cls(*syms), ca.vertcat(*syms)
+
+    def as_list(self) -> list[Any]:
+        return [self.v, self.a, self.x, self.p1, self.p2, self.s]
+
+
+def side_of(v: np.ndarray, initial: float = 1.0) -> np.ndarray:
+    """Side ``s`` (+1/-1) for a velocity record: ``sign(v)``, holding the last side at ``v = 0``."""
+    v = np.asarray(v, dtype=float)
+    s = np.sign(v)
+    if s.size and s[0] == 0:
+        s[0] = initial
+    # forward-fill zeros with the last non-zero side
+    idx = np.where(s != 0, np.arange(s.size), 0)
+    np.maximum.accumulate(idx, out=idx)
+    return s[idx]
+
+
+class FrictionModel(ABC):
+    """Base class of every friction model (see the module docstring for the contract).
+
+    Parameters
+    ----------
+    params
+        The model's parameters (a ``Params`` instance or a mapping of flat
+        names); defaults where omitted.
+    effects
+        Effect instances (or names) composed onto the model.
+    """
+
+    name: ClassVar[str] = ""
+    Params: ClassVar[type[ParamSet]]
+    base_states: ClassVar[tuple[str, ...]] = ()
+    symbolic: ClassVar[bool] = True
+    #: level parameters that effects may scale (present ones only)
+    level_names: ClassVar[tuple[str, ...]] = ("Fc", "Fs")
+
+    def __init__(
+        self,
+        params: ParamSet | Mapping[str, Any] | None = None,
+        effects: Sequence[Effect | str] = (),
+    ) -> None:
+        if params is None:
+            params = self.Params()
+        elif isinstance(params, Mapping):
+            params = self.Params.from_flat(params)
+        elif not isinstance(params, self.Params):
+            raise ValueError(
+                f"{self.name}: expected {self.Params.__name__}, got {type(params).__name__}"
+            )
+        self.params: ParamSet = params
+        from fcomp.effects import make_effect
+
+        self.effects: tuple[Effect, ...] = tuple(
+            make_effect(e) if isinstance(e, str) else e for e in effects
+        )
+        names = list(self.params.flat())
+        for e in self.effects:
+            for n in e.params.flat():
+                if n in names:
+                    raise ValueError(
+                        f"{self.name}: parameter {n!r} of effect {e.name!r} clashes with another"
+                    )
+                names.append(n)
+
+    # ------------------------------------------------------------ contract
+    def base_initial_state(self) -> list[float]:
+        """Initial values of :attr:`base_states` (friction states zero)."""
+        return [0.0] * len(self.base_states)
+
+    def base_rhs(self, be: Backend, x: list[Any], sig: Signals, P: ParamValues, L: dict) -> list:
+        """Time derivatives of the model's own states (none for static maps)."""
+        return []
+
+    @abstractmethod
+    def base_force(
+        self, be: Backend, x: list[Any], dx: list[Any], sig: Signals, P: ParamValues, L: dict
+    ) -> tuple[Any, Any]:
+        """Friction force ``(F0, c_a)`` with ``F = F0 + c_a*a`` (N, kg)."""
+
+    def base_steady_state(self, be: Backend, sig: Signals, P: ParamValues, L: dict) -> list:
+        """States reached at constant velocity ``sig.v``."""
+        return []
+
+    # ------------------------------------------------------------- composition
+    @property
+    def state_names(self) -> tuple[str, ...]:
+        names = list(self.base_states)
+        for e in self.effects:
+            names += list(e.states)
+        return tuple(names)
+
+    @property
+    def n_states(self) -> int:
+        return len(self.state_names)
+
+    @property
+    def dynamic(self) -> bool:
+        """Whether the model has continuous states."""
+        return self.n_states > 0
+
+    def initial_state(self) -> np.ndarray:
+        """Initial state vector (friction states zero, effect states at their rest values)."""
+        x0 = list(self.base_initial_state())
+        for e in self.effects:
+            x0 += list(e.initial)
+        return np.asarray(x0, dtype=float)
+
+    def with_effects(self, *effects: Effect | str) -> FrictionModel:
+        """A new model with ``effects`` added (names or :class:`~fcomp.effects.Effect` objects).
+
+        Structural effects (``stribeck``, ``viscous``, ``viscous-lead``,
+        ``presliding``, ``frictional-lag``, ``nonlocal-memory``) turn the
+        model into the richer model of the family; the others are added on.
+        """
+        from fcomp.effects import make_effect
+
+        model: FrictionModel = self
+        for e in effects:
+            eff = make_effect(e) if isinstance(e, str) else e
+            model = eff.attach(model)
+        return model
+
+    def with_params(self, **flat: float) -> FrictionModel:
+        """A copy with parameters changed by flat name (model or effect parameters)."""
+        own = {k: v for k, v in flat.items() if k in self.params.flat()}
+        new_params = self.Params.from_flat(own, base=self.params) if own else self.params
+        rest = {k: v for k, v in flat.items() if k not in own}
+        effects = []
+        for e in self.effects:
+            mine = {k: v for k, v in rest.items() if k in e.params.flat()}
+            effects.append(e.with_params(**mine) if mine else e)
+            for k in mine:
+                rest.pop(k)
+        if rest:
+            raise ValueError(
+                f"{self.describe()}: unknown parameter(s) {', '.join(sorted(rest))}; "
+                f"known: {', '.join(self.flat_params())}"
+            )
+        return self._rebuild(new_params, tuple(effects))
+
+    def _rebuild(self, params: ParamSet, effects: tuple[Effect, ...]) -> FrictionModel:
+        new = object.__new__(type(self))
+        new.__dict__.update(self.__dict__)
+        new.params = params
+        new.effects = effects
+        return new
+
+    def flat_params(self) -> dict[str, float]:
+        """All parameters, model and effects, by flat name."""
+        out = dict(self.params.flat())
+        for e in self.effects:
+            out.update(e.params.flat())
+        return out
+
+    def param_specs(self) -> dict[str, Any]:
+        """Flat name -> :class:`~fcomp.parameters.ParamSpec` of every parameter."""
+        out = {}
+        for owner in (self.params, *[e.params for e in self.effects]):
+            for n in owner.flat():
+                base = n[:-4] if n.endswith(("_pos", "_neg")) else n
+                out[n] = type(owner).spec_of(base)
+        return out
+
+    def describe(self) -> str:
+        """``"lugre + pressure-dependence"`` style label."""
+        return " + ".join([self.name, *[e.name for e in self.effects]])
+
+    # ------------------------------------------------------------ evaluation
+    def param_values(self, be: Backend, values: Mapping[str, Any] | None = None) -> ParamValues:
+        return ParamValues(values if values is not None else self.flat_params(), be)
+
+    def levels(self, be: Backend, x: list[Any], sig: Signals, P: ParamValues) -> dict:
+        """Force levels after every effect modified them (``Fc``, ``Fs``, ...)."""
+        L = {n: P(n, sig.s) for n in self.level_names if P.has(n)}
+        offset = len(self.base_states)
+        for e in self.effects:
+            k = len(e.states)
+            L = e.modify_levels(be, L, x[offset : offset + k], sig, P)
+            offset += k
+        return L
+
+    def rhs(self, be: Backend, x: Sequence[Any], sig: Signals, P: ParamValues) -> list:
+        """Time derivatives of all states (model then effects)."""
+        x = list(x)
+        L = self.levels(be, x, sig, P)
+        nb = len(self.base_states)
+        dx = list(self.base_rhs(be, x[:nb], sig, P, L))
+        offset = nb
+        for e in self.effects:
+            k = len(e.states)
+            dx += list(e.rhs(be, x[offset : offset + k], sig, P))
+            offset += k
+        return dx
+
+    def force_parts(
+        self, be: Backend, x: Sequence[Any], sig: Signals, P: ParamValues
+    ) -> tuple[Any, Any]:
+        """Friction force split ``(F0, c_a)``, ``F = F0 + c_a*a`` (effects included)."""
+        x = list(x)
+        L = self.levels(be, x, sig, P)
+        nb = len(self.base_states)
+        dx = self.base_rhs(be, x[:nb], sig, P, L)
+        F0, ca_ = self.base_force(be, x[:nb], dx, sig, P, L)
+        for e in self.effects:
+            f0, c = e.extra_force(be, sig, P)
+            F0 = F0 + f0
+            ca_ = ca_ + c
+        return F0, ca_
+
+    def force(self, be: Backend, x: Sequence[Any], sig: Signals, P: ParamValues) -> Any:
+        """Friction force ``F`` (N), positive opposing extension."""
+        F0, c = self.force_parts(be, x, sig, P)
+        return F0 + c * sig.a
+
+    def steady_state_states(self, be: Backend, sig: Signals, P: ParamValues) -> list:
+        """All states at constant velocity ``sig.v``."""
+        xs: list[Any] = []
+        for e in self.effects:
+            xs += list(e.steady_state(be, sig, P))
+        # levels may depend on effect states: evaluate them with the effect states first
+        nb = len(self.base_states)
+        placeholder = [0.0] * nb + xs
+        L = self.levels(be, placeholder, sig, P)
+        return list(self.base_steady_state(be, sig, P, L)) + xs
+
+    def steady_state(
+        self,
+        v: Any,
+        *,
+        x: Any = 0.0,
+        p1: Any = 0.0,
+        p2: Any = 0.0,
+        values: Mapping[str, Any] | None = None,
+    ) -> np.ndarray:
+        """Steady-state friction force ``F_ss(v)`` (N) at constant velocity ``v`` (m/s).
+
+        For static maps this is the map itself; for dynamic models it is the
+        force their states settle to when ``v`` is held constant (e.g. for
+        LuGre ``F_ss = sign(v)*g(v) + sigma2*v``, models.md 1.3).
+        """
+        v = np.asarray(v, dtype=float)
+        s = np.where(v >= 0, 1.0, -1.0)
+        sig = Signals(v=v, a=0.0, x=x, p1=p1, p2=p2, s=s)
+        P = self.param_values(NUMPY, values)
+        xs = self.steady_state_states(NUMPY, sig, P)
+        xs = [np.broadcast_to(np.asarray(c, dtype=float), v.shape) for c in xs]
+        return np.asarray(self.force(NUMPY, xs, sig, P), dtype=float)
+
+    # -------------------------------------------------------------- symbolic
+    def require_symbolic(self) -> None:
+        if not self.symbolic:
+            raise NotSymbolicError(
+                f"model {self.describe()!r} has discrete (turning-point) memory and no "
+                "symbolic CasADi form; use its numeric simulation, or 'nmlgm'/'gms' for "
+                "EKF/MPC/gradient-based work"
+            )
+
+    def casadi_functions(self, *, symbolic_params: bool = False) -> dict[str, ca.Function]:
+        """CasADi functions of the model, built from the same equations.
+
+        Returns
+        -------
+        dict
+            ``"rhs"``: ``(x, sig[, p]) -> dx/dt``; ``"force"``: ``(x, sig[, p]) -> F``;
+            ``"force_parts"``: ``(x, sig[, p]) -> [F0, c_a]``. ``sig`` is the vector
+            ``[v, a, x, p1, p2, s]``; ``p`` (only with ``symbolic_params``) the
+            flat parameters in the order of :meth:`flat_params`.
+        """
+        self.require_symbolic()
+        xs = ca.SX.sym("x", self.n_states)
+        sig, sigv = Signals.symbolic()
+        names = list(self.flat_params())
+        if symbolic_params:
+            pv = ca.SX.sym("p", len(names))
+            P = ParamValues({n: pv[i] for i, n in enumerate(names)}, CASADI)
+            args, argn = [xs, sigv, pv], ["x", "sig", "p"]
+        else:
+            P = self.param_values(CASADI)
+            args, argn = [xs, sigv], ["x", "sig"]
+        xl = [xs[i] for i in range(self.n_states)]
+        dx = self.rhs(CASADI, xl, sig, P)
+        F0, c = self.force_parts(CASADI, xl, sig, P)
+        dxv = ca.vertcat(*dx) if dx else ca.SX(0, 1)
+        return {
+            "rhs": ca.Function("rhs", args, [dxv], argn, ["dx"]),
+            "force": ca.Function("force", args, [F0 + c * sig.a], argn, ["F"]),
+            "force_parts": ca.Function("force_parts", args, [ca.vertcat(F0, c)], argn, ["Fc_a"]),
+        }
+
+    # ----------------------------------------------------------------- misc
+    def __repr__(self) -> str:
+        return f"<{type(self).__name__} {self.describe()}>"
+
+    def passivity(self) -> dict[str, Any]:
+        """Passivity (dissipativity) of the map ``v -> F``.
+
+        Models without a bristle state are memoryless monotone maps and are
+        passive when every level is non-negative; dynamic models override this.
+        """
+        return {"applies": False, "passive": None, "reason": "no bristle state"}
+
+
+def isfinite_param(value: float) -> bool:
+    return math.isfinite(value)

@@ -1,0 +1,342 @@
+"""The LuGre family: Coulomb, Coulomb-viscous, Stribeck, Dahl, LuGre, modified LuGre, NMLGM.
+
+All seven models are one set of equations (models.md sections 1.1-1.5) with
+*features* switched on or off, written once here:
+
+==============  ==========================================================
+feature          term
+==============  ==========================================================
+``viscous``      ``sigma2*v`` (``B*v`` for ``coulomb-viscous``, seed 001 Eq. 4)
+``stribeck``     ``g = Fc + ((1 - h)*Fs - Fc)*exp(-(|v|/vs)^n)`` (seed 002 Eq. 7)
+``presliding``   bristle state ``z``: ``dz/dt = v - sigma0*|v|*z/g`` (LuGre, Dahl)
+``damping``      ``sigma1*dz/dt`` (LuGre; absent in Dahl)
+``film``         film term ``h`` with ``h_ss = (1 - Fc/Fs)*min(|v|/vb, 1)^(2/3)``
+                 (seed 002 Eqs. 10-11, ``Kf*min(|v|, vb)^(2/3)`` rewritten)
+``film-lag``     ``h`` is a state: ``dh/dt = (h_ss - h)/tau_h`` (seed 002 Eqs. 8-9);
+                 without it ``h = h_ss`` (the steady-state model, seed 002 Eq. 12)
+``lead``         ``sigma2*(v + T*dv/dt)`` (NMLGM, seed 000 Eq. 8, seed 002 Eq. 6)
+==============  ==========================================================
+
+Friction force:
+
+* static maps (no ``presliding``): ``F = sat(v/v_eps)*g(v, h) + sigma2*(v + T*a)``.
+  The sign is *regularised* over ``|v| < v_eps`` (default 1e-5 m/s) so the map
+  is a function of ``v`` alone and usable along a prescribed motion; plants
+  use a Karnopp stick state instead (:meth:`StaticMixin` in :mod:`plants`).
+* dynamic: ``F = sigma0*z + sigma1*dz/dt + sigma2*(v + T*a)`` (models.md 1.3-1.5).
+
+Direction-dependent parameters select the side ``s`` of :class:`~fcomp.models.base.Signals`.
+``tau_h`` selection (models.md 1.4): ``tau_h0`` if ``|v| < v_eps`` (dwell),
+else ``tau_hp`` if ``h <= h_ss`` (film building) else ``tau_hn``.
+
+Numerical guard: fractional powers ``r**(2/3)`` and ``r**n`` are evaluated at
+``max(r, 1e-30)`` so that exact (CasADi) Jacobians stay finite at ``v = 0``;
+the change in value is below 1e-19 relative.
+"""
+
+from __future__ import annotations
+
+import math
+from functools import cache
+from typing import Any, ClassVar
+
+from fcomp.backend import Backend
+from fcomp.models.base import FrictionModel, Signals
+from fcomp.parameters import ParamSet, ParamSpec, ParamValues, make_params_class, spec
+
+INF = math.inf
+_TINY = 1e-30
+
+#: Every parameter of the family, once (models.md names, SI units).
+FAMILY_SPECS: dict[str, ParamSpec] = {
+    s.name: s
+    for s in (
+        spec("Fc", "N", 1.0, 0.0, INF, "Coulomb friction level"),
+        spec("B", "Ns/m", 0.0, 0.0, INF, "viscous coefficient (coulomb-viscous, seed 001)"),
+        spec("Fs", "N", 1.5, 0.0, INF, "static (break-away) friction level, Fs >= Fc"),
+        spec("vs", "m/s", 1e-3, 0.0, INF, "Stribeck velocity", lower_open=True),
+        spec("n", "-", 2.0, 0.0, 10.0, "Stribeck exponent", lower_open=True),
+        spec("sigma2", "Ns/m", 0.4, 0.0, INF, "viscous (fluid) friction coefficient"),
+        spec("sigma0", "N/m", 1e5, 0.0, INF, "bristle stiffness", lower_open=True,
+             directional=False),
+        spec("sigma1", "Ns/m", 316.2277660, 0.0, INF, "bristle damping", directional=False),
+        spec("vb", "m/s", 0.03, 0.0, INF, "velocity up to which the film thickens "
+             "(inf: no film effect)", lower_open=True),
+        spec("tau_hp", "s", 0.02, 0.0, INF, "film time constant, acceleration",
+             lower_open=True, directional=False),
+        spec("tau_hn", "s", 0.12, 0.0, INF, "film time constant, deceleration",
+             lower_open=True, directional=False),
+        spec("tau_h0", "s", 10.0, 0.0, INF, "film time constant, dwell",
+             lower_open=True, directional=False),
+        spec("T", "s", 0.0, 0.0, INF, "time constant of the fluid-friction lead",
+             directional=False),
+        spec("v_eps", "m/s", 1e-5, 0.0, INF, "velocity treated as zero (dwell detection, "
+             "static-map regularisation)", lower_open=True, directional=False),
+    )
+}
+
+FEATURE_PARAMS: dict[str, tuple[str, ...]] = {
+    "viscous": ("sigma2",),
+    "stribeck": ("Fs", "vs", "n"),
+    "presliding": ("sigma0",),
+    "damping": ("sigma1",),
+    "film": ("vb",),
+    "film-lag": ("tau_hp", "tau_hn", "tau_h0"),
+    "lead": ("T",),
+}
+FEATURE_ORDER = ("stribeck", "viscous", "presliding", "damping", "film", "film-lag", "lead")
+
+
+def _check_features(features: frozenset[str]) -> None:
+    unknown = features - set(FEATURE_PARAMS)
+    if unknown:
+        raise ValueError(f"unknown model feature(s): {sorted(unknown)}")
+    if "film" in features and "stribeck" not in features:
+        raise ValueError("the film term needs the Stribeck term (Fs) to act on")
+    if "film-lag" in features and "film" not in features:
+        raise ValueError("film-lag needs the film term")
+    if "damping" in features and "presliding" not in features:
+        raise ValueError("bristle damping needs the bristle state (presliding)")
+
+
+def _param_names(features: frozenset[str], viscous_name: str) -> tuple[str, ...]:
+    names = ["Fc"]
+    for f in FEATURE_ORDER:
+        if f in features:
+            names += [viscous_name if p == "sigma2" else p for p in FEATURE_PARAMS[f]]
+    if "presliding" not in features or "film" in features:
+        names.append("v_eps")
+    return tuple(names)
+
+
+@cache
+def params_class(
+    features: frozenset[str], viscous_name: str = "sigma2", cls_name: str = "", owner: str = ""
+) -> type[ParamSet]:
+    """The frozen parameter dataclass of a feature set (cached)."""
+    _check_features(features)
+    names = _param_names(features, viscous_name)
+    return make_params_class(
+        cls_name or "Params_" + "_".join(sorted(features)),
+        [FAMILY_SPECS[n] for n in names],
+        owner=owner or "model",
+        constraints=[("Fc", "Fs")],
+    )
+
+
+class LuGreFamily(FrictionModel):
+    """One model of the LuGre family, defined by its ``features`` (see module docstring)."""
+
+    features: ClassVar[frozenset[str]] = frozenset()
+    viscous_name: ClassVar[str] = "sigma2"
+
+    # ------------------------------------------------------------ structure
+    @property
+    def base_states(self) -> tuple[str, ...]:  # type: ignore[override]
+        st = []
+        if "presliding" in self.features:
+            st.append("z")
+        if "film-lag" in self.features:
+            st.append("h")
+        return tuple(st)
+
+    def with_features(self, add: set[str], values: dict[str, float]) -> LuGreFamily:
+        """The model with more features, new parameters from ``values`` (else defaults).
+
+        Returns an instance of the registered model class whose feature set
+        matches, so ``lugre`` + ``frictional-lag`` *is* ``modified-lugre``.
+        """
+        features = frozenset(self.features | add)
+        cls = family_class(features, self.viscous_name)
+        flat = dict(self.params.flat())
+        flat.update(values)
+        keep = set(cls.Params.names())
+        flat = {k: v for k, v in flat.items() if k.removesuffix("_pos").removesuffix("_neg") in keep}
+        new = cls(cls.Params.from_flat(flat), effects=self.effects)
+        new.lineage = (*self.lineage, *sorted(add))
+        return new
+
+    lineage: tuple[str, ...] = ()
+
+    def describe(self) -> str:
+        base = self.name if not self.lineage else self.lineage[0]
+        parts = [base, *self.lineage[1:]] if self.lineage else [self.name]
+        return " + ".join(parts + [e.name for e in self.effects])
+
+    # ------------------------------------------------------------- equations
+    def _stribeck_decay(self, be: Backend, v: Any, P: ParamValues, s: Any) -> Any:
+        vs, n = P("vs", s), P("n", s)
+        return be.exp(-be.power(be.fmax(be.abs(v) / vs, _TINY), n))
+
+    def g(self, be: Backend, v: Any, h: Any, P: ParamValues, L: dict, s: Any) -> Any:
+        """Stribeck function ``g(v, h) = Fc + ((1 - h)*Fs - Fc)*exp(-(|v|/vs)^n)`` (N)."""
+        Fc = L["Fc"]
+        if "stribeck" not in self.features:
+            return Fc
+        Fs = L["Fs"]
+        return Fc + ((1.0 - h) * Fs - Fc) * self._stribeck_decay(be, v, P, s)
+
+    def h_ss(self, be: Backend, v: Any, P: ParamValues, L: dict, s: Any) -> Any:
+        """Steady film ``h_ss = Kf*min(|v|, vb)^(2/3)``, ``Kf = (1 - Fc/Fs)*vb^(-2/3)`` (-)."""
+        if "film" not in self.features:
+            return 0.0
+        r = be.fmin(be.abs(v) / P("vb", s), 1.0)
+        return (1.0 - L["Fc"] / L["Fs"]) * be.power(be.fmax(r, _TINY), 2.0 / 3.0)
+
+    def _h(self, x: list[Any], be: Backend, sig: Signals, P: ParamValues, L: dict) -> Any:
+        if "film-lag" in self.features:
+            return x[self.base_states.index("h")]
+        return self.h_ss(be, sig.v, P, L, sig.s)
+
+    def tau_h(self, be: Backend, v: Any, h: Any, hss: Any, P: ParamValues) -> Any:
+        """Film time constant (seed 002 Eq. 9): dwell, building or thinning."""
+        moving = be.if_else(h <= hss, P("tau_hp"), P("tau_hn"))
+        return be.if_else(be.abs(v) < P("v_eps"), P("tau_h0"), moving)
+
+    def base_rhs(self, be: Backend, x: list[Any], sig: Signals, P: ParamValues, L: dict) -> list:
+        out = []
+        v = sig.v
+        h = self._h(x, be, sig, P, L)
+        if "presliding" in self.features:
+            z = x[0]
+            g = self.g(be, v, h, P, L, sig.s)
+            out.append(v - P("sigma0") * be.abs(v) * z / g)
+        if "film-lag" in self.features:
+            hss = self.h_ss(be, v, P, L, sig.s)
+            out.append((hss - h) / self.tau_h(be, v, h, hss, P))
+        return out
+
+    def _viscous(self, P: ParamValues, s: Any) -> Any:
+        if "viscous" not in self.features:
+            return 0.0
+        return P(self.viscous_name, s)
+
+    def base_force(
+        self, be: Backend, x: list[Any], dx: list[Any], sig: Signals, P: ParamValues, L: dict
+    ) -> tuple[Any, Any]:
+        v = sig.v
+        visc = self._viscous(P, sig.s)
+        c_a = visc * P("T") if "lead" in self.features else 0.0
+        if "presliding" in self.features:
+            F0 = P("sigma0") * x[0] + visc * v
+            if "damping" in self.features:
+                F0 = F0 + P("sigma1") * dx[0]
+            return F0, c_a
+        h = self._h(x, be, sig, P, L)
+        sat = be.fmax(-1.0, be.fmin(1.0, v / P("v_eps")))
+        return sat * self.g(be, v, h, P, L, sig.s) + visc * v, c_a
+
+    def base_steady_state(self, be: Backend, sig: Signals, P: ParamValues, L: dict) -> list:
+        v = sig.v
+        hss = self.h_ss(be, v, P, L, sig.s)
+        out = []
+        if "presliding" in self.features:
+            out.append(be.sign(v) * self.g(be, v, hss, P, L, sig.s) / P("sigma0"))
+        if "film-lag" in self.features:
+            out.append(hss)
+        return out
+
+    def base_initial_state(self) -> list[float]:
+        return [0.0] * len(self.base_states)
+
+    # ------------------------------------------------------------ passivity
+    def passivity(self) -> dict[str, Any]:
+        """Dissipativity of the bristle map ``v -> sigma0*z + sigma1*dz/dt`` (LuGre type).
+
+        With the storage ``V = sigma0*z^2/2`` and ``alpha = sigma0*|v|/g(v)``,
+        ``v*(sigma0*z + sigma1*dz/dt) - dV/dt = sigma1*dz^2 + sigma1*alpha*z*dz
+        + sigma0*alpha*z^2``: a quadratic form in ``(z, dz/dt)`` that is
+        non-negative for every state iff ``sigma1*alpha <= 4*sigma0``, i.e.
+        ``sigma1*|v| <= 4*g(v)``. Since ``g >= Fc`` the map is dissipative for
+        every motion with ``|v| <= v_max = 4*Fc/sigma1``; beyond that speed the
+        bristle damping can return energy and the result is flagged
+        (``passive: None``). ``sigma2*v`` is dissipative; the NMLGM lead
+        ``sigma2*T*dv/dt`` is a mass-like term that stores, not dissipates.
+        """
+        if "presliding" not in self.features:
+            return {"applies": False, "passive": True, "reason": "memoryless monotone map"}
+        p = self.params
+        sigma1 = p.sigma1 if "damping" in self.features else 0.0  # type: ignore[attr-defined]
+        gmin = min(p.side_values("Fc"))
+        if sigma1 == 0.0:
+            return {"applies": True, "passive": True, "v_max": INF,
+                    "reason": "no bristle damping: dissipative for every velocity"}
+        vmax = 4.0 * gmin / sigma1
+        return {
+            "applies": True,
+            "passive": None,
+            "v_max": vmax,
+            "reason": f"dissipative for |v| <= 4*Fc/sigma1 = {vmax:.3g} m/s; beyond that "
+            "the bristle damping can return energy (flagged)",
+        }
+
+
+@cache
+def family_class(features: frozenset[str], viscous_name: str = "sigma2") -> type[LuGreFamily]:
+    """The model class of a feature set: a registered preset if one matches."""
+    for cls in PRESETS.values():
+        if cls.features == features and cls.viscous_name == viscous_name:
+            return cls
+    name = "+".join(sorted(features))
+    return type(
+        "LuGreFamily_" + name.replace("-", "_").replace("+", "__"),
+        (LuGreFamily,),
+        {
+            "name": "custom",
+            "features": features,
+            "viscous_name": viscous_name,
+            "Params": params_class(features, viscous_name, owner="model " + name),
+        },
+    )
+
+
+_CLASS_NAMES = {
+    "coulomb": "Coulomb", "coulomb-viscous": "CoulombViscous", "stribeck": "Stribeck",
+    "dahl": "Dahl", "lugre": "LuGre", "modified-lugre": "ModifiedLuGre", "nmlgm": "NMLGM",
+}
+
+
+def _preset(name: str, features: set[str], doc: str, viscous_name: str = "sigma2") -> type:
+    fs = frozenset(features)
+    cls_name = _CLASS_NAMES[name]
+    params = params_class(fs, viscous_name, cls_name + "Params", owner=name)
+    cls = type(cls_name, (LuGreFamily,), {
+        "name": name, "features": fs, "viscous_name": viscous_name, "Params": params,
+        "__doc__": doc, "__module__": __name__,
+    })
+    return cls
+
+
+PRESETS: dict[str, type[LuGreFamily]] = {
+    "coulomb": _preset("coulomb", set(), "Coulomb friction ``F = Fc*sign(v)`` (models.md 1.1)."),
+    "coulomb-viscous": _preset(
+        "coulomb-viscous", {"viscous"},
+        "Coulomb-viscous friction ``F = Fc*sign(v) + B*v`` (seed 001 Eq. 4).", "B"),
+    "stribeck": _preset(
+        "stribeck", {"stribeck", "viscous", "film"},
+        "Stribeck steady-state map with film term, seed 002 Eq. 12 / seed 000 Eq. 9: "
+        "``F = sign(v)*(Fc + ((1 - h_ss)*Fs - Fc)*exp(-(|v|/vs)^n)) + sigma2*v``; "
+        "``vb = inf`` gives the classical Stribeck curve."),
+    "dahl": _preset(
+        "dahl", {"presliding", "viscous"},
+        "Dahl model ``dz/dt = v - sigma0*|v|*z/Fc``, ``F = sigma0*z + sigma2*v`` (models.md 1.2)."),
+    "lugre": _preset(
+        "lugre", {"stribeck", "viscous", "presliding", "damping"},
+        "LuGre model (Canudas de Wit et al. 1995, models.md 1.3)."),
+    "modified-lugre": _preset(
+        "modified-lugre", {"stribeck", "viscous", "presliding", "damping", "film", "film-lag"},
+        "Modified LuGre with lubricant-film state h (Yanada & Sekikawa; seed 000 Eqs. 2-8, "
+        "T = 0; models.md 1.4)."),
+    "nmlgm": _preset(
+        "nmlgm", {"stribeck", "viscous", "presliding", "damping", "film", "film-lag", "lead"},
+        "New modified LuGre model (Tran et al.; seed 002 Eqs. 5-11, seed 000 Eq. 8): "
+        "``F = sigma0*z + sigma1*dz/dt + sigma2*(v + T*dv/dt)`` (models.md 1.5)."),
+}
+
+CoulombParams = PRESETS["coulomb"].Params
+CoulombViscousParams = PRESETS["coulomb-viscous"].Params
+StribeckParams = PRESETS["stribeck"].Params
+DahlParams = PRESETS["dahl"].Params
+LuGreParams = PRESETS["lugre"].Params
+ModifiedLuGreParams = PRESETS["modified-lugre"].Params
+NMLGMParams = PRESETS["nmlgm"].Params

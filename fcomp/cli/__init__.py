@@ -1,0 +1,1 @@
+"""The ``fcomp`` command line (public contract in the architecture document)."""

@@ -1,0 +1,52 @@
+"""Pieces shared by the sub-commands: building models from options, output paths."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from fcomp.effects import load_effects_module
+from fcomp.errors import FcompError
+from fcomp.models import FrictionModel, make_model
+
+
+def add_model_options(p: argparse.ArgumentParser, *, flag: str = "--friction") -> None:
+    p.add_argument("--add-effect", action="append", default=[], metavar="EFFECT",
+                   help="add a catalogue (or registered) effect to the model; repeatable")
+    p.add_argument("--effects", metavar="MODULE.py", default=None,
+                   help="a Python file that registers the user's own effects")
+    p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
+                   help="override a friction parameter (flat name, SI units); repeatable")
+
+
+def parse_assignments(items: list[str]) -> dict[str, float]:
+    out: dict[str, float] = {}
+    for item in items:
+        if "=" not in item:
+            raise FcompError(f"--set {item!r}: expected NAME=VALUE")
+        k, v = (s.strip() for s in item.split("=", 1))
+        try:
+            out[k] = float(v)
+        except ValueError:
+            raise FcompError(f"--set {item!r}: {v!r} is not a number") from None
+    return out
+
+
+def build_model(name: str, params: str | None, args: argparse.Namespace) -> FrictionModel:
+    """The friction model of the options (model, parameter set, effects, overrides)."""
+    if args.effects:
+        load_effects_module(args.effects)
+    model = make_model(name, params=params)
+    if args.add_effect:
+        model = model.with_effects(*args.add_effect)
+    overrides = parse_assignments(args.set)
+    return model.with_params(**overrides) if overrides else model
+
+
+def output_path(path: str, suffix: str = ".csv") -> Path:
+    p = Path(path)
+    if p.suffix != suffix:
+        raise FcompError(f"-o {path}: the output must end in {suffix}")
+    if p.exists() and p.is_dir():
+        raise FcompError(f"-o {path}: is a directory")
+    return p

@@ -1,0 +1,267 @@
+"""Measurements and simulation results: one class, one file format (data-format.md).
+
+A :class:`Measurement` is a time vector, named columns in SI units and the
+sidecar metadata. It is written as ``NAME.csv`` (header line, one row per
+sample, ``.`` decimal point, full ``repr`` precision so a round trip is
+lossless) and ``NAME.toml`` (the rig and the conventions); unknown columns
+and sidecar keys are carried through unchanged.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import tomllib
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from fcomp.errors import FcompError
+
+#: Columns of data-format.md with their SI unit.
+COLUMN_UNITS: dict[str, str] = {
+    "t": "s", "x": "m", "v": "m/s", "a": "m/s^2", "p1": "Pa", "p2": "Pa",
+    "u": "A or V", "F": "N", "F_ext": "N",
+}
+KINDS = ("pneumatic-cylinder", "hydraulic-cylinder", "friction-rig")
+ORIENTATIONS = {"horizontal": 0.0, "vertical-up": 1.0, "vertical-down": -1.0}
+G = 9.80665
+
+
+@dataclass
+class Measurement:
+    """A measurement or simulated run (SI units).
+
+    Attributes
+    ----------
+    columns
+        Column name -> 1-D float array, ``t`` first; all of one length.
+    meta
+        Sidecar content (``name``, ``kind``, ``pressure``, ``[rig]``, ``[signals]``,
+        any other keys kept as they are).
+    """
+
+    columns: dict[str, np.ndarray]
+    meta: dict[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        self.columns = {k: np.asarray(v, dtype=float) for k, v in self.columns.items()}
+        self.validate()
+
+    # ----------------------------------------------------------------- access
+    @property
+    def t(self) -> np.ndarray:
+        return self.columns["t"]
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        try:
+            return self.columns[name]
+        except KeyError:
+            raise FcompError(
+                f"{self.label}: column {name!r} is missing (have {', '.join(self.columns)})"
+            ) from None
+
+    def __contains__(self, name: object) -> bool:
+        return name in self.columns
+
+    def __len__(self) -> int:
+        return self.t.size
+
+    @property
+    def label(self) -> str:
+        return str(self.meta.get("name") or self.meta.get("_path") or "measurement")
+
+    @property
+    def rig(self) -> dict[str, Any]:
+        return dict(self.meta.get("rig", {}))
+
+    def rig_value(self, key: str) -> Any:
+        """A ``[rig]`` value; a clear error naming the missing sidecar key otherwise."""
+        rig = self.meta.get("rig", {})
+        if key not in rig:
+            raise FcompError(f"{self.label}: sidecar key rig.{key} is missing (add it to the .toml)")
+        return rig[key]
+
+    def areas(self) -> tuple[float, float]:
+        """Piston areas ``A1 = pi/4*bore^2``, ``A2 = pi/4*(bore^2 - rod^2)`` (m^2)."""
+        bore = float(self.rig_value("bore"))
+        rod = float(self.meta.get("rig", {}).get("rod", 0.0))
+        return math.pi / 4 * bore**2, math.pi / 4 * (bore**2 - rod**2)
+
+    def gauge_pressures(self) -> tuple[np.ndarray, np.ndarray]:
+        """``p1, p2`` as gauge pressures (Pa), converting from absolute if the sidecar says so."""
+        p_atm = float(self.meta.get("p_atm", 101325.0))
+        shift = p_atm if self.meta.get("pressure", "gauge") == "absolute" else 0.0
+        return self["p1"] - shift, self["p2"] - shift
+
+    def select(self, mask: np.ndarray) -> Measurement:
+        """The samples where ``mask`` is true (a contiguous slice keeps time increasing)."""
+        return Measurement({k: v[mask] for k, v in self.columns.items()}, dict(self.meta))
+
+    def with_columns(self, **cols: np.ndarray) -> Measurement:
+        new = dict(self.columns)
+        new.update({k: np.asarray(v, dtype=float) for k, v in cols.items()})
+        return Measurement(new, dict(self.meta))
+
+    # ------------------------------------------------------------- validation
+    def validate(self) -> None:
+        """Check the data-format rules; raise :class:`FcompError` naming the problem."""
+        if "t" not in self.columns:
+            raise FcompError(f"{self.label}: column 't' (time, s) is required")
+        n = self.columns["t"].size
+        for k, v in self.columns.items():
+            if v.ndim != 1 or v.size != n:
+                raise FcompError(f"{self.label}: column {k!r} has {v.size} values, t has {n}")
+            bad = ~np.isfinite(v)
+            if bad.any():
+                i = int(np.argmax(bad))
+                raise FcompError(
+                    f"{self.label}: column {k!r} has a non-finite value ({v[i]}) at row {i + 2}"
+                )
+        if n < 2:
+            raise FcompError(f"{self.label}: needs at least two samples")
+        dt = np.diff(self.columns["t"])
+        if np.any(dt <= 0):
+            i = int(np.argmax(dt <= 0))
+            raise FcompError(
+                f"{self.label}: time is not strictly increasing at row {i + 3} "
+                f"(t = {self.columns['t'][i + 1]!r} s)"
+            )
+        pr = self.meta.get("pressure", "gauge")
+        if pr not in ("gauge", "absolute"):
+            raise FcompError(f"{self.label}: sidecar 'pressure' must be 'gauge' or 'absolute', got {pr!r}")
+        rig = self.meta.get("rig", {})
+        if not isinstance(rig, Mapping):
+            raise FcompError(f"{self.label}: sidecar [rig] must be a table")
+        for key in ("bore", "rod", "stroke", "mass"):
+            if key in rig:
+                val = rig[key]
+                if not isinstance(val, int | float) or isinstance(val, bool) or not val >= 0:
+                    raise FcompError(
+                        f"{self.label}: sidecar rig.{key} must be a non-negative number in SI "
+                        f"units, got {val!r}"
+                    )
+        if "bore" in rig and "rod" in rig and rig["rod"] >= rig["bore"]:
+            raise FcompError(f"{self.label}: sidecar rig.rod ({rig['rod']}) must be smaller than rig.bore ({rig['bore']})")
+        if "bore" in rig and rig["bore"] > 2.0:
+            raise FcompError(
+                f"{self.label}: sidecar rig.bore = {rig['bore']} m is implausible; "
+                "lengths are in metres (SI)"
+            )
+        orient = rig.get("orientation", "horizontal")
+        if orient not in ORIENTATIONS:
+            raise FcompError(
+                f"{self.label}: sidecar rig.orientation must be one of {', '.join(ORIENTATIONS)}"
+            )
+
+    # -------------------------------------------------------------------- I/O
+    def write(self, path: str | Path) -> tuple[Path, Path]:
+        """Write ``path`` (``.csv``) and its sidecar ``.toml`` atomically; return both paths."""
+        csv, toml = sidecar_paths(path)
+        names = list(self.columns)
+        data = np.column_stack([self.columns[k] for k in names])
+        lines = [",".join(names)]
+        lines += [",".join(repr(float(x)) for x in row) for row in data]
+        meta = {k: v for k, v in self.meta.items() if not k.startswith("_")}
+        _atomic_write(csv, "\n".join(lines) + "\n")
+        _atomic_write(toml, dumps_toml(meta))
+        return csv, toml
+
+    @classmethod
+    def read(cls, path: str | Path, *, drop_nan: bool = False) -> Measurement:
+        """Read ``NAME.csv`` and, if present, ``NAME.toml``."""
+        csv, toml = sidecar_paths(path)
+        if not csv.is_file():
+            raise FcompError(f"{csv}: file not found")
+        meta: dict[str, Any] = {}
+        if toml.is_file():
+            try:
+                meta = tomllib.loads(toml.read_text())
+            except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+                raise FcompError(f"{toml}: not valid TOML ({exc})") from None
+        meta.setdefault("name", csv.stem)
+        meta["_path"] = str(csv)
+        try:
+            with csv.open() as fh:
+                header = fh.readline().strip()
+            names = [h.strip() for h in header.split(",")]
+            if not header or any(not n for n in names):
+                raise FcompError(f"{csv}: the first line must be comma-separated column names")
+            if len(set(names)) != len(names):
+                raise FcompError(f"{csv}: duplicate column names in the header")
+            raw = np.loadtxt(csv, delimiter=",", skiprows=1, ndmin=2, dtype=float)
+        except FcompError:
+            raise
+        except (ValueError, UnicodeDecodeError) as exc:
+            raise FcompError(f"{csv}: cannot read as CSV numbers ({str(exc).splitlines()[0]})") from None
+        if raw.shape[1] != len(names):
+            raise FcompError(f"{csv}: {raw.shape[1]} values per row but {len(names)} column names")
+        if drop_nan:
+            raw = raw[np.all(np.isfinite(raw), axis=1)]
+        cols = {n: raw[:, i] for i, n in enumerate(names)}
+        try:
+            return cls(cols, meta)
+        except FcompError as exc:
+            msg = str(exc)
+            raise FcompError(msg if msg.startswith(str(csv)) else f"{csv}: {msg.split(': ', 1)[-1]}") from None
+
+
+def sidecar_paths(path: str | Path) -> tuple[Path, Path]:
+    p = Path(path)
+    csv = p if p.suffix == ".csv" else p.with_suffix(".csv")
+    return csv, csv.with_suffix(".toml")
+
+
+def _atomic_write(path: Path, text: str) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    tmp.write_text(text)
+    os.replace(tmp, path)
+
+
+def _toml_value(v: Any) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, int | float):
+        f = float(v)
+        if math.isinf(f):
+            return "inf" if f > 0 else "-inf"
+        if math.isnan(f):
+            return "nan"
+        return repr(v)
+    if isinstance(v, str):
+        return '"' + v.replace("\\", "\\\\").replace('"', '\\"').replace("\n", "\\n") + '"'
+    if isinstance(v, list | tuple):
+        return "[" + ", ".join(_toml_value(x) for x in v) + "]"
+    if isinstance(v, Mapping):
+        return "{" + ", ".join(f"{_key(k)} = {_toml_value(x)}" for k, x in v.items()) + "}"
+    raise TypeError(f"cannot write {type(v).__name__} to TOML")
+
+
+def _key(k: str) -> str:
+    return k if k.replace("_", "").replace("-", "").isalnum() else _toml_value(k)
+
+
+def dumps_toml(doc: Mapping[str, Any], _prefix: str = "") -> str:
+    """A minimal TOML writer for sidecars (scalars, arrays, nested tables)."""
+    lines: list[str] = []
+    tables: list[tuple[str, Mapping[str, Any]]] = []
+    for k, v in doc.items():
+        if isinstance(v, Mapping):
+            tables.append((k, v))
+        else:
+            lines.append(f"{_key(k)} = {_toml_value(v)}")
+    out = "\n".join(lines) + ("\n" if lines else "")
+    for k, v in tables:
+        name = f"{_prefix}{_key(k)}"
+        out += f"\n[{name}]\n" + dumps_toml(v, name + ".")
+    return out
+
+
+def from_arrays(meta: Mapping[str, Any] | None = None, **columns: Iterable[float]) -> Measurement:
+    """A :class:`Measurement` from keyword arrays (``t`` required)."""
+    return Measurement({k: np.asarray(list(v) if not isinstance(v, np.ndarray) else v)
+                        for k, v in columns.items()}, dict(meta or {}))

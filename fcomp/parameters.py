@@ -28,6 +28,7 @@ from typing import Any, ClassVar, TypeVar
 
 from fcomp.backend import Backend
 
+
 @dataclass(frozen=True)
 class Directional:
     """A parameter with separate magnitudes for ``v > 0`` (``pos``) and ``v < 0`` (``neg``).

@@ -44,7 +44,6 @@ from fcomp.models.base import FrictionModel, Signals, side_of
 from fcomp.parameters import ParamValues
 
 
-
 @dataclass(frozen=True)
 class FrictionRun:
     """Friction along a motion (SI): time, signals, states and force at every sample."""

@@ -71,13 +71,23 @@ def compiler() -> str | None:
 
 
 def _build(step: ca.Function, nx: int, nu: int) -> Path | None:
+    driver = _DRIVER.replace("STEP", step.name()).replace("NX", str(nx)).replace("NU", str(nu))
+    return build_library(step, driver)
+
+
+def build_library(fn: ca.Function, driver: str) -> Path | None:
+    """Compile CasADi's C code of ``fn`` followed by the C ``driver`` into a cached shared library.
+
+    Returns the library path, or ``None`` without a working compiler (callers
+    then fall back to CasADi's virtual machine or a Python loop).
+    """
     cc = compiler()
     if cc is None:
         return None
-    name = step.name()
+    name = fn.name()
     with tempfile.TemporaryDirectory() as tmp:
         cg = ca.CodeGenerator(f"{name}.c", {"with_header": False, "casadi_real": "double"})
-        cg.add(step)
+        cg.add(fn)
         cwd = os.getcwd()
         try:
             os.chdir(tmp)
@@ -85,7 +95,6 @@ def _build(step: ca.Function, nx: int, nu: int) -> Path | None:
         finally:
             os.chdir(cwd)
         src = Path(tmp) / f"{name}.c"
-        driver = _DRIVER.replace("STEP", name).replace("NX", str(nx)).replace("NU", str(nu))
         code = src.read_text() + driver
         key = hashlib.sha1((code + cc).encode()).hexdigest()[:16]
         lib = cache_dir() / f"{name}_{key}.so"

@@ -5,6 +5,25 @@ sidecar metadata. It is written as ``NAME.csv`` (header line, one row per
 sample, ``.`` decimal point, full ``repr`` precision so a round trip is
 lossless) and ``NAME.toml`` (the rig and the conventions); unknown columns
 and sidecar keys are carried through unchanged.
+
+Validation (:meth:`Measurement.validate`, run on construction, before writing
+and after reading) enforces data-format.md: a ``t`` column, strictly
+increasing time, finite values, columns of equal length, and plausible SI
+units. The unit checks are deliberately coarse, to catch the usual mistakes
+without rejecting real data:
+
+* ``rig.bore`` and ``rig.rod`` above 2 m, or ``rig.stroke`` above 20 m, are
+  taken as millimetres and refused;
+* a ``p1``/``p2`` column whose largest magnitude is above zero but below
+  50 Pa is taken as bar or MPa and refused (a pressure transducer on a real
+  chamber reads thousands of pascals; an all-zero column, a chamber vented
+  to atmosphere in gauge pressure, is accepted); absolute pressures must not
+  be negative;
+* an ``x`` column spanning more than 20 m, or more than twice ``rig.stroke``
+  plus 10 mm, is taken as millimetres and refused;
+* ``signals.u_unit``, where given, must be ``"A"`` or ``"V"``.
+
+Every error is one line naming the file (or measurement) and the problem.
 """
 
 from __future__ import annotations
@@ -12,6 +31,7 @@ from __future__ import annotations
 import math
 import os
 import tomllib
+import warnings
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -29,6 +49,11 @@ COLUMN_UNITS: dict[str, str] = {
 KINDS = ("pneumatic-cylinder", "hydraulic-cylinder", "friction-rig")
 ORIENTATIONS = {"horizontal": 0.0, "vertical-up": 1.0, "vertical-down": -1.0}
 G = 9.80665
+#: Largest plausible value of each length in ``[rig]`` (m); larger ones are taken as mm.
+MAX_LENGTH = {"bore": 2.0, "rod": 2.0, "stroke": 20.0}
+#: A non-zero pressure column whose largest magnitude is below this (Pa) is bar or MPa.
+MIN_PRESSURE_SCALE = 50.0
+U_UNITS = ("A", "V")
 
 
 @dataclass
@@ -91,11 +116,19 @@ class Measurement:
         rod = float(self.meta.get("rig", {}).get("rod", 0.0))
         return math.pi / 4 * bore**2, math.pi / 4 * (bore**2 - rod**2)
 
-    def gauge_pressures(self) -> tuple[np.ndarray, np.ndarray]:
-        """``p1, p2`` as gauge pressures (Pa), converting from absolute if the sidecar says so."""
+    def gauge_pressure(self, name: str) -> np.ndarray:
+        """Column ``name`` (``p1`` or ``p2``) as gauge pressure (Pa).
+
+        ``p_gauge = p - p_atm`` when the sidecar says ``pressure = "absolute"``
+        (``p_atm`` from the sidecar, default 101325 Pa), else the column itself.
+        """
         p_atm = float(self.meta.get("p_atm", 101325.0))
         shift = p_atm if self.meta.get("pressure", "gauge") == "absolute" else 0.0
-        return self["p1"] - shift, self["p2"] - shift
+        return self[name] - shift
+
+    def gauge_pressures(self) -> tuple[np.ndarray, np.ndarray]:
+        """``p1, p2`` as gauge pressures (Pa), converting from absolute if the sidecar says so."""
+        return self.gauge_pressure("p1"), self.gauge_pressure("p2")
 
     def select(self, mask: np.ndarray) -> Measurement:
         """The samples where ``mask`` is true (a contiguous slice keeps time increasing)."""
@@ -144,30 +177,69 @@ class Measurement:
                         f"{self.label}: sidecar rig.{key} must be a non-negative number in SI "
                         f"units, got {val!r}"
                     )
+        for key, limit in MAX_LENGTH.items():
+            if key in rig and rig[key] > limit:
+                raise FcompError(
+                    f"{self.label}: sidecar rig.{key} = {rig[key]} m is implausible; "
+                    "lengths are in metres (SI), not millimetres"
+                )
         if "bore" in rig and "rod" in rig and rig["rod"] >= rig["bore"]:
             raise FcompError(f"{self.label}: sidecar rig.rod ({rig['rod']}) must be smaller than rig.bore ({rig['bore']})")
-        if "bore" in rig and rig["bore"] > 2.0:
-            raise FcompError(
-                f"{self.label}: sidecar rig.bore = {rig['bore']} m is implausible; "
-                "lengths are in metres (SI)"
-            )
         orient = rig.get("orientation", "horizontal")
         if orient not in ORIENTATIONS:
             raise FcompError(
                 f"{self.label}: sidecar rig.orientation must be one of {', '.join(ORIENTATIONS)}"
+            )
+        self._check_units(pr, rig)
+
+    def _check_units(self, pressure: str, rig: Mapping[str, Any]) -> None:
+        """Coarse SI plausibility checks of the columns (see the module docstring)."""
+        for name in ("p1", "p2"):
+            if name not in self.columns:
+                continue
+            col = self.columns[name]
+            peak = float(np.max(np.abs(col)))
+            if 0.0 < peak < MIN_PRESSURE_SCALE:
+                raise FcompError(
+                    f"{self.label}: column {name!r} peaks at {peak:g}, which looks like bar or "
+                    "MPa; pressures are in Pa (multiply bar by 1e5)"
+                )
+            if pressure == "absolute" and float(np.min(col)) < 0.0:
+                raise FcompError(
+                    f"{self.label}: column {name!r} has a negative absolute pressure "
+                    f"({float(np.min(col)):g} Pa); is it gauge? set pressure = \"gauge\""
+                )
+        if "x" in self.columns:
+            x = self.columns["x"]
+            span = float(np.max(x) - np.min(x))
+            limit = 20.0
+            if isinstance(rig.get("stroke"), int | float) and rig["stroke"] > 0:
+                limit = min(limit, 2.0 * float(rig["stroke"]) + 0.01)
+            if span > limit:
+                raise FcompError(
+                    f"{self.label}: column 'x' spans {span:g} m, more than is plausible "
+                    f"({limit:g} m); positions are in metres, not millimetres"
+                )
+        signals = self.meta.get("signals", {})
+        if not isinstance(signals, Mapping):
+            raise FcompError(f"{self.label}: sidecar [signals] must be a table")
+        if "u_unit" in signals and signals["u_unit"] not in U_UNITS:
+            raise FcompError(
+                f"{self.label}: sidecar signals.u_unit must be 'A' or 'V' (SI), got "
+                f"{signals['u_unit']!r}; convert the u column"
             )
 
     # -------------------------------------------------------------------- I/O
     def write(self, path: str | Path) -> tuple[Path, Path]:
         """Write ``path`` (``.csv``) and its sidecar ``.toml`` atomically; return both paths."""
         csv, toml = sidecar_paths(path)
+        self.validate()  # columns may have been changed in place since construction
         names = list(self.columns)
         data = np.column_stack([self.columns[k] for k in names])
         lines = [",".join(names)]
-        lines += [",".join(repr(float(x)) for x in row) for row in data]
+        lines += [",".join(map(repr, row)) for row in data.tolist()]
         meta = {k: v for k, v in self.meta.items() if not k.startswith("_")}
-        _atomic_write(csv, "\n".join(lines) + "\n")
-        _atomic_write(toml, dumps_toml(meta))
+        _atomic_write_all({csv: "\n".join(lines) + "\n", toml: dumps_toml(meta)})
         return csv, toml
 
     @classmethod
@@ -182,6 +254,8 @@ class Measurement:
                 meta = tomllib.loads(toml.read_text())
             except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
                 raise FcompError(f"{toml}: not valid TOML ({exc})") from None
+            except OSError as exc:
+                raise FcompError(f"{toml}: cannot read ({exc.strerror or exc})") from None
         meta.setdefault("name", csv.stem)
         meta["_path"] = str(csv)
         try:
@@ -192,21 +266,39 @@ class Measurement:
                 raise FcompError(f"{csv}: the first line must be comma-separated column names")
             if len(set(names)) != len(names):
                 raise FcompError(f"{csv}: duplicate column names in the header")
-            raw = np.loadtxt(csv, delimiter=",", skiprows=1, ndmin=2, dtype=float)
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", UserWarning)  # "empty input": reported below
+                raw = np.loadtxt(csv, delimiter=",", skiprows=1, ndmin=2, dtype=float)
         except FcompError:
             raise
         except (ValueError, UnicodeDecodeError) as exc:
             raise FcompError(f"{csv}: cannot read as CSV numbers ({str(exc).splitlines()[0]})") from None
+        except OSError as exc:
+            raise FcompError(f"{csv}: cannot read ({exc.strerror or exc})") from None
+        if raw.size == 0:
+            raise FcompError(f"{csv}: no data rows after the header")
         if raw.shape[1] != len(names):
             raise FcompError(f"{csv}: {raw.shape[1]} values per row but {len(names)} column names")
         if drop_nan:
             raw = raw[np.all(np.isfinite(raw), axis=1)]
         cols = {n: raw[:, i] for i, n in enumerate(names)}
-        try:
-            return cls(cols, meta)
-        except FcompError as exc:
-            msg = str(exc)
-            raise FcompError(msg if msg.startswith(str(csv)) else f"{csv}: {msg.split(': ', 1)[-1]}") from None
+        return checked(cols, meta, csv)
+
+
+def checked(columns: Mapping[str, np.ndarray], meta: Mapping[str, Any],
+            source: str | Path) -> Measurement:
+    """A validated :class:`Measurement` whose validation errors name ``source``.
+
+    For readers and importers: the message becomes ``"SOURCE: problem"`` (the file
+    the user gave) rather than the measurement's own name.
+    """
+    try:
+        return Measurement(dict(columns), dict(meta))
+    except FcompError as exc:
+        msg = str(exc)
+        if not msg.startswith(str(source)):
+            msg = f"{source}: {msg.split(': ', 1)[-1]}"
+        raise FcompError(msg) from None
 
 
 def sidecar_paths(path: str | Path) -> tuple[Path, Path]:
@@ -215,11 +307,26 @@ def sidecar_paths(path: str | Path) -> tuple[Path, Path]:
     return csv, csv.with_suffix(".toml")
 
 
-def _atomic_write(path: Path, text: str) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    tmp.write_text(text)
-    os.replace(tmp, path)
+def _atomic_write_all(files: Mapping[Path, str]) -> None:
+    """Write every file to a temporary name first, then rename them all into place.
+
+    Nothing appears under a final name unless every file could be written.
+    """
+    for path in files:
+        if path.is_dir():
+            raise FcompError(f"{path}: is a directory, cannot write a file there")
+    tmps: dict[Path, Path] = {}
+    try:
+        for path, text in files.items():
+            path.parent.mkdir(parents=True, exist_ok=True)
+            tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+            tmps[path] = tmp
+            tmp.write_text(text)
+        for path, tmp in tmps.items():
+            os.replace(tmp, path)
+    finally:
+        for tmp in tmps.values():
+            tmp.unlink(missing_ok=True)
 
 
 def _toml_value(v: Any) -> str:

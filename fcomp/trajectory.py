@@ -75,9 +75,14 @@ def _phi1(y: Any) -> Any:
 _MODEL_BY_KEY: dict[tuple, FrictionModel] = {}
 
 
-@lru_cache(maxsize=64)
-def _stepper(key: tuple, substeps: int, compiled: bool) -> Loop:
-    model = _MODEL_BY_KEY[key]
+def friction_step(model: FrictionModel, substeps: int = 1) -> ca.Function:
+    """The CasADi step ``(x, sig, dt, p) -> x_next`` of the scheme above.
+
+    ``sig`` is the interval-mean signal vector ``[v, a, x, p1, p2, s]``, ``p``
+    the flat parameters in the order of :meth:`FrictionModel.flat_params`.
+    Identification differentiates this same step for exact sensitivities.
+    """
+    model.require_symbolic()
     nx = model.n_states
     names = list(model.flat_params())
     x = ca.SX.sym("x", nx)
@@ -92,8 +97,12 @@ def _stepper(key: tuple, substeps: int, compiled: bool) -> Loop:
         f = ca.vertcat(*model.rhs(CASADI, xl, sig, P))
         J = ca.diag(ca.jacobian(f, xk))
         xk = xk + h * _phi1(h * J) * f
-    step = ca.Function("fcomp_friction_step", [x, sigv, dt, p], [xk])
-    return stepping_loop(step, compiled=compiled)
+    return ca.Function("fcomp_friction_step", [x, sigv, dt, p], [xk])
+
+
+@lru_cache(maxsize=64)
+def _stepper(key: tuple, substeps: int, compiled: bool) -> Loop:
+    return stepping_loop(friction_step(_MODEL_BY_KEY[key], substeps), compiled=compiled)
 
 
 def _as_array(name: str, value: Any, n: int) -> np.ndarray:

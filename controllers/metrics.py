@@ -1,0 +1,145 @@
+"""Closed-loop metrics: tracking, steady state, hunting, reversals, valve activity, compute time.
+
+All errors are computed on the *true* plant position (not the noisy,
+quantised measurement the controller saw): ``e = r - x`` (m).
+
+================================ =================================================
+metric                            definition
+================================ =================================================
+``rms_error`` (m)                 ``sqrt(mean(e^2))`` over the whole run
+``max_error`` (m)                 ``max |e|`` over the whole run
+``steady_state_error`` (m)        mean of ``|mean(e)|`` over the task's settle
+                                  windows (the constant part of the error where
+                                  the reference holds still or moves steadily);
+                                  for the periodic tasks the window is the last
+                                  period and the value is the RMS error there
+``hunting_amplitude`` (m)         limit-cycle amplitude: the largest half
+                                  peak-to-peak of ``e`` over the settle windows
+                                  (0 for a loop that settles), ``None`` for the
+                                  periodic tasks
+``reversal_error`` (m)            RMS of ``e`` in windows centred on the
+                                  reference-velocity reversals (``None`` if the
+                                  task has none)
+``valve_activity`` (1/s)          total variation of the valve command per
+                                  second, in units of the valve range:
+                                  ``sum|du| / (u_max * duration)``
+``solve_time_median``, ``_max``   wall-clock time of the controller's
+(s)                               ``step`` call, median and maximum
+``fallbacks`` (-)                 steps where the controller could not apply its
+                                  law and used its stated fallback (MPC solve
+                                  failure): counted, never hidden
+================================ =================================================
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass
+from typing import Any
+
+import numpy as np
+
+from fcomp.errors import FcompError
+
+
+@dataclass(frozen=True)
+class Metrics:
+    """The metrics of one closed-loop run (see the module docstring; SI units)."""
+
+    rms_error: float
+    max_error: float
+    steady_state_error: float
+    hunting_amplitude: float | None
+    reversal_error: float | None
+    valve_activity: float
+    solve_time_median: float
+    solve_time_max: float
+    fallbacks: int
+    steps: int
+
+    def as_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+
+def _mask(t: np.ndarray, a: float, b: float) -> np.ndarray:
+    return (t >= a) & (t <= b)
+
+
+def compute_metrics(
+    t: np.ndarray,
+    r: np.ndarray,
+    x: np.ndarray,
+    u: np.ndarray,
+    solve_times: np.ndarray,
+    *,
+    u_max: float,
+    settle: Sequence[tuple[float, float]],
+    reversals: Sequence[float] = (),
+    reversal_window: float = 0.2,
+    periodic: bool = False,
+    fallbacks: int = 0,
+) -> Metrics:
+    """Metrics of a run sampled at ``t`` (s).
+
+    Parameters
+    ----------
+    t, r, x
+        Sample times (s), reference and true position (m).
+    u
+        Valve command applied over each sample interval.
+    solve_times
+        Wall-clock duration of each controller step (s).
+    u_max
+        Half range of the valve command (its unit), for ``valve_activity``.
+    settle
+        Settle windows ``(t0, t1)`` (s).
+    reversals, reversal_window
+        Reversal times (s) and full window width (s).
+    periodic
+        Whether the task is periodic (steady-state error is then an RMS, and
+        there is no hunting amplitude).
+    fallbacks
+        Number of fallback steps the controller reported.
+    """
+    t = np.asarray(t, dtype=float)
+    e = np.asarray(r, dtype=float) - np.asarray(x, dtype=float)
+    if t.size < 2 or e.shape != t.shape:
+        raise FcompError("metrics need at least two samples of equal length")
+    if not np.all(np.isfinite(e)):
+        raise FcompError("the closed loop produced non-finite positions (unstable run)")
+    if not settle:
+        raise FcompError("metrics need at least one settle window inside the run")
+    duration = float(t[-1] - t[0])
+    sse: list[float] = []
+    hunt: list[float] = []
+    for a, b in settle:
+        m = _mask(t, a, b)
+        if not m.any():
+            raise FcompError(f"settle window {a}..{b} s holds no sample")
+        ew = e[m]
+        sse.append(float(np.sqrt(np.mean(ew**2))) if periodic else abs(float(np.mean(ew))))
+        hunt.append(0.5 * float(ew.max() - ew.min()))
+    rev: float | None = None
+    if reversals:
+        m = np.zeros_like(t, dtype=bool)
+        for tr in reversals:
+            m |= _mask(t, tr - reversal_window / 2, tr + reversal_window / 2)
+        rev = float(np.sqrt(np.mean(e[m] ** 2)))
+    u = np.asarray(u, dtype=float)
+    activity = float(np.sum(np.abs(np.diff(u))) / (u_max * duration)) if u.size > 1 else 0.0
+    st = np.asarray(solve_times, dtype=float)
+    return Metrics(
+        rms_error=float(np.sqrt(np.mean(e**2))),
+        max_error=float(np.max(np.abs(e))),
+        steady_state_error=float(np.mean(sse)),
+        hunting_amplitude=None if periodic else float(max(hunt)),
+        reversal_error=rev,
+        valve_activity=activity,
+        solve_time_median=float(np.median(st)) if st.size else 0.0,
+        solve_time_max=float(np.max(st)) if st.size else 0.0,
+        fallbacks=int(fallbacks),
+        steps=int(st.size),
+    )
+
+
+__all__ = ["Metrics", "compute_metrics"]

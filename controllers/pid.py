@@ -1,0 +1,219 @@
+"""``pid``: PID position control with a derivative filter and anti-windup.
+
+The PID acts on the position error ``e = r - x`` (m) and produces a *force
+demand* (N); :mod:`controllers.force_to_valve` turns the force demand into
+the valve command. Every force-based controller of the package
+(``pid-ff``, ``lugre-observer``, ``ekf``) is this PID plus a friction
+estimate added to the demand, so they differ only in the compensation::
+
+    F_d = m*d2r/dt2 + F_g + kp*e + ki*I + kd*(dr/dt - v_f) + F_hat
+
+with ``F_g`` the weight the actuator carries (``m*g`` for a vertical
+cylinder extending upward, 0 for a horizontal one), ``v_f`` the velocity
+from the measured position through the derivative filter (first order,
+cut-off ``derivative_cutoff`` Hz; backward Euler)::
+
+    v_f[k] = (Tf*v_f[k-1] + x[k] - x[k-1]) / (Tf + dt),   Tf = 1/(2*pi*f_d)
+
+and ``F_hat`` the friction estimate (0 for ``pid``). The integral is the
+backward-Euler sum of ``e`` with *anti-windup* by back-calculation (gain
+``kt``, 1/s; Astrom & Hagglund, *Advanced PID Control*, 2006, sec. 3.5): when
+the force demand exceeds what the actuator can produce
+(``[F_min, F_max]``, from the supply pressure and the piston areas) the
+integral is bled by ``kt*(F_sat - F_d)/ki`` per second, and it is frozen
+while the valve command itself saturates in the direction of the error.
+
+Default gains place the three closed-loop poles of the nominal
+mass-plus-force-loop at ``-w`` (``w = bandwidth`` rad/s):
+``kp = 3*m*w^2``, ``ki = m*w^3``, ``kd = 3*m*w``.
+
+**Unstable gains are refused**: :func:`check_stability` builds the sampled
+loop of the nominal model (mass ``m``, first-order force loop with the
+bandwidth of :mod:`controllers.force_to_valve`, zero-order hold at the
+controller rate) with python-control and raises :class:`FcompError` when a
+closed-loop pole lies on or outside the unit circle.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+import numpy as np
+
+from controllers.base import Controller, Reference
+from fcomp.errors import FcompError
+
+
+@dataclass(frozen=True)
+class PIDGains:
+    """PID gains (SI): ``kp`` N/m, ``ki`` N/(m s), ``kd`` N s/m, cut-off Hz, ``kt`` 1/s."""
+
+    kp: float
+    ki: float
+    kd: float
+    derivative_cutoff: float = 60.0
+    kt: float = 20.0
+
+    def __post_init__(self) -> None:
+        for name in ("kp", "ki", "kd", "derivative_cutoff", "kt"):
+            val = getattr(self, name)
+            if not (isinstance(val, int | float) and math.isfinite(val) and val >= 0):
+                raise FcompError(f"pid gain {name} must be a finite number >= 0, got {val!r}")
+        if self.kp == 0:
+            raise FcompError("pid gain kp must be positive (a position loop needs it)")
+        if self.derivative_cutoff == 0:
+            raise FcompError("pid derivative_cutoff must be positive (Hz)")
+
+    @classmethod
+    def placed(cls, mass: float, bandwidth: float, **extra: float) -> PIDGains:
+        """Gains placing the nominal closed-loop poles at ``-bandwidth`` (rad/s)."""
+        if not (math.isfinite(bandwidth) and bandwidth > 0):
+            raise FcompError(f"pid bandwidth must be a positive number (rad/s), got {bandwidth}")
+        w = bandwidth
+        return cls(kp=3 * mass * w**2, ki=mass * w**3, kd=3 * mass * w, **extra)
+
+
+def check_stability(gains: PIDGains, mass: float, force_bandwidth: float, dt: float) -> float:
+    """Largest closed-loop pole magnitude of the nominal sampled loop; raise if >= 1.
+
+    Nominal plant ``1/(m s^2) * 1/(s/w_F + 1)`` discretised with a zero-order
+    hold at ``dt``; controller the discrete PID of this module.
+    """
+    import control as ct
+
+    tau = 1.0 / force_bandwidth
+    plant = ct.c2d(ct.tf([1.0], [mass * tau, mass, 0.0, 0.0]), dt, "zoh")
+    z = ct.tf([1.0, 0.0], [1.0], dt)
+    Tf = 1.0 / (2 * math.pi * gains.derivative_cutoff)
+    C = gains.kp + gains.ki * dt * z / (z - 1) + gains.kd * (z - 1) / ((Tf + dt) * z - Tf)
+    poles = ct.feedback(C * plant, 1).poles()
+    rho = float(np.max(np.abs(poles)))
+    if not rho < 1.0:
+        raise FcompError(
+            f"pid gains kp={gains.kp:.4g}, ki={gains.ki:.4g}, kd={gains.kd:.4g} give an unstable "
+            f"closed loop on the nominal model (largest pole |z| = {rho:.4f} >= 1 at "
+            f"{1 / dt:.0f} Hz); lower the gains or the bandwidth"
+        )
+    return rho
+
+
+class PIDLaw:
+    """The discrete PID of the module docstring (state: integral, filtered velocity)."""
+
+    def __init__(self, gains: PIDGains, dt: float) -> None:
+        self.gains = gains
+        self.dt = dt
+        self.Tf = 1.0 / (2 * math.pi * gains.derivative_cutoff)
+        self.reset(0.0)
+
+    def reset(self, x0: float) -> None:
+        self.integral = 0.0
+        self.v_f = 0.0
+        self.x_prev = x0
+
+    def velocity(self, x: float) -> float:
+        """Update and return the filtered velocity ``v_f`` (m/s) from the measured position."""
+        self.v_f = (self.Tf * self.v_f + x - self.x_prev) / (self.Tf + self.dt)
+        self.x_prev = x
+        return self.v_f
+
+    def force(self, e: float, dr: float) -> float:
+        """``kp*e + ki*I + kd*(dr - v_f)`` with the integral *before* this sample's update."""
+        g = self.gains
+        return g.kp * e + g.ki * self.integral + g.kd * (dr - self.v_f)
+
+    def integrate(self, e: float, demand: float, applied: float, valve_saturated: int) -> None:
+        """Advance the integral: back-calculation, frozen while the valve saturates with ``e``.
+
+        ``valve_saturated`` is +1 / -1 when the valve command hit its upper /
+        lower limit, 0 otherwise.
+        """
+        g = self.gains
+        if g.ki == 0:
+            return
+        if valve_saturated * e > 0:
+            return
+        self.integral += self.dt * (e + g.kt * (applied - demand) / g.ki)
+
+
+class PIDController(Controller):
+    """PID position control, force demand through the valve model (see the module docstring).
+
+    Parameters
+    ----------
+    model
+        The controller's own view of the plant (:class:`controllers.base.ControlModel`).
+    rate
+        Sample rate (Hz); default the plant's control rate.
+    bandwidth
+        Closed-loop bandwidth (rad/s) placing the default gains.
+    kp, ki, kd
+        Gains (N/m, N/(m s), N s/m) overriding the placed ones.
+    derivative_cutoff
+        Derivative filter cut-off (Hz).
+    kt
+        Anti-windup back-calculation gain (1/s).
+    force_bandwidth
+        Bandwidth of the force loop (rad/s) of :mod:`controllers.force_to_valve`.
+    """
+
+    name: ClassVar[str] = "pid"
+    options: ClassVar[tuple[str, ...]] = (
+        "rate", "bandwidth", "kp", "ki", "kd", "derivative_cutoff", "kt", "force_bandwidth",
+    )
+
+    def __init__(self, model: Any, **options: Any) -> None:
+        super().__init__(model, **options)
+        o = self.opts
+        placed = PIDGains.placed(model.mass, float(o.get("bandwidth", model.pid_bandwidth)))
+        self.gains = PIDGains(
+            kp=float(o.get("kp", placed.kp)), ki=float(o.get("ki", placed.ki)),
+            kd=float(o.get("kd", placed.kd)),
+            derivative_cutoff=float(o.get("derivative_cutoff", 60.0)),
+            kt=float(o.get("kt", 20.0)),
+        )
+        from controllers.force_to_valve import ForceToValve
+
+        self.valve = ForceToValve(model, float(o.get("force_bandwidth", model.force_bandwidth)))
+        self.stability_radius = check_stability(self.gains, model.mass, self.valve.bandwidth,
+                                                self.dt)
+        self.law = PIDLaw(self.gains, self.dt)
+        self.F_demand = 0.0
+
+    # hooks for the compensators ------------------------------------------------
+    def reset_compensation(self, y0: np.ndarray, ref: Reference) -> None:
+        """Reset the friction estimator (none for plain PID)."""
+
+    def compensation(self, t: float, y: np.ndarray, ref: Reference, v: float) -> float:
+        """Friction force estimate ``F_hat`` (N) to add to the demand (0 for plain PID)."""
+        return 0.0
+
+    def velocity_estimate(self, v_f: float) -> float:
+        """Velocity (m/s) the force-to-valve inversion uses (the filtered one here)."""
+        return v_f
+
+    # contract ---------------------------------------------------------------------
+    def reset(self, t0: float, y0: np.ndarray, ref: Reference) -> None:
+        self.law.reset(float(y0[0]))
+        self.valve.reset()
+        self.friction_estimate = 0.0
+        self.fallbacks = 0
+        self.fallback_active = False
+        self.reset_compensation(y0, ref)
+
+    def step(self, t: float, y: np.ndarray, ref: Reference) -> float:
+        x = float(y[0])
+        e = ref.r - x
+        v_f = self.law.velocity(x)
+        F_hat = self.compensation(t, y, ref, v_f)
+        self.friction_estimate = F_hat
+        m = self.model
+        demand = m.mass * ref.ddr + m.weight + self.law.force(e, ref.dr) + F_hat
+        applied = min(max(demand, m.force_min), m.force_max)
+        u, sat = self.valve.command(applied, y, self.velocity_estimate(v_f))
+        self.law.integrate(e, demand, applied, sat)
+        self.F_demand = applied
+        self.last_u = u
+        return u

@@ -1,0 +1,94 @@
+"""The controller's prediction model: plant + friction equations, symbolic, discretised.
+
+The EKF and the MPC do not carry their own copy of any equation: they take
+the continuous-time right-hand side ``dx/dt = f(x, u)`` that the plant
+builds symbolically from its equations and the controller's own friction
+model (:mod:`plants`, one source of truth), and discretise it here at the
+controller's sample time.
+
+Discretisation: the *linearly implicit (Rosenbrock) Euler* step with the
+exact CasADi Jacobian ``J = df/dx``::
+
+    x_{k+1} = x_k + h * (I - h*J(x_k, u))^{-1} * f(x_k, u)
+
+applied ``substeps`` times per sample with the input held (Hairer & Wanner,
+*Solving ODEs II*, sec. IV.7). It is L-stable, so the stiff parts of the
+model -- the bristle state ``dz/dt = v - sigma0*|v|*z/g`` with
+``sigma0*|v|/g`` up to 1e4 1/s, the servo valve at 440 rad/s, the oil
+compliance -- neither blow up nor ring at a 1-2 ms step, and it is smooth
+in ``x`` and ``u``, as the EKF Jacobian and the MPC's Gauss-Newton
+linearisation need. It is first-order accurate; the tests measure its error
+against an accurate integration (``scipy.integrate.solve_ivp``, Radau) of
+the same equations.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import casadi as ca
+
+
+@dataclass(frozen=True)
+class ContinuousModel:
+    """A symbolic continuous-time model ``dx/dt = f(x, u)`` and what a controller reads from it.
+
+    Attributes
+    ----------
+    f
+        ``(x, u) -> dx/dt`` (CasADi function; ``u`` scalar valve command).
+    friction
+        ``(x, u) -> F`` the friction force (N) at state ``x``.
+    state_names
+        Names of the states (``x``, ``v``, ``p1``, ``p2``, valve states,
+        friction states ``z``, ``h``, ...).
+    measured
+        Indices of the measured states, in the order of the measurement
+        vector ``y = [x, p1, p2]``.
+    """
+
+    f: ca.Function
+    friction: ca.Function
+    state_names: tuple[str, ...]
+    measured: tuple[int, ...]
+
+    @property
+    def nx(self) -> int:
+        return len(self.state_names)
+
+    def index(self, name: str) -> int:
+        return self.state_names.index(name)
+
+
+def rosenbrock_euler(f: ca.Function, dt: float, substeps: int = 1) -> ca.Function:
+    """``(x, u) -> x_next``: ``substeps`` linearly implicit Euler steps over ``dt`` (s)."""
+    if substeps < 1:
+        raise ValueError("substeps must be >= 1")
+    nx = f.size1_in(0)
+    x = ca.SX.sym("x", nx)
+    u = ca.SX.sym("u", f.size1_in(1))
+    h = dt / substeps
+    xk = x
+    eye = ca.SX.eye(nx)
+    for _ in range(substeps):
+        fk = f(xk, u)
+        J = ca.jacobian(fk, xk)
+        xk = xk + h * ca.solve(eye - h * J, fk)
+    return ca.Function("rosenbrock_euler", [x, u], [xk], ["x", "u"], ["x_next"])
+
+
+def rollout(step: ca.Function, horizon: int, outputs: Sequence[int]) -> ca.Function:
+    """``(x0, U) -> Y``: ``horizon`` steps from ``x0`` under ``U`` (horizon,), outputs stacked.
+
+    ``Y`` is ``(len(outputs), horizon)``: the selected states after each step.
+    """
+    nx = step.size1_in(0)
+    x0 = ca.SX.sym("x0", nx)
+    U = ca.SX.sym("U", horizon)
+    xk = x0
+    cols = []
+    for k in range(horizon):
+        xk = step(xk, U[k])
+        cols.append(ca.vertcat(*[xk[i] for i in outputs]))
+    return ca.Function("rollout", [x0, U], [ca.horzcat(*cols)], ["x0", "U"], ["Y"])

@@ -1,0 +1,52 @@
+"""``fcomp import KIND SRC -o OUT.csv`` -- convert a real data file to the measurement format.
+
+KIND is ``emps`` (EMPS benchmark .mat), ``zillen`` (TU Delft pneumatic
+seal-friction text file), ``mataveid`` (MataveID hydraulic bench CSV) or ``mat``
+(any MATLAB .mat file with ``--map COLUMN=VARIABLE,...`` and an optional
+``--sidecar RIG.toml``). Writes OUT.csv and OUT.toml (SI units, provenance in
+the ``[source]`` table of the sidecar) atomically: on any error nothing is
+written and the command exits with status 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+from fcomp.cli.common import output_path
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    from fcomp.importers import IMPORTERS
+
+    kinds = ", ".join(f"{n} ({IMPORTERS.get(n).summary})" for n in IMPORTERS.names())
+    p = sub.add_parser("import", help="convert a real data file to the measurement format",
+                       description=__doc__)
+    p.add_argument("kind", metavar="KIND", help=f"the file's kind: {kinds}")
+    p.add_argument("src", metavar="SRC", help="the file to convert")
+    p.add_argument("-o", "--output", required=True, metavar="OUT.csv")
+    p.add_argument("--map", dest="mapping", default=None, metavar="COL=VAR,...",
+                   help="mat: column mapping, e.g. t=time,x=qm,F_ext=gtau*vir "
+                   "(products of variables and numbers; a leading - flips the sign)")
+    p.add_argument("--sidecar", default=None, metavar="RIG.toml",
+                   help="mat: a TOML file with kind, pressure, [rig], [signals] (data-format.md)")
+    p.add_argument("--bore", type=float, default=None, metavar="M",
+                   help="zillen: piston bore in m (default from the file name: 0.0257 if it "
+                   "contains 257, else 0.025)")
+    p.add_argument("--position-scale", type=float, default=None, metavar="M_PER_V",
+                   help="mataveid: a calibration of the position signal in m/V, adds x and x_ref")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from fcomp.errors import FcompError
+    from fcomp.importers import import_file
+
+    out = output_path(args.output)
+    options = {k: getattr(args, k) for k in ("mapping", "sidecar", "bore", "position_scale")
+               if getattr(args, k) is not None}
+    if args.kind == "mat" and "mapping" not in options:
+        raise FcompError("import mat: --map COLUMN=VARIABLE,... is required (t at least)")
+    meas = import_file(args.kind, args.src, **options)
+    csv, toml = meas.write(out)
+    print(f"wrote {csv} and {toml} ({len(meas)} samples, columns {', '.join(meas.columns)})")
+    return 0

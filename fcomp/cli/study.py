@@ -1,0 +1,39 @@
+"""``fcomp study NAME [--out DIR] [--fast]`` -- run a study; writes DIR/summary.json, figures and
+DIR/report.html (``all``: every study in DIR/NAME/ and DIR/index.html)."""
+
+from __future__ import annotations
+
+import argparse
+import shlex
+import sys
+from pathlib import Path
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("study", help="run a study and write its report", description=__doc__)
+    p.add_argument("name", help="study name: coulomb-viscous, friction-models, presliding, "
+                   "compensators, missing-physics, all (`fcomp list studies` shows those "
+                   "available)")
+    p.add_argument("--out", default=None, metavar="DIR",
+                   help="output directory (default: study-NAME in the current directory)")
+    p.add_argument("--fast", action="store_true",
+                   help="fast mode: shorter runs, as in CI")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from studies import STUDIES
+    from studies.base import StudyConfig, StudyError
+
+    study = STUDIES.get(args.name)
+    out = Path(args.out) if args.out else Path(f"study-{args.name}")
+    words = ["fcomp", "study", args.name, "--out", str(out)] + (["--fast"] if args.fast else [])
+    config = StudyConfig(out=out, fast=args.fast, command=shlex.join(words))
+    try:
+        study.main(config)
+    except StudyError as exc:
+        sys.stderr.write(f"fcomp: error: {exc}\n")
+        return 1
+    reports = " and ".join(str(out / f) for f in study.report_files)
+    print(f"wrote {out / 'summary.json'}, {reports}")
+    return 0

@@ -1,0 +1,324 @@
+"""The records a diagnosis works on: experiments, signals, the force to match, and data scales.
+
+A diagnosis reads one or several measurements. Each is cut into
+*experiments* -- runs whose friction states start afresh -- by its
+``experiment`` column when it has one (a user column, data-format.md keeps
+it), else at time gaps longer than :data:`GAP_FACTOR` median sample
+intervals. Per experiment the force to match and the motion come from
+:func:`fcomp.identification.target.fit_data` (a measured ``F``; else the
+friction reconstructed as ``p1*A1 - p2*A2 - m*a + F_ext``, models.md 2; else
+the driving force with the mass fitted). Velocity and acceleration missing
+from the file are derived from ``x`` by the zero-phase filter of
+:mod:`fcomp.reconstruction` with a cutoff set from the sample rate
+(:func:`default_cutoff`), so that presliding transients of a few
+milliseconds are not smeared.
+
+*Steady-state* records (sidecar ``[diagnosis] samples = "steady-state"``)
+hold independent steady-state points (each row a force at a constant
+velocity, e.g. the tables of seed 001) rather than a motion; only static
+models and memoryless effects can be compared with them.
+
+:class:`Scales` holds the magnitudes every threshold and bound of the
+diagnosis is derived from (force, speed, acceleration, stroke, pressure,
+position resolution), so nothing is tuned to one rig.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from fcomp.errors import FcompError
+from fcomp.identification.target import FitData, fit_data
+from fcomp.measurement import Measurement
+from fcomp.reconstruction import differentiate, smooth
+
+#: A time step longer than this many median steps starts a new experiment.
+GAP_FACTOR = 20.0
+#: Fewest samples an experiment must have.
+MIN_SAMPLES = 20
+STEADY_STATE = "steady-state"
+
+
+def default_cutoff(fs: float) -> float:
+    """Cutoff (Hz) of the zero-phase filter that derives ``v``, ``a`` from ``x``: ``min(fs/10, 50)``.
+
+    A tenth of the sample rate keeps the filter well inside the Nyquist band
+    for any rate; 50 Hz is enough for the presliding transients of seal
+    friction (milliseconds) while double differentiation of an encoder's
+    quantisation stays small.
+    """
+    return float(min(0.1 * fs, 50.0))
+
+
+@dataclass(frozen=True)
+class Scales:
+    """Magnitudes of a record, the reference of every data-derived threshold (SI).
+
+    Attributes
+    ----------
+    force : N
+        Typical friction magnitude: median ``|y|`` over moving samples.
+    speed : m/s
+        95th percentile of ``|v|``.
+    accel : m/s^2
+        95th percentile of ``|a|``.
+    x_min, x_max : m
+        1st and 99th percentiles of the position.
+    resolution : m
+        Position resolution: the smallest clearly non-zero step of ``x``.
+    p_mid, p_span : Pa
+        Mean and range (1st to 99th percentile) of ``p1 + p2``.
+    dt : s
+        Median sample interval.
+    duration : s
+        Total duration of all experiments.
+    """
+
+    force: float
+    speed: float
+    accel: float
+    x_min: float
+    x_max: float
+    resolution: float
+    p_mid: float
+    p_span: float
+    dt: float
+    duration: float
+
+    @property
+    def stroke(self) -> float:
+        """Position range covered (m), at least 100 resolutions."""
+        return max(self.x_max - self.x_min, 100.0 * self.resolution)
+
+
+@dataclass(frozen=True)
+class Experiment:
+    """One experiment: its fit data and its place in the concatenated arrays."""
+
+    label: str
+    data: FitData
+    start: int
+    stop: int
+
+    @property
+    def n(self) -> int:
+        return self.stop - self.start
+
+
+@dataclass
+class DiagnosisData:
+    """All experiments of a diagnosis, with the signals they hold and their scales.
+
+    Attributes
+    ----------
+    experiments
+        The experiments, in the order given.
+    available
+        Signal name -> whether it is measured and informative: ``"x"``
+        (measured position), ``"p1"``/``"p2"`` (measured, ``p1 + p2`` varies).
+    reasons
+        Signal name -> why it is not available (for the report).
+    scales
+        The data scales.
+    steady_state
+        Whether the samples are independent steady-state points.
+    source
+        Where the force came from (``"F"``, ``"reconstructed"``, ``"driving-force"``).
+    """
+
+    experiments: list[Experiment]
+    available: dict[str, bool]
+    reasons: dict[str, str]
+    scales: Scales
+    steady_state: bool
+    source: str
+    labels: list[str] = field(default_factory=list)
+
+    @property
+    def n(self) -> int:
+        return self.experiments[-1].stop
+
+    @property
+    def fits_mass(self) -> bool:
+        """Whether the mass is fitted (driving-force data without a known mass)."""
+        return self.experiments[0].data.inertia is not None
+
+    def signal(self, name: str) -> np.ndarray:
+        """A signal (``t``, ``v``, ``a``, ``x``, ``p1``, ``p2``, ``s``) concatenated over experiments."""
+        return np.concatenate([e.data.sig[name] for e in self.experiments])
+
+    @property
+    def y(self) -> np.ndarray:
+        """The force to match (N), concatenated."""
+        return np.concatenate([e.data.y for e in self.experiments])
+
+    def experiment_index(self) -> np.ndarray:
+        """Experiment number (0-based) of every sample."""
+        return np.concatenate([np.full(e.n, i) for i, e in enumerate(self.experiments)])
+
+
+def _cut(meas: Measurement) -> list[Measurement]:
+    """Experiments of one measurement: by the ``experiment`` column, else at long time gaps."""
+    t = meas.t
+    if "experiment" in meas:
+        ids = meas["experiment"]
+        change = np.nonzero(np.diff(ids) != 0)[0] + 1
+    else:
+        dt = np.diff(t)
+        med = float(np.median(dt))
+        change = np.nonzero(dt > GAP_FACTOR * med)[0] + 1
+    bounds = [0, *change.tolist(), len(meas)]
+    out = []
+    for k, (a, b) in enumerate(zip(bounds[:-1], bounds[1:], strict=True)):
+        if b - a < MIN_SAMPLES:
+            continue
+        mask = np.zeros(len(meas), dtype=bool)
+        mask[a:b] = True
+        sub = meas.select(mask)
+        if len(bounds) > 2:
+            sub.meta["name"] = f"{meas.label}[{k + 1}]"
+        out.append(sub)
+    if not out:
+        raise FcompError(f"{meas.label}: no experiment with at least {MIN_SAMPLES} samples")
+    return out
+
+
+def _motion_columns(meas: Measurement, cutoff_hz: float | None) -> Measurement:
+    """``meas`` with ``v`` and ``a`` columns (derived from ``x`` where absent)."""
+    if "v" in meas and "a" in meas:
+        return meas
+    t = meas.t
+    fs = (t.size - 1) / float(t[-1] - t[0])
+    fc = cutoff_hz if cutoff_hz is not None else default_cutoff(fs)
+    if "x" in meas:
+        _, v, a = differentiate(t, meas["x"], cutoff_hz=fc, label=meas.label)
+        cols = {"v": meas["v"] if "v" in meas else v}
+        if "a" not in meas:
+            cols["a"] = a if "v" not in meas else np.gradient(
+                smooth(t, meas["v"], cutoff_hz=fc, label=meas.label), t)
+        return meas.with_columns(**cols)
+    if "v" in meas:
+        vf = smooth(t, meas["v"], cutoff_hz=fc, label=meas.label)
+        return meas.with_columns(a=np.gradient(vf, t))
+    raise FcompError(f"{meas.label}: a diagnosis needs a position 'x' or velocity 'v' column")
+
+
+def _steady_state(meas: Measurement) -> bool:
+    diag = meas.meta.get("diagnosis", {})
+    mode = diag.get("samples", "motion") if isinstance(diag, dict) else "motion"
+    if mode not in ("motion", STEADY_STATE):
+        raise FcompError(f"{meas.label}: sidecar diagnosis.samples must be 'motion' or "
+                         f"'{STEADY_STATE}', got {mode!r}")
+    return mode == STEADY_STATE
+
+
+def _resolution(x: np.ndarray) -> float:
+    steps = np.abs(np.diff(x))
+    steps = steps[steps > 1e-12 * max(float(np.max(np.abs(x))), 1e-12)]
+    if steps.size == 0:
+        return 1e-6
+    return float(np.percentile(steps, 1.0))
+
+
+def prepare(
+    measurements: Measurement | Sequence[Measurement],
+    *,
+    cutoff_hz: float | None = None,
+) -> DiagnosisData:
+    """The :class:`DiagnosisData` of one or several measurements (see the module docstring).
+
+    Raises
+    ------
+    FcompError
+        When a record has no motion signal, no force to match, too few
+        samples, or mixes steady-state points with motion records.
+    """
+    meas_list = [measurements] if isinstance(measurements, Measurement) else list(measurements)
+    if not meas_list:
+        raise FcompError("no measurement to diagnose")
+    modes = {_steady_state(m) for m in meas_list}
+    if len(modes) > 1:
+        raise FcompError("the records mix steady-state points and motion records; "
+                         "diagnose them separately")
+    steady = modes.pop()
+    experiments: list[Experiment] = []
+    sources = set()
+    start = 0
+    x_measured = all("x" in m for m in meas_list)
+    p_measured = all("p1" in m and "p2" in m for m in meas_list)
+    for meas in meas_list:
+        for sub in ([meas] if steady else _cut(meas)):
+            if steady:
+                cols = {"a": np.zeros(len(sub))} if "a" not in sub else {}
+                if "v" not in sub:
+                    raise FcompError(f"{sub.label}: steady-state points need a 'v' column")
+                sub = sub.with_columns(**cols)
+            else:
+                sub = _motion_columns(sub, cutoff_hz)
+            d = fit_data(sub)
+            sources.add(d.source)
+            experiments.append(Experiment(sub.label, d, start, start + d.n))
+            start += d.n
+    if len(sources) > 1:
+        raise FcompError(f"the records give the force in different ways ({', '.join(sorted(sources))}); "
+                         "give every record an F column, or none")
+    if any((e.data.inertia is None) != (experiments[0].data.inertia is None)
+           for e in experiments):
+        raise FcompError("some records give rig.mass and others not; give it for all or none")
+    data = DiagnosisData(experiments, {}, {}, _scales(experiments), steady, sources.pop(),
+                         [e.label for e in experiments])
+    _availability(data, x_measured, p_measured)
+    return data
+
+
+def _scales(experiments: list[Experiment]) -> Scales:
+    cat = {k: np.concatenate([e.data.sig[k] for e in experiments])
+           for k in ("t", "v", "a", "x", "p1", "p2")}
+    y = np.concatenate([e.data.y for e in experiments])
+    speed = np.abs(cat["v"])
+    top = float(np.percentile(speed, 99.0))
+    moving = speed > 0.02 * top if top > 0 else np.zeros(speed.size, dtype=bool)
+    force = float(np.median(np.abs(y[moving]))) if moving.any() else float(np.median(np.abs(y)))
+    if not force > 0:
+        force = float(np.max(np.abs(y))) or 1.0
+    psum = cat["p1"] + cat["p2"]
+    dts = np.concatenate([np.diff(e.data.sig["t"]) for e in experiments])
+    x = cat["x"]
+    return Scales(
+        force=force,
+        speed=float(np.percentile(speed, 95.0)) or top or 1e-3,
+        accel=float(np.percentile(np.abs(cat["a"]), 95.0)) or 1.0,
+        x_min=float(np.percentile(x, 1.0)),
+        x_max=float(np.percentile(x, 99.0)),
+        resolution=float(min(np.median([_resolution(e.data.sig["x"]) for e in experiments]),
+                             1e-3)),
+        p_mid=float(np.mean(psum)),
+        p_span=float(np.percentile(psum, 99.0) - np.percentile(psum, 1.0)),
+        dt=float(np.median(dts)),
+        duration=float(sum(e.data.sig["t"][-1] - e.data.sig["t"][0] for e in experiments)),
+    )
+
+
+def _availability(data: DiagnosisData, x_measured: bool, p_measured: bool) -> None:
+    sc = data.scales
+    ok_x = x_measured and sc.x_max - sc.x_min > 20.0 * sc.resolution
+    data.available["x"] = ok_x
+    if not x_measured:
+        data.reasons["x"] = "no measured position column 'x'"
+    elif not ok_x:
+        data.reasons["x"] = "the position hardly varies"
+    ok_p = p_measured and sc.p_span > max(1000.0, 0.05 * abs(sc.p_mid))
+    for k in ("p1", "p2"):
+        data.available[k] = ok_p
+        if not p_measured:
+            data.reasons[k] = "no p1, p2 columns"
+        elif not ok_p:
+            data.reasons[k] = (f"p1 + p2 hardly varies (range {sc.p_span:.3g} Pa around "
+                               f"{sc.p_mid:.3g} Pa)")
+    data.available["a"] = not data.steady_state and not math.isclose(sc.accel, 0.0)
+    if not data.available["a"]:
+        data.reasons["a"] = "no acceleration in the data (steady-state points)"

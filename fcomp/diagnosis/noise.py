@@ -1,0 +1,127 @@
+"""The noise floor, estimated from the data, and the effective sample size of residuals.
+
+The noise floor is the RMS force error a *perfect* model would still leave:
+the sensor noise. It is estimated from stretches where the friction force is
+known to be smooth, so that what varies there is noise:
+
+1. ``rest`` -- runs at rest (``|v| <= v_rest``) of at least 10 samples,
+   trimmed by ``max(3 samples, 20 ms)`` at both ends; a straight line in
+   time is removed from each run (slow relaxation, pressure drift) and the
+   pooled variance of what remains, with ``n - 2`` degrees of freedom per
+   run, is the noise variance. Used when there are at least 50 such samples.
+2. ``sliding`` -- otherwise, runs of steady sliding (regime ``sliding``,
+   ``|a|`` below a tenth of the acceleration scale) of at least 20 samples,
+   each with a quadratic in time removed.
+3. ``difference`` -- otherwise ``std(diff(y))/sqrt(2)`` over the whole record
+   (exact for white noise, a lower bound for coloured noise).
+
+Removing a trend from a run of ``n`` samples of noise with correlation time
+``tau`` lowers its variance by roughly ``2*tau/T``; runs are long compared
+with sensor noise correlation, so the bias is small and on the low side.
+
+The *effective sample size* of a residual series is ``n/tau_int`` with
+``tau_int = 1 + 2*sum(rho_l)`` its integrated autocorrelation time
+(:func:`fcomp.identification.uncertainty.integrated_autocorrelation`); the
+information criterion and the significance tests of :mod:`.loop` use it
+because residuals of friction fits are far from independent.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from fcomp.diagnosis.data import DiagnosisData
+from fcomp.diagnosis.regimes import SLIDING, Segmentation
+from fcomp.identification.uncertainty import integrated_autocorrelation
+
+MIN_REST_RUN = 10
+MIN_REST_TOTAL = 50
+MIN_SLIDE_RUN = 20
+
+
+@dataclass(frozen=True)
+class NoiseFloor:
+    """The noise floor of a record.
+
+    Attributes
+    ----------
+    value : N
+        Standard deviation of the force noise.
+    method : str
+        ``"rest"``, ``"sliding"`` or ``"difference"`` (see the module docstring).
+    n_samples : int
+        Samples the estimate rests on.
+    runs : int
+        Number of runs pooled.
+    tau : s
+        Integrated autocorrelation time of the noise.
+    """
+
+    value: float
+    method: str
+    n_samples: int
+    runs: int
+    tau: float
+
+
+def effective_sample_size(r: np.ndarray) -> float:
+    """``n/tau_int`` of a residual series (see the module docstring)."""
+    r = np.asarray(r, dtype=float)
+    if r.size < 4:
+        return float(r.size)
+    return float(r.size / integrated_autocorrelation(r, max_lag=max(1, r.size // 10)))
+
+
+def _runs(mask: np.ndarray, min_len: int) -> list[tuple[int, int]]:
+    idx = np.flatnonzero(np.diff(np.concatenate([[0], mask.astype(int), [0]])))
+    return [(a, b) for a, b in zip(idx[::2], idx[1::2], strict=True) if b - a >= min_len]
+
+
+def _pooled(t: np.ndarray, y: np.ndarray, runs: list[tuple[int, int]], degree: int
+            ) -> tuple[float, int, np.ndarray]:
+    ss, dof, res = 0.0, 0, []
+    for a, b in runs:
+        tt = t[a:b] - t[a]
+        coef = np.polyfit(tt, y[a:b], degree)
+        r = y[a:b] - np.polyval(coef, tt)
+        ss += float(r @ r)
+        dof += (b - a) - (degree + 1)
+        res.append(r)
+    return (ss / dof if dof > 0 else math.nan), sum(b - a for a, b in runs), np.concatenate(res)
+
+
+def noise_floor(data: DiagnosisData, seg: Segmentation) -> NoiseFloor:
+    """The :class:`NoiseFloor` of ``data`` (see the module docstring)."""
+    t, v, a, y = data.signal("t"), data.signal("v"), data.signal("a"), data.y
+    dt = data.scales.dt
+    boundaries = np.zeros(data.n, dtype=bool)
+    for e in data.experiments:
+        boundaries[e.start] = True
+    if not data.steady_state:
+        trim = max(3, int(math.ceil(0.02 / dt)))
+        rest = (np.abs(v) <= seg.v_rest) & seg.valid
+        runs = [(s + trim, e - trim) for s, e in _runs(rest, MIN_REST_RUN + 2 * trim)]
+        runs = [(s, e) for s, e in runs if not boundaries[s + 1:e].any()]
+        if sum(e - s for s, e in runs) >= MIN_REST_TOTAL:
+            var, n, res = _pooled(t, y, runs, 1)
+            return NoiseFloor(math.sqrt(var), "rest", n, len(runs), _tau(res, runs, dt))
+        steady = (seg.regime == SLIDING) & (np.abs(a) < 0.1 * data.scales.accel) & seg.valid
+        runs = [r for r in _runs(steady, MIN_SLIDE_RUN) if not boundaries[r[0] + 1:r[1]].any()]
+        if sum(e - s for s, e in runs) >= MIN_REST_TOTAL:
+            var, n, res = _pooled(t, y, runs, 2)
+            return NoiseFloor(math.sqrt(var), "sliding", n, len(runs), _tau(res, runs, dt))
+    d = np.diff(y)
+    d = d[~boundaries[1:]]
+    return NoiseFloor(float(np.std(d) / math.sqrt(2.0)), "difference", int(d.size), 1, dt)
+
+
+def _tau(res: np.ndarray, runs: list[tuple[int, int]], dt: float) -> float:
+    """Correlation time (s) of the pooled run residuals (longest run, for simplicity)."""
+    lengths = [b - a for a, b in runs]
+    k = int(np.argmax(lengths))
+    start = sum(lengths[:k])
+    r = res[start:start + lengths[k]]
+    return float(integrated_autocorrelation(r, max_lag=max(1, r.size // 4)) * dt)

@@ -1,0 +1,126 @@
+"""Trajectory fit: the simulated model force along the measured motion against the measured force.
+
+The prediction at sample ``k`` is
+
+    F_hat_k = F_model_k(theta) + mass*(a_k + g*s_o) + offset,
+
+where ``F_model`` is the friction model integrated along the measured
+velocity exactly as :func:`fcomp.trajectory.friction_along_motion` does
+(interval-mean signals, exponential Rosenbrock-Euler step, states starting
+at rest), and the ``mass`` and ``offset`` terms are present only when fitted.
+The residual is ``r = y - F_hat`` (target ``y`` from :mod:`.target`), over
+all samples or a ``mask``.
+
+Jacobian: for symbolic models the exact forward sensitivities of
+:class:`~fcomp.identification.sensitivity.SensitivityLoop` (one compiled pass
+gives the force and all its derivatives); for models with discrete memory
+(``symbolic = False``) central finite differences of the numeric simulation
+(relative step ``1e-6`` of each parameter's scale). The ``mass`` and
+``offset`` columns are ``a + g*s_o`` and ``1``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from fcomp.identification.problem import ParameterVector
+from fcomp.identification.sensitivity import SensitivityLoop
+from fcomp.identification.target import FitData
+from fcomp.models.base import FrictionModel
+from fcomp.trajectory import friction_along_motion
+
+EXTRAS = ("mass", "offset")
+
+
+class TrajectoryProblem:
+    """Residuals ``y - F_hat`` and ``dF_hat/dtheta`` along a record (see the module docstring).
+
+    Parameters
+    ----------
+    model
+        The friction model (with effects).
+    data
+        Signals and target of the record.
+    pv
+        The fitted parameters: model flat names plus optionally ``mass``, ``offset``.
+    mask
+        Samples that enter the residual (default all). The model is always
+        simulated over the whole record.
+    substeps
+        Integration steps per sample interval.
+    """
+
+    def __init__(self, model: FrictionModel, data: FitData, pv: ParameterVector, *,
+                 mask: np.ndarray | None = None, substeps: int = 1) -> None:
+        self.model = model
+        self.data = data
+        self.pv = pv
+        self.model_free = [n for n in pv.names if n not in EXTRAS]
+        if "mass" in pv.names and data.inertia is None:
+            raise ValueError("the mass can only be fitted to driving-force data")
+        self.mask = np.ones(data.n, dtype=bool) if mask is None else np.asarray(mask, bool)
+        self.substeps = substeps
+        self.loop = (SensitivityLoop(model, self.model_free, substeps=substeps)
+                     if model.symbolic and model.n_states + len(self.model_free) > 0 else None)
+        self.evaluations = 0
+
+    # ------------------------------------------------------------------ model
+    def _model_force(self, values: dict[str, float], jac: bool) -> tuple[np.ndarray, np.ndarray]:
+        d = self.data
+        if self.loop is not None:
+            return self.loop(d.sig, values)
+        F = self._simulate(values)
+        nf = len(self.model_free)
+        G = np.zeros((F.size, nf))
+        if jac:
+            for j, name in enumerate(self.model_free):
+                h = 1e-6 * self.pv.scale[self.pv.index(name)]
+                up = self._simulate({**values, name: values[name] + h})
+                down = self._simulate({**values, name: values[name] - h})
+                G[:, j] = (up - down) / (2 * h)
+        return F, G
+
+    def _simulate(self, values: dict[str, float]) -> np.ndarray:
+        s = self.data.sig
+        run = friction_along_motion(self.model, s["t"], s["v"], a=s["a"], x=s["x"],
+                                    p1=s["p1"], p2=s["p2"], values=values,
+                                    substeps=self.substeps)
+        return run.F
+
+    def values(self, theta: Sequence[float]) -> dict[str, float]:
+        return dict(zip(self.pv.names, map(float, theta), strict=True))
+
+    def predict(self, theta: Sequence[float]) -> np.ndarray:
+        """``F_hat`` at every sample (N)."""
+        return self._predict(theta, jac=False)[0]
+
+    def _predict(self, theta: Sequence[float], jac: bool) -> tuple[np.ndarray, np.ndarray]:
+        vals = self.values(theta)
+        model_vals = {k: v for k, v in vals.items() if k not in EXTRAS}
+        F, Gm = self._model_force(model_vals, jac)
+        self.evaluations += 1
+        F = F.copy()
+        G = np.empty((F.size, len(self.pv.names)))
+        for j, name in enumerate(self.pv.names):
+            if name == "mass":
+                F += vals["mass"] * self.data.inertia  # type: ignore[operator]
+                G[:, j] = self.data.inertia  # type: ignore[index]
+            elif name == "offset":
+                F += vals["offset"]
+                G[:, j] = 1.0
+            else:
+                G[:, j] = Gm[:, self.model_free.index(name)]
+        return F, G
+
+    def __call__(self, theta: np.ndarray,
+                 need_jac: bool = True) -> tuple[np.ndarray, np.ndarray | None]:
+        F, G = self._predict(theta, jac=need_jac)
+        m = self.mask
+        return self.data.y[m] - F[m], (G[m] if need_jac or self.jacobian_is_free else None)
+
+    @property
+    def jacobian_is_free(self) -> bool:
+        """Whether the Jacobian comes with every evaluation (exact sensitivities)."""
+        return self.loop is not None or not self.model_free

@@ -1,0 +1,571 @@
+"""The public estimator: :class:`FrictionFit` identifies any friction model from a measurement.
+
+Procedure (docs/identification.md has the full account):
+
+1. **Target.** The force to match and the motion (:mod:`.target`): a
+   measured ``F``; or the friction reconstructed with the known mass; or,
+   without a mass, the driving force with ``mass`` as a fitted parameter.
+2. **Start.** Levels, mass and offset by linear least squares, the Stribeck
+   hump and the bristle stiffness read off the data (:mod:`.guess`).
+3. **Static stage** (seed 002's procedure, :mod:`.static`): the parameters
+   the steady-state map depends on are fitted by weighted least squares to
+   the binned steady-state force-velocity points. For static maps without a
+   mass to estimate this *is* the fit (``method_ = "steady-state"``) when the
+   record holds enough steady points; otherwise static maps are fitted to
+   every moving sample (``"samples"``).
+4. **Trajectory stage** (dynamic models, :mod:`.dynamic`): every free
+   parameter (``sigma0``, ``sigma1``, film time constants, ``T`` with the
+   static ones, plus ``mass``/``offset``) by minimising the force error of
+   the model simulated along the measured motion, with the exact
+   sensitivity Jacobian (finite differences for non-symbolic models).
+5. **Uncertainty** (:mod:`.uncertainty`): standard errors from the
+   autocorrelation-robust (batch-means) sandwich covariance, Student-t
+   confidence intervals on the effective sample size. Parameters the data do
+   not determine (zero sensitivity at the start, or a null direction at the
+   solution) are held at their start value and listed in
+   ``not_identifiable_``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+from fcomp.errors import ConvergenceError, FcompError
+from fcomp.identification.dynamic import EXTRAS, TrajectoryProblem
+from fcomp.identification.guess import (
+    bristle_stiffness,
+    default_v_min,
+    linear_start,
+    stribeck_start,
+)
+from fcomp.identification.problem import ParameterVector, Solution, base_name, side_suffix, solve
+from fcomp.identification.static import (
+    SteadyStateMap,
+    fit_steady_state,
+    steady_state_points,
+)
+from fcomp.identification.target import FitData, fit_data
+from fcomp.identification.uncertainty import Uncertainty, estimate
+from fcomp.measurement import Measurement
+from fcomp.models import FrictionModel, make_model
+from fcomp.parameters import Directional, ParamSpec, spec
+
+#: Parameters never fitted by default (numerical thresholds, reference values).
+ALWAYS_FIXED = ("v_eps", "p_ref")
+EXTRA_SPECS: dict[str, ParamSpec] = {
+    "mass": spec("mass", "kg", 0.0, 0.0, math.inf, "moving mass", directional=False),
+    "offset": spec("offset", "N", 0.0, -math.inf, math.inf, "constant force offset",
+                   directional=False),
+}
+METHODS = ("auto", "steady-state", "samples", "trajectory")
+
+
+def default_free(model: FrictionModel) -> list[str]:
+    """Flat names fitted by default: every finite parameter but :data:`ALWAYS_FIXED`."""
+    return [n for n, v in model.flat_params().items()
+            if base_name(n) not in ALWAYS_FIXED and math.isfinite(v)]
+
+
+def directional_model(model: FrictionModel) -> FrictionModel:
+    """``model`` with every direction-capable parameter split into ``_pos``/``_neg`` values."""
+    params = model.params
+    flat: dict[str, float] = {}
+    for s in type(params).SPECS:
+        raw = getattr(params, s.name)
+        if s.directional and not isinstance(raw, Directional):
+            flat[s.name + "_pos"] = flat[s.name + "_neg"] = float(raw)
+    if not flat:
+        return model
+    return model._rebuild(type(params).from_flat(flat, base=params), model.effects)
+
+
+class FrictionFit:
+    """Identify a friction model from a measurement, with standard errors (sklearn style).
+
+    Parameters
+    ----------
+    model
+        Model name (``coulomb`` ... ``nmlgm``, ``gms``, ...) or a
+        :class:`~fcomp.models.base.FrictionModel` (its values are the start of
+        the parameters not read off the data, and the values of the fixed ones).
+    offset
+        Fit a constant force offset ``offset`` (N).
+    estimate_mass
+        ``None``: estimate ``mass`` (kg) exactly when the data hold a driving
+        force (``F_ext``, pressures) but no ``F`` column and no mass is known;
+        ``True``/``False`` force or forbid it.
+    mass
+        Known moving mass (kg), overriding the sidecar's ``rig.mass``.
+    free
+        Flat names to fit (default :func:`default_free`).
+    fixed
+        Flat name -> value to hold fixed (removed from the free set).
+    directional
+        Fit separate ``v > 0`` / ``v < 0`` values of every direction-capable
+        parameter (``Fc``, ``Fs``, ``vs``, ``n``, ``sigma2``/``B``, ``vb``).
+    initial
+        Flat name -> start value, overriding the data-based start.
+    method
+        ``"auto"`` (see the module docstring), ``"steady-state"`` (static maps
+        on the steady-state characteristic only), ``"samples"`` (static maps
+        on every moving sample) or ``"trajectory"`` (dynamic models without
+        the static stage).
+    v_min
+        Speed (m/s) below which samples count as at rest for the static
+        parts (default :func:`~fcomp.identification.guess.default_v_min`).
+    min_duration
+        Shortest steady run (s) for the steady-state points.
+    substeps
+        Integration steps per sample interval in the trajectory stage.
+    max_nfev
+        Evaluation budget of each least-squares stage.
+    confidence
+        Level of the confidence intervals ``ci_``.
+    strict
+        Raise :class:`~fcomp.errors.ConvergenceError` when the fit does not
+        converge (after setting the result attributes).
+
+    Attributes
+    ----------
+    params_, stderr_ : dict
+        Estimates and standard errors by flat name (``mass``/``offset`` included).
+    ci_ : dict
+        Name -> ``(low, high)`` confidence interval at ``confidence``.
+    cov_ : ndarray
+        Covariance of the estimates, in the order of ``param_names_``.
+    units_ : dict
+        SI unit of each estimate.
+    rms_ : float
+        RMS of the force residual (N) over the fitted samples.
+    converged_ : bool
+    message_ : str
+    model_ : FrictionModel
+        The model with the fitted values.
+    fixed_ : dict
+        Model parameters held fixed, with their values.
+    not_identifiable_ : list
+        Parameters the data did not determine (held at their start value).
+    method_ : str
+        ``"steady-state"``, ``"samples"`` or ``"trajectory"``.
+    n_samples_, n_eff_, tau_int_ :
+        Samples in the residual, effective sample size, residual
+        autocorrelation time (samples).
+    stages_ : list of dict
+        One entry per least-squares stage (name, parameters, rms, evaluations, converged).
+    target_ : str
+        Where the fitted force came from (``"F"``, ``"reconstructed"``, ``"driving-force"``).
+    """
+
+    def __init__(
+        self,
+        model: str | FrictionModel,
+        *,
+        offset: bool = False,
+        estimate_mass: bool | None = None,
+        mass: float | None = None,
+        free: Sequence[str] | None = None,
+        fixed: Mapping[str, float] | None = None,
+        directional: bool = False,
+        initial: Mapping[str, float] | None = None,
+        method: str = "auto",
+        v_min: float | None = None,
+        min_duration: float = 0.05,
+        substeps: int = 1,
+        max_nfev: int = 200,
+        confidence: float = 0.95,
+        strict: bool = True,
+    ) -> None:
+        self.model = model
+        self.offset = offset
+        self.estimate_mass = estimate_mass
+        self.mass = mass
+        self.free = free
+        self.fixed = fixed
+        self.directional = directional
+        self.initial = initial
+        self.method = method
+        self.v_min = v_min
+        self.min_duration = min_duration
+        self.substeps = substeps
+        self.max_nfev = max_nfev
+        self.confidence = confidence
+        self.strict = strict
+
+    # ---------------------------------------------------------------- setup
+    def _base_model(self) -> FrictionModel:
+        model = make_model(self.model) if isinstance(self.model, str) else self.model
+        if not isinstance(model, FrictionModel):
+            raise FcompError(f"model must be a name or a FrictionModel, got {self.model!r}")
+        if self.directional:
+            model = directional_model(model)
+        if self.fixed:
+            model = model.with_params(**{k: float(v) for k, v in self.fixed.items()})
+        return model
+
+    def _free_names(self, model: FrictionModel) -> list[str]:
+        flat = model.flat_params()
+        if self.free is None:
+            free = default_free(model)
+        else:
+            free = []
+            for name in self.free:
+                if name in flat:
+                    free.append(name)
+                elif name + "_pos" in flat:
+                    free += [name + "_pos", name + "_neg"]
+                else:
+                    raise FcompError(f"{model.describe()}: no parameter {name!r} to fit; "
+                                     f"known: {', '.join(flat)}")
+        fixed = set(self.fixed or ())
+        for name in fixed:
+            if name not in flat:
+                raise FcompError(f"{model.describe()}: no parameter {name!r} to fix; "
+                                 f"known: {', '.join(flat)}")
+        return [n for n in free if n not in fixed]
+
+    def _specs(self, model: FrictionModel, names: Sequence[str],
+               values: Mapping[str, float]) -> dict[str, ParamSpec]:
+        """Bounds of the fitted names; ``Fc <= Fs`` against a fixed partner."""
+        specs = dict(model.param_specs())
+        specs.update(EXTRA_SPECS)
+        out = {n: specs[n] for n in names}
+        for n in names:
+            sfx = side_suffix(n)
+            if base_name(n) == "Fc":
+                partner = next((p for p in ("Fs" + sfx, "Fs") if p in values), None)
+                if partner and partner not in names:
+                    out[n] = dataclasses.replace(out[n], upper=float(values[partner]))
+            if base_name(n) == "Fs":
+                partner = next((p for p in ("Fc" + sfx, "Fc") if p in values), None)
+                if partner and partner not in names:
+                    out[n] = dataclasses.replace(out[n], lower=float(values[partner]))
+        return out
+
+    def _start(self, model: FrictionModel, d: FitData, v_min: float) -> dict[str, float]:
+        """Start values of every model parameter and the extras (module :mod:`.guess`)."""
+        flat = dict(model.flat_params())
+        start = dict(flat)
+        names = {base_name(n) for n in flat}
+        visc = "B" if "B" in names else ("sigma2" if "sigma2" in names else None)
+        directional = any(n.endswith("_pos") for n in flat)
+        ls = linear_start(d, v_min, offset=self.offset, directional=directional,
+                          viscous=visc is not None)
+        v, f = d.sig["v"], ls.friction
+
+        def put(name: str, pos: float, neg: float) -> None:
+            if name in flat:
+                start[name] = 0.5 * (pos + neg)
+            else:
+                start[name + "_pos"], start[name + "_neg"] = pos, neg
+
+        if "Fc" in names:
+            put("Fc", *ls.Fc)
+        if visc is not None:
+            put(visc, *ls.B)
+        if "Fs" in names:
+            hump = [stribeck_start(v[sel], f[sel], fc, b, v_min)
+                    for sel, fc, b in ((v > 0, ls.Fc[0], ls.B[0]), (v < 0, ls.Fc[1], ls.B[1]))]
+            put("Fs", hump[0][0], hump[1][0])
+            put("vs", hump[0][1], hump[1][1])
+        g = 0.5 * (ls.Fc[0] + ls.Fc[1])
+        if "sigma0" in names:
+            x = d.sig["x"]
+            sigma0 = bristle_stiffness(x, v, f, g)
+            start["sigma0"] = sigma0 if sigma0 is not None else g / 1e-4
+        if "sigma1" in names:
+            moving = np.abs(v) >= v_min
+            start["sigma1"] = 0.1 * g / float(np.median(np.abs(v[moving])))
+        if ls.mass is not None:
+            start["mass"] = ls.mass
+        if self.offset:
+            start["offset"] = ls.offset
+        for k, val in (self.initial or {}).items():
+            if k not in start:
+                raise FcompError(f"initial value for unknown parameter {k!r}")
+            start[k] = float(val)
+        return start
+
+    @staticmethod
+    def _scales(pv_names: Sequence[str], start: Mapping[str, float], G: np.ndarray,
+                y: np.ndarray) -> dict[str, float]:
+        """Typical magnitudes: ``|start|``, or (start 0) the change giving 1 % of the force RMS."""
+        ref = 0.01 * float(np.sqrt(np.mean(y**2))) or 1e-3
+        out = {}
+        for j, n in enumerate(pv_names):
+            if abs(start[n]) > 0:
+                out[n] = abs(start[n])
+            else:
+                col = float(np.sqrt(np.mean(G[:, j] ** 2)))
+                out[n] = ref / col if col > 0 else 1.0
+        return out
+
+    @staticmethod
+    def _insensitive(jacobian_at: Any, names: Sequence[str], start: Mapping[str, float],
+                     ref: float) -> list[str]:
+        """Names whose Jacobian column vanishes at the start and at 3 perturbed points.
+
+        ``jacobian_at(values) -> G`` (samples x names). A column counts as zero when
+        ``rms(G_j)*|theta_j| < 1e-9*ref`` (``ref`` the force RMS), or is exactly zero
+        for a parameter starting at 0. Structural zeros (``sigma0`` in a steady-state
+        map, ``tau_h0`` in a record without rest) vanish at every point; a
+        parameter that merely starts where it has no effect does not.
+        """
+        rng = np.random.default_rng(12345)
+        alive = np.zeros(len(names), dtype=bool)
+        for trial in range(4):
+            vals = dict(start)
+            if trial:
+                for n in names:
+                    if n not in EXTRAS:
+                        vals[n] = start[n] * float(np.exp(0.3 * rng.standard_normal()))
+            G = jacobian_at(vals)
+            for j, n in enumerate(names):
+                col = G[:, j]
+                if start[n] == 0.0:
+                    alive[j] |= bool(np.any(col != 0.0))
+                else:
+                    alive[j] |= float(np.sqrt(np.mean(col**2))) * abs(vals[n]) >= 1e-9 * ref
+            if alive.all():
+                break
+        return [n for n, a in zip(names, alive, strict=True) if not a]
+
+    # ------------------------------------------------------------------ fit
+    def fit(self, data: Measurement) -> FrictionFit:
+        """Identify the model from ``data``; returns ``self`` with the ``*_`` attributes set."""
+        if self.method not in METHODS:
+            raise FcompError(f"method {self.method!r}: choose one of {', '.join(METHODS)}")
+        if not 0.0 < self.confidence < 1.0:
+            raise FcompError(f"confidence must be in (0, 1), got {self.confidence}")
+        model = self._base_model()
+        d = fit_data(data, estimate_mass=self.estimate_mass, mass=self.mass)
+        if self.directional and self.offset:
+            raise FcompError("direction-dependent levels and a constant offset are confounded "
+                             "(both shift v > 0 and v < 0 forces apart/together); fit one of them")
+        v_min = self.v_min if self.v_min is not None else default_v_min(d.sig["v"])
+        free = self._free_names(model)
+        extras = (["mass"] if d.inertia is not None else []) + (["offset"] if self.offset else [])
+        if not free and not extras:
+            raise FcompError(f"{model.describe()}: nothing to fit (every parameter fixed)")
+        start = self._start(model, d, v_min)
+        self.stages_: list[dict[str, Any]] = []
+        self.not_identifiable_: list[str] = []
+        self.target_ = d.source
+        dynamic = model.n_states > 0
+        moving = np.abs(d.sig["v"]) >= v_min
+
+        if not dynamic and self.method == "trajectory":
+            raise FcompError(f"{model.describe()} is a static map: use method 'auto', "
+                             "'steady-state' or 'samples'")
+        if dynamic and self.method in ("steady-state", "samples"):
+            raise FcompError(f"{model.describe()} is dynamic: use method 'auto' or 'trajectory'")
+
+        if not dynamic:
+            use_ss = self.method == "steady-state" or (
+                self.method == "auto" and d.inertia is None)
+            if use_ss:
+                done = self._static_stage(model, d, free, start, v_min,
+                                          required=self.method == "steady-state", final=True)
+                # auto: the steady-state characteristic only where it determines every parameter
+                if done is not None and (self.method == "steady-state" or (
+                        done[1].converged and bool(np.all(done[2].identifiable)))):
+                    return self._finish(model, d, moving, *done)
+                self.not_identifiable_ = []
+            return self._trajectory_stage(model, d, free, extras, start, moving, "samples")
+        if self.method == "auto" and model.symbolic:
+            self._static_stage(model, d, free, start, v_min, required=False, final=False)
+        return self._trajectory_stage(model, d, free, extras, start,
+                                      np.ones(d.n, dtype=bool), "trajectory")
+
+    def _static_stage(self, model: FrictionModel, d: FitData, free: list[str],
+                      start: dict[str, float], v_min: float, *, required: bool,
+                      final: bool) -> tuple | None:
+        """Seed 002's steady-state fit; updates ``start`` (first stage) or is the result."""
+        y = d.y if d.inertia is None else d.y - start["mass"] * d.inertia
+        s = d.sig
+        pts = steady_state_points(s["t"], s["v"], s["a"], y, v_min=v_min,
+                                  min_duration=self.min_duration, x=s["x"], p1=s["p1"],
+                                  p2=s["p2"])
+        # parameters the steady-state map depends on
+        ss_free: list[str] = []
+        if len(pts):
+            fmap = SteadyStateMap(model, free)
+            ref = float(np.sqrt(np.mean(pts.F**2))) or 1.0
+            dead = self._insensitive(lambda vals: fmap(pts, {k: vals[k] for k in free})[1],
+                                     free, start, ref)
+            ss_free = [n for n in free if n not in dead]
+        names = ss_free + (["offset"] if self.offset else [])
+        if len(pts) < 3 * len(names) or not names:
+            if required:
+                raise FcompError(
+                    f"{d.label}: only {len(pts)} steady-state force-velocity points for "
+                    f"{len(names)} parameters (need steady runs of at least "
+                    f"{self.min_duration} s above {v_min:.3g} m/s); use method 'samples'")
+            return None
+        _, Gs = SteadyStateMap(model, ss_free)(pts, {k: start[k] for k in ss_free})
+        if self.offset:
+            Gs = np.hstack([Gs, np.ones((len(pts), 1))])
+        scales = self._scales(names, start, Gs, pts.F)
+        pv = ParameterVector.build(names, start, self._specs(model, names, start), scales)
+        res = fit_steady_state(model, pts, pv, max_nfev=self.max_nfev, level=self.confidence)
+        self.stages_.append({"stage": "steady-state", "parameters": names,
+                             "points": len(pts), "rms": res.rms,
+                             "evaluations": res.solution.nfev,
+                             "converged": res.solution.converged})
+        if final:
+            self.not_identifiable_ += [n for n in free if n not in ss_free]
+            return pv, res.solution, res.uncertainty, "steady-state", None
+        if res.solution.converged:  # keep only well-determined values (stderr < 50 %)
+            for n, se in zip(names, res.uncertainty.stderr, strict=True):
+                if se < 0.5 * abs(res.values[n]):
+                    start[n] = res.values[n]
+        return None
+
+    def _trajectory_stage(self, model: FrictionModel, d: FitData, free: list[str],
+                          extras: list[str], start: dict[str, float], mask: np.ndarray,
+                          method: str) -> FrictionFit:
+        names = free + extras
+        probe_pv = ParameterVector.build(names, start, self._specs(model, names, start))
+        prob = TrajectoryProblem(model, d, probe_pv, mask=mask, substeps=self.substeps)
+
+        def jacobian_at(vals: Mapping[str, float]) -> np.ndarray:
+            G = prob(np.array([vals[n] for n in probe_pv.names]), True)[1]
+            if G is None:
+                raise RuntimeError("the trajectory problem returned no Jacobian")
+            return G
+
+        ref = float(np.sqrt(np.mean(d.y[mask] ** 2))) or 1.0
+        dead = [n for n in self._insensitive(jacobian_at, names, start, ref) if n not in EXTRAS]
+        if dead:
+            self.not_identifiable_ += dead
+            names = [n for n in names if n not in dead]
+        if not names:
+            raise FcompError(f"{d.label}: the record determines none of the parameters of "
+                             f"{model.describe()}")
+        G = jacobian_at(start)[:, [j for j, n in enumerate(probe_pv.names) if n in names]]
+        scales = self._scales(names, start, G, d.y[mask])
+        pv = ParameterVector.build(names, start, self._specs(model, names, start), scales)
+        prob = TrajectoryProblem(model, d, pv, mask=mask, substeps=self.substeps)
+        sol = solve(pv, prob, max_nfev=self.max_nfev, what=f"fit of {model.describe()}",
+                    compress=prob.jacobian_is_free)
+        unc = estimate(sol.jacobian, sol.residuals, sol.theta, level=self.confidence)
+        self.stages_.append({"stage": method, "parameters": list(names),
+                             "rms": float(np.sqrt(np.mean(sol.residuals**2))),
+                             "evaluations": sol.nfev, "converged": sol.converged})
+        return self._finish(model, d, mask, pv, sol, unc, method, prob)
+
+    # --------------------------------------------------------------- results
+    def _finish(self, model: FrictionModel, d: FitData, mask: np.ndarray, pv: ParameterVector,
+                sol: Solution, unc: Uncertainty, method: str,
+                prob: TrajectoryProblem | None) -> FrictionFit:
+        names = list(pv.names)
+        theta = sol.theta
+        # a null direction at the solution: hold those parameters, keep the others' errors
+        bad = [n for n, ok in zip(names, unc.identifiable, strict=True) if not ok]
+        if bad:
+            self.not_identifiable_ += bad
+            keep = [j for j, n in enumerate(names) if n not in bad]
+            unc = estimate(sol.jacobian[:, keep], sol.residuals, theta[keep],
+                           level=self.confidence, autocorrelated=method != "steady-state")
+        values = dict(zip(names, map(float, theta), strict=True))
+        model_values = {k: v for k, v in values.items() if k not in EXTRAS}
+        try:
+            self.model_ = model.with_params(**model_values)
+        except ValueError as exc:
+            raise ConvergenceError(f"{d.label}: the fit ended on invalid parameters ({exc})") \
+                from None
+        est = [n for n in names if n not in bad]
+        self.param_names_ = est
+        self.params_ = {n: values[n] for n in est}
+        self.stderr_ = {n: float(s) for n, s in zip(est, unc.stderr, strict=True)}
+        self.ci_ = {n: (float(lo), float(hi))
+                    for n, lo, hi in zip(est, unc.ci_low, unc.ci_high, strict=True)}
+        self.cov_ = unc.cov
+        self.units_ = {n: u for n, u in zip(names, pv.units, strict=True) if n in est}
+        self.fixed_ = {k: float(v) for k, v in self.model_.flat_params().items() if k not in est}
+        self.tau_int_ = unc.tau_int
+        self.n_eff_ = unc.n_eff
+        self.uncertainty_ = unc
+        self.method_ = method
+        self.converged_ = sol.converged
+        self.message_ = sol.message
+        self.nfev_ = sum(s["evaluations"] for s in self.stages_)
+        self.v_min_ = self.v_min if self.v_min is not None else default_v_min(d.sig["v"])
+        self._extras = {k: values[k] for k in EXTRAS if k in values}
+        self._target_kind = (d.source, d.inertia is not None)
+        if prob is None:  # the steady-state fit: the record's force error over moving samples
+            prob = TrajectoryProblem(model, d, pv, mask=mask, substeps=self.substeps)
+        F_hat = prob.predict(theta)
+        r = d.y[mask] - F_hat[mask]
+        self.rms_ = float(np.sqrt(np.mean(r**2)))
+        self.n_samples_ = int(mask.sum())
+        self.at_bound_ = [n for n, a in zip(names, sol.at_bound, strict=True) if a and n in est]
+        if not sol.converged and self.strict:
+            raise ConvergenceError(
+                f"{d.label}: fitting {model.describe()} did not converge ({sol.message}; "
+                f"{sol.nfev} evaluations); try fixing parameters (--fix) or a longer, richer record")
+        return self
+
+    # -------------------------------------------------------------- predict
+    def _check_fitted(self) -> None:
+        if not hasattr(self, "params_"):
+            raise FcompError("this FrictionFit is not fitted yet: call fit(measurement) first")
+
+    def target(self, data: Measurement) -> np.ndarray:
+        """The force the fit compares with (N), built from ``data`` the way the fit did."""
+        return self._data(data).y
+
+    def _data(self, data: Measurement) -> FitData:
+        self._check_fitted()
+        return fit_data(data, estimate_mass=self._target_kind[1], mass=self.mass)
+
+    def predict(self, data: Measurement) -> np.ndarray:
+        """Predicted force ``F_model + mass*(a + g*s_o) + offset`` (N) along ``data``'s motion."""
+        d = self._data(data)
+        s = d.sig
+        from fcomp.trajectory import friction_along_motion
+
+        F = friction_along_motion(self.model_, s["t"], s["v"], a=s["a"], x=s["x"], p1=s["p1"],
+                                  p2=s["p2"], substeps=self.substeps).F
+        if "mass" in self._extras and d.inertia is not None:
+            F = F + self._extras["mass"] * d.inertia
+        return F + self._extras.get("offset", 0.0)
+
+    def score(self, data: Measurement) -> float:
+        """RMS force error (N) of the fitted model on ``data`` (e.g. a validation record)."""
+        return float(np.sqrt(np.mean((self.target(data) - self.predict(data)) ** 2)))
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON report (public contract: ``model``, ``params``, ``stderr``, ``rms``; more keys)."""
+        self._check_fitted()
+
+        def num(x: float) -> float | str:
+            return float(x) if math.isfinite(x) else ("inf" if x > 0 else "-inf")
+
+        name = self.model if isinstance(self.model, str) else self.model_.name
+        return {
+            "model": name,
+            "effects": [e.name for e in self.model_.effects],
+            "params": dict(self.params_),
+            "stderr": dict(self.stderr_),
+            "rms": self.rms_,
+            "ci": {k: list(v) for k, v in self.ci_.items()},
+            "confidence": self.confidence,
+            "units": dict(self.units_),
+            "fixed": {k: num(v) for k, v in self.fixed_.items()},
+            "not_identifiable": list(self.not_identifiable_),
+            "at_bound": list(self.at_bound_),
+            "method": self.method_,
+            "target": self.target_,
+            "converged": self.converged_,
+            "message": self.message_,
+            "n_samples": self.n_samples_,
+            "n_eff": self.n_eff_,
+            "tau_int": self.tau_int_,
+            "evaluations": self.nfev_,
+            "stages": self.stages_,
+        }

@@ -1,0 +1,124 @@
+"""Exact parameter sensitivities of the friction force along a motion (forward sensitivities).
+
+The simulation engine (:mod:`fcomp.trajectory`) advances the friction states
+sample to sample with one CasADi step ``x_{k+1} = Phi(x_k, u_k, dt_k, p)``.
+Differentiating that *same* step gives the exact derivative of the simulated
+force with respect to the parameters (exact for the discrete scheme that
+produces the simulated force, not a finite-difference approximation):
+
+    S_{k+1} = Phi_x S_k + Phi_p,        S_0 = 0   (S = dx/dp, nx x np)
+    dF_k/dp = F_x(x_k) S_k + F_p(x_k),
+
+where ``F(x, sig, p)`` is the model's force at sample ``k``. The augmented
+step ``[x, S, F, dF/dp] -> [x', S', F', dF'/dp]`` is built symbolically and
+compiled to native code by :func:`fcomp.compiled.stepping_loop`; its input at
+interval ``k`` is the interval-mean signal vector (what the simulation uses)
+followed by the sample signals at ``k+1`` (what the force reads). Models
+without states (static maps) use the same loop with ``S`` empty.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+
+import casadi as ca
+import numpy as np
+
+from fcomp.backend import CASADI
+from fcomp.compiled import Loop, stepping_loop
+from fcomp.models.base import SIGNAL_NAMES, FrictionModel, Signals
+from fcomp.parameters import ParamValues
+from fcomp.trajectory import _structure_key, friction_step, midpoint_signals
+
+_LOOPS: dict[tuple, tuple[Loop, ca.Function]] = {}
+
+
+def _build(model: FrictionModel, free: tuple[str, ...], substeps: int,
+           compiled: bool) -> tuple[Loop, ca.Function]:
+    names = list(model.flat_params())
+    fi = [names.index(n) for n in free]
+    nx, nf = model.n_states, len(free)
+    p = ca.SX.sym("p", len(names))
+    u = ca.SX.sym("u", 2 * len(SIGNAL_NAMES))
+    dt = ca.SX.sym("dt")
+    P = ParamValues({n: p[i] for i, n in enumerate(names)}, CASADI)
+    sig_next = Signals(*[u[len(SIGNAL_NAMES) + i] for i in range(len(SIGNAL_NAMES))])
+    xs = ca.SX.sym("xs", nx)
+    F = model.force(CASADI, [xs[i] for i in range(nx)], sig_next, P)
+    F = ca.SX(F) if not isinstance(F, ca.SX) else F
+    force = ca.Function("fcomp_force_sens", [xs, u, p],
+                        [F, ca.jacobian(F, xs), ca.jacobian(F, p)[:, fi]])
+    w = ca.SX.sym("w", nx + nx * nf + 1 + nf)
+    if nx:
+        x = w[:nx]
+        S = ca.reshape(w[nx : nx + nx * nf], nx, nf)
+        xn = friction_step(model, substeps)(x, u[: len(SIGNAL_NAMES)], dt, p)
+        Sn = ca.jacobian(xn, x) @ S + ca.jacobian(xn, p)[:, fi]
+        Fn, Fx, Fp = force(xn, u, p)
+        out = ca.vertcat(xn, ca.vec(Sn), Fn, (Fx @ Sn + Fp).T)
+    else:
+        Fn, _, Fp = force(ca.SX(0, 1), u, p)
+        out = ca.vertcat(Fn, Fp.T)
+    step = ca.Function("fcomp_sens_step", [w, u, dt, p], [out])
+    return stepping_loop(step, compiled=compiled), force
+
+
+class SensitivityLoop:
+    """Friction force and its exact derivatives along a sampled motion.
+
+    Parameters
+    ----------
+    model
+        A symbolic friction model (any effects).
+    free
+        Flat names of the parameters to differentiate with respect to.
+    substeps
+        Integration steps per sample interval (as :func:`fcomp.trajectory.friction_along_motion`).
+    compiled
+        Native-compiled loop (default) or CasADi's virtual machine.
+
+    Calling the object with the prepared signals (:func:`fcomp.trajectory.prepare_signals`)
+    and the flat parameter values returns ``(F, G)``: the force (N,) in N and
+    ``G[k, j] = dF_k/dp_j`` (N, len(free)).
+    """
+
+    def __init__(self, model: FrictionModel, free: Sequence[str], *, substeps: int = 1,
+                 compiled: bool = True) -> None:
+        model.require_symbolic()
+        names = list(model.flat_params())
+        unknown = [n for n in free if n not in names]
+        if unknown:
+            raise ValueError(f"{model.describe()}: no parameter(s) {', '.join(unknown)}")
+        self.model = model
+        self.free = tuple(free)
+        self.names = names
+        key = (_structure_key(model), self.free, int(substeps), bool(compiled))
+        if key not in _LOOPS:
+            _LOOPS[key] = _build(model, self.free, int(substeps), bool(compiled))
+        self._loop, self._force = _LOOPS[key]
+
+    def __call__(
+        self,
+        sig: Mapping[str, np.ndarray],
+        values: Mapping[str, float],
+        state0: np.ndarray | None = None,
+    ) -> tuple[np.ndarray, np.ndarray]:
+        model = self.model
+        nx, nf = model.n_states, len(self.free)
+        flat = dict(model.flat_params())
+        flat.update(values)
+        pvec = np.array([flat[n] for n in self.names], dtype=float)
+        M, dt = midpoint_signals(sig)
+        S = np.vstack([np.asarray(sig[k], dtype=float) for k in SIGNAL_NAMES])
+        U = np.vstack([M, S[:, 1:]]).T
+        x0 = model.initial_state() if state0 is None else np.asarray(state0, dtype=float)
+        w0 = np.zeros(nx + nx * nf + 1 + nf)
+        w0[:nx] = x0
+        W = self._loop(w0, U, dt, pvec)
+        u0 = np.concatenate([S[:, 0], S[:, 0]])
+        F0, _, G0 = self._force(x0, u0, pvec)
+        F = W[:, nx + nx * nf]
+        G = W[:, nx + nx * nf + 1 :]
+        F[0] = float(F0)
+        G[0] = np.asarray(G0, dtype=float).ravel()
+        return F, G

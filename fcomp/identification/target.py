@@ -1,0 +1,167 @@
+"""What a fit reads from a measurement: the motion signals and the force the model must match.
+
+Three cases, in this order (data-format.md, models.md section 2):
+
+1. The measurement has an ``F`` column (friction measured or already
+   reconstructed): the target is ``y = F``.
+2. No ``F`` but a driving force can be formed,
+   ``D = p1*A1 - p2*A2 + F_ext`` (gauge pressures, whichever terms the data
+   hold), and the moving mass is known (``rig.mass`` or the ``mass``
+   argument): the target is the reconstructed friction
+   ``y = D - m*(a + g*s_o)`` (``s_o`` = +1 vertical-up, -1 vertical-down,
+   0 horizontal).
+3. Driving force but no mass: the mass is estimated with the friction
+   parameters. The target is ``y = D`` and the prediction gains the term
+   ``mass*(a + g*s_o)``; :attr:`FitData.inertia` holds ``a + g*s_o``.
+
+Velocity and acceleration come from the ``v``/``a`` columns where present,
+else from the position by the zero-phase differentiation of
+:mod:`fcomp.reconstruction`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from fcomp.errors import FcompError
+from fcomp.measurement import ORIENTATIONS, G, Measurement
+from fcomp.trajectory import prepare_signals
+
+
+@dataclass(frozen=True)
+class FitData:
+    """The signals of a fit (SI).
+
+    Attributes
+    ----------
+    sig
+        Prepared motion signals ``t, v, a, x, p1, p2, s``
+        (:func:`fcomp.trajectory.prepare_signals`; pressures gauge, Pa).
+    y
+        Force target (N), see the module docstring.
+    inertia
+        ``a + g*s_o`` (m/s^2) when the mass is estimated, else ``None``.
+    source
+        ``"F"``, ``"reconstructed"`` or ``"driving-force"``.
+    mass
+        The known moving mass used to reconstruct ``y`` (kg), if any.
+    label
+        The measurement's name, for messages.
+    """
+
+    sig: dict[str, np.ndarray]
+    y: np.ndarray
+    inertia: np.ndarray | None
+    source: str
+    mass: float | None
+    label: str
+
+    @property
+    def n(self) -> int:
+        return self.y.size
+
+    def select(self, mask: np.ndarray) -> FitData:
+        """The samples where ``mask`` is true (a contiguous slice keeps time increasing)."""
+        sig = {k: v[mask] for k, v in self.sig.items()}
+        inertia = None if self.inertia is None else self.inertia[mask]
+        return FitData(sig, self.y[mask], inertia, self.source, self.mass, self.label)
+
+
+def motion(meas: Measurement) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    """``(v, a, x)`` of a measurement: columns where present, else differentiated ``x``."""
+    has_v, has_a, has_x = "v" in meas, "a" in meas, "x" in meas
+    if not has_v and not has_x:
+        raise FcompError(f"{meas.label}: a fit needs a velocity 'v' or a position 'x' column")
+    x = meas["x"] if has_x else None
+    if has_v and has_a:
+        return meas["v"], meas["a"], x
+    from fcomp.reconstruction import derivatives
+
+    if has_x:
+        v_est, a_est = derivatives(meas)
+    else:
+        v_est, a_est = meas["v"], np.gradient(meas["v"], meas.t)
+    v = meas["v"] if has_v else v_est
+    a = meas["a"] if has_a else a_est
+    return v, a, x
+
+
+def driving_force(meas: Measurement) -> np.ndarray | None:
+    """``p1*A1 - p2*A2 + F_ext`` (N) from whatever the measurement holds, or ``None``."""
+    terms: list[np.ndarray] = []
+    if "p1" in meas or "p2" in meas:
+        A1, A2 = meas.areas()
+        zero = np.zeros(len(meas))
+        p1 = _gauge(meas, "p1") if "p1" in meas else zero
+        p2 = _gauge(meas, "p2") if "p2" in meas else zero
+        terms.append(p1 * A1 - p2 * A2)
+    if "F_ext" in meas:
+        terms.append(meas["F_ext"])
+    if not terms:
+        return None
+    return np.sum(terms, axis=0)
+
+
+def _gauge(meas: Measurement, name: str) -> np.ndarray:
+    p_atm = float(meas.meta.get("p_atm", 101325.0))
+    shift = p_atm if meas.meta.get("pressure", "gauge") == "absolute" else 0.0
+    return meas[name] - shift
+
+
+def fit_data(
+    meas: Measurement,
+    *,
+    estimate_mass: bool | None = None,
+    mass: float | None = None,
+) -> FitData:
+    """The :class:`FitData` of a measurement (see the module docstring for the cases).
+
+    Parameters
+    ----------
+    meas
+        The measurement.
+    estimate_mass
+        ``None`` (default): estimate the mass exactly when there is no ``F``
+        column, a driving force can be formed and no mass is known.
+        ``True`` forces it (needs a driving force and no ``F`` column);
+        ``False`` forbids it (a mass must then be known if there is no ``F``).
+    mass
+        Moving mass (kg) overriding ``rig.mass``.
+    """
+    v, a, x = motion(meas)
+    n = len(meas)
+    zero = np.zeros(n)
+    p1 = _gauge(meas, "p1") if "p1" in meas else zero
+    p2 = _gauge(meas, "p2") if "p2" in meas else zero
+    sig = prepare_signals(meas.t, v, a, x, p1, p2)
+    known = mass if mass is not None else meas.rig.get("mass")
+    if known is not None and (not np.isfinite(float(known)) or float(known) < 0):
+        raise FcompError(f"{meas.label}: the moving mass must be a non-negative number (kg)")
+    has_F = "F" in meas
+    D = None if has_F else driving_force(meas)
+    if estimate_mass is None:
+        estimate_mass = not has_F and D is not None and known is None
+    if estimate_mass:
+        if has_F:
+            raise FcompError(f"{meas.label}: the mass cannot be estimated from an 'F' column "
+                             "(friction already has the inertia removed); give F_ext or "
+                             "pressures instead")
+        if D is None:
+            raise FcompError(f"{meas.label}: estimating the mass needs a driving force "
+                             "(F_ext and/or p1, p2 columns)")
+    s_o = ORIENTATIONS[meas.rig.get("orientation", "horizontal")]
+    label = meas.label
+    if has_F:
+        return FitData(sig, meas["F"].copy(), None, "F", None, label)
+    if D is None:
+        raise FcompError(f"{label}: no force to fit: the data need an 'F' column, or "
+                         "F_ext and/or p1, p2 columns")
+    inertia = sig["a"] + G * s_o
+    if estimate_mass:
+        return FitData(sig, D, inertia, "driving-force", None, label)
+    if known is None:
+        raise FcompError(f"{label}: sidecar key rig.mass is missing (needed to reconstruct the "
+                         "friction force; or let the mass be estimated)")
+    return FitData(sig, D - float(known) * inertia, None, "reconstructed", float(known), label)

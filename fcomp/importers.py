@@ -1,0 +1,331 @@
+"""Importers: real data sets -> the measurement format of data-format.md.
+
+One function per KIND, registered in :data:`IMPORTERS` by the name used on the
+command line (``fcomp import KIND SRC -o OUT.csv``). Every importer returns a
+validated :class:`~fcomp.measurement.Measurement` in SI units whose sidecar
+carries the provenance in a ``[source]`` table (original file name and SHA-256,
+repository, licence, citation, the importer and the fcomp version) and the
+conversion notes in ``[source].notes``. Sign conventions are those of
+data-format.md: ``x`` positive = extending, ``F_ext`` positive when it pushes
+in the extending direction, so that (seed 000, Eq. 1, models.md section 2)
+
+    F = p1*A1 - p2*A2 - m*a - m*g*s + F_ext
+
+is the friction force, positive opposing extension.
+
+Kinds
+-----
+``emps``
+    EMPS benchmark ``.mat`` (Janot, Gautier & Brunot 2019): ``t``; ``x = qm``;
+    ``F_ext = gtau*vir`` (motor force on the carriage, N); user columns
+    ``x_ref = qg`` (m), ``u = vir`` (V) and ``pulses_N`` where present.
+``zillen``
+    TU Delft pneumatic seal-friction text files (Zillen, Vallery & Smit 2021).
+``mataveid``
+    MataveID hydraulic bench CSV (raw volts, no calibration).
+``mat``
+    Any ``.mat`` file through a column mapping (:mod:`fcomp.matfile`) and an
+    optional sidecar TOML giving the rig.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import tomllib
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from fcomp import __version__
+from fcomp.errors import FcompError
+from fcomp.matfile import from_variables, load_mat, parse_mapping
+from fcomp.measurement import Measurement, checked
+from fcomp.registry import Registry
+
+#: Where each known data set comes from (written into the ``[source]`` table).
+ORIGINS: dict[str, dict[str, str]] = {
+    "emps": {
+        "dataset": "EMPS (Electro-Mechanical Positioning System) benchmark",
+        "repository": "https://github.com/forgi86/sysid-neural-continuous "
+                      "(examples/EMPS/data), redistributing the benchmark files",
+        "licence": "none stated by the benchmark; cite the paper",
+        "citation": "A. Janot, M. Gautier, M. Brunot, Data Set and Reference Models of EMPS, "
+                    "2019 Workshop on Nonlinear System Identification Benchmarks, Eindhoven",
+    },
+    "zillen": {
+        "dataset": "Pneumatic cylinder seal-friction tests (3D-printed pneumatic actuators)",
+        "repository": "https://github.com/EvaZillen/3D-printed-pneumatic-actuator "
+                      "(results_pneumatic-actuator/data, HEAD 6e0bcb4)",
+        "licence": "CC0-1.0",
+        "citation": "E. Zillen, H. Vallery, G. Smit, MSc thesis, TU Delft BioMechanical Design, "
+                    "2021",
+    },
+    "mataveid": {
+        "dataset": "MataveID electro-hydraulic bench recording (HangingLoad)",
+        "repository": "https://github.com/DanielMartensson/MataveID (data/HangingLoad.csv, "
+                      "commit 4a12ff2)",
+        "licence": "MIT (Copyright (c) 2017 Daniel Mårtensson)",
+        "citation": "D. Mårtensson, MataveID, GitHub repository",
+    },
+}
+
+
+@dataclass(frozen=True)
+class Importer:
+    """A registered importer.
+
+    Attributes
+    ----------
+    function
+        ``function(src, **options) -> Measurement``.
+    options
+        The keyword options it accepts (the CLI refuses the others).
+    summary
+        One line for help texts.
+    """
+
+    function: Callable[..., Measurement]
+    options: tuple[str, ...]
+    summary: str
+
+
+IMPORTERS: Registry[Importer] = Registry("import kind")
+
+
+def import_file(kind: str, src: str | Path, **options: Any) -> Measurement:
+    """Convert ``src`` with the importer registered as ``kind``.
+
+    Raises
+    ------
+    UnknownNameError
+        For an unknown kind.
+    FcompError
+        For an option the importer does not take, or any problem with the file.
+    """
+    imp = IMPORTERS.get(kind)
+    bad = sorted(set(options) - set(imp.options))
+    if bad:
+        allowed = ", ".join(imp.options) or "none"
+        raise FcompError(f"import {kind}: option(s) {', '.join(bad)} do not apply "
+                         f"(options of {kind}: {allowed})")
+    return imp.function(Path(src), **options)
+
+
+def provenance(src: Path, kind: str, notes: str = "", **extra: Any) -> dict[str, Any]:
+    """The ``[source]`` sidecar table for a file converted by importer ``kind``."""
+    out: dict[str, Any] = {"file": src.name, "sha256": _sha256(src),
+                           "importer": f"fcomp import {kind}", "fcomp_version": __version__}
+    out.update(ORIGINS.get(kind, {}))
+    out.update(extra)
+    if notes:
+        out["notes"] = notes
+    return out
+
+
+def _sha256(src: Path) -> str:
+    try:
+        return hashlib.sha256(src.read_bytes()).hexdigest()
+    except OSError as exc:
+        raise FcompError(f"{src}: cannot read ({exc.strerror or exc})") from None
+
+
+def _require_file(src: Path) -> None:
+    if not src.is_file():
+        raise FcompError(f"{src}: file not found")
+
+
+# ---------------------------------------------------------------------- EMPS
+EMPS_NOTES = (
+    "x = qm (carriage position, m); F_ext = gtau*vir, the motor force on the carriage (N, "
+    "positive in +x); x_ref = qg (reference position, m); u = vir (drive input, V); "
+    "pulses_N (validation file) kept unchanged and not added to F_ext: the pulses are "
+    "already in vir (F_ext jumps by about gtau*5 V = 176 N when pulses_N steps from 0 to 5, "
+    "so despite its name the column looks like volts added to the drive input). Closed-loop data "
+    "(position loop gains kp, kv). No moving mass is given: rigid model "
+    "M*qdd + Fv*qd + Fc*sign(qd) + offset = F_ext, M to be estimated."
+)
+
+
+def import_emps(src: Path) -> Measurement:
+    """EMPS benchmark ``.mat`` -> measurement (kind ``friction-rig``, no mass).
+
+    Columns: ``t`` (s), ``x = qm`` (m), ``F_ext = gtau*vir`` (N), ``x_ref = qg`` (m),
+    ``u = vir`` (V), ``pulses_N`` (N, validation file only, carried unchanged).
+    """
+    variables = load_mat(src)
+    required = ("t", "qm", "qg", "vir", "gtau")
+    missing = [k for k in required if k not in variables]
+    if missing:
+        raise FcompError(f"{src}: not an EMPS file, variable(s) {', '.join(missing)} missing "
+                         "(use 'fcomp import mat' with --map for other .mat files)")
+    mapping = {"t": "t", "x": "qm", "F_ext": "gtau*vir", "x_ref": "qg", "u": "vir"}
+    if "pulses_N" in variables:
+        mapping["pulses_N"] = "pulses_N"
+    gains = {k: float(np.squeeze(variables[k])) for k in ("gtau", "kp", "kv") if k in variables}
+    meta = {
+        "name": src.stem,
+        "kind": "friction-rig",
+        "rig": {"orientation": "horizontal"},
+        "signals": {"u_unit": "V"},
+        "source": provenance(src, "emps", EMPS_NOTES, mapping=mapping, **gains),
+    }
+    return from_variables(variables, mapping, meta, source=src)
+
+
+# -------------------------------------------------------------------- Zillen
+ZILLEN_BORE = 0.025         # m, the standard cylinder of the set-up
+ZILLEN_BORE_257 = 0.0257    # m, files with "257" in the name (authors' script)
+ZILLEN_NOTES = (
+    "Axis: x = -(laser position)*1e-3, positive = extension = the direction in which the "
+    "chamber pressure pushes the piston (the laser reading grows as the piston retracts: "
+    "the authors' friction Force - p*A is positive while the laser reading grows). "
+    "p1 = chamber pressure (bar -> Pa, gauge), acting on A1 = pi/4*bore^2; the other side "
+    "of the piston is open to atmosphere, so there is no p2 column (p2 = 0 gauge) and "
+    "rig.rod is not needed. F_ext = -(load-cell force), N: the load cell holds the piston "
+    "against the pressure. Hence F = p1*A1 + F_ext - m*a = -(Force - p*A) - m*a, the "
+    "authors' friction with the sign of this package. Moving mass and mounting orientation "
+    "are not given (a vertical mounting would show as a constant offset m*g). Raw sensor "
+    "volts kept as laser_V, pressure_V, force_V. Rows with a repeated time stamp are "
+    "dropped (the first is kept): counts in duplicate_rows_dropped (identical rows) and "
+    "repeated_times_dropped (same time, different values)."
+)
+
+
+def import_zillen(src: Path, *, bore: float | None = None) -> Measurement:
+    """TU Delft pneumatic seal-friction file -> measurement (kind ``pneumatic-cylinder``).
+
+    The 7 whitespace-separated columns are time (ms), laser (V), pressure (V),
+    force (V), laser position (mm), chamber pressure (bar, gauge), force (N).
+    Output: ``t`` (s), ``x`` (m), ``p1`` (Pa gauge), ``F_ext`` (N) and the raw volts;
+    see :data:`ZILLEN_NOTES` for the axis and sign conventions. ``bore`` (m)
+    defaults to 25.7 mm for file names containing ``257``, else 25 mm.
+    """
+    _require_file(src)
+    try:
+        raw = np.loadtxt(src, ndmin=2, dtype=float)
+    except (ValueError, UnicodeDecodeError) as exc:
+        raise FcompError(f"{src}: cannot read as whitespace-separated numbers "
+                         f"({str(exc).splitlines()[0]})") from None
+    except OSError as exc:
+        raise FcompError(f"{src}: cannot read ({exc.strerror or exc})") from None
+    if raw.shape[1] != 7 or raw.shape[0] < 2:
+        raise FcompError(f"{src}: expected 7 whitespace-separated columns and at least two rows "
+                         f"(got {raw.shape[0]} rows of {raw.shape[1]})")
+    bad = ~np.isfinite(raw)
+    if bad.any():
+        row, col = np.argwhere(bad)[0]
+        raise FcompError(f"{src}: non-finite value ({raw[row, col]}) at line {row + 1}, "
+                         f"column {col + 1}")
+    dt = np.diff(raw[:, 0])
+    if np.any(dt < 0):
+        i = int(np.argmax(dt < 0))
+        raise FcompError(f"{src}: time goes backwards at line {i + 2} "
+                         f"({raw[i, 0]} ms -> {raw[i + 1, 0]} ms)")
+    repeat = np.concatenate([[False], dt == 0])
+    identical = repeat & np.concatenate([[False], np.all(raw[1:] == raw[:-1], axis=1)])
+    raw = raw[~repeat]
+    if bore is None:
+        bore = ZILLEN_BORE_257 if "257" in src.name else ZILLEN_BORE
+    cols = {
+        "t": raw[:, 0] * 1e-3,
+        "x": -raw[:, 4] * 1e-3 + 0.0,  # + 0.0: no negative zeros in the file
+        "p1": raw[:, 5] * 1e5,
+        "F_ext": -raw[:, 6],
+        "laser_V": raw[:, 1],
+        "pressure_V": raw[:, 2],
+        "force_V": raw[:, 3],
+    }
+    meta = {
+        "name": src.stem,
+        "kind": "pneumatic-cylinder",
+        "pressure": "gauge",
+        "rig": {"bore": float(bore)},
+        "source": provenance(src, "zillen", ZILLEN_NOTES,
+                             duplicate_rows_dropped=int(identical.sum()),
+                             repeated_times_dropped=int(repeat.sum() - identical.sum())),
+    }
+    return checked(cols, meta, src)
+
+
+# ------------------------------------------------------------------ MataveID
+MATAVEID_NOTES = (
+    "Raw instrument volts, no calibration given: u = P-controller output (V, the valve "
+    "command); r_raw = reference and y_raw = cylinder position, both in volts. Without a "
+    "calibration there is no x in metres, no pressure and no force, so friction in newtons "
+    "cannot be reconstructed; the file still shows the valve deadband / stiction (|u| up to "
+    "~0.4 V with no motion) in the volt domain. With --position-scale K (m/V) the columns "
+    "x = K*y_raw and x_ref = K*r_raw are added (a user-given calibration, not from the "
+    "source)."
+)
+
+
+def import_mataveid(src: Path, *, position_scale: float | None = None) -> Measurement:
+    """MataveID ``HangingLoad.csv`` (t, r, y, u; volts) -> measurement.
+
+    Output: ``t`` (s), ``u`` (V), ``r_raw``, ``y_raw`` (V); with ``position_scale``
+    (m/V, user calibration) also ``x`` and ``x_ref`` (m).
+    """
+    _require_file(src)
+    try:
+        raw = np.loadtxt(src, delimiter=",", ndmin=2, dtype=float)
+    except (ValueError, UnicodeDecodeError) as exc:
+        raise FcompError(f"{src}: cannot read as comma-separated numbers "
+                         f"({str(exc).splitlines()[0]})") from None
+    except OSError as exc:
+        raise FcompError(f"{src}: cannot read ({exc.strerror or exc})") from None
+    if raw.shape[1] != 4:
+        raise FcompError(f"{src}: expected 4 columns t, r, y, u (got {raw.shape[1]})")
+    cols = {"t": raw[:, 0], "u": raw[:, 3], "r_raw": raw[:, 1], "y_raw": raw[:, 2]}
+    extra: dict[str, Any] = {}
+    if position_scale is not None:
+        k = float(position_scale)
+        if not np.isfinite(k) or k == 0.0:
+            raise FcompError(f"--position-scale {position_scale}: must be a non-zero number (m/V)")
+        cols["x"] = k * raw[:, 2]
+        cols["x_ref"] = k * raw[:, 1]
+        extra["position_scale_m_per_V"] = k
+    meta = {
+        "name": src.stem,
+        "kind": "hydraulic-cylinder",
+        "signals": {"u_unit": "V"},
+        "source": provenance(src, "mataveid", MATAVEID_NOTES, **extra),
+    }
+    return checked(cols, meta, src)
+
+
+# ------------------------------------------------------------------- generic
+def import_mat(src: Path, *, mapping: str | Mapping[str, str],
+               sidecar: str | Path | None = None) -> Measurement:
+    """Any MATLAB ``.mat`` file through a column mapping (see :mod:`fcomp.matfile`).
+
+    ``sidecar`` is a TOML file with the rig and conventions of data-format.md
+    (``kind``, ``pressure``, ``[rig]``, ``[signals]``); its content is copied into
+    the output sidecar, with the ``[source]`` provenance added.
+    """
+    _require_file(src)
+    meta: dict[str, Any] = {}
+    if sidecar is not None:
+        sp = Path(sidecar)
+        if not sp.is_file():
+            raise FcompError(f"{sp}: sidecar file not found")
+        try:
+            meta = tomllib.loads(sp.read_text())
+        except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+            raise FcompError(f"{sp}: not valid TOML ({exc})") from None
+    cmap = parse_mapping(mapping) if isinstance(mapping, str) else dict(mapping)
+    meta.setdefault("name", src.stem)
+    meta["source"] = provenance(src, "mat", mapping=cmap,
+                                **({"sidecar": Path(sidecar).name} if sidecar else {}))
+    return from_variables(load_mat(src), cmap, meta, source=src)
+
+
+IMPORTERS.register("emps", Importer(import_emps, (), "EMPS benchmark .mat (Janot et al. 2019)"))
+IMPORTERS.register("zillen", Importer(import_zillen, ("bore",),
+                                      "TU Delft pneumatic seal-friction text file (Zillen 2021)"))
+IMPORTERS.register("mataveid", Importer(import_mataveid, ("position_scale",),
+                                        "MataveID hydraulic bench CSV (raw volts)"))
+IMPORTERS.register("mat", Importer(import_mat, ("mapping", "sidecar"),
+                                   "any MATLAB .mat file with --map COLUMN=VARIABLE,..."))

@@ -1,0 +1,175 @@
+"""MATLAB ``.mat`` files -> :class:`~fcomp.measurement.Measurement` with a column mapping.
+
+A mapping says which measurement column (data-format.md) comes from which
+variable of the file, e.g. ``t=time,x=qm,F_ext=gtau*vir``. The right-hand side
+of each entry is a product of factors separated by ``*``, each factor a
+variable name (``qm``; a field of a MATLAB struct as ``data.qm``) or a number
+(``1e-3`` to convert mm to m), optionally preceded by one ``-`` for a sign
+change. Vector variables (``N``, ``N x 1`` or ``1 x N``) give the samples;
+scalar variables (``1 x 1``, e.g. a gain) multiply every sample.
+
+MATLAB v4, v6 and v7 files are read with :func:`scipy.io.loadmat`; v7.3 files
+(HDF5) are refused with a one-line error telling the user to save with ``-v7``.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from fcomp.errors import FcompError
+from fcomp.measurement import Measurement, checked
+
+_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*(\.[A-Za-z_][A-Za-z0-9_]*)*$")
+_COLUMN = re.compile(r"[A-Za-z_][A-Za-z0-9_]*$")
+
+
+def load_mat(path: str | Path) -> dict[str, Any]:
+    """The variables of a ``.mat`` file (structs as nested dicts, arrays squeezed).
+
+    Raises
+    ------
+    FcompError
+        The file is missing, is MATLAB v7.3/HDF5, or cannot be read as a ``.mat`` file.
+    """
+    p = Path(path)
+    if not p.is_file():
+        raise FcompError(f"{p}: file not found")
+    with p.open("rb") as fh:
+        head = fh.read(128)
+    if b"MATLAB 7.3" in head or head[:8] == b"\x89HDF\r\n\x1a\n":
+        raise FcompError(
+            f"{p}: MATLAB v7.3 (HDF5) files are not supported; save it with save(..., '-v7')"
+        )
+    import scipy.io  # here: keeps the command line's start-up light
+
+    try:
+        raw = scipy.io.loadmat(p, simplify_cells=True)
+    except Exception as exc:  # scipy raises several types for corrupt files
+        msg = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise FcompError(f"{p}: cannot read as a MATLAB .mat file ({msg})") from None
+    return {k: v for k, v in raw.items() if not k.startswith("__")}
+
+
+def parse_mapping(spec: str) -> dict[str, str]:
+    """``"t=time,x=qm,F_ext=gtau*vir"`` -> ``{"t": "time", "x": "qm", "F_ext": "gtau*vir"}``."""
+    out: dict[str, str] = {}
+    for item in (s.strip() for s in spec.split(",")):
+        if not item:
+            continue
+        if "=" not in item:
+            raise FcompError(f"--map {item!r}: expected COLUMN=VARIABLE")
+        col, expr = (s.strip() for s in item.split("=", 1))
+        if not _COLUMN.match(col):
+            raise FcompError(f"--map {item!r}: {col!r} is not a valid column name")
+        if col in out:
+            raise FcompError(f"--map: column {col!r} is mapped twice")
+        if not expr:
+            raise FcompError(f"--map {item!r}: no variable given for column {col!r}")
+        out[col] = expr
+    if "t" not in out:
+        raise FcompError("--map: the time column 't' must be mapped (e.g. t=time)")
+    return out
+
+
+def _lookup(variables: Mapping[str, Any], name: str, path: Path) -> Any:
+    obj: Any = variables
+    for part in name.split("."):
+        if not isinstance(obj, Mapping) or part not in obj:
+            have = ", ".join(sorted(k for k in variables)) or "none"
+            raise FcompError(f"{path}: no variable {name!r} in the file (variables: {have})")
+        obj = obj[part]
+    return obj
+
+
+def _factor(variables: Mapping[str, Any], token: str, path: Path, column: str) -> np.ndarray:
+    try:
+        return np.asarray(float(token))
+    except ValueError:
+        pass
+    if not _NAME.match(token):
+        raise FcompError(f"{path}: column {column!r}: {token!r} is neither a variable nor a number")
+    value = _lookup(variables, token, path)
+    try:
+        arr = np.asarray(value)
+        if np.iscomplexobj(arr) or arr.dtype.kind not in "biuf":
+            raise TypeError
+        arr = arr.astype(float)
+    except (TypeError, ValueError):
+        raise FcompError(
+            f"{path}: variable {token!r} (for column {column!r}) is not a real numeric array"
+        ) from None
+    arr = np.squeeze(arr)
+    if arr.ndim > 1:
+        raise FcompError(
+            f"{path}: variable {token!r} (for column {column!r}) has shape {arr.shape}; "
+            "a vector or a scalar is needed"
+        )
+    return arr
+
+
+def evaluate(variables: Mapping[str, Any], expr: str, *, path: str | Path, column: str) -> np.ndarray:
+    """Evaluate one mapping expression (product of variables / numbers, optional leading ``-``)."""
+    p = Path(path)
+    text = expr.strip()
+    sign = 1.0
+    if text.startswith("-"):
+        sign, text = -1.0, text[1:].strip()
+    tokens = [s.strip() for s in text.split("*")]
+    if any(not s for s in tokens):
+        raise FcompError(f"{p}: column {column!r}: cannot parse {expr!r}")
+    value: np.ndarray = np.asarray(sign)
+    for token in tokens:
+        value = value * _factor(variables, token, p, column)
+    return np.asarray(value, dtype=float)
+
+
+def read_mat(path: str | Path, mapping: Mapping[str, str] | str,
+             meta: Mapping[str, Any] | None = None) -> Measurement:
+    """Read a ``.mat`` file into a :class:`Measurement` through a column mapping.
+
+    Parameters
+    ----------
+    path
+        The ``.mat`` file.
+    mapping
+        ``{column: expression}`` or the ``"col=expr,..."`` text (see the module doc).
+    meta
+        The sidecar content to attach (rig, kind, provenance).
+
+    Raises
+    ------
+    FcompError
+        Naming the file and the problem (missing variable, wrong shape, lengths that
+        differ, non-finite values, time not strictly increasing).
+    """
+    p = Path(path)
+    cmap = parse_mapping(mapping) if isinstance(mapping, str) else dict(mapping)
+    return from_variables(load_mat(p), cmap, meta, source=p)
+
+
+def from_variables(variables: Mapping[str, Any], mapping: Mapping[str, str],
+                   meta: Mapping[str, Any] | None, *, source: str | Path) -> Measurement:
+    """:func:`read_mat` on variables already loaded with :func:`load_mat`."""
+    p = Path(source)
+    cmap = dict(mapping)
+    if "t" not in cmap:
+        raise FcompError(f"{p}: the mapping must give the time column 't'")
+    cols = {c: evaluate(variables, e, path=p, column=c) for c, e in cmap.items()}
+    n = max((v.size for v in cols.values() if v.ndim == 1), default=0)
+    if cols["t"].ndim != 1:
+        raise FcompError(f"{p}: time {cmap['t']!r} is a scalar, not a vector of sample times")
+    lengths = {c: v.size for c, v in cols.items() if v.ndim == 1}
+    if len(set(lengths.values())) > 1:
+        desc = ", ".join(f"{c}: {k}" for c, k in lengths.items())
+        raise FcompError(f"{p}: the mapped variables have different lengths ({desc})")
+    cols = {c: (np.full(n, float(v)) if v.ndim == 0 else v) for c, v in cols.items()}
+    cols = {"t": cols.pop("t"), **cols}
+    doc = dict(meta or {})
+    doc.setdefault("name", p.stem)
+    return checked(cols, doc, p)
+

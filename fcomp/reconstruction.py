@@ -1,0 +1,218 @@
+"""Friction force reconstructed from a measurement (seed 000, Eq. 1; models.md section 2).
+
+.. math::
+
+    F = p_1 A_1 - p_2 A_2 - m a - m g s + F_{ext},
+    \\qquad A_1 = \\tfrac{\\pi}{4} D^2,\\; A_2 = \\tfrac{\\pi}{4}(D^2 - d^2)
+
+with gauge pressures (absolute ones are converted with the sidecar's
+``p_atm``, default 101325 Pa), ``s = +1`` for a cylinder extending upward,
+``-1`` extending downward, ``0`` horizontal (``rig.orientation``), and
+``F_ext`` the external force pushing in the extending direction. ``F`` is the
+friction force, positive opposing extension (data-format.md). A missing
+``p1``/``p2`` column is a chamber open to atmosphere (0 gauge); ``rig.rod`` is
+required when ``p2`` is present, ``rig.bore`` when either pressure is.
+
+Velocity and acceleration come from the position ``x`` by zero-phase
+filtering and differentiation, exactly:
+
+1. **Time grid.** If the sampling is uniform (every interval within 1 % of the
+   mean interval) the samples are used as they are. Otherwise ``x`` is linearly
+   interpolated onto a uniform grid whose step is the median interval, the
+   steps below are done there, and the results are linearly interpolated back
+   to the measurement's own times (across a long gap this gives a constant
+   velocity and no acceleration).
+2. **Zero-phase low-pass.** A Butterworth filter of order ``order`` with -3 dB
+   frequency ``cutoff_hz`` is run forward and backward
+   (:func:`scipy.signal.sosfiltfilt`): no phase lag, magnitude response
+   ``|H|^2`` (-6 dB at ``cutoff_hz``, roll-off ``40*order`` dB/decade). The
+   ends are padded by odd reflection over ``3/cutoff_hz`` seconds; the first
+   and last ``~1/cutoff_hz`` seconds are less accurate than the rest. Seed 000
+   used a first-order acausal low-pass at 10 Hz on the acceleration:
+   ``order=1, cutoff_hz=10`` is that filter; the default ``order=2`` rolls off
+   faster than double differentiation amplifies noise (+40 dB/decade), which
+   matters with encoder quantisation.
+3. **Differentiation.** ``v`` and ``a`` are second-order central differences
+   (:func:`numpy.gradient`) of the filtered position and of ``v``. Because the
+   filter is linear and time invariant this equals differentiating first and
+   filtering after (the seed's order) away from the ends.
+
+Pressures and ``F_ext`` are used unfiltered (as in seed 000) unless
+``filter_forces=True``, which passes the whole driving force through the same
+zero-phase filter so that every term of ``F`` has the same bandwidth.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+from scipy.signal import butter, sosfiltfilt
+
+from fcomp.errors import FcompError
+from fcomp.measurement import ORIENTATIONS, G, Measurement
+
+#: Largest relative deviation of a sample interval from the mean for "uniform" sampling.
+UNIFORM_TOL = 0.01
+#: Largest uniform grid the resampling step builds (samples).
+MAX_GRID = 50_000_000
+
+
+def _grid(t: np.ndarray, label: str) -> tuple[np.ndarray, bool]:
+    """The uniform time grid the filter runs on, and whether it is ``t`` itself."""
+    n = t.size
+    span = float(t[-1] - t[0])
+    mean = span / (n - 1)
+    dt = np.diff(t)
+    if np.max(np.abs(dt - mean)) <= UNIFORM_TOL * mean:
+        return t, True
+    h = float(np.median(dt))
+    m = int(math.floor(span / h + 1e-9)) + 1
+    if m > MAX_GRID:
+        raise FcompError(f"{label}: sampling too irregular to resample (median interval {h:g} s "
+                         f"over {span:g} s)")
+    return t[0] + h * np.arange(m), False
+
+
+def zero_phase_lowpass(y: np.ndarray, fs: float, cutoff_hz: float, order: int, *,
+                       label: str = "signal") -> np.ndarray:
+    """Butterworth low-pass run forward and backward (no phase lag), uniform samples.
+
+    Parameters
+    ----------
+    y
+        Uniformly sampled signal.
+    fs
+        Sample rate, Hz.
+    cutoff_hz
+        -3 dB frequency of one pass (the forward-backward response is ``|H|^2``).
+    order
+        Butterworth order of one pass (1 reproduces seed 000's first-order filter).
+    """
+    if not isinstance(order, int) or isinstance(order, bool) or order < 1:
+        raise FcompError(f"filter order must be a positive integer, got {order!r}")
+    if not (cutoff_hz > 0 and cutoff_hz < 0.5 * fs):
+        raise FcompError(f"{label}: cutoff {cutoff_hz:g} Hz must be positive and below half the "
+                         f"sample rate ({0.5 * fs:g} Hz)")
+    if y.size < 3:
+        raise FcompError(f"{label}: at least three samples are needed to filter")
+    sos = butter(order, cutoff_hz, fs=fs, output="sos")
+    padlen = min(y.size - 1, int(math.ceil(3.0 * fs / cutoff_hz)))
+    return sosfiltfilt(sos, y, padtype="odd", padlen=padlen)
+
+
+def smooth(t: np.ndarray, y: np.ndarray, *, cutoff_hz: float = 10.0, order: int = 2,
+           label: str = "signal") -> np.ndarray:
+    """:func:`zero_phase_lowpass` of ``y(t)`` on any strictly increasing time vector."""
+    tu, same = _grid(t, label)
+    yu = y if same else np.interp(tu, t, y)
+    fs = (tu.size - 1) / float(tu[-1] - tu[0])
+    out = zero_phase_lowpass(yu, fs, cutoff_hz, order, label=label)
+    return out if same else np.interp(t, tu, out)
+
+
+def differentiate(t: np.ndarray, x: np.ndarray, *, cutoff_hz: float = 10.0, order: int = 2,
+                  label: str = "signal") -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Zero-phase filtered ``x`` and its first two derivatives at the times ``t``.
+
+    Returns ``(x_f, v, a)``: the filtered position (m), velocity (m/s) and
+    acceleration (m/s^2); see the module docstring for the method.
+    """
+    tu, same = _grid(t, label)
+    xu = x if same else np.interp(tu, t, x)
+    fs = (tu.size - 1) / float(tu[-1] - tu[0])
+    xf = zero_phase_lowpass(xu, fs, cutoff_hz, order, label=label)
+    v = np.gradient(xf, tu)
+    a = np.gradient(v, tu)
+    if same:
+        return xf, v, a
+    return np.interp(t, tu, xf), np.interp(t, tu, v), np.interp(t, tu, a)
+
+
+def derivatives(meas: Measurement, *, cutoff_hz: float = 10.0,
+                order: int = 2) -> tuple[np.ndarray, np.ndarray]:
+    """``(v, a)`` of a measurement's position column ``x`` (see :func:`differentiate`)."""
+    _, v, a = differentiate(meas.t, meas["x"], cutoff_hz=cutoff_hz, order=order,
+                            label=meas.label)
+    return v, a
+
+
+def driving_force(meas: Measurement) -> np.ndarray:
+    """``p1*A1 - p2*A2 + F_ext`` (N), gauge pressures; absent terms are zero.
+
+    Raises
+    ------
+    FcompError
+        If the measurement has none of ``p1``, ``p2``, ``F_ext``, or lacks the
+        ``rig.bore`` (pressures) or ``rig.rod`` (``p2``) it needs.
+    """
+    if not any(k in meas for k in ("p1", "p2", "F_ext")):
+        raise FcompError(f"{meas.label}: no force to reconstruct friction from: needs p1/p2 "
+                         "(with rig.bore) and/or F_ext")
+    total = np.zeros(len(meas))
+    if "p1" in meas or "p2" in meas:
+        bore = float(meas.rig_value("bore"))
+        A1 = math.pi / 4 * bore**2
+        if "p1" in meas:
+            total += meas.gauge_pressure("p1") * A1
+        if "p2" in meas:
+            rod = float(meas.rig_value("rod"))
+            total -= meas.gauge_pressure("p2") * (math.pi / 4 * (bore**2 - rod**2))
+    if "F_ext" in meas:
+        total += meas["F_ext"]
+    return total
+
+
+def reconstruct_friction(meas: Measurement, *, cutoff_hz: float = 10.0, order: int = 2,
+                         mass: float | None = None, filter_forces: bool = False) -> Measurement:
+    """The measurement with columns ``v``, ``a`` and the friction force ``F`` added.
+
+    ``F = p1*A1 - p2*A2 - m*a - m*g*s + F_ext`` (seed 000 Eq. 1, models.md
+    section 2); see the module docstring for the filter and differentiation.
+
+    Parameters
+    ----------
+    meas
+        Needs ``x`` and at least one of ``p1``, ``p2``, ``F_ext``.
+    cutoff_hz, order
+        The zero-phase Butterworth low-pass (Hz; order of one pass).
+    mass
+        Moving mass, kg; default ``rig.mass`` of the sidecar (an error names the
+        key if it is missing). ``0`` neglects inertia (quasi-static data).
+    filter_forces
+        Also pass the driving force through the same zero-phase filter.
+
+    Returns
+    -------
+    Measurement
+        All input columns plus ``v`` (m/s), ``a`` (m/s^2), ``F`` (N); existing
+        ``v``, ``a``, ``F`` are replaced (listed in the sidecar). The sidecar gets
+        a ``[reconstruction]`` table recording the method and its settings.
+    """
+    if "x" not in meas:
+        raise FcompError(f"{meas.label}: friction reconstruction needs the position column 'x'")
+    m = float(meas.rig_value("mass")) if mass is None else float(mass)
+    if not (math.isfinite(m) and m >= 0):
+        raise FcompError(f"{meas.label}: mass must be a non-negative number of kg, got {mass!r}")
+    drive = driving_force(meas)
+    v, a = derivatives(meas, cutoff_hz=cutoff_hz, order=order)
+    if filter_forces:
+        drive = smooth(meas.t, drive, cutoff_hz=cutoff_hz, order=order, label=meas.label)
+    s = ORIENTATIONS[meas.rig.get("orientation", "horizontal")]
+    F = drive - m * a - m * G * s
+    meta: dict[str, Any] = dict(meas.meta)
+    meta["reconstruction"] = {
+        "equation": "F = p1*A1 - p2*A2 - m*a - m*g*s + F_ext (seed 000 Eq. 1)",
+        "filter": "Butterworth, forward-backward (scipy.signal.sosfiltfilt)",
+        "cutoff_hz": float(cutoff_hz),
+        "order": int(order),
+        "differentiation": "central differences of the filtered position",
+        "mass": m,
+        "filter_forces": bool(filter_forces),
+        "resampled": not _grid(meas.t, meas.label)[1],
+        "replaced": [k for k in ("v", "a", "F") if k in meas],
+    }
+    cols = dict(meas.columns)
+    cols.update(v=v, a=a, F=F)
+    return Measurement(cols, meta)

@@ -1,0 +1,201 @@
+"""What every study shares: configuration, output directory, figures, summary and report.
+
+A study is an object with a ``name``, a ``title`` and a :meth:`Study.build`
+method that computes its results and fills a report; :meth:`Study.main`
+does the rest, always the same way::
+
+    DIR/summary.json    the results (JSON; numbers in SI units) + "meta"
+    DIR/fig-*.png       every figure of the report, also as a file
+    DIR/report.html     the self-contained report (fcomp.report)
+
+Each study module exposes ``STUDY`` (its instance) and ``main(config) ->
+results``; it is selected by name through ``studies.STUDIES``. ``summary.json``
+and ``report.html`` are written only when the study has finished, each
+through a temporary file and a rename: a failed run leaves no half-written
+file. ``config.fast`` asks for the fast mode CI runs (fewer samples, shorter
+runs); a study that is fast anyway says so and runs in full.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from abc import ABC, abstractmethod
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, ClassVar
+
+import numpy as np
+
+from fcomp import __version__
+from fcomp.errors import FcompError
+from fcomp.report import Report, atomic_write_text, render_png
+
+__all__ = ["Study", "StudyConfig", "StudyError", "StudyOutput", "to_jsonable"]
+
+
+class StudyError(RuntimeError):
+    """One or more studies raised an error (their output says which and why)."""
+
+
+@dataclass(frozen=True)
+class StudyConfig:
+    """How to run a study.
+
+    Attributes
+    ----------
+    out
+        Output directory (created if missing).
+    fast
+        Fast mode (what CI runs).
+    command
+        The command line that asked for the run, recorded in the report.
+    """
+
+    out: Path
+    fast: bool = False
+    command: str | None = None
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "out", Path(self.out))
+        if not isinstance(self.fast, bool):
+            raise FcompError(f"study config: fast must be true or false, got {self.fast!r}")
+
+    @classmethod
+    def coerce(cls, config: StudyConfig | Mapping[str, Any]) -> StudyConfig:
+        """A :class:`StudyConfig` from itself or a mapping with keys ``out``, ``fast``, ``command``."""
+        if isinstance(config, StudyConfig):
+            return config
+        if not isinstance(config, Mapping):
+            raise FcompError(f"study config must be a mapping, got {type(config).__name__}")
+        unknown = set(config) - {"out", "fast", "command"}
+        if unknown:
+            raise FcompError(f"study config: unknown key(s) {', '.join(sorted(unknown))}")
+        if "out" not in config:
+            raise FcompError("study config: 'out' (output directory) is required")
+        return cls(out=Path(config["out"]), fast=bool(config.get("fast", False)),
+                   command=config.get("command"))
+
+    def as_dict(self) -> dict[str, Any]:
+        return {"out": str(self.out), "fast": self.fast, "command": self.command}
+
+
+def to_jsonable(obj: Any) -> Any:
+    """``obj`` with numpy scalars/arrays as Python numbers/lists and NaN/inf as ``None``."""
+    if isinstance(obj, Mapping):
+        return {str(k): to_jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [to_jsonable(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return [to_jsonable(v) for v in obj.tolist()]
+    if isinstance(obj, np.generic):
+        obj = obj.item()
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return None
+    if isinstance(obj, Path):
+        return str(obj)
+    if obj is None or isinstance(obj, bool | int | float | str):
+        return obj
+    raise TypeError(f"cannot write a {type(obj).__name__} to summary.json")
+
+
+class StudyOutput:
+    """The output directory and the report of one run, handed to :meth:`Study.build`.
+
+    Attributes
+    ----------
+    directory
+        Where the files go.
+    report
+        The :class:`fcomp.report.Report` being built.
+    figures
+        Paths of the figure files written so far.
+    """
+
+    def __init__(self, directory: Path, report: Report) -> None:
+        self.directory = directory
+        self.report = report
+        self.figures: list[Path] = []
+
+    @staticmethod
+    def subplots(*args: Any, **kwargs: Any) -> tuple[Any, Any]:
+        """``matplotlib.pyplot.subplots`` on the Agg backend (no display needed)."""
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        return plt.subplots(*args, **kwargs)
+
+    def figure(self, fig: Any, name: str, caption: str, *, dpi: int = 110) -> Path:
+        """Write ``fig`` to ``DIR/fig-NAME.png`` and embed the same image in the report."""
+        if not name.replace("-", "").replace("_", "").isalnum():
+            raise FcompError(f"figure name {name!r}: use letters, digits, '-' and '_'")
+        png = render_png(fig, dpi=dpi)
+        path = self.directory / f"fig-{name}.png"
+        tmp = path.with_name(f".{path.name}.tmp")
+        tmp.write_bytes(png)
+        tmp.replace(path)
+        self.figures.append(path)
+        self.report.figure(png, caption, alt=f"{name}: {caption}")
+        return path
+
+
+class Study(ABC):
+    """Base of every study: subclasses set ``name``, ``title``, ``summary`` and write ``build``."""
+
+    #: Public name (``fcomp study NAME``).
+    name: ClassVar[str]
+    #: Report title.
+    title: ClassVar[str]
+    #: One line: what the study shows.
+    summary: ClassVar[str]
+    #: File names the report is written to inside the output directory.
+    report_files: ClassVar[tuple[str, ...]] = ("report.html",)
+
+    def headline(self, results: dict[str, Any]) -> str:
+        """One line of result for the index of ``fcomp study all`` (default: the summary)."""
+        return self.summary
+
+    @abstractmethod
+    def build(self, out: StudyOutput, config: StudyConfig) -> dict[str, Any]:
+        """Compute the results, add sections and figures to ``out.report``; return the results.
+
+        The results become ``summary.json`` (a key ``"meta"`` is added there).
+        """
+
+    def main(self, config: StudyConfig | Mapping[str, Any]) -> dict[str, Any]:
+        """Run the study: write ``summary.json``, figures and the report; return the results."""
+        cfg = StudyConfig.coerce(config)
+        directory = cfg.out
+        if directory.exists() and not directory.is_dir():
+            raise FcompError(f"--out {directory}: exists and is not a directory")
+        try:
+            directory.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise FcompError(f"--out {directory}: cannot create it ({exc.strerror})") from None
+        report = Report(self.title, subtitle=self.summary, command=cfg.command,
+                        config={"study": self.name, **cfg.as_dict()})
+        out = StudyOutput(directory, report)
+        results = self.build(out, cfg)
+        if "meta" in results:
+            raise RuntimeError(f"study {self.name}: 'meta' is reserved in summary.json")
+        summary = to_jsonable({
+            **results,
+            "meta": {
+                "study": self.name,
+                "title": self.title,
+                "fcomp_version": __version__,
+                "fast": cfg.fast,
+                "command": cfg.command,
+                "figures": [p.name for p in out.figures],
+                "reports": list(self.report_files),
+            },
+        })
+        atomic_write_text(directory / "summary.json",
+                          json.dumps(summary, indent=2, allow_nan=False) + "\n")
+        page = report.to_html()
+        for filename in self.report_files:
+            atomic_write_text(directory / filename, page)
+        return summary

@@ -142,8 +142,9 @@ EMPS_NOTES = (
     "x = qm (carriage position, m); F_ext = gtau*vir, the motor force on the carriage (N, "
     "positive in +x); x_ref = qg (reference position, m); u = vir (drive input, V); "
     "pulses_N (validation file) kept unchanged and not added to F_ext: the pulses are "
-    "already in vir (F_ext jumps by about gtau*5 V = 176 N when pulses_N steps from 0 to 5, "
-    "so despite its name the column looks like volts added to the drive input). Closed-loop data "
+    "already in vir (F_ext jumps within one sample by about gtau*5 V = 176 N when pulses_N "
+    "steps from 0 to 5; the benchmark calls them force pulses in newtons, the data show them "
+    "added to the drive input). Closed-loop data "
     "(position loop gains kp, kv). No moving mass is given: rigid model "
     "M*qdd + Fv*qd + Fc*sign(qd) + offset = F_ext, M to be estimated."
 )

@@ -245,6 +245,10 @@ class Report:
         The command line that produced the report (shown in the footer).
     config
         The configuration (JSON-serialisable mapping) that produced it.
+    table_label, figure_label
+        Words before the numbers of table and figure captions (a report about
+        a paper may say ``"Report table"`` so as not to clash with the paper's
+        own table numbers).
     """
 
     def __init__(
@@ -254,6 +258,8 @@ class Report:
         subtitle: str | None = None,
         command: str | None = None,
         config: Mapping[str, Any] | None = None,
+        table_label: str = "Table",
+        figure_label: str = "Figure",
     ) -> None:
         if not title or not str(title).strip():
             raise FcompError("a report needs a non-empty title")
@@ -261,6 +267,8 @@ class Report:
         self.subtitle = subtitle
         self.command = command
         self.config = dict(config) if config else {}
+        self.table_label = table_label
+        self.figure_label = figure_label
         self._blocks: list[str] = []
         self._toc: list[tuple[int, str, str]] = []
         self._slugs: set[str] = set()
@@ -323,7 +331,8 @@ class Report:
         self._tables += 1
         parts = ['<div class="table-wrap"><table>']
         if caption:
-            parts.append(f"<caption>Table {self._tables}. {_inline(caption)}</caption>")
+            parts.append(f"<caption>{html.escape(self.table_label)} {self._tables}. "
+                         f"{_inline(caption)}</caption>")
         parts.append("<thead><tr>" + "".join(f'<th scope="col">{_inline(h)}</th>'
                                              for h in header) + "</tr></thead><tbody>")
         for i, row in enumerate(rows):
@@ -388,7 +397,7 @@ class Report:
         if fmt not in ("png", "svg"):
             raise FcompError(f"figure format must be png or svg, got {fmt!r}")
         self._figures += 1
-        label = f"Figure {self._figures}."
+        label = f"{html.escape(self.figure_label)} {self._figures}."
         alt_text = html.escape(alt or caption)
         if isinstance(fig, str | Path) and not str(fig).lstrip().startswith("<"):
             path = Path(fig)

@@ -151,6 +151,9 @@ class Study(ABC):
     title: ClassVar[str]
     #: One line: what the study shows.
     summary: ClassVar[str]
+    #: Caption labels of the report's tables and figures.
+    table_label: ClassVar[str] = "Table"
+    figure_label: ClassVar[str] = "Figure"
     #: File names the report is written to inside the output directory.
     report_files: ClassVar[tuple[str, ...]] = ("report.html",)
 
@@ -176,7 +179,8 @@ class Study(ABC):
         except OSError as exc:
             raise FcompError(f"--out {directory}: cannot create it ({exc.strerror})") from None
         report = Report(self.title, subtitle=self.summary, command=cfg.command,
-                        config={"study": self.name, **cfg.as_dict()})
+                        config={"study": self.name, **cfg.as_dict()},
+                        table_label=self.table_label, figure_label=self.figure_label)
         out = StudyOutput(directory, report)
         results = self.build(out, cfg)
         if "meta" in results:

@@ -43,7 +43,6 @@ from typing import Any
 import numpy as np
 
 from fcomp.errors import FcompError
-from fcomp.report import Comparison
 from studies.base import Study, StudyConfig, StudyOutput
 
 DIRECTIONS = ("extension", "retraction")
@@ -90,7 +89,7 @@ PAPER_EXPERIMENT_MEANS: dict[str, tuple[float, ...]] = {
     "extension": (6.019, 5.098, 5.893, 5.794, 5.194, 5.821, 5.360, 4.997, 5.666, 5.020),
     "retraction": (5.148, 5.192, 5.727, 5.148, 5.404, 5.414, 5.782, 5.003, 4.774, 5.268),
 }
-_FIELDS = ("std", "ci_low", "ci_high")
+FIELDS = ("std", "ci_low", "ci_high")
 
 
 # ---------------------------------------------------------------------- data
@@ -332,7 +331,7 @@ def reproduction(ours: Mapping[str, Mapping[str, Mapping[str, float]]]) -> list[
     rows = []
     for cyl in CYLINDERS:
         for par in PARAMETERS:
-            for i, field in enumerate(_FIELDS):
+            for i, field in enumerate(FIELDS):
                 value, paper = float(ours[cyl][par][field]), PAPER_TABLE8[cyl][par][i]
                 rows.append({"cylinder": cyl, "parameter": par, "field": field,
                              "computed": value, "paper": paper,
@@ -650,6 +649,8 @@ class CoulombViscousStudy(Study):
     title = "Seed 001 reproduced: Coulomb-viscous friction of two pneumatic cylinders"
     summary = ("Dağdelen & Sarıgeçili (2020): the two-step estimates and Table 8 recomputed "
                "from the paper's tables, and the paper's assumptions tested on its own data.")
+    # "Table N" in the text is the paper's; the report's own tables say so
+    table_label = "Report table"
 
     def headline(self, results: dict[str, Any]) -> str:
         rows = [r for r in results["reproduction"]["comparisons"] if r["cylinder"] == "C1"]
@@ -679,7 +680,7 @@ class CoulombViscousStudy(Study):
         results: dict[str, Any] = {
             "table8": {cyl: {p: _contract(t8[cyl][p]) for p in PARAMETERS} for cyl in CYLINDERS},
             "paper": {
-                "table8": {cyl: {p: dict(zip(_FIELDS, PAPER_TABLE8[cyl][p], strict=True))
+                "table8": {cyl: {p: dict(zip(FIELDS, PAPER_TABLE8[cyl][p], strict=True))
                                  for p in PARAMETERS} for cyl in CYLINDERS},
                 "means": PAPER_MEANS,
             },

@@ -61,6 +61,7 @@ class TrajectoryProblem:
         if "mass" in pv.names and data.inertia is None:
             raise ValueError("the mass can only be fitted to driving-force data")
         self.mask = np.ones(data.n, dtype=bool) if mask is None else np.asarray(mask, bool)
+        self.all_samples = bool(self.mask.all())
         self.substeps = substeps
         self.loop = (SensitivityLoop(model, self.model_free, substeps=substeps)
                      if model.symbolic and model.n_states + len(self.model_free) > 0 else None)
@@ -103,22 +104,31 @@ class TrajectoryProblem:
         self.evaluations += 1
         F = F.copy()
         G = np.empty((F.size, len(self.pv.names)))
-        for j, name in enumerate(self.pv.names):
+        pos = [self.pv.index(n) for n in self.model_free]
+        if pos == list(range(len(pos))):
+            G[:, : len(pos)] = Gm
+        else:
+            G[:, pos] = Gm
+        for name in EXTRAS:
+            if name not in vals:
+                continue
+            j = self.pv.index(name)
             if name == "mass":
                 F += vals["mass"] * self.data.inertia  # type: ignore[operator]
                 G[:, j] = self.data.inertia  # type: ignore[index]
-            elif name == "offset":
+            else:
                 F += vals["offset"]
                 G[:, j] = 1.0
-            else:
-                G[:, j] = Gm[:, self.model_free.index(name)]
         return F, G
 
     def __call__(self, theta: np.ndarray,
                  need_jac: bool = True) -> tuple[np.ndarray, np.ndarray | None]:
         F, G = self._predict(theta, jac=need_jac)
+        give = need_jac or self.jacobian_is_free
+        if self.all_samples:
+            return self.data.y - F, (G if give else None)
         m = self.mask
-        return self.data.y[m] - F[m], (G[m] if need_jac or self.jacobian_is_free else None)
+        return self.data.y[m] - F[m], (G[m] if give else None)
 
     @property
     def jacobian_is_free(self) -> bool:

@@ -411,7 +411,8 @@ class FrictionFit:
             Gs = np.hstack([Gs, np.ones((len(pts), 1))])
         scales = self._scales(names, start, Gs, pts.F)
         pv = ParameterVector.build(names, start, self._specs(model, names, start), scales)
-        res = fit_steady_state(model, pts, pv, max_nfev=self.max_nfev, level=self.confidence)
+        budget = self.max_nfev if final else min(self.max_nfev, 60)
+        res = fit_steady_state(model, pts, pv, max_nfev=budget, level=self.confidence)
         self.stages_.append({"stage": "steady-state", "parameters": names,
                              "points": len(pts), "rms": res.rms,
                              "evaluations": res.solution.nfev,

@@ -124,18 +124,31 @@ class ParameterVector:
 def compressed(J: np.ndarray, r: np.ndarray, block: int = 512) -> tuple[np.ndarray, np.ndarray]:
     """``(r~, J~)`` with ``|r~ + J~ d| = |r + J d|`` for every step ``d``; ``p + 1`` rows.
 
-    The triangular factor ``R~`` of the QR factorisation of ``[J, r]``
-    (``(p+1) x (p+1)``): ``J~`` is its first ``p`` columns, ``r~`` its last.
-    Computed blockwise (TSQR: QR of row blocks, then of the stacked
-    factors), which is exact and avoids the poor speed of one LAPACK QR of
-    a very tall matrix.
+    ``[J~, r~]`` is the triangular factor ``R`` of ``[J, r] = Q R``. It is
+    computed from the Cholesky factor of the column-equilibrated Gram matrix
+    (one matrix product: fast); where that is ill-conditioned (smallest
+    pivot below ``1e-6`` of the largest, or not positive definite) from a
+    blockwise QR (TSQR: QR of row blocks, then of the stacked factors), which
+    is exact to rounding at any conditioning.
     """
     A = np.column_stack([J, r])
-    Rs = [np.linalg.qr(A[i : i + block], mode="r") for i in range(0, A.shape[0], block)]
-    R = np.linalg.qr(np.vstack(Rs), mode="r") if len(Rs) > 1 else Rs[0]
     p1 = A.shape[1]
-    if R.shape[0] < p1:  # fewer rows than columns: pad with zero rows
-        R = np.vstack([R, np.zeros((p1 - R.shape[0], p1))])
+    gram = A.T @ A
+    D = np.sqrt(np.diag(gram))
+    D = np.where(D > 0, D, 1.0)
+    R: np.ndarray | None = None
+    try:
+        Rs = np.linalg.cholesky(gram / np.outer(D, D)).T
+        piv = np.abs(np.diag(Rs))
+        if piv.min() >= 1e-6 * piv.max():
+            R = Rs * D[None, :]
+    except np.linalg.LinAlgError:
+        R = None
+    if R is None:
+        Rb = [np.linalg.qr(A[i : i + block], mode="r") for i in range(0, A.shape[0], block)]
+        R = np.linalg.qr(np.vstack(Rb), mode="r") if len(Rb) > 1 else Rb[0]
+        if R.shape[0] < p1:  # fewer rows than columns: pad with zero rows
+            R = np.vstack([R, np.zeros((p1 - R.shape[0], p1))])
     return R[:, -1].copy(), R[:, :-1].copy()
 
 

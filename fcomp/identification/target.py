@@ -88,28 +88,6 @@ def motion(meas: Measurement) -> tuple[np.ndarray, np.ndarray, np.ndarray | None
     return v, a, x
 
 
-def driving_force(meas: Measurement) -> np.ndarray | None:
-    """``p1*A1 - p2*A2 + F_ext`` (N) from whatever the measurement holds, or ``None``."""
-    terms: list[np.ndarray] = []
-    if "p1" in meas or "p2" in meas:
-        A1, A2 = meas.areas()
-        zero = np.zeros(len(meas))
-        p1 = _gauge(meas, "p1") if "p1" in meas else zero
-        p2 = _gauge(meas, "p2") if "p2" in meas else zero
-        terms.append(p1 * A1 - p2 * A2)
-    if "F_ext" in meas:
-        terms.append(meas["F_ext"])
-    if not terms:
-        return None
-    return np.sum(terms, axis=0)
-
-
-def _gauge(meas: Measurement, name: str) -> np.ndarray:
-    p_atm = float(meas.meta.get("p_atm", 101325.0))
-    shift = p_atm if meas.meta.get("pressure", "gauge") == "absolute" else 0.0
-    return meas[name] - shift
-
-
 def fit_data(
     meas: Measurement,
     *,
@@ -130,17 +108,20 @@ def fit_data(
     mass
         Moving mass (kg) overriding ``rig.mass``.
     """
+    from fcomp.reconstruction import driving_force
+
     v, a, x = motion(meas)
     n = len(meas)
     zero = np.zeros(n)
-    p1 = _gauge(meas, "p1") if "p1" in meas else zero
-    p2 = _gauge(meas, "p2") if "p2" in meas else zero
+    p1 = meas.gauge_pressure("p1") if "p1" in meas else zero
+    p2 = meas.gauge_pressure("p2") if "p2" in meas else zero
     sig = prepare_signals(meas.t, v, a, x, p1, p2)
     known = mass if mass is not None else meas.rig.get("mass")
     if known is not None and (not np.isfinite(float(known)) or float(known) < 0):
         raise FcompError(f"{meas.label}: the moving mass must be a non-negative number (kg)")
     has_F = "F" in meas
-    D = None if has_F else driving_force(meas)
+    can_drive = any(k in meas for k in ("p1", "p2", "F_ext"))
+    D = driving_force(meas) if can_drive and not has_F else None
     if estimate_mass is None:
         estimate_mass = not has_F and D is not None and known is None
     if estimate_mass:

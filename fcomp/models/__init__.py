@@ -10,12 +10,16 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 from fcomp.models.base import FrictionModel, NotSymbolicError, Signals, side_of
+from fcomp.models.gms import GMS
+from fcomp.models.hysteresis import NMLGMHysteresis
 from fcomp.models.lugre_family import PRESETS, LuGreFamily
 from fcomp.registry import Registry
 
 MODELS: Registry[type[FrictionModel]] = Registry("friction model")
 for _name, _cls in PRESETS.items():
     MODELS.register(_name, _cls)
+MODELS.register(NMLGMHysteresis.name, NMLGMHysteresis)
+MODELS.register(GMS.name, GMS)
 
 
 def register_model(cls: type[FrictionModel], *, replace: bool = False) -> type[FrictionModel]:

@@ -1,0 +1,287 @@
+"""The effect catalogue as a diagnosis sees it: signatures, applicability, starting values.
+
+Every registered effect (:data:`fcomp.effects.EFFECTS`: the catalogue of
+models.md 1.8 and the user's own) is a candidate. For each one this module
+says
+
+* whether it applies to the current model and to the data
+  (:func:`applicability`): the effect must change the model
+  (:meth:`~fcomp.effects.Effect.applies_to`), the signals it ``needs`` must be
+  measured and informative, steady-state points admit only memoryless
+  effects, a fitted mass excludes ``inertia-error``, ``dwell-time`` needs
+  starts after a dwell;
+* what residual signature it explains and which experiment isolates it (the
+  effect's ``signature`` and ``experiment``), and its physics (the effect
+  class docstring), for reports;
+* where its refit starts (:func:`propose`): a *data-driven guess* of the new
+  parameters read off the current residual ``r = y - F_hat`` and the motion
+  (linear least squares for the additive effects, the low-speed hump for
+  ``stribeck``, the presliding length for ``presliding``, the break-away
+  peaks against the dwell time for ``dwell-time``, a small grid where a time
+  constant or a speed must be found). A user's effect starts from its
+  defaults.
+
+Guesses only start the refit; every parameter of the model is refitted.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from fcomp.diagnosis.data import DiagnosisData
+from fcomp.diagnosis.refit import FitResult
+from fcomp.diagnosis.regimes import Segmentation
+from fcomp.effects import EFFECTS, Effect, make_effect
+from fcomp.identification.guess import stribeck_start
+from fcomp.models.base import FrictionModel
+
+#: Effects that need a motion (memory, acceleration): not for steady-state points.
+DYNAMIC_EFFECTS = frozenset({"presliding", "frictional-lag", "dwell-time", "nonlocal-memory",
+                             "viscous-lead", "inertia-error"})
+#: Effects that read the acceleration.
+ACCELERATION_EFFECTS = frozenset({"viscous-lead", "inertia-error"})
+
+
+@dataclass(frozen=True)
+class Context:
+    """What a guess reads: the record, its regimes, the training samples, the current fit."""
+
+    data: DiagnosisData
+    seg: Segmentation
+    train: np.ndarray
+    current: FitResult
+
+
+@dataclass(frozen=True)
+class Proposal:
+    """A candidate model and the starts of its refit (flat values of that model)."""
+
+    effect: str
+    model: FrictionModel
+    starts: list[dict[str, float]]
+
+
+def describe(name: str) -> dict[str, str]:
+    """Signature, experiment and physics (class docstring) of a registered effect."""
+    cls = EFFECTS.get(name)
+    doc = (cls.__doc__ or "").strip()
+    return {"effect": name, "signature": cls.signature, "experiment": cls.experiment,
+            "physics": " ".join(doc.split())}
+
+
+def applicability(name: str, model: FrictionModel, data: DiagnosisData,
+                  seg: Segmentation) -> str | None:
+    """``None`` if effect ``name`` is a candidate for ``model`` on ``data``, else why not."""
+    cls = EFFECTS.get(name)
+    try:
+        probe = cls()
+    except (TypeError, ValueError) as exc:
+        return f"cannot be built with its defaults ({exc})"
+    if not probe.applies_to(model):
+        return f"already part of {model.describe()} or not applicable to it"
+    for sig in cls.needs:
+        if not data.available.get(sig, False):
+            return f"needs {sig}: {data.reasons.get(sig, 'not available')}"
+    dynamic = name in DYNAMIC_EFFECTS or bool(cls.states)
+    if data.steady_state and dynamic:
+        return "needs a motion (the data are steady-state points)"
+    if name in ACCELERATION_EFFECTS and not data.available.get("a", False):
+        return f"needs an acceleration: {data.reasons.get('a', 'none')}"
+    if name == "inertia-error" and data.fits_mass:
+        return "the mass is already fitted (no rig.mass): a mass error is part of it"
+    if name == "dwell-time" and not _dwell_starts(seg):
+        return "the record has no start after a dwell"
+    try:
+        _attach(model, name, {}, data)
+    except ValueError as exc:
+        return str(exc).split("\n")[0]
+    return None
+
+
+def _config(name: str, data: DiagnosisData) -> dict[str, Any]:
+    if name == "position-dependence":
+        sc = data.scales
+        pad = 0.02 * sc.stroke
+        return {"x_min": sc.x_min - pad, "x_max": sc.x_max + pad}
+    return {}
+
+
+def _attach(model: FrictionModel, name: str, params: dict[str, float],
+            data: DiagnosisData) -> FrictionModel:
+    effect: Effect = make_effect(name, params or None, **_config(name, data))
+    return model.with_effects(effect)
+
+
+def propose(name: str, ctx: Context) -> Proposal:
+    """The candidate ``current model + name`` with the starts of its refit."""
+    model = ctx.current.model
+    guess = GUESSES.get(name)
+    alternatives = guess(ctx) if guess is not None else [{}]
+    models = [_attach(model, name, p, ctx.data) for p in alternatives]
+    starts = [m.flat_params() for m in models]
+    if "mass" in ctx.current.values:
+        for s in starts:
+            s["mass"] = ctx.current.values["mass"]
+    return Proposal(name, models[0], starts)
+
+
+# ------------------------------------------------------------------ guesses
+def _moving(ctx: Context) -> np.ndarray:
+    v = ctx.data.signal("v")
+    return ctx.train & (np.abs(v) > ctx.seg.v_rest)
+
+
+def _level(ctx: Context) -> float:
+    m = _moving(ctx)
+    F = ctx.current.F_hat
+    return float(np.median(np.abs(F[m]))) if m.any() else ctx.data.scales.force
+
+
+def _ls(r: np.ndarray, col: np.ndarray) -> float:
+    den = float(col @ col)
+    return float(col @ r) / den if den > 0 else 0.0
+
+
+def _viscous(ctx: Context) -> list[dict[str, float]]:
+    m = _moving(ctx)
+    c = _ls(ctx.current.residual[m], ctx.data.signal("v")[m])
+    sc = ctx.data.scales
+    c = c if c > 0 else 0.05 * sc.force / sc.speed
+    return [{"sigma2": c}]
+
+
+def _stribeck(ctx: Context) -> list[dict[str, float]]:
+    flat = ctx.current.model.flat_params()
+    v = ctx.data.signal("v")
+    m = ctx.train
+    Fc = flat.get("Fc", flat.get("Fc_pos", _level(ctx)))
+    B = flat.get("B", flat.get("sigma2", 0.0))
+    Fs, vs = stribeck_start(v[m], ctx.data.y[m], Fc, B, ctx.seg.v_rest)
+    exc = max(Fs - Fc, 0.1 * Fc)
+    return [{"Fs_excess": exc, "vs": vs}, {"Fs_excess": exc, "vs": 4 * vs},
+            {"Fs_excess": exc, "vs": vs / 4}]
+
+
+def _presliding(ctx: Context) -> list[dict[str, float]]:
+    s0 = _level(ctx) / ctx.seg.d_pre
+    return [{"sigma0": s0}, {"sigma0": 4 * s0}, {"sigma0": s0 / 4}]
+
+
+def _frictional_lag(ctx: Context) -> list[dict[str, float]]:
+    flat = ctx.current.model.flat_params()
+    vs = flat.get("vs", flat.get("vs_pos", 0.1 * ctx.data.scales.speed))
+    dt = ctx.data.scales.dt
+    out = []
+    for vb in (vs, 4 * vs):
+        for tau in (max(5 * dt, 0.01), max(25 * dt, 0.05)):
+            out.append({"vb": vb, "tau_hp": tau, "tau_hn": tau, "tau_h0": 1.0})
+    return out
+
+
+def _dwell_starts(seg: Segmentation) -> list[tuple[int, float]]:
+    return [(k, dw) for k, dw, _ in seg.starts if dw >= seg.t_dwell]
+
+
+def _dwell_time(ctx: Context) -> list[dict[str, float]]:
+    """Break-away peaks of the residual against the dwell time before each start."""
+    seg, data = ctx.seg, ctx.data
+    x, v = data.signal("x"), data.signal("v")
+    r = ctx.current.residual
+    zone = 3.0 * seg.d_pre
+    dwells, peaks = [], []
+    for k, dw in _dwell_starts(seg):
+        j = k
+        s = math.copysign(1.0, v[k]) if v[k] != 0 else 1.0
+        while j < data.n and abs(x[j] - x[k]) < zone and j - k < 10_000:
+            j += 1
+        win = slice(k, max(j, k + 1))
+        sel = ctx.train[win]
+        if sel.any():
+            dwells.append(dw)
+            peaks.append(float(np.max(s * r[win][sel])))
+    level = _level(ctx)
+    if len(dwells) < 2:
+        return [{"dFs": 0.2 * level, "tau_dwell": 1.0, "L_dwell": 2 * seg.d_pre}]
+    d, p = np.array(dwells), np.array(peaks)
+    best = None
+    for tau in np.geomspace(max(d.min(), 0.01), max(d.max(), 0.02), 5):
+        A = np.column_stack([np.ones_like(d), 1.0 - np.exp(-d / tau)])
+        coef, *_ = np.linalg.lstsq(A, p, rcond=None)
+        cost = float(np.sum((p - A @ coef) ** 2))
+        if best is None or cost < best[0]:
+            best = (cost, max(float(coef[1]), 0.05 * level), float(tau))
+    _, dFs, tau = best  # type: ignore[misc]
+    return [{"dFs": dFs, "tau_dwell": tau, "L_dwell": 2 * seg.d_pre},
+            {"dFs": dFs, "tau_dwell": tau, "L_dwell": 8 * seg.d_pre}]
+
+
+def _direction_asymmetry(ctx: Context) -> list[dict[str, float]]:
+    m = _moving(ctx)
+    v, y = ctx.data.signal("v"), ctx.data.y
+    pos, neg = m & (v > 0), m & (v < 0)
+    if pos.sum() < 3 or neg.sum() < 3:
+        return [{"r_neg": 1.0}]
+    a, b = float(np.median(y[pos])), float(np.median(-y[neg]))
+    ratio = b / a if a > 0 and b > 0 else 1.0
+    return [{"r_neg": float(np.clip(ratio, 0.2, 5.0))}]
+
+
+def _pressure(ctx: Context) -> list[dict[str, float]]:
+    m = _moving(ctx)
+    s = np.sign(ctx.data.signal("v"))
+    dp = ctx.data.signal("p1") + ctx.data.signal("p2") - ctx.data.scales.p_mid
+    F = ctx.current.F_hat
+    kp = _ls((s * ctx.current.residual)[m], (np.abs(F) * dp)[m])
+    bound = 0.9 / max(float(np.max(np.abs(dp))), 1.0)
+    return [{"kp": float(np.clip(kp, -bound, bound)), "p_ref": ctx.data.scales.p_mid}]
+
+
+def _position(ctx: Context) -> list[dict[str, float]]:
+    m = _moving(ctx)
+    cfg = _config("position-dependence", ctx.data)
+    xi = 2.0 * (ctx.data.signal("x") - cfg["x_min"]) / (cfg["x_max"] - cfg["x_min"]) - 1.0
+    F = np.abs(ctx.current.F_hat)
+    cols = np.column_stack([F * xi, F * 0.5 * (3 * xi**2 - 1), F * 0.5 * (5 * xi**3 - 3 * xi)])
+    s = np.sign(ctx.data.signal("v"))
+    coef, *_ = np.linalg.lstsq(cols[m], (s * ctx.current.residual)[m], rcond=None)
+    coef = np.clip(coef, -0.9, 0.9)
+    return [{"kx1": float(coef[0]), "kx2": float(coef[1]), "kx3": float(coef[2])}]
+
+
+def _viscous_lead(ctx: Context) -> list[dict[str, float]]:
+    flat = ctx.current.model.flat_params()
+    visc = flat.get("sigma2", flat.get("B", flat.get("sigma2_pos", 0.0)))
+    a = ctx.data.signal("a")
+    m = ctx.train
+    sc = ctx.data.scales
+    T = _ls(ctx.current.residual[m], visc * a[m]) if visc > 0 else 0.0
+    return [{"T": T if T > 0 else 0.05 * sc.speed / sc.accel}]
+
+
+def _inertia(ctx: Context) -> list[dict[str, float]]:
+    m = ctx.train
+    return [{"dm": _ls(ctx.current.residual[m], ctx.data.signal("a")[m])}]
+
+
+def _offset(ctx: Context) -> list[dict[str, float]]:
+    return [{"offset": float(np.mean(ctx.current.residual[ctx.train]))}]
+
+
+GUESSES: dict[str, Callable[[Context], list[dict[str, float]]]] = {
+    "viscous": _viscous,
+    "stribeck": _stribeck,
+    "presliding": _presliding,
+    "frictional-lag": _frictional_lag,
+    "dwell-time": _dwell_time,
+    "direction-asymmetry": _direction_asymmetry,
+    "pressure-dependence": _pressure,
+    "position-dependence": _position,
+    "viscous-lead": _viscous_lead,
+    "inertia-error": _inertia,
+    "force-offset": _offset,
+}

@@ -1,0 +1,318 @@
+"""Refit a model on the training samples of several experiments; predict everywhere.
+
+The diagnosis refits every candidate model (a baseline plus effects) on the
+*training* samples only and scores it on the held-out ones. The fit is the
+trajectory least squares of :mod:`fcomp.identification` -- the model
+simulated along each experiment's measured motion
+(:class:`~fcomp.identification.dynamic.TrajectoryProblem`, exact
+sensitivities, bounded trust-region solve of
+:func:`~fcomp.identification.problem.solve`) -- with three additions a
+diagnosis needs:
+
+* **Several experiments, one parameter vector.** Residuals and Jacobians of
+  every experiment's training samples are stacked; each experiment is
+  simulated from rest over its whole length.
+* **Bounds from the data scale.** Each parameter's box is its
+  :class:`~fcomp.parameters.ParamSpec` bounds intersected with a box set by
+  its unit and the record's :class:`~fcomp.diagnosis.data.Scales`
+  (:func:`data_bounds`), so no fit can run away to a value the record could
+  not support (a stiffness softer than the stroke allows, a time constant
+  shorter than a sample...).
+* **Several starts.** The guesses of :mod:`.catalogue` may give several
+  starting points; each gets a short fit (:data:`PROBE_NFEV` evaluations)
+  and the best continues to convergence.
+
+Long records are fitted on a block-averaged copy with at most
+``max_samples`` samples (every signal and the target averaged over blocks of
+``q`` samples, so displacement is preserved); predictions and every score
+are always computed on the full record.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from fcomp.diagnosis.data import DiagnosisData, Experiment, Scales
+from fcomp.diagnosis.split import Split
+from fcomp.errors import FcompError
+from fcomp.identification.dynamic import TrajectoryProblem
+from fcomp.identification.estimator import ALWAYS_FIXED, EXTRA_SPECS, default_free
+from fcomp.identification.problem import ParameterVector, base_name, solve
+from fcomp.identification.target import FitData
+from fcomp.models.base import FrictionModel
+from fcomp.parameters import ParamSpec
+from fcomp.trajectory import friction_along_motion
+
+#: Evaluations of each short probe fit when there are several starts.
+PROBE_NFEV = 12
+
+
+def unit_scale(unit: str, sc: Scales, d_pre: float) -> float:
+    """The natural magnitude of a quantity of ``unit`` in this record (SI)."""
+    table = {
+        "N": sc.force,
+        "Ns/m": sc.force / sc.speed,
+        "N/m": sc.force / max(d_pre, sc.resolution),
+        "m/s": sc.speed,
+        "m/s^2": sc.accel,
+        "m": sc.stroke,
+        "s": max(sc.duration, 10 * sc.dt),
+        "1/Pa": 1.0 / max(sc.p_span, abs(sc.p_mid), 1.0),
+        "kg": sc.force / sc.accel,
+        "Pa": max(sc.p_span, abs(sc.p_mid), 1.0),
+    }
+    return float(table.get(unit, 1.0))
+
+
+def data_bounds(spec: ParamSpec, sc: Scales, d_pre: float) -> tuple[float, float]:
+    """Box of a parameter: its spec bounds intersected with a data-derived box.
+
+    Positive quantities (spec lower bound >= 0) are confined to
+    ``[lo_u, hi_u]`` by unit: forces ``[0, 20 F]``; viscous coefficients
+    ``[0, 50 F/V]``; stiffnesses ``[F/(0.5*stroke), F/(0.2*resolution)]``;
+    speeds ``[1e-4 V, 100 V]``; lengths ``[0.2*resolution, stroke]``;
+    time constants ``[dt/2, 10*duration]``; dimensionless numbers keep their
+    spec box (an open lower bound becomes 1e-3). Signed quantities get
+    ``+-20`` unit scales. ``F``, ``V`` are the force and speed scales.
+    """
+    u = spec.unit
+    s = unit_scale(u, sc, d_pre)
+    lo_s, hi_s = spec.lower, spec.upper
+    if spec.lower >= 0:
+        box = {
+            "N": (0.0, 20.0 * s),
+            "Ns/m": (0.0, 50.0 * s),
+            "N/m": (sc.force / (0.5 * sc.stroke), sc.force / (0.2 * sc.resolution)),
+            "m/s": (1e-4 * sc.speed, 100.0 * sc.speed),
+            "m": (0.2 * sc.resolution, sc.stroke),
+            "s": (0.5 * sc.dt, 10.0 * sc.duration),
+            "kg": (0.0, 20.0 * s),
+        }.get(u, (lo_s, hi_s))
+        lo = max(lo_s, box[0])
+        hi = min(hi_s, box[1])
+        if spec.lower_open and lo <= spec.lower:
+            lo = spec.lower + (1e-3 if u == "-" else 1e-9 * s)
+    else:
+        lo, hi = max(lo_s, -20.0 * s), min(hi_s, 20.0 * s)
+    if spec.name == "n":
+        lo = max(lo, 0.2)
+        hi = min(hi, 6.0)
+    return float(lo), float(hi)
+
+
+@dataclass
+class FitResult:
+    """A model fitted on the training samples, and its prediction everywhere.
+
+    Attributes
+    ----------
+    model : FrictionModel
+        The model with the fitted values.
+    values : dict
+        Fitted values by flat name (``mass`` included when it is fitted).
+    F_hat, residual : (N,) N
+        Prediction and ``y - F_hat`` at every sample.
+    rms_train, rms_test : N
+        RMS residual over the training and the held-out samples.
+    n_params : int
+        Number of fitted parameters.
+    converged : bool
+    nfev : int
+        Model evaluations.
+    """
+
+    model: FrictionModel
+    values: dict[str, float]
+    F_hat: np.ndarray
+    residual: np.ndarray
+    rms_train: float
+    rms_test: float
+    n_params: int
+    converged: bool
+    nfev: int
+
+
+def fixed_names(model: FrictionModel) -> set[str]:
+    """Flat names never fitted: numerical thresholds, references, effects' ``fixed`` lists."""
+    out = {n for n in model.flat_params() if base_name(n) in ALWAYS_FIXED}
+    for e in model.effects:
+        out |= {n for n in e.params.flat() if base_name(n) in getattr(e, "fixed", ())}
+    return out
+
+
+def _block_mean(arr: np.ndarray, q: int) -> np.ndarray:
+    m = arr.size // q
+    head = arr[: m * q].reshape(m, q).mean(axis=1)
+    return np.concatenate([head, [arr[m * q:].mean()]]) if arr.size % q else head
+
+
+class Refit:
+    """Fits and predictions of models on one record and split (see the module docstring).
+
+    Parameters
+    ----------
+    data
+        The record.
+    split
+        Training and held-out samples.
+    d_pre
+        Presliding length (m) of the record (for the stiffness bounds).
+    max_nfev
+        Evaluation budget of each fit.
+    max_samples
+        Largest number of samples a fit runs on (longer records are block-averaged).
+    """
+
+    def __init__(self, data: DiagnosisData, split: Split, d_pre: float, *,
+                 max_nfev: int = 60, max_samples: int = 40_000) -> None:
+        self.data = data
+        self.split = split
+        self.d_pre = d_pre
+        self.max_nfev = max_nfev
+        self.q = max(1, math.ceil(data.n / max_samples))
+        self._records = self._fit_records()
+
+    def _fit_records(self) -> list[tuple[FitData, np.ndarray]]:
+        """Per experiment with training samples: the (block-averaged) data and training mask."""
+        out = []
+        q = self.q
+        for e in self.data.experiments:
+            train = self.split.train[e.start:e.stop]
+            if not train.any():
+                continue
+            d = e.data
+            if q > 1:
+                sig = {k: _block_mean(v, q) for k, v in d.sig.items() if k != "s"}
+                from fcomp.models.base import side_of
+
+                sig["s"] = side_of(sig["v"])
+                inertia = None if d.inertia is None else _block_mean(d.inertia, q)
+                d = FitData(sig, _block_mean(d.y, q), inertia, d.source, d.mass, d.label)
+                train = _block_mean(train.astype(float), q) > 0.999
+            out.append((d, train))
+        return out
+
+    # ------------------------------------------------------------ predict
+    def predict(self, model: FrictionModel, values: Mapping[str, float] | None = None
+                ) -> np.ndarray:
+        """Predicted force (N) at every sample of the record (full rate)."""
+        vals = dict(values or {})
+        mass = vals.pop("mass", None)
+        out = []
+        for e in self.data.experiments:
+            out.append(self._predict_one(model, e, vals, mass))
+        return np.concatenate(out)
+
+    def _predict_one(self, model: FrictionModel, e: Experiment, vals: Mapping[str, float],
+                     mass: float | None) -> np.ndarray:
+        s = e.data.sig
+        F = friction_along_motion(model, s["t"], s["v"], a=s["a"], x=s["x"], p1=s["p1"],
+                                  p2=s["p2"], values=vals or None).F
+        if mass is not None and e.data.inertia is not None:
+            F = F + mass * e.data.inertia
+        return F
+
+    def result(self, model: FrictionModel, values: Mapping[str, float], n_params: int,
+               converged: bool = True, nfev: int = 0) -> FitResult:
+        """The :class:`FitResult` of ``model`` with ``values`` (scored on the full record)."""
+        model_vals = {k: v for k, v in values.items() if k != "mass"}
+        fitted = model.with_params(**model_vals) if model_vals else model
+        extras = {"mass": values["mass"]} if "mass" in values else {}
+        F_hat = self.predict(fitted, extras)
+        r = self.data.y - F_hat
+        tr, te = self.split.train, self.split.test
+        return FitResult(fitted, dict(values), F_hat, r, _rms(r[tr]), _rms(r[te]), n_params,
+                         converged, nfev)
+
+    # ---------------------------------------------------------------- fit
+    def free_names(self, model: FrictionModel) -> list[str]:
+        fixed = fixed_names(model)
+        names = [n for n in default_free(model) if n not in fixed]
+        if self.data.fits_mass:
+            names.append("mass")
+        return names
+
+    def specs(self, model: FrictionModel, names: Sequence[str]) -> dict[str, ParamSpec]:
+        """Specs of ``names`` with the data-derived bounds of :func:`data_bounds`."""
+        all_specs = dict(model.param_specs())
+        all_specs.update(EXTRA_SPECS)
+        out = {}
+        for n in names:
+            sp = all_specs[n]
+            lo, hi = data_bounds(sp, self.data.scales, self.d_pre)
+            out[n] = dataclasses.replace(sp, lower=lo, upper=hi, lower_open=False)
+        return out
+
+    def scales(self, model: FrictionModel, names: Sequence[str], start: Mapping[str, float]
+               ) -> dict[str, float]:
+        specs = dict(model.param_specs())
+        specs.update(EXTRA_SPECS)
+        out = {}
+        for n in names:
+            v = abs(float(start[n]))
+            out[n] = v if v > 0 and math.isfinite(v) else 0.1 * unit_scale(
+                specs[n].unit, self.data.scales, self.d_pre)
+        return out
+
+    def fit(self, model: FrictionModel, starts: Sequence[Mapping[str, float]] = (),
+            free: Sequence[str] | None = None) -> FitResult:
+        """Fit ``model`` on the training samples from the best of ``starts``.
+
+        Each start maps flat names to values (missing names: the model's
+        current values). Returns the :class:`FitResult`, scored on the full record.
+        """
+        names = list(free) if free is not None else self.free_names(model)
+        if not names:
+            return self.result(model, {}, 0)
+        base = dict(model.flat_params())
+        if "mass" in names:
+            base["mass"] = 0.0
+        start_list = [dict(base, **s) for s in starts] or [base]
+        specs = self.specs(model, names)
+        best = None
+        nfev = 0
+        budget = PROBE_NFEV if len(start_list) > 1 else self.max_nfev
+        for st in start_list:
+            pv = ParameterVector.build(names, st, specs, self.scales(model, names, st))
+            try:
+                sol, n = self._solve(model, pv, budget)
+            except FcompError:
+                continue
+            nfev += n
+            cost = float(sol.residuals @ sol.residuals)
+            if best is None or cost < best[0]:
+                best = (cost, sol, pv)
+        if best is None:
+            raise FcompError(f"fitting {model.describe()}: the model gives non-finite forces at "
+                             "every start")
+        _, sol, pv = best
+        if len(start_list) > 1:
+            st = dict(base, **dict(zip(names, map(float, sol.theta), strict=True)))
+            pv = ParameterVector.build(names, st, specs, self.scales(model, names, st))
+            sol, n = self._solve(model, pv, self.max_nfev)
+            nfev += n
+        values = dict(zip(names, map(float, sol.theta), strict=True))
+        return self.result(model, values, len(names), sol.converged, nfev)
+
+    def _solve(self, model: FrictionModel, pv: ParameterVector, budget: int):
+        problems = [TrajectoryProblem(model, d, pv, mask=m) for d, m in self._records]
+
+        def fun(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+            rs, Gs = [], []
+            for p in problems:
+                r, G = p(theta, True)
+                rs.append(r)
+                Gs.append(G)
+            return np.concatenate(rs), np.vstack(Gs)
+
+        sol = solve(pv, fun, max_nfev=budget, what=f"fit of {model.describe()}")
+        return sol, sum(p.evaluations for p in problems) // max(len(problems), 1)
+
+
+def _rms(r: np.ndarray) -> float:
+    return float(np.sqrt(np.mean(r**2))) if r.size else math.nan

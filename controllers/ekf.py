@@ -80,26 +80,32 @@ class FrictionEKF:
             raise FcompError("ekf: noise intensities must be >= 0 (q) and > 0 (r)")
         self.model = model
         self.dt = dt
-        step = rosenbrock_euler(model.f, dt, substeps)
-        x = ca.SX.sym("x", nx)
+        # the filter runs on scaled states xi = x/scale and measurements y/r (both O(1))
+        sc = np.asarray(model.scales, dtype=float)
+        self.scale = sc
+        self.r = np.asarray(r, dtype=float)
+        step = rosenbrock_euler(model.f, dt, sc, substeps)
+        xi = ca.SX.sym("xi", nx)
         u = ca.SX.sym("u")
-        xn = step(x, u)
-        self._predict = native(ca.Function("ekf_predict", [x, u], [xn, ca.jacobian(xn, x)]))
-        self._friction = native(ca.Function("ekf_friction", [x, u], [model.friction(x, u)]))
+        S = ca.DM(sc)
+        xn = step(S * xi, u) / S
+        self._predict = native(ca.Function("ekf_predict", [xi, u], [xn, ca.jacobian(xn, xi)]))
+        self._friction = native(ca.Function("ekf_friction", [xi, u], [model.friction(S * xi, u)]))
         self.kf = _ModelEKF(dim_x=nx, dim_z=len(model.measured))
         H = np.zeros((len(model.measured), nx))
         for row, i in enumerate(model.measured):
-            H[row, i] = 1.0
+            H[row, i] = sc[i] / self.r[row]
         self.H = H
-        self.Q = np.diag(np.asarray(q, dtype=float) ** 2 * dt)
-        self.R = np.diag(np.asarray(r, dtype=float) ** 2)
+        self.Q = np.diag((np.asarray(q, dtype=float) / sc) ** 2 * dt)
+        self.R = np.eye(len(model.measured))
         self._HJ = lambda _x: H
         self._Hx = lambda xx: H @ xx
 
     def reset(self, x0: np.ndarray, P0: np.ndarray) -> None:
+        """Start from estimate ``x0`` with covariance ``P0`` (model units)."""
         kf = self.kf
-        kf.x = np.asarray(x0, dtype=float).reshape(-1, 1).copy()
-        kf.P = np.array(P0, dtype=float)
+        kf.x = (np.asarray(x0, dtype=float) / self.scale).reshape(-1, 1)
+        kf.P = np.array(P0, dtype=float) / np.outer(self.scale, self.scale)
         kf.Q = self.Q
         kf.R = self.R
 
@@ -112,12 +118,18 @@ class FrictionEKF:
         kf.x_pred = xn.reshape(-1, 1)
         kf.F = A
         kf.predict()
-        kf.update(np.asarray(y, dtype=float).reshape(-1, 1), self._HJ, self._Hx)
-        return kf.x[:, 0]
+        kf.update((np.asarray(y, dtype=float) / self.r).reshape(-1, 1), self._HJ, self._Hx)
+        return self.x_hat
 
     @property
     def x_hat(self) -> np.ndarray:
-        return self.kf.x[:, 0]
+        """The state estimate (model units)."""
+        return self.kf.x[:, 0] * self.scale
+
+    @property
+    def P(self) -> np.ndarray:
+        """The estimate's covariance (model units)."""
+        return self.kf.P * np.outer(self.scale, self.scale)
 
     def friction(self, u: float) -> float:
         """Friction force (N) of the model at the current estimate."""

@@ -41,6 +41,12 @@ int NAME_eval(const double* in, double* out) {
 """
 
 
+def _view(buf: np.ndarray, start: int, shape: tuple[int, int]) -> np.ndarray:
+    r, c = shape
+    flat = buf[start:start + r * c]
+    return flat if c == 1 else flat.reshape((r, c), order="F")
+
+
 def _offsets(sizes: Sequence[int]) -> list[int]:
     out = [0]
     for s in sizes:
@@ -66,10 +72,14 @@ class NativeFunction:
         self.out_sizes = [r * c for r, c in self.out_shapes]
         self._in_off = _offsets(self.in_sizes)
         self._out_off = _offsets(self.out_sizes)
-        self._in_sl = [slice(a, b) for a, b in zip(self._in_off, self._in_off[1:])]
-        self._out_sl = [slice(a, b) for a, b in zip(self._out_off, self._out_off[1:])]
         self._in = np.zeros(self._in_off[-1])
         self._out = np.zeros(self._out_off[-1])
+        in_shapes = [(dense.size1_in(i), dense.size2_in(i)) for i in range(dense.n_in())]
+        # views shaped like each argument (column-major, as CasADi stores them)
+        self._in_views = [_view(self._in, a, shp)
+                          for a, shp in zip(self._in_off, in_shapes, strict=False)]
+        self._out_views = [_view(self._out, a, shp)
+                           for a, shp in zip(self._out_off, self.out_shapes, strict=False)]
         self._fn = None
         if compiled:
             name = dense.name()
@@ -91,25 +101,18 @@ class NativeFunction:
         self.compiled = self._fn is not None
 
     def __call__(self, *args: object) -> tuple[np.ndarray, ...]:
-        if len(args) != len(self.in_sizes):
-            raise TypeError(f"{self.fn.name()}: expected {len(self.in_sizes)} inputs")
+        if len(args) != len(self._in_views):
+            raise TypeError(f"{self.fn.name()}: expected {len(self._in_views)} inputs")
         if self._fn is None:
             res = self.fn(*args)
             res = res if isinstance(res, tuple) else (res,)
-            return tuple(self._shape(np.asarray(r, dtype=float).ravel(order="F"), i)
-                         for i, r in enumerate(res))
-        buf = self._in
-        for sl, a in zip(self._in_sl, args, strict=True):
-            buf[sl] = a.ravel(order="F") if isinstance(a, np.ndarray) and a.ndim == 2 else a
+            return tuple(np.asarray(r, dtype=float).reshape(v.shape, order="F")
+                         for r, v in zip(res, self._out_views, strict=True))
+        for view, a in zip(self._in_views, args, strict=True):
+            view[...] = a
         if self._fn(self._in_p, self._out_p):
             raise FloatingPointError(f"{self.fn.name()}: native evaluation failed")
-        o = self._out.copy()
-        return tuple(o[sl] if c == 1 else o[sl].reshape((r, c), order="F")
-                     for sl, (r, c) in zip(self._out_sl, self.out_shapes, strict=True))
-
-    def _shape(self, flat: np.ndarray, i: int) -> np.ndarray:
-        r, c = self.out_shapes[i]
-        return flat if c == 1 else flat.reshape((r, c), order="F")
+        return tuple([v.copy() for v in self._out_views])
 
 
 def native(fn: ca.Function, *, compiled: bool = True) -> NativeFunction:

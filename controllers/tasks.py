@@ -22,7 +22,7 @@ name                 reference (SI)
                      (peak 15.7 mm/s, inside the Stribeck region); velocity
                      reversals every 2 s
 ``steps``            a staircase of 2 mm steps (+2, +4, +2, 0 mm), each a
-                     quintic blend of 50 ms then a 1.5 s hold: integral action
+                     quintic blend of 150 ms then a 1.5 s hold: integral action
                      plus static friction gives *hunting* (a limit cycle
                      about the set point)
 ``low-velocity-ramp`` quintic start to 2 mm/s, then a constant 2 mm/s ramp,
@@ -176,7 +176,7 @@ def ramp_reference(velocity: float, accel_time: float) -> RefFn:
 
 TASKS: Registry[Task] = Registry("task")
 
-_HOLD, _BLEND = 1.5, 0.05
+_HOLD, _BLEND = 1.5, 0.15
 _STEPS = (0.002, 0.004, 0.002, 0.0)
 _P = _HOLD + _BLEND
 

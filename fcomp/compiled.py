@@ -23,7 +23,7 @@ import os
 import shutil
 import subprocess
 import tempfile
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from functools import cache
 from pathlib import Path
 
@@ -75,8 +75,9 @@ def _build(step: ca.Function, nx: int, nu: int) -> Path | None:
     return build_library(step, driver)
 
 
-def build_library(fn: ca.Function, driver: str) -> Path | None:
-    """Compile CasADi's C code of ``fn`` followed by the C ``driver`` into a cached shared library.
+def build_library(fn: ca.Function | Sequence[ca.Function], driver: str) -> Path | None:
+    """Compile CasADi's C code of ``fn`` (one or several functions) followed by the C
+    ``driver`` into a cached shared library.
 
     Returns the library path, or ``None`` without a working compiler (callers
     then fall back to CasADi's virtual machine or a Python loop).
@@ -84,10 +85,12 @@ def build_library(fn: ca.Function, driver: str) -> Path | None:
     cc = compiler()
     if cc is None:
         return None
-    name = fn.name()
+    fns = [fn] if isinstance(fn, ca.Function) else list(fn)
+    name = fns[0].name()
     with tempfile.TemporaryDirectory() as tmp:
         cg = ca.CodeGenerator(f"{name}.c", {"with_header": False, "casadi_real": "double"})
-        cg.add(fn)
+        for f in fns:
+            cg.add(f)
         cwd = os.getcwd()
         try:
             os.chdir(tmp)

@@ -23,14 +23,18 @@ Methods (:data:`METHODS`, selected by name like ``solve_ivp``'s)
     The 4th-order, L-stable, stiffly accurate Rosenbrock method RODAS4
     (Hairer & Wanner, *Solving ODEs II*, 2nd ed., Springer 1996, Sec. IV.7,
     coefficients of their ``rodas.f``) with its embedded 3rd-order error
-    estimate and step-size control. Each step uses the *exact* Jacobian
-    ``df/dx`` (CasADi, symbolic) and one linear factorisation; the input is
-    a state with derivative ``du/dt`` (the hold), so the scheme is applied
-    to an autonomous system and is exact for the linear input. The whole
-    step (Jacobian, factorisation, six stages, error estimate) is one CasADi
-    function compiled to C (:func:`fcomp.compiled.build_library`), and the
-    adaptive loop over all samples runs in C as well: no Python per step.
-    Without a C compiler the same loop runs in Python (same results, slower).
+    estimate and step-size control. Each step uses the *exact* Jacobians
+    ``df/dx`` and ``df/du`` (CasADi, symbolic) and one LU factorisation with
+    partial pivoting of ``I/(h*gamma) - J`` in scaled variables ``x/scale``
+    (a hydraulic Jacobian spans 1e-6 m to 1e7 Pa); the input enters as a
+    known function of time (its rate ``du/dt`` through the non-autonomous
+    terms), so the method is exact for the held or linear input. The
+    model's ``f`` and Jacobians are generated as C by CasADi and compiled
+    with the adaptive loop over all samples (:func:`fcomp.compiled.build_library`):
+    no Python per step. Without a C compiler the same loop runs in Python
+    (same decisions, slower). The same RODAS4 step is also available as a
+    CasADi expression (:func:`rosenbrock_step`), for the discrete-time model
+    of :meth:`OdeModel.discrete_step`.
 ``radau``, ``bdf``, ``lsoda``
     :func:`scipy.integrate.solve_ivp` with the CasADi right-hand side and the
     exact Jacobian (reference methods; slower).
@@ -71,6 +75,7 @@ from typing import Any, ClassVar
 import casadi as ca
 import numpy as np
 from scipy.integrate import solve_ivp
+from scipy.linalg import lu_factor, lu_solve
 
 from fcomp.compiled import build_library
 from fcomp.errors import ConvergenceError, FcompError
@@ -104,7 +109,7 @@ RODAS4_ORDER = 4  # exponent of the step-size controller: min(order, embedded or
 
 
 def rosenbrock_step(
-    f: Callable[[Any, Any], Any], x: Any, u: Any, du: Any, h: Any
+    f: Callable[[Any, Any], Any], x: Any, u: Any, du: Any, h: Any, scale: Any = None
 ) -> tuple[Any, Any]:
     """One RODAS4 step of ``dx/dt = f(x, u)``, ``du/dt = du``, as CasADi SX expressions.
 
@@ -115,12 +120,20 @@ def rosenbrock_step(
     x, u, du, h
         State, input at the start of the step, input rate (0 for a held
         input) and step size (SX).
+    scale
+        Nominal magnitude of each state. The step is computed for ``x/scale``
+        (mathematically the same step: Rosenbrock methods are invariant under
+        a constant scaling of the state) so that the linear solves see a
+        well-scaled matrix -- a hydraulic Jacobian spans 1e-6 m to 1e7 Pa.
 
     Returns
     -------
     x_new, err
         The state after the step and the embedded error estimate (SX).
     """
+    if scale is not None:
+        xn, err = rosenbrock_step(lambda a, b: f(a * scale, b) / scale, x / scale, u, du, h)
+        return xn * scale, err * scale
     nx, nu = x.size1(), u.size1()
     xa = ca.SX.sym("xa", nx + nu)
 
@@ -201,9 +214,10 @@ class OdeModel:
         x, u, p = self.symbols()
         h = dt / substeps
         xk = x
+        scale = ca.DM(self.scales)
         for _ in range(substeps):
             xk, _err = rosenbrock_step(lambda a, b: self.rhs(a, b, p), xk, u,
-                                       ca.SX.zeros(self.nu), ca.SX(h))
+                                       ca.SX.zeros(self.nu), ca.SX(h), scale)
         return ca.Function(f"{self.name}_discrete", [x, u, p], [ca.cse(xk)],
                            ["x", "u", "p"], ["x_next"])
 
@@ -286,54 +300,151 @@ _DRIVER = r"""
 #include <math.h>
 #include <string.h>
 /* Adaptive RODAS4 over sample intervals (fcomp/simulation.py).
+   The model: @F@(x, u, p) -> dx/dt and @J@(x, u, p) -> (df/dx, df/du), dense, column-major.
    opts = {rtol, atol, h_min, max_steps}; info = {status, interval, t, h, accepted, rejected}
-   status: 0 ok, 1 step size below h_min, 2 too many steps. */
+   status: 0 ok, 1 step size below h_min, 2 too many steps, 3 non-finite model output. */
+#define NX @NX@
+#define NU @NU@
+#define NUB (NU > 0 ? NU : 1)
+static const double GAM = @GAMMA@;
+static const double RA[6][5] = @RA@;
+static const double RC[6][5] = @RC@;
+static const double RM[6] = @RM@;
+static const double ALPHA[6] = @ALPHA@;
+static const double GAMS[6] = @GAMS@;
+
+static int lu_factor(double* A, int* piv) {
+  for (int k = 0; k < NX; ++k) {
+    int p = k;
+    double amax = fabs(A[k * NX + k]);
+    for (int i = k + 1; i < NX; ++i)
+      if (fabs(A[i * NX + k]) > amax) { amax = fabs(A[i * NX + k]); p = i; }
+    piv[k] = p;
+    if (!(amax > 0.0) || !isfinite(amax)) return 1;
+    if (p != k)
+      for (int j = 0; j < NX; ++j) { double t = A[k * NX + j]; A[k * NX + j] = A[p * NX + j]; A[p * NX + j] = t; }
+    const double inv = 1.0 / A[k * NX + k];
+    for (int i = k + 1; i < NX; ++i) {
+      const double l = (A[i * NX + k] *= inv);
+      if (l != 0.0)
+        for (int j = k + 1; j < NX; ++j) A[i * NX + j] -= l * A[k * NX + j];
+    }
+  }
+  return 0;
+}
+
+static void lu_solve(const double* A, const int* piv, double* b) {
+  for (int k = 0; k < NX; ++k)
+    if (piv[k] != k) { double t = b[k]; b[k] = b[piv[k]]; b[piv[k]] = t; }
+  for (int i = 1; i < NX; ++i) {
+    double s = b[i];
+    for (int j = 0; j < i; ++j) s -= A[i * NX + j] * b[j];
+    b[i] = s;
+  }
+  for (int i = NX - 1; i >= 0; --i) {
+    double s = b[i];
+    for (int j = i + 1; j < NX; ++j) s -= A[i * NX + j] * b[j];
+    b[i] = s / A[i * NX + i];
+  }
+}
+
 int fcomp_ode(int n, const double* x0, const double* U, const double* dU, const double* dt,
-              const double* p, const double* wscale, const double* opts, double* h_io,
+              const double* p, const double* sc, const double* opts, double* h_io,
               double* X, double* info) {
-  casadi_int sz_arg, sz_res, sz_iw, sz_w;
-  @STEP@_work(&sz_arg, &sz_res, &sz_iw, &sz_w);
-  const casadi_real* arg[sz_arg > 5 ? sz_arg : 5];
+  casadi_int a1, r1, i1, w1, a2, r2, i2, w2;
+  @F@_work(&a1, &r1, &i1, &w1);
+  @J@_work(&a2, &r2, &i2, &w2);
+  casadi_int sz_arg = a1 > a2 ? a1 : a2, sz_res = r1 > r2 ? r1 : r2;
+  casadi_int sz_iw = i1 > i2 ? i1 : i2, sz_w = w1 > w2 ? w1 : w2;
+  const casadi_real* arg[sz_arg > 3 ? sz_arg : 3];
   casadi_real* res[sz_res > 2 ? sz_res : 2];
   casadi_int iw[sz_iw + 1];
   casadi_real w[sz_w + 1];
-  double x[@NX@], xn[@NX@], err[@NX@], ut[@NU@ > 0 ? @NU@ : 1];
+  double x[NX], xn[NX], f0[NX], J[NX * NX], Ju[NX * NUB], ft[NX], M[NX * NX];
+  double K[6][NX], Y[NX], fy[NX], uu[NUB];
+  int piv[NX];
   const double rtol = opts[0], atol = opts[1], hmin = opts[2], max_steps = opts[3];
   double h = *h_io, nacc = info[4], nrej = info[5], t = 0.0;
   int status = 0, k = 0;
-  memcpy(x, x0, @NX@ * sizeof(double));
-  memcpy(X, x0, @NX@ * sizeof(double));
+  memcpy(x, x0, NX * sizeof(double));
+  memcpy(X, x0, NX * sizeof(double));
   for (k = 0; k < n && status == 0; ++k) {
     const double T = dt[k];
-    int rejected = 0;
+    const double* u0 = U + k * NU;
+    const double* du = dU + k * NU;
+    int rejected = 0, fresh = 0;
     t = 0.0;
     while (T - t > 1e-12 * T) {
       double hs = h;
-      int clipped = 0;
+      int clipped = 0, bad = 0;
       if (hs >= T - t || (T - t) - hs < 0.01 * hs) { hs = T - t; clipped = 1; }
-      for (int i = 0; i < @NU@; ++i) ut[i] = U[k * @NU@ + i] + dU[k * @NU@ + i] * t;
-      arg[0] = x; arg[1] = ut; arg[2] = dU + k * @NU@; arg[3] = &hs; arg[4] = p;
-      res[0] = xn; res[1] = err;
-      int bad = @STEP@(arg, res, iw, w, 0);
-      double s = 0.0;
-      for (int i = 0; i < @NX@; ++i) {
-        double sc = atol * wscale[i] + rtol * fmax(fabs(x[i]), fabs(xn[i]));
-        double e = err[i] / sc;
-        s += e * e;
-        if (!isfinite(xn[i])) bad = 1;
+      if (!fresh) {  /* f and Jacobians at (t, x): once per accepted state */
+        for (int i = 0; i < NU; ++i) uu[i] = u0[i] + du[i] * t;
+        arg[0] = x; arg[1] = uu; arg[2] = p; res[0] = f0;
+        if (@F@(arg, res, iw, w, 0)) { status = 3; break; }
+        res[0] = J; res[1] = Ju;
+        if (@J@(arg, res, iw, w, 0)) { status = 3; break; }
+        for (int i = 0; i < NX; ++i) {
+          double s = 0.0;
+          for (int j = 0; j < NU; ++j) s += Ju[i + j * NX] * du[j];
+          ft[i] = s;
+          if (!isfinite(f0[i]) || !isfinite(s)) status = 3;
+          for (int j = 0; j < NX; ++j) if (!isfinite(J[i + j * NX])) status = 3;
+        }
+        if (status) break;
+        fresh = 1;
       }
-      double en = sqrt(s / @NX@);
-      if (bad || !isfinite(en)) en = 1e10;
+      /* scaled iteration matrix  I/(h*gamma) - D^-1 J D,  D = diag(sc) */
+      for (int i = 0; i < NX; ++i)
+        for (int j = 0; j < NX; ++j)
+          M[i * NX + j] = (i == j ? 1.0 / (hs * GAM) : 0.0) - J[i + j * NX] * sc[j] / sc[i];
+      if (lu_factor(M, piv)) bad = 1;
+      for (int st = 0; st < 6 && !bad; ++st) {
+        if (st == 0) {
+          memcpy(fy, f0, NX * sizeof(double));
+        } else {
+          for (int i = 0; i < NX; ++i) {
+            double y = x[i];
+            for (int j = 0; j < st; ++j) y += RA[st][j] * K[j][i];
+            Y[i] = y;
+          }
+          for (int i = 0; i < NU; ++i) uu[i] = u0[i] + du[i] * (t + ALPHA[st] * hs);
+          arg[0] = Y; arg[1] = uu; arg[2] = p; res[0] = fy;
+          if (@F@(arg, res, iw, w, 0)) { bad = 1; break; }
+        }
+        for (int i = 0; i < NX; ++i) {
+          double r = fy[i] + hs * GAMS[st] * ft[i];
+          for (int j = 0; j < st; ++j) r += RC[st][j] / hs * K[j][i];
+          K[st][i] = r / sc[i];
+        }
+        lu_solve(M, piv, K[st]);
+        for (int i = 0; i < NX; ++i) K[st][i] *= sc[i];
+      }
+      double en = 1e10;
+      if (!bad) {
+        double s = 0.0;
+        for (int i = 0; i < NX; ++i) {
+          double v = x[i];
+          for (int j = 0; j < 6; ++j) v += RM[j] * K[j][i];
+          xn[i] = v;
+          const double e = K[5][i] / (atol * sc[i] + rtol * fmax(fabs(x[i]), fabs(v)));
+          s += e * e;
+          if (!isfinite(v)) bad = 1;
+        }
+        en = sqrt(s / NX);
+        if (bad || !isfinite(en)) en = 1e10;
+      }
       double fac = 0.9 * pow(en, -1.0 / @ORDER@);
       if (!(fac <= 6.0)) fac = 6.0;
       if (fac < 0.2) fac = 0.2;
       if (en <= 1.0) {
-        memcpy(x, xn, @NX@ * sizeof(double));
+        memcpy(x, xn, NX * sizeof(double));
         t += hs;
         nacc += 1.0;
+        fresh = 0;
         if (rejected) fac = fmin(fac, 1.0);
         rejected = 0;
-        double hn = hs * fac;
+        const double hn = hs * fac;
         h = (clipped && fac >= 1.0) ? fmax(h, hn) : hn;
       } else {
         nrej += 1.0;
@@ -343,7 +454,7 @@ int fcomp_ode(int n, const double* x0, const double* U, const double* dU, const 
       }
       if (nacc + nrej >= max_steps) { status = 2; break; }
     }
-    if (status == 0) memcpy(X + (k + 1) * @NX@, x, @NX@ * sizeof(double));
+    if (status == 0) memcpy(X + (k + 1) * NX, x, NX * sizeof(double));
   }
   *h_io = h;
   info[0] = status; info[1] = status ? k - 1 : n; info[2] = t; info[3] = h;
@@ -353,17 +464,16 @@ int fcomp_ode(int n, const double* x0, const double* U, const double* dU, const 
 """
 
 
-@lru_cache(maxsize=64)
-def _rodas_function(model_key: tuple) -> ca.Function:
-    model = _MODELS[model_key]
-    x, u, p = model.symbols()
-    du = ca.SX.sym("du", model.nu)
-    h = ca.SX.sym("h")
-    xn, err = rosenbrock_step(lambda a, b: model.rhs(a, b, p), x, u, du, h)
-    xn, err = ca.cse(xn), ca.cse(err)
-    name = "fcomp_rodas4_" + "".join(c if c.isalnum() else "_" for c in model.name)
-    return ca.Function(name, [x, u, du, h, p], [xn, err])
+def _c_array(rows: Any, width: int | None = None) -> str:
+    if width is None:
+        return "{" + ", ".join(repr(float(v)) for v in rows) + "}"
+    return "{" + ", ".join(_c_array(list(r) + [0.0] * (width - len(r))) for r in rows) + "}"
 
+
+#: RODAS4 stage times ``alpha_i`` and ``gamma_i = sum_j gamma_ij`` (non-autonomous terms,
+#: used by the C driver, which treats the input as a function of time).
+RODAS4_ALPHA = (0.0, 0.386, 0.21, 0.63, 1.0, 1.0)
+RODAS4_GAMMAS = (0.25, -0.1043, 0.1035, -0.03620000000000023, 0.0, 0.0)
 
 _MODELS: dict[tuple, OdeModel] = {}
 
@@ -375,12 +485,33 @@ def _model_key(model: OdeModel) -> tuple:
 
 
 @lru_cache(maxsize=64)
-def _rodas_library(model_key: tuple) -> Any:
-    fn = _rodas_function(model_key)
+def _model_functions(model_key: tuple) -> tuple[ca.Function, ca.Function]:
+    """``f(x, u, p) -> dx`` and ``jac(x, u, p) -> (df/dx, df/du)`` (dense), C-friendly names."""
     model = _MODELS[model_key]
-    driver = (_DRIVER.replace("@STEP@", fn.name()).replace("@NX@", str(model.nx))
-              .replace("@NU@", str(model.nu)).replace("@ORDER@", str(RODAS4_ORDER)))
-    lib = build_library(fn, driver)
+    x, u, p = model.symbols()
+    f = model.rhs(x, u, p)
+    tag = "".join(c if c.isalnum() else "_" for c in model.name)
+    F = ca.Function(f"fcomp_f_{tag}", [x, u, p], [f])
+    Jf = ca.Function(f"fcomp_j_{tag}", [x, u, p],
+                     [ca.densify(ca.jacobian(f, x)), ca.densify(ca.jacobian(f, u))])
+    return F, Jf
+
+
+@lru_cache(maxsize=64)
+def _rodas_library(model_key: tuple) -> Any:
+    F, Jf = _model_functions(model_key)
+    model = _MODELS[model_key]
+    repl = {
+        "@F@": F.name(), "@J@": Jf.name(), "@NX@": str(model.nx), "@NU@": str(model.nu),
+        "@ORDER@": str(RODAS4_ORDER), "@GAMMA@": repr(RODAS4_GAMMA),
+        "@RA@": _c_array(RODAS4_A, 5), "@RC@": _c_array(RODAS4_C, 5),
+        "@RM@": _c_array(RODAS4_M), "@ALPHA@": _c_array(RODAS4_ALPHA),
+        "@GAMS@": _c_array(RODAS4_GAMMAS),
+    }
+    driver = _DRIVER
+    for k, v in repl.items():
+        driver = driver.replace(k, v)
+    lib = build_library([F, Jf], driver)
     if lib is None:
         return None
     dll = ctypes.CDLL(str(lib))
@@ -399,7 +530,7 @@ class Rodas4(Integrator):
     def __init__(self, model: OdeModel, *, compiled: bool = True) -> None:
         super().__init__(model)
         self.key = _model_key(model)
-        self.step_fn = _rodas_function(self.key)
+        self.F, self.Jf = _model_functions(self.key)
         self.c_fn = _rodas_library(self.key) if compiled else None
 
     @property
@@ -422,13 +553,15 @@ class Rodas4(Integrator):
         else:
             self._run_python(*args, h_io, X, info)
         status = int(info[0])
-        stats = Stats(steps=int(info[4]), rejected=int(info[5]),
-                      nfev=6 * int(info[4] + info[5]), njev=int(info[4] + info[5]))
+        steps = int(info[4] + info[5])
+        stats = Stats(steps=int(info[4]), rejected=int(info[5]), nfev=6 * steps,
+                      njev=int(info[4]))
         if status:
             k = int(info[1])
             t_fail = float(np.sum(dt[:k]) + info[2])
-            why = (f"the step size fell below h_min = {tol.h_min:g} s" if status == 1
-                   else f"more than max_steps = {tol.max_steps} steps were needed")
+            why = {1: f"the step size fell below h_min = {tol.h_min:g} s",
+                   2: f"more than max_steps = {tol.max_steps} steps were needed",
+                   3: "the model gave a non-finite value"}[status]
             raise ConvergenceError(
                 f"simulation of {m.name} did not converge at t = {t_fail:.6g} s: {why} "
                 "(check the parameters and the initial state, or loosen --rtol/--atol)"
@@ -436,35 +569,62 @@ class Rodas4(Integrator):
         return X, stats, float(h_io[0])
 
     def _run_python(self, x0: np.ndarray, U: np.ndarray, dU: np.ndarray, dt: np.ndarray,
-                    p: np.ndarray, wscale: np.ndarray, opts: np.ndarray, h_io: np.ndarray,
+                    p: np.ndarray, sc: np.ndarray, opts: np.ndarray, h_io: np.ndarray,
                     X: np.ndarray, info: np.ndarray) -> None:
-        """The C driver's loop in Python (no compiler available); same decisions."""
+        """The C driver's loop in Python (no compiler available); the same decisions."""
         rtol, atol, hmin, max_steps = opts
         h = float(h_io[0])
         nacc, nrej = 0, 0
         x = x0.copy()
         X[0] = x
         status, k, t = 0, 0, 0.0
+        Dinv = 1.0 / sc
         for k in range(dt.size):  # noqa: B007 - k reported on failure
             T = dt[k]
-            rejected = False
+            rejected, fresh = False, False
             t = 0.0
             while T - t > 1e-12 * T:
                 hs, clipped = h, False
                 if hs >= T - t or (T - t) - hs < 0.01 * hs:
                     hs, clipped = T - t, True
-                xn, err = self.step_fn(x, U[k] + dU[k] * t, dU[k], hs, p)
-                xn = np.asarray(xn).ravel()
-                err = np.asarray(err).ravel()
-                sc = atol * wscale + rtol * np.maximum(np.abs(x), np.abs(xn))
+                if not fresh:
+                    uu = U[k] + dU[k] * t
+                    f0 = np.asarray(self.F(x, uu, p), dtype=float).ravel()
+                    Jx, Ju = (np.asarray(a, dtype=float) for a in self.Jf(x, uu, p))
+                    ft = Ju @ dU[k]
+                    if not (np.all(np.isfinite(f0)) and np.all(np.isfinite(Jx))
+                            and np.all(np.isfinite(ft))):
+                        status = 3
+                        break
+                    fresh = True
+                Mt = np.eye(x.size) / (hs * RODAS4_GAMMA) - Dinv[:, None] * Jx * sc[None, :]
+                en = 1e10
                 with np.errstate(all="ignore"):
-                    en = float(np.sqrt(np.mean((err / sc) ** 2)))
-                if not (np.all(np.isfinite(xn)) and math.isfinite(en)):
-                    en = 1e10
+                    try:
+                        lu = lu_factor(Mt, check_finite=True)
+                        K: list[np.ndarray] = []
+                        for st in range(6):
+                            if st == 0:
+                                fy = f0
+                            else:
+                                Y = x + sum(a * K[j] for j, a in enumerate(RODAS4_A[st]))
+                                uu = U[k] + dU[k] * (t + RODAS4_ALPHA[st] * hs)
+                                fy = np.asarray(self.F(Y, uu, p), dtype=float).ravel()
+                            r = fy + hs * RODAS4_GAMMAS[st] * ft
+                            for j, c in enumerate(RODAS4_C[st]):
+                                r = r + c / hs * K[j]
+                            K.append(sc * lu_solve(lu, r * Dinv))
+                        xn = x + sum(mm * kk for mm, kk in zip(RODAS4_M, K, strict=True))
+                        e = K[5] / (atol * sc + rtol * np.maximum(np.abs(x), np.abs(xn)))
+                        en = float(np.sqrt(np.mean(e * e)))
+                        if not (np.all(np.isfinite(xn)) and math.isfinite(en)):
+                            en = 1e10
+                    except (ValueError, np.linalg.LinAlgError):
+                        en = 1e10
                 fac = 6.0 if en == 0 else min(6.0, 0.9 * en ** (-1.0 / RODAS4_ORDER))
                 fac = max(fac, 0.2)
                 if en <= 1.0:
-                    x, t, nacc = xn, t + hs, nacc + 1
+                    x, t, nacc, fresh = xn, t + hs, nacc + 1, False
                     if rejected:
                         fac = min(fac, 1.0)
                     rejected = False

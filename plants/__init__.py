@@ -5,11 +5,16 @@ from __future__ import annotations
 from fcomp.models.base import FrictionModel
 from fcomp.paramsets import ParameterSet
 from fcomp.registry import Registry
-from plants.base import Plant
+from plants.base import OdePlant, Plant
+from plants.force_rig import ForceRig
+from plants.hydraulic import HydraulicPlant
 from plants.motion import MotionPlant
+from plants.pneumatic import PneumaticPlant
+from plants.presliding_rig import PreslidingRig
 
 PLANTS: Registry[type[Plant]] = Registry("plant")
-PLANTS.register("motion", MotionPlant)
+for _cls in (MotionPlant, HydraulicPlant, PneumaticPlant, PreslidingRig, ForceRig):
+    PLANTS.register(_cls.name, _cls)
 
 
 def make_plant(name: str, friction: FrictionModel, params: str | ParameterSet | None = None) -> Plant:
@@ -17,4 +22,4 @@ def make_plant(name: str, friction: FrictionModel, params: str | ParameterSet | 
     return PLANTS.get(name)(friction, params)
 
 
-__all__ = ["PLANTS", "Plant", "make_plant"]
+__all__ = ["PLANTS", "OdePlant", "Plant", "make_plant"]

@@ -55,7 +55,9 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
-from fcomp.backend import Backend
+import numpy as np
+
+from fcomp.backend import NUMPY, Backend
 from fcomp.errors import FcompError
 from fcomp.measurement import G, ORIENTATIONS
 from fcomp.models.base import FrictionModel, Signals
@@ -95,12 +97,16 @@ def piston_values(pset: ParameterSet | None) -> dict[str, Any]:
         if k in pset.rig:
             out[k] = pset.rig[k]
     if "orientation" in pset.rig:
-        orient = pset.rig["orientation"]
-        if orient not in ORIENTATIONS:
-            raise FcompError(f"parameter set {pset.name}: orientation must be one of "
-                             f"{', '.join(ORIENTATIONS)}, got {orient!r}")
-        out["orient"] = ORIENTATIONS[orient]
+        out["orient"] = orient_value(pset.rig["orientation"], pset.name)
     return out
+
+
+def orient_value(orientation: Any, where: str) -> float:
+    """``orient`` (+1, -1, 0) of an orientation name (``vertical-up``, ...)."""
+    if orientation not in ORIENTATIONS:
+        raise FcompError(f"parameter set {where}: orientation must be one of "
+                         f"{', '.join(ORIENTATIONS)}, got {orientation!r}")
+    return ORIENTATIONS[orientation]
 
 
 def require_section(pset: ParameterSet | None, plant: str, *keys: str) -> dict[str, Any]:
@@ -197,10 +203,6 @@ class PistonPlant(OdePlant):
 
     def _check_mass_side(self) -> None:
         """``m + c_a > 0`` on both sides: the acceleration can be solved."""
-        import numpy as np
-
-        from fcomp.backend import NUMPY
-
         P = self.friction.param_values(NUMPY)
         m = self.plant_params.flat()["mass"]
         x = list(self.friction.initial_state())

@@ -9,11 +9,13 @@ alone, evaluated with :func:`fcomp.trajectory.friction_along_motion`.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
 
 from fcomp import __version__
+from fcomp.errors import FcompError
 from fcomp.measurement import Measurement
 from fcomp.trajectory import friction_along_motion
 from plants.base import InputFn, Plant, output_times
@@ -29,9 +31,13 @@ class MotionPlant(Plant):
     def simulate(
         self, u: InputFn, duration: float, rate: float, *, x0: Any = None, **options: Any
     ) -> Measurement:
+        unknown = set(options) - {"substeps"}
+        if unknown:
+            raise FcompError(f"plant {self.name}: unknown option(s) {', '.join(sorted(unknown))}")
         t = output_times(duration, rate)
         v = np.asarray(u(t), dtype=float) + 0.0 * t
-        run = friction_along_motion(self.friction, t, v, state0=x0,
+        state0 = self.initial_state(x0) if isinstance(x0, Mapping) else x0
+        run = friction_along_motion(self.friction, t, v, state0=state0,
                                     substeps=int(options.get("substeps", 1)))
         meta: dict[str, Any] = {
             "name": f"motion-{self.friction.name}",

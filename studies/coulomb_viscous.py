@@ -263,7 +263,7 @@ def implied_sample_size(std: float, low: float, high: float, *,
             "n_max": n_for(std + r, half - r)}
 
 
-def ols_line(x: np.ndarray, y: np.ndarray) -> dict[str, float]:
+def ols_line(x: np.ndarray, y: np.ndarray) -> dict[str, Any]:
     """Least-squares line ``y = a + b x`` with standard errors, 95 % intervals, R^2, p of b."""
     from scipy import stats
 

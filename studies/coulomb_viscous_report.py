@@ -470,6 +470,14 @@ def _conclusion(rep: Report, data: Seed001Data, res: dict[str, Any]) -> None:
 
 
 # ------------------------------------------------------------------- figures
+def _decorate(ax: Any, title: str, xlabel: str, *, legend: float | None = None) -> None:
+    ax.set_title(title)
+    ax.set_xlabel(xlabel)
+    ax.grid(alpha=0.3)
+    if legend:
+        ax.legend(fontsize=legend)
+
+
 def _fig_table8(out: StudyOutput, res: dict[str, Any]) -> None:
     fig, axes = out.subplots(1, 2, figsize=(11, 3.8))
     for ax, kind, unit in ((axes[0], "Fc", "N"), (axes[1], "B", "Ns/m")):
@@ -512,9 +520,8 @@ def _fig_position(out: StudyOutput, data: Seed001Data, res: dict[str, Any]) -> N
         ax.axhline(ti["mean"], color="tab:green", lw=1.2, label=f"mean {ti['mean']:.3f} N")
         ax.axhline(pos[d]["other_steps_mean"], color="k", ls="--", lw=1,
                    label="mean of steps 2-12")
-        ax.set_title(f"{d} (C1), ANOVA p = {format_p(pos[d]['anova_p'])}")
-        ax.set_xlabel("position step (1 = first break-away from rest at the stroke end)")
-        ax.grid(alpha=0.3)
+        _decorate(ax, f"{d} (C1), ANOVA p = {format_p(pos[d]['anova_p'])}",
+                  "position step (1 = first break-away from rest at the stroke end)")
     axes[0].set_ylabel("break-away force Fc [N]")
     axes[0].legend(fontsize=8, loc="upper right")
     fig.tight_layout()
@@ -538,10 +545,8 @@ def _fig_normal(out: StudyOutput, data: Seed001Data, res: dict[str, Any]) -> Non
         ax.plot(osm[first], values[first], "^", color="tab:red", ms=4.5, label="step 1")
         ax.plot(osm, M.mean() + M.std(ddof=1) * osm, "k--", lw=1,
                 label="normal with the sample mean and std")
-        ax.set_title(f"{d}: Shapiro-Wilk p = {format_p(nor[d]['Fc_shapiro_p'])}")
-        ax.set_xlabel("normal quantile")
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=8)
+        _decorate(ax, f"{d}: Shapiro-Wilk p = {format_p(nor[d]['Fc_shapiro_p'])}",
+                  "normal quantile", legend=8)
     axes[0].set_ylabel("break-away force Fc [N]")
     fig.tight_layout()
     out.figure(fig, "fc-normal",
@@ -614,10 +619,7 @@ def _fig_b_speed(out: StudyOutput, data: Seed001Data, res: dict[str, Any],
         ax.axhline(B[d].mean(), color="tab:green", label=f"mean B = {B[d].mean():.1f} Ns/m")
         ax.axhline(s["line"]["slope"], color="tab:purple", ls=":",
                    label=f"slope of F_ext(v) = {s['line']['slope']:.0f} Ns/m")
-        ax.set_title(f"{d} (C1)")
-        ax.set_xlabel("speed v [m/s]")
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=7.5)
+        _decorate(ax, f"{d} (C1)", "speed v [m/s]", legend=7.5)
     axes[0].set_ylabel("B [Ns/m]")
     fig.tight_layout()
     out.figure(fig, "b-speed",

@@ -19,16 +19,16 @@ def add_model_options(p: argparse.ArgumentParser, *, flag: str = "--friction") -
                    help="override a friction parameter (flat name, SI units); repeatable")
 
 
-def parse_assignments(items: list[str]) -> dict[str, float]:
+def parse_assignments(items: list[str], option: str = "--set") -> dict[str, float]:
     out: dict[str, float] = {}
     for item in items:
         if "=" not in item:
-            raise FcompError(f"--set {item!r}: expected NAME=VALUE")
+            raise FcompError(f"{option} {item!r}: expected NAME=VALUE")
         k, v = (s.strip() for s in item.split("=", 1))
         try:
             out[k] = float(v)
         except ValueError:
-            raise FcompError(f"--set {item!r}: {v!r} is not a number") from None
+            raise FcompError(f"{option} {item!r}: {v!r} is not a number") from None
     return out
 
 

@@ -285,3 +285,59 @@ GUESSES: dict[str, Callable[[Context], list[dict[str, float]]]] = {
     "inertia-error": _inertia,
     "force-offset": _offset,
 }
+
+
+# ------------------------------------------------------------------ baseline
+def baseline_starts(model: FrictionModel, data: DiagnosisData, seg: Segmentation,
+                    train: np.ndarray) -> list[dict[str, float]]:
+    """Starts of the baseline fit, read off the training samples.
+
+    Levels and the viscous coefficient by linear least squares on the moving
+    samples (:func:`fcomp.identification.guess.linear_start`), the Stribeck
+    hump (:func:`~fcomp.identification.guess.stribeck_start`), the bristle
+    stiffness ``Fc/d_pre`` from the presliding length (three starts, a factor
+    of four apart), a small bristle damping (its term a tenth of ``Fc`` at the
+    median speed), the film speed ``vb`` ten times the speed scale (almost the
+    classical curve); everything else from the model's defaults.
+    """
+    from fcomp.identification.guess import linear_start
+    from fcomp.identification.target import FitData
+
+    flat = dict(model.flat_params())
+    sig = {k: data.signal(k)[train] for k in ("t", "v", "a", "x", "p1", "p2", "s")}
+    inertia = None
+    if data.fits_mass:
+        inertia = np.concatenate([e.data.inertia for e in data.experiments])[train]
+    d = FitData(sig, data.y[train], inertia, data.source, None, "training samples")
+    names = {n.removesuffix("_pos").removesuffix("_neg") for n in flat}
+    visc = "B" if "B" in names else ("sigma2" if "sigma2" in names else None)
+    v_min = max(seg.v_rest, 0.02 * data.scales.speed)
+    ls = linear_start(d, v_min, offset=False, directional=False, viscous=visc is not None)
+    Fc = float(ls.Fc[0])
+    start: dict[str, float] = {}
+
+    def put(name: str, value: float) -> None:
+        if name in flat:
+            start[name] = value
+        elif name + "_pos" in flat:
+            start[name + "_pos"] = start[name + "_neg"] = value
+
+    put("Fc", Fc)
+    if visc is not None:
+        put(visc, float(ls.B[0]))
+    if ls.mass is not None:
+        start["mass"] = ls.mass
+    if "Fs" in names:
+        Fs, vs = stribeck_start(d.sig["v"], ls.friction, Fc, float(ls.B[0]), v_min)
+        put("Fs", max(Fs, Fc))
+        put("vs", vs)
+    if "vb" in names:
+        put("vb", 10.0 * data.scales.speed)
+    if "sigma1" in names:
+        moving = np.abs(d.sig["v"]) >= v_min
+        med = float(np.median(np.abs(d.sig["v"][moving]))) if moving.any() else data.scales.speed
+        put("sigma1", 0.1 * Fc / med)
+    if "sigma0" not in names:
+        return [start]
+    s0 = Fc / seg.d_pre
+    return [dict(start, sigma0=s0 * k) for k in (1.0, 4.0, 0.25)]

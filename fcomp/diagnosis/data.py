@@ -43,15 +43,46 @@ MIN_SAMPLES = 20
 STEADY_STATE = "steady-state"
 
 
-def default_cutoff(fs: float) -> float:
-    """Cutoff (Hz) of the zero-phase filter that derives ``v``, ``a`` from ``x``: ``min(fs/10, 50)``.
+#: Candidate cutoffs of the derivation filter, as fractions of the sample rate.
+CUTOFF_FRACTIONS = (1 / 4, 1 / 5, 1 / 6, 1 / 8, 1 / 10, 1 / 15, 1 / 20, 1 / 30, 1 / 50, 1 / 100)
 
-    A tenth of the sample rate keeps the filter well inside the Nyquist band
-    for any rate; 50 Hz is enough for the presliding transients of seal
-    friction (milliseconds) while double differentiation of an encoder's
-    quantisation stays small.
+
+def position_noise(x: np.ndarray) -> float:
+    """Standard deviation (m) of the position noise: quantisation or sensor noise.
+
+    The larger of the quantisation noise ``q/sqrt(12)`` (``q`` the smallest
+    clearly non-zero step of ``x``) and ``1.4826*median|d3x|/sqrt(20)``, the
+    robust spread of third differences (for white noise ``var(d3x) = 20*sigma^2``;
+    smooth motion contributes only ``jerk*dt^3``).
     """
-    return float(min(0.1 * fs, 50.0))
+    q = _resolution(x)
+    d3 = np.diff(x, 3)
+    moving = d3 != 0
+    white = 1.4826 * float(np.median(np.abs(d3[moving]))) / math.sqrt(20.0) if moving.any() \
+        else 0.0
+    return max(q / math.sqrt(12.0), white)
+
+
+def default_cutoff(t: np.ndarray, x: np.ndarray) -> float:
+    """Cutoff (Hz) of the zero-phase filter that derives ``v``, ``a`` from ``x``.
+
+    The highest of :data:`CUTOFF_FRACTIONS` of the sample rate ``fs`` at which
+    the position noise ``sigma_x`` (:func:`position_noise`) leaves a velocity
+    noise ``sigma_v = 2*pi*sigma_x*sqrt(2*fc^3/(3*fs))`` (an ideal low-pass of
+    white noise, differentiated) below 0.2 % of the speed scale (95th
+    percentile of ``|v|`` at ``fs/10``). A clean encoder gets ``fs/4``, so
+    presliding transients of a few milliseconds keep their timing; a noisy
+    sensor gets a lower cutoff.
+    """
+    fs = (t.size - 1) / float(t[-1] - t[0])
+    sx = position_noise(x)
+    _, v0, _ = differentiate(t, x, cutoff_hz=0.1 * fs, label="x")
+    speed = float(np.percentile(np.abs(v0), 95.0))
+    for frac in CUTOFF_FRACTIONS:
+        fc = frac * fs
+        if 2 * math.pi * sx * math.sqrt(2 * fc**3 / (3 * fs)) <= 2e-3 * speed:
+            return float(fc)
+    return float(CUTOFF_FRACTIONS[-1] * fs)
 
 
 @dataclass(frozen=True)
@@ -192,9 +223,8 @@ def _motion_columns(meas: Measurement, cutoff_hz: float | None) -> Measurement:
     if "v" in meas and "a" in meas:
         return meas
     t = meas.t
-    fs = (t.size - 1) / float(t[-1] - t[0])
-    fc = cutoff_hz if cutoff_hz is not None else default_cutoff(fs)
     if "x" in meas:
+        fc = cutoff_hz if cutoff_hz is not None else default_cutoff(t, meas["x"])
         _, v, a = differentiate(t, meas["x"], cutoff_hz=fc, label=meas.label)
         cols = {"v": meas["v"] if "v" in meas else v}
         if "a" not in meas:
@@ -202,6 +232,7 @@ def _motion_columns(meas: Measurement, cutoff_hz: float | None) -> Measurement:
                 smooth(t, meas["v"], cutoff_hz=fc, label=meas.label), t)
         return meas.with_columns(**cols)
     if "v" in meas:
+        fc = cutoff_hz if cutoff_hz is not None else 0.1 * (t.size - 1) / float(t[-1] - t[0])
         vf = smooth(t, meas["v"], cutoff_hz=fc, label=meas.label)
         return meas.with_columns(a=np.gradient(vf, t))
     raise FcompError(f"{meas.label}: a diagnosis needs a position 'x' or velocity 'v' column")

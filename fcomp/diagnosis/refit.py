@@ -302,12 +302,15 @@ class Refit:
     def _solve(self, model: FrictionModel, pv: ParameterVector, budget: int):
         problems = [TrajectoryProblem(model, d, pv, mask=m) for d, m in self._records]
 
-        def fun(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        def fun(theta: np.ndarray, need_jac: bool = True
+                ) -> tuple[np.ndarray, np.ndarray | None]:
             rs, Gs = [], []
             for p in problems:
-                r, G = p(theta, True)
+                r, G = p(theta, need_jac)
                 rs.append(r)
                 Gs.append(G)
+            if any(G is None for G in Gs):
+                return np.concatenate(rs), None
             return np.concatenate(rs), np.vstack(Gs)
 
         sol = solve(pv, fun, max_nfev=budget, what=f"fit of {model.describe()}")

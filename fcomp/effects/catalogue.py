@@ -12,6 +12,13 @@ from typing import TYPE_CHECKING, Any, ClassVar
 
 from fcomp.backend import Backend
 from fcomp.effects.base import Effect, scale_levels
+from fcomp.models.hysteresis import (
+    HYSTERESIS_CONSTRAINTS,
+    NONLOCAL_MEMORY_DEFAULTS,
+    HysteresisFamily,
+    hysteresis_specs,
+    with_hysteresis,
+)
 from fcomp.parameters import ParamValues, make_params_class, spec
 
 if TYPE_CHECKING:
@@ -376,7 +383,58 @@ class ForceOffset(Effect):
         return P("offset"), 0.0
 
 
+class NonlocalMemory(StructuralEffect):
+    """Nonlocal memory: seed 000's hysteresis function ``F(z)`` in place of the bristle ``sigma0*z``.
+
+    In pre-sliding the asperity junctions of the seal deform elastically and
+    plastically: the force-displacement curve after each reversal starts
+    stiff and softens, and its course depends on the earlier reversal points,
+    not only on the current state (seed 000 Figs. 10-11): minor loops close,
+    and once the displacement passes an earlier reversal point the curve goes
+    on as if the minor loop had never happened (wiping-out). The LuGre bristle
+    is one spring with local memory (stiffness ``sigma0`` after every reversal,
+    lens-shaped loops). A model without this effect leaves residuals at small
+    displacements that follow the displacement since the last reversal: the
+    model is too soft just after a reversal and the loop shape is wrong, and
+    after a minor loop an offset remains that the data erase once the earlier
+    reversal point is passed. Parameters are those of
+    :mod:`fcomp.models.hysteresis` (seed 000 Tables 2-3); the defaults, zero
+    segment widths and amplitudes, make every transition curve its
+    continuation with slope ``sigma0`` from ``sigma0*z_r``, i.e. ``sigma0*z``
+    itself: a no-op. Needs a bristle state (``presliding``).
+    """
+
+    name = "nonlocal-memory"
+    Params = make_params_class(
+        "NonlocalMemoryParams", hysteresis_specs(NONLOCAL_MEMORY_DEFAULTS),
+        owner="effect nonlocal-memory", constraints=HYSTERESIS_CONSTRAINTS,
+    )
+    signature = ("small-displacement residual following travel since reversal; minor-loop "
+                 "offsets erased past earlier reversal points")
+    experiment = "small displacement cycles with nested minor loops (seed 000 Figs. 10, 16)"
+
+    def applies_to(self, model: FrictionModel) -> bool:
+        from fcomp.models.lugre_family import LuGreFamily
+
+        return (isinstance(model, LuGreFamily) and "presliding" in model.features
+                and not isinstance(model, HysteresisFamily))
+
+    def attach(self, model: FrictionModel) -> FrictionModel:
+        fam = _family(model, self.name)
+        if isinstance(fam, HysteresisFamily):
+            raise ValueError(f"model {fam.describe()!r} already has effect {self.name!r}")
+        if "presliding" not in fam.features:
+            raise ValueError(
+                f"effect 'nonlocal-memory' replaces the bristle force sigma0*z: add "
+                f"'presliding' to {fam.describe()!r} first"
+            )
+        new = with_hysteresis(fam, self.params.flat())
+        new.lineage = (*(fam.lineage or (fam.name,)), self.name)
+        return new
+
+
 CATALOGUE: tuple[type[Effect], ...] = (
     Viscous, Stribeck, Presliding, FrictionalLag, DwellTime, DirectionAsymmetry,
     PressureDependence, PositionDependence, ViscousLead, InertiaError, ForceOffset,
+    NonlocalMemory,
 )

@@ -14,8 +14,8 @@ all samples or a ``mask``.
 Jacobian: for symbolic models the exact forward sensitivities of
 :class:`~fcomp.identification.sensitivity.SensitivityLoop` (one compiled pass
 gives the force and all its derivatives); for models with discrete memory
-(``symbolic = False``) central finite differences of the numeric simulation
-(relative step ``1e-6`` of each parameter's scale). The ``mass`` and
+(``symbolic = False``) forward finite differences of the numeric simulation
+(step ``1e-6`` of each parameter's scale, one extra simulation per parameter). The ``mass`` and
 ``offset`` columns are ``a + g*s_o`` and ``1``.
 """
 
@@ -77,10 +77,11 @@ class TrajectoryProblem:
         G = np.zeros((F.size, nf))
         if jac:
             for j, name in enumerate(self.model_free):
-                h = 1e-6 * self.pv.scale[self.pv.index(name)]
-                up = self._simulate({**values, name: values[name] + h})
-                down = self._simulate({**values, name: values[name] - h})
-                G[:, j] = (up - down) / (2 * h)
+                i = self.pv.index(name)
+                h = 1e-6 * self.pv.scale[i]
+                if values[name] + h > self.pv.upper[i]:
+                    h = -h
+                G[:, j] = (self._simulate({**values, name: values[name] + h}) - F) / h
         return F, G
 
     def _simulate(self, values: dict[str, float]) -> np.ndarray:

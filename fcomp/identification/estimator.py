@@ -43,6 +43,7 @@ from fcomp.identification.guess import (
     linear_start,
     stribeck_start,
 )
+from fcomp.identification.hysteresis_fit import EXTERNAL, INTERNAL, fit_hysteresis
 from fcomp.identification.problem import ParameterVector, Solution, base_name, side_suffix, solve
 from fcomp.identification.static import (
     SteadyStateMap,
@@ -53,10 +54,14 @@ from fcomp.identification.target import FitData, fit_data
 from fcomp.identification.uncertainty import Uncertainty, estimate
 from fcomp.measurement import Measurement
 from fcomp.models import FrictionModel, make_model
+from fcomp.models.hysteresis import HYSTERESIS_NAMES, HysteresisFamily
 from fcomp.parameters import Directional, ParamSpec, spec
 
-#: Parameters never fitted by default (numerical thresholds, reference values).
-ALWAYS_FIXED = ("v_eps", "p_ref")
+#: Hysteresis-function segment parameters fitted from transition curves.
+SEGMENT_NAMES = (*EXTERNAL, *INTERNAL)
+#: Parameters never fitted by default: numerical thresholds, reference values and the
+#: hysteresis segment boundaries (seed 000 fixes them from the loop's shape, Table 2).
+ALWAYS_FIXED = ("v_eps", "p_ref", *(n for n in HYSTERESIS_NAMES if n not in SEGMENT_NAMES))
 EXTRA_SPECS: dict[str, ParamSpec] = {
     "mass": spec("mass", "kg", 0.0, 0.0, math.inf, "moving mass", directional=False),
     "offset": spec("offset", "N", 0.0, -math.inf, math.inf, "constant force offset",
@@ -82,6 +87,17 @@ def directional_model(model: FrictionModel) -> FrictionModel:
     if not flat:
         return model
     return model._rebuild(type(params).from_flat(flat, base=params), model.effects)
+
+
+def _block_diag(blocks: Sequence[np.ndarray]) -> np.ndarray:
+    n = sum(b.shape[0] for b in blocks)
+    out = np.zeros((n, n))
+    i = 0
+    for b in blocks:
+        k = b.shape[0]
+        out[i : i + k, i : i + k] = b
+        i += k
+    return out
 
 
 class FrictionFit:
@@ -120,12 +136,21 @@ class FrictionFit:
         parts (default :func:`~fcomp.identification.guess.default_v_min`).
     min_duration
         Shortest steady run (s) for the steady-state points.
+    cutoff_hz
+        Cut-off (Hz) of the zero-phase filter deriving ``v``, ``a`` from ``x``
+        when the data hold no ``v``/``a`` columns (the driving force is
+        filtered alike, :mod:`.target`).
     substeps
         Integration steps per sample interval in the trajectory stage.
     max_nfev
         Evaluation budget of each least-squares stage.
     confidence
         Level of the confidence intervals ``ci_``.
+    refine_hysteresis
+        For models with seed 000's hysteresis function: refine the segment
+        parameters ``c_i, k_i`` found from the transition curves by a
+        trajectory fit of the full model (finite differences: one simulation
+        per parameter and iteration, ~10 us per sample).
     strict
         Raise :class:`~fcomp.errors.ConvergenceError` when the fit does not
         converge (after setting the result attributes).
@@ -175,9 +200,11 @@ class FrictionFit:
         method: str = "auto",
         v_min: float | None = None,
         min_duration: float = 0.05,
+        cutoff_hz: float = 10.0,
         substeps: int = 1,
         max_nfev: int = 200,
         confidence: float = 0.95,
+        refine_hysteresis: bool = True,
         strict: bool = True,
     ) -> None:
         self.model = model
@@ -191,9 +218,11 @@ class FrictionFit:
         self.method = method
         self.v_min = v_min
         self.min_duration = min_duration
+        self.cutoff_hz = cutoff_hz
         self.substeps = substeps
         self.max_nfev = max_nfev
         self.confidence = confidence
+        self.refine_hysteresis = refine_hysteresis
         self.strict = strict
 
     # ---------------------------------------------------------------- setup
@@ -342,10 +371,13 @@ class FrictionFit:
         if not 0.0 < self.confidence < 1.0:
             raise FcompError(f"confidence must be in (0, 1), got {self.confidence}")
         model = self._base_model()
-        d = fit_data(data, estimate_mass=self.estimate_mass, mass=self.mass)
+        d = fit_data(data, estimate_mass=self.estimate_mass, mass=self.mass,
+                     cutoff_hz=self.cutoff_hz)
         if self.directional and self.offset:
             raise FcompError("direction-dependent levels and a constant offset are confounded "
                              "(both shift v > 0 and v < 0 forces apart/together); fit one of them")
+        if isinstance(model, HysteresisFamily):
+            return self._fit_hysteresis_model(model, data, d)
         v_min = self.v_min if self.v_min is not None else default_v_min(d.sig["v"])
         free = self._free_names(model)
         extras = (["mass"] if d.inertia is not None else []) + (["offset"] if self.offset else [])
@@ -380,6 +412,122 @@ class FrictionFit:
             self._static_stage(model, d, free, start, v_min, required=False, final=False)
         return self._trajectory_stage(model, d, free, extras, start,
                                       np.ones(d.n, dtype=bool), "trajectory")
+
+    def _fit_hysteresis_model(self, model: HysteresisFamily, data: Measurement,
+                              d: FitData) -> FrictionFit:
+        """Seed 000's new model: the NMLGM part by the trajectory fit of the carrier model
+        (symbolic, exact sensitivities), then ``c_i, k_i`` from transition curves
+        (:mod:`.hysteresis_fit`), refined (``refine_hysteresis``) by a trajectory fit
+        of the full model with finite differences, the other parameters held."""
+        free = self._free_names(model)
+        seg = [n for n in free if n in SEGMENT_NAMES]
+        carrier = model.carrier()
+        cflat = carrier.flat_params()
+        extras = (["mass"] if d.inertia is not None else []) + (["offset"] if self.offset else [])
+        cfree = [n for n in free if n in cflat]
+        sub: FrictionFit | None = None
+        if cfree or extras:
+            sub = FrictionFit(
+                carrier, offset=self.offset, estimate_mass=self.estimate_mass, mass=self.mass,
+                free=cfree, initial={k: v for k, v in (self.initial or {}).items()
+                                     if k in cflat or k in EXTRAS},
+                method=self.method, v_min=self.v_min, min_duration=self.min_duration,
+                cutoff_hz=self.cutoff_hz, substeps=self.substeps, max_nfev=self.max_nfev,
+                confidence=self.confidence, strict=False,
+            ).fit(data)
+            cvals = sub.model_.flat_params()
+            ext = dict(sub._extras)
+        else:
+            cvals, ext = dict(cflat), {}
+        f = d.y - ext.get("offset", 0.0)
+        if "mass" in ext and d.inertia is not None:
+            f = f - ext["mass"] * d.inertia
+        hmodel = model.with_params(**cvals)
+        values = hmodel.flat_params()
+        specs = hmodel.param_specs()
+        stages = list(sub.stages_) if sub else []
+        hyst_names: list[str] = []
+        not_ident = list(sub.not_identifiable_) if sub else []
+        if seg:
+            hf = fit_hysteresis(d.sig["x"], f, values, specs, free=seg, max_nfev=self.max_nfev,
+                                level=self.confidence, label=d.label)
+            stages.append({"stage": "transition-curves", "parameters": hf.names,
+                           "curves": hf.curves, "rms": hf.rms,
+                           "evaluations": hf.solution.nfev, "converged": hf.solution.converged})
+            not_ident += hf.not_identifiable
+            values.update(hf.values)
+            hyst_names = hf.names
+        fd = FitData(d.sig, f, None, d.source, d.mass, d.label)
+        hmodel = hmodel.with_params(**{n: values[n] for n in hyst_names})
+        if hyst_names and self.refine_hysteresis:
+            pv = ParameterVector.build(hyst_names, values, {n: specs[n] for n in hyst_names})
+            prob = TrajectoryProblem(hmodel, fd, pv, substeps=self.substeps)
+            sol = solve(pv, prob, max_nfev=self.max_nfev, compress=False,
+                        what=f"{d.label}: hysteresis refinement")
+            unc = estimate(sol.jacobian, sol.residuals, sol.theta, level=self.confidence)
+            stages.append({"stage": "hysteresis-trajectory", "parameters": hyst_names,
+                           "rms": float(np.sqrt(np.mean(sol.residuals**2))),
+                           "evaluations": sol.nfev, "converged": sol.converged})
+            h_theta, h_unc, converged, message = sol.theta, unc, sol.converged, sol.message
+            h_units = pv.units
+        elif hyst_names:
+            h_theta = np.array([hf.values[n] for n in hyst_names])
+            h_unc, converged, message = hf.uncertainty, hf.solution.converged, \
+                hf.solution.message
+            h_units = tuple(specs[n].unit for n in hyst_names)
+        else:
+            h_theta, h_unc, converged, message, h_units = np.zeros(0), None, True, "", ()
+        hvals = dict(zip(hyst_names, map(float, h_theta), strict=True))
+        try:
+            self.model_ = hmodel.with_params(**hvals)
+        except ValueError as exc:
+            raise ConvergenceError(f"{d.label}: the fit ended on invalid parameters ({exc})") \
+                from None
+        # results: the carrier fit's, then the segment parameters (block-diagonal covariance)
+        self.params_, self.stderr_, self.ci_, self.units_ = {}, {}, {}, {}
+        covs = []
+        if sub is not None:
+            self.params_.update(sub.params_)
+            self.stderr_.update(sub.stderr_)
+            self.ci_.update(sub.ci_)
+            self.units_.update(sub.units_)
+            covs.append(sub.cov_)
+        if h_unc is not None:
+            keep = [j for j, ok in enumerate(h_unc.identifiable) if ok]
+            for j in keep:
+                n = hyst_names[j]
+                self.params_[n] = hvals[n]
+                self.stderr_[n] = float(h_unc.stderr[j])
+                self.ci_[n] = (float(h_unc.ci_low[j]), float(h_unc.ci_high[j]))
+                self.units_[n] = h_units[j]
+            not_ident += [hyst_names[j] for j, ok in enumerate(h_unc.identifiable) if not ok]
+            covs.append(h_unc.cov[np.ix_(keep, keep)])
+        self.param_names_ = list(self.params_)
+        self.cov_ = _block_diag(covs)
+        self.not_identifiable_ = not_ident
+        self.stages_ = stages
+        self.fixed_ = {k: float(v) for k, v in self.model_.flat_params().items()
+                       if k not in self.params_}
+        self.tau_int_ = sub.tau_int_ if sub else (h_unc.tau_int if h_unc else 1.0)
+        self.n_eff_ = sub.n_eff_ if sub else (h_unc.n_eff if h_unc else float(d.n))
+        self.uncertainty_ = h_unc
+        self.method_ = "trajectory+transition-curves"
+        self.converged_ = bool(converged and (sub.converged_ if sub else True))
+        self.message_ = message if sub is None else f"{sub.message_}; {message}".strip("; ")
+        self.nfev_ = sum(s_["evaluations"] for s_ in stages)
+        self.v_min_ = sub.v_min_ if sub else default_v_min(d.sig["v"])
+        self._extras = ext
+        self._target_kind = (d.source, d.inertia is not None)
+        self.target_ = d.source
+        run = TrajectoryProblem(self.model_, fd, ParameterVector.build(
+            [], {}, {}), substeps=self.substeps).predict(np.zeros(0))
+        self.rms_ = float(np.sqrt(np.mean((f - run) ** 2)))
+        self.n_samples_ = d.n
+        self.at_bound_ = list(sub.at_bound_) if sub else []
+        if not self.converged_ and self.strict:
+            raise ConvergenceError(f"{d.label}: fitting {model.describe()} did not converge "
+                                   f"({self.message_})")
+        return self
 
     def _static_stage(self, model: FrictionModel, d: FitData, free: list[str],
                       start: dict[str, float], v_min: float, *, required: bool,
@@ -465,8 +613,12 @@ class FrictionFit:
                 prob: TrajectoryProblem | None) -> FrictionFit:
         names = list(pv.names)
         theta = sol.theta
-        # a null direction at the solution: hold those parameters, keep the others' errors
-        bad = [n for n, ok in zip(names, unc.identifiable, strict=True) if not ok]
+        # a null direction at the solution, or a parameter whose 100 % change moves the
+        # prediction by less than 1e-6 of the residual RMS: hold it, keep the others' errors
+        r_rms = float(np.sqrt(np.mean(sol.residuals**2))) or 1e-300
+        effect = np.sqrt(np.mean(sol.jacobian**2, axis=0)) * np.maximum(np.abs(theta), pv.scale)
+        bad = [n for n, ok, e in zip(names, unc.identifiable, effect, strict=True)
+               if not ok or e < 1e-6 * r_rms]
         if bad:
             self.not_identifiable_ += bad
             keep = [j for j, n in enumerate(names) if n not in bad]
@@ -522,7 +674,8 @@ class FrictionFit:
 
     def _data(self, data: Measurement) -> FitData:
         self._check_fitted()
-        return fit_data(data, estimate_mass=self._target_kind[1], mass=self.mass)
+        return fit_data(data, estimate_mass=self._target_kind[1], mass=self.mass,
+                        cutoff_hz=self.cutoff_hz)
 
     def predict(self, data: Measurement) -> np.ndarray:
         """Predicted force ``F_model + mass*(a + g*s_o) + offset`` (N) along ``data``'s motion."""
@@ -547,7 +700,8 @@ class FrictionFit:
         def num(x: float) -> float | str:
             return float(x) if math.isfinite(x) else ("inf" if x > 0 else "-inf")
 
-        name = self.model if isinstance(self.model, str) else self.model_.name
+        lineage = getattr(self.model_, "lineage", ()) or (self.model_.name,)
+        name = self.model if isinstance(self.model, str) else lineage[0]
         return {
             "model": name,
             "effects": [e.name for e in self.model_.effects],

@@ -23,9 +23,11 @@ white residuals ``tau_int = 1`` and the estimate reduces to the usual
 one. The *effective sample size* ``N_eff = N / tau_int`` sets the degrees of
 freedom ``N_eff - p`` of the Student-t confidence intervals.
 
-Rank deficiency (a parameter the data do not determine) shows as a near-zero
-singular value of the column-scaled ``J``; the covariance uses the
-pseudo-inverse and the affected parameters get an infinite standard error.
+Rank deficiency (a parameter the data do not determine) shows as a tiny
+singular value of the column-scaled ``J`` (below ``1e-7`` of the largest):
+:func:`determined_mask` then marks the parameter weighing most in that
+direction as undetermined, repeatedly; those get an infinite standard error
+and the covariance of the others is computed without them.
 """
 
 from __future__ import annotations
@@ -94,6 +96,32 @@ def integrated_autocorrelation(r: np.ndarray, max_lag: int | None = None) -> flo
     return max(1.0, 1.0 + 2.0 * float(np.sum(acf[1:cut])))
 
 
+def determined_mask(J: np.ndarray, rcond: float = 1e-7) -> np.ndarray:
+    """Which parameters the data determine (``True``) given the Jacobian ``J`` (N, p).
+
+    The columns are scaled to unit norm; while the smallest singular value is
+    below ``rcond`` times the largest, the parameter with the largest
+    component in its singular vector is declared undetermined and its column
+    removed. Zero columns are undetermined from the start. The remaining
+    parameters have a well-conditioned (``cond < 1/rcond``) scaled Jacobian.
+    """
+    from fcomp.identification.problem import compressed
+
+    J = np.asarray(J, dtype=float)
+    p = J.shape[1]
+    norms = np.linalg.norm(J, axis=0)
+    ok = norms > 0
+    # the triangular factor R of the scaled J has J's singular values and vectors
+    R = compressed(J / np.where(ok, norms, 1.0), np.zeros(J.shape[0]))[1]
+    while ok.any():
+        idx = np.flatnonzero(ok)
+        _, sv, Vt = np.linalg.svd(R[:, idx], full_matrices=False)
+        if sv[-1] >= rcond * sv[0]:
+            break
+        ok[idx[int(np.argmax(np.abs(Vt[-1])))]] = False
+    return ok if p else np.zeros(0, dtype=bool)
+
+
 def estimate(
     J: np.ndarray,
     r: np.ndarray,
@@ -124,24 +152,19 @@ def estimate(
     n, p = J.shape
     if n <= p:
         raise ValueError(f"{n} residuals cannot determine {p} parameters")
-    norms = np.linalg.norm(J, axis=0)
-    good = norms > 0
-    scale = np.where(good, norms, 1.0)
-    Js = J / scale
-    U, sv, Vt = np.linalg.svd(Js, full_matrices=False)
-    tol = max(n, p) * np.finfo(float).eps * 1e3 * (sv[0] if sv.size else 1.0)
-    keep = sv > max(tol, 1e-10 * (sv[0] if sv.size else 1.0))
-    inv_s2 = np.where(keep, 1.0 / np.where(keep, sv, 1.0) ** 2, 0.0)
-    H_inv_s = (Vt.T * inv_s2) @ Vt  # (Js^T Js)^+
-    # parameters with a component in the dropped subspace are not identifiable
-    null = Vt[~keep]
-    identifiable = good & (np.abs(null).max(axis=0) < 1e-3 if null.size else True)
+    identifiable = determined_mask(J)
+    cov = np.full((p, p), np.nan)
+    kept = np.flatnonzero(identifiable)
+    Jk = J[:, kept]
+    scale = np.linalg.norm(Jk, axis=0)
+    Js = Jk / scale
+    H_inv_s = np.linalg.inv(Js.T @ Js) if kept.size else np.zeros((0, 0))
     tau = integrated_autocorrelation(r, max_lag=max(1, n // (6 * p))) if autocorrelated else 1.0
     batch = max(1, min(math.ceil(3.0 * tau), max(1, n // (6 * p))))
     if autocorrelated:
         g = Js * r[:, None]
         nb = n // batch
-        head = g[: nb * batch].reshape(nb, batch, p).sum(axis=1)
+        head = g[: nb * batch].reshape(nb, batch, kept.size).sum(axis=1)
         tail = g[nb * batch :].sum(axis=0, keepdims=True)
         blocks = np.vstack([head, tail]) if n % batch else head
         meat = blocks.T @ blocks
@@ -149,9 +172,9 @@ def estimate(
     else:
         s2 = float(r @ r) / (n - p)
         cov_s = s2 * H_inv_s
-    cov = cov_s / np.outer(scale, scale)
-    var = np.diag(cov).copy()
-    var[~identifiable] = np.inf
+    cov[np.ix_(kept, kept)] = cov_s / np.outer(scale, scale)
+    var = np.full(p, np.inf)
+    var[kept] = np.diag(cov)[kept]
     stderr = np.sqrt(np.maximum(var, 0.0))
     n_eff = n / tau
     dof = max(n_eff - p, 1.0)

@@ -256,7 +256,8 @@ class FrictionModel(ABC):
         out = {}
         for owner in (self.params, *[e.params for e in self.effects]):
             for n in owner.flat():
-                base = n[:-4] if n.endswith(("_pos", "_neg")) else n
+                own = type(owner).names()  # a parameter may itself end in _neg (r_neg)
+                base = n[:-4] if n not in own and n.endswith(("_pos", "_neg")) else n
                 out[n] = type(owner).spec_of(base)
         return out
 

@@ -52,8 +52,11 @@ INF = math.inf
 #: Tolerance of the ``sum(alpha_i) = 1`` check.
 ALPHA_SUM_TOL = 1e-9
 
-#: The family's Stribeck function ``g(v, h)``, evaluated with the film term off (``h = 0``).
-_STRIBECK = PRESETS["stribeck"]()
+
+@cache
+def _stribeck_model() -> FrictionModel:
+    """The family's ``stribeck`` model, whose ``g(v, h)`` GMS evaluates with ``h = 0``."""
+    return PRESETS["stribeck"]()
 
 
 @cache
@@ -73,7 +76,7 @@ def gms_params_class(n: int) -> type[ParamSet]:
               for i in range(1, n + 1)]
     base = make_params_class(f"GMS{n}ParamsBase", specs, owner=owner, constraints=[("Fc", "Fs")])
 
-    def __post_init__(self: Any) -> None:
+    def check_alpha_sum(self: Any) -> None:
         base.__post_init__(self)
         s = sum(getattr(self, f"alpha{i}") for i in range(1, n + 1))
         if abs(s - 1.0) > ALPHA_SUM_TOL:
@@ -83,7 +86,7 @@ def gms_params_class(n: int) -> type[ParamSet]:
             )
 
     return type(f"GMS{n}Params", (base,), {
-        "__post_init__": __post_init__, "__doc__": base.__doc__, "__module__": __name__,
+        "__post_init__": check_alpha_sum, "__doc__": base.__doc__, "__module__": __name__,
     })
 
 
@@ -97,7 +100,7 @@ class GMSModel(FrictionModel):
 
     def g(self, be: Backend, v: Any, P: ParamValues, L: dict, s: Any) -> Any:
         """Stribeck curve ``g(v) = Fc + (Fs - Fc)*exp(-(|v|/vs)^n)`` (N), the family's."""
-        return _STRIBECK.g(be, v, 0.0, P, L, s)
+        return _stribeck_model().g(be, v, 0.0, P, L, s)  # type: ignore[attr-defined]
 
     def _k_alpha(self, P: ParamValues) -> list[tuple[Any, Any]]:
         return [(P(f"k{i}"), P(f"alpha{i}")) for i in range(1, self.n_elements + 1)]

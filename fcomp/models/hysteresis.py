@@ -57,33 +57,49 @@ where the seed is silent, each stated with its reason:
    The external loop's average stiffness, 5.49 N over 0.354 mm = 1.55e4 N/m,
    equals ``sigma0`` = 1.5e4 N/m of Table 4 to 3 %, so the continuation is the
    seed's own stiffness.
-3. **Shape classes.** A curve starting at a *global* extreme of the memory
-   (the first two reversals after a virgin start, or the first after leaving
-   sliding, and every curve that starts where an earlier extreme was wiped
-   out) uses the external shape; a curve starting inside the memorised range
-   is an internal loop (Fig. 16) and uses the ``c8, k8`` shape.
+3. **Shape classes.** A curve that starts at a *global* extreme of the
+   memory (the first two reversals after the virgin state, the first after
+   leaving sliding, and every reversal beyond a point that was wiped out)
+   uses the external shape; a curve that starts inside the memorised range
+   is an internal loop (Fig. 16) and uses the ``c8, k8`` shape. "Inside"
+   means short of the memorised extreme of the same kind by more than the
+   width of the seed's internal loop, ``zd - zc`` (19 um for cylinder 1):
+   the class, and with it the curve's shape, must not flip between two
+   nearly equal cycles because one reversal falls a nanometre short of the
+   previous one (repeated displacement cycles re-centre ``z`` slowly through
+   Eq. 10 and would otherwise alternate between the two shapes).
 4. **Return-point memory by affine scaling** (Preisach/Madelung rule). A curve
-   whose *target* (the previous opposite reversal point still in memory)
-   exists is scaled, ``lam = |F_t - F_r|/Phi(Delta_t)``, so that it passes
-   exactly through the target; the outermost curves (no target) use the raw
-   shape, ``lam = 1``. With the raw Table 3 numbers the external ascending
-   curve rises 5.486 N from ``-z1`` to ``z5`` but the descending one falls
-   only 5.399 N back, so unscaled curves drift 0.087 N per closed cycle; with
-   the scaling a closed deflection cycle returns to its start exactly.
-5. **Memory rules** (seed 000, Figs. 15-16, Madelung's rules). A turning-point
+   with a *target* (the previous opposite reversal point still in memory) is
+   scaled, ``lam = |F_t - F_r|/Phi(Delta_t)``, so that it passes exactly
+   through the target; curves without a target use the raw shape,
+   ``lam = 1``. With the raw Table 3 numbers the external ascending curve
+   rises 5.486 N from ``-z1`` to ``z5`` but the descending one falls only
+   5.399 N back, so unscaled curves would drift 0.087 N per closed cycle;
+   with the scaling a closed deflection cycle returns to its start exactly.
+5. **Memory rules** (seed 000 Figs. 15-16; Madelung's rules). A turning-point
    stack holds the reversal points. A reversal pushes the current point and
    starts a curve towards the previous reversal point. When the deflection
-   reaches a curve's target the minor loop is closed and removed from memory
+   reaches a curve's target the loop is closed and removed from memory
    (*wiping-out*): the state continues exactly on the outer curve it left,
    which passes through the target by construction. So minor loops close,
-   an inner loop leaves no trace (wiping-out), the curve returns to every
-   memorised reversal point (return-point memory) and a closed deflection
-   cycle produces a closed force cycle (no drift).
-6. **Direction.** The branch (ascending or descending) is the direction of
+   an inner loop leaves no trace, the curve returns to every memorised
+   reversal point (return-point memory) and a closed deflection cycle gives a
+   closed force cycle (no drift).
+6. **Virgin state** (the model's initial state ``z = 0, F = 0``; Masing's
+   initial-loading rule). The seed gives no initial-loading curve. From the
+   virgin state the deflection follows the *virgin curve*, the external
+   shape halved, ``Phi(2*Delta)/2``, in the direction of motion, so that a
+   symmetric cycle ``+-A`` about the virgin point has the external shapes.
+   The first reversal ``A`` targets the mirror point ``(-A, virgin value)`` on
+   the virgin curve of the other direction, and continues on that curve once
+   it passes it (the extended Masing rules; the Preisach picture of a
+   demagnetised start). Tiny loops near the start (noise) are therefore
+   wiped out by larger excursions instead of being remembered forever.
+7. **Direction.** The branch (ascending or descending) is the direction of
    ``dz/dt``, which equals ``sign(v)`` whenever ``|F(z)| < g`` (all of
    pre-sliding); using ``dz`` keeps ``F`` a rate-independent function of the
    deflection history even where ``F(z)`` reaches ``g`` while sliding.
-7. **Sliding (Eq. 12).** When ``|z|`` reaches ``Fs/sigma0`` (``Fs`` of the side
+8. **Sliding (Eq. 12).** When ``|z|`` reaches ``Fs/sigma0`` (``Fs`` of the side
    of the motion, after effects; ``Fc/sigma0`` for models without ``Fs``) the
    model switches to the NMLGM: ``F(z) = sigma0*z`` and the memory is
    cleared. This is latched until the next velocity reversal (otherwise the
@@ -92,18 +108,20 @@ where the seed is silent, each stated with its reason:
    the reversal a new external curve starts at ``(z, sigma0*z)``; that point
    is kept as the root of the memory, so returning past it re-enters the
    sliding law it left (the outermost "curve"). The switch keeps ``z``, as
-   the seed does, so the force jumps by ``sigma0*z - F(z)`` at the switch.
-   With the continuation of rule 2 the jump is the offset of the curve's tail
-   from the line ``sigma0*z``: for cylinder 1 about +0.17 N ascending (from a
-   reversal on the line) and -0.09 N descending, i.e. <1 % of ``Fs``; since
-   ``g <= Fs`` the force usually reaches ``g`` before ``|z|`` reaches the
-   threshold and the switch is not even met. (Without rule 2 the jump would
-   be ~19 N.)
-8. **Bounded memory.** At most :data:`MAX_POINTS` reversal points are kept;
-   when the stack is full the innermost loop is forgotten (its two points
-   removed; the new curve then targets the next outer reversal point).
-   Force stays continuous; only return-point memory of loops nested deeper
-   than that is lost.
+   the seed does, so the force jumps by ``sigma0*z - F(z)``. With rule 2 this
+   is the offset of the curve's tail from the line ``sigma0*z``: for
+   cylinder 1, from a point on the line, the external ascending tail lies
+   ``Phi_a(z1 + z5) - sigma0*(z1 + z5)`` = 0.176 N above the line (the force
+   drops by 0.176 N at the switch) and the descending tail 0.089 N below it
+   (the force magnitude drops by 0.089 N); on the virgin curve half of that.
+   That is <1 % of ``Fs``, and since ``g <= Fs`` the force usually reaches
+   ``g`` before ``|z|`` reaches the threshold, so the switch is rarely met.
+   (Without rule 2 the jump would be about 19 N.)
+9. **Bounded memory.** At most :data:`MAX_POINTS` points are kept; when the
+   stack is full the innermost loop is forgotten (its two points removed;
+   the new curve then targets the next outer reversal point). Force stays
+   continuous; only return-point memory of loops nested deeper than that is
+   lost.
 
 Defaults: the model's hysteresis parameters default to seed 000 Tables 2-3
 (cylinder 1); :data:`NONLOCAL_MEMORY_DEFAULTS` are zero segment widths and
@@ -150,7 +168,7 @@ from fcomp.parameters import ParamSet, ParamSpec, ParamValues, make_params_class
 
 INF = math.inf
 
-#: Maximum number of reversal points kept in memory (rule 8 of the module docstring).
+#: Maximum number of reversal points kept in memory (rule 9 of the module docstring).
 MAX_POINTS = 128
 
 #: ``k*width`` beyond which an exponential segment is continued as a flat one
@@ -285,14 +303,23 @@ class CurveShape:
         """Travel over which the seed's segments apply (m); the continuation follows."""
         return self.starts[-1]
 
+    def halved(self) -> CurveShape:
+        """Masing's initial-loading curve ``Phi_v(Delta) = Phi(2*Delta)/2`` of this shape."""
+        return CurveShape(tuple(s / 2.0 for s in self.starts), tuple(v / 2.0 for v in self.values),
+                          tuple(c / 2.0 for c in self.c), tuple(2.0 * k for k in self.k),
+                          self.slope)
+
 
 @dataclass(frozen=True)
 class CurveShapes:
-    """The three raw shapes (external ascending, external descending, internal)."""
+    """The raw shapes: external ascending and descending, internal, and the virgin curves."""
 
     ascending: CurveShape
     descending: CurveShape
     internal: CurveShape
+    virgin_ascending: CurveShape
+    virgin_descending: CurveShape
+    internal_width: float
 
     @classmethod
     def from_values(cls, values: Mapping[str, float]) -> CurveShapes:
@@ -303,11 +330,17 @@ class CurveShapes:
         asc = [(p["z1"], *s1), (p["z3"], *s2), (p["z5"] - p["z3"], *s3)]
         desc = [(p["z5"] - p["z4"], *s1), (p["z4"] - p["z2"], *s2), (p["z2"] + p["z1"], *s3)]
         internal = [(p["internal_zd"] - p["internal_zc"], p["c8"], p["k8"])]
-        return cls(CurveShape.build(asc, tail), CurveShape.build(desc, tail),
-                   CurveShape.build(internal, tail))
+        a, b = CurveShape.build(asc, tail), CurveShape.build(desc, tail)
+        return cls(a, b, CurveShape.build(internal, tail), a.halved(), b.halved(),
+                   p["internal_zd"] - p["internal_zc"])
 
     def external(self, d: int) -> CurveShape:
+        """External-loop shape of direction ``d`` (+1 ascending)."""
         return self.ascending if d > 0 else self.descending
+
+    def virgin(self, d: int) -> CurveShape:
+        """Initial-loading (virgin) shape of direction ``d``."""
+        return self.virgin_ascending if d > 0 else self.virgin_descending
 
 
 # -------------------------------------------------------------- linear ODE help
@@ -331,13 +364,22 @@ def _time_to(A: float, rate0: float, dy: float) -> float:
 class HysteresisFunction:
     """The hysteresis function ``F(z)`` with its turning-point memory (seed 000 Eqs. 12-13).
 
-    Rules: module docstring (Masing shapes, affine return-point scaling,
-    Madelung wiping-out, sliding latch). Two ways to drive it:
+    Rules: module docstring (Masing shapes and virgin curve, affine
+    return-point scaling, Madelung wiping-out, sliding latch). Two ways to
+    drive it:
 
     * :meth:`move_to` ``(z)``: the rate-independent operator, deflection in,
       ``F(z)`` out (used to test the memory properties);
     * :meth:`step` ``(dt, v, g, zs)``: the bristle equation (Eq. 10) advanced
       exactly over ``dt`` at constant ``v`` and ``g``.
+
+    Memory: :attr:`points` is the turning-point stack, oldest first. Each
+    entry ``[z_r, F_r, d, shape, lam, z_t, F_t]`` starts a curve
+    ``F = F_r + d*lam*shape(d*(z - z_r))`` in direction ``d`` with target
+    ``(z_t, F_t)`` (``z_t = None``: no target); the last entry is the current
+    curve. The first entry is the *root*: the virgin state (its curve is the
+    virgin curve in the direction of motion) or the point where the sliding
+    law was left (:attr:`root_sliding`).
 
     Parameters
     ----------
@@ -346,7 +388,7 @@ class HysteresisFunction:
     sigma0
         Bristle stiffness (N/m): the sliding law ``F(z) = sigma0*z``.
     max_points
-        Memory bound (rule 8).
+        Memory bound (rule 9).
     """
 
     def __init__(self, shapes: CurveShapes, sigma0: float, max_points: int = MAX_POINTS) -> None:
@@ -364,17 +406,15 @@ class HysteresisFunction:
         """Virgin state at deflection ``z`` (m) and force ``F`` (N, default ``sigma0*z``)."""
         self.z = float(z)
         self.F = self.sigma0 * self.z if F is None else float(F)
-        #: reversal points ``[z_r, F_r, d, shape, lam]``; the last one starts the current curve
         self.points: list[list[Any]] = []
-        self.root_real = False
+        self.root_sliding = False
         self.sliding = False
         self.slide_dir = 0
         self._delta = 0.0
-        self._next_root_real = False
 
     @property
     def depth(self) -> int:
-        """Number of reversal points in memory."""
+        """Number of points in memory (root included)."""
         return len(self.points)
 
     @property
@@ -385,63 +425,68 @@ class HysteresisFunction:
         return self.points[-1][2] if self.points else 0
 
     def reversal_points(self) -> list[tuple[float, float]]:
-        """The memorised reversal points ``(z, F)`` (oldest first)."""
+        """The memorised points ``(z, F)``, root first."""
         return [(p[0], p[1]) for p in self.points]
 
     def snapshot(self) -> tuple:
         """An immutable copy of the whole memory (for :meth:`restore`)."""
-        return (self.z, self.F, tuple(tuple(p) for p in self.points), self.root_real,
-                self.sliding, self.slide_dir, self._delta, self._next_root_real)
+        return (self.z, self.F, tuple(tuple(p) for p in self.points), self.root_sliding,
+                self.sliding, self.slide_dir, self._delta)
 
     def restore(self, snap: tuple) -> None:
         """Return to a :meth:`snapshot`."""
-        (self.z, self.F, pts, self.root_real, self.sliding, self.slide_dir, self._delta,
-         self._next_root_real) = snap
+        (self.z, self.F, pts, self.root_sliding, self.sliding, self.slide_dir,
+         self._delta) = snap
         self.points = [list(p) for p in pts]
 
     # --------------------------------------------------------- memory rules
     def _start(self, d: int) -> None:
         """Begin a curve in direction ``d`` at the current point (root or reversal)."""
-        if self.sliding:
+        z, F = self.z, self.F
+        self._delta = 0.0
+        if self.sliding:  # velocity reversal: leave the sliding law, its exit point is the root
             self.sliding = False
-            self.points = []
-            self._next_root_real = True
-        if not self.points:
-            self.root_real = self._next_root_real
-            self.points.append([self.z, self.F, d, self.shapes.external(d), 1.0])
-            self._delta = 0.0
+            self.root_sliding = True
+            self.points = [[z, F, d, self.shapes.external(d), 1.0, None, 0.0]]
+            return
+        if not self.points:  # first motion from the virgin state: the virgin curve
+            self.points = [[z, F, d, self.shapes.virgin(d), 1.0, None, 0.0]]
             return
         if len(self.points) >= self.max_points:
-            del self.points[-2:]  # forget the innermost loop (rule 8)
+            del self.points[-2:]  # forget the innermost loop (rule 9)
         j = len(self.points)
-        external = j <= 1 or (j == 2 and not self.root_real)
-        shape = self.shapes.external(d) if external else self.shapes.internal
-        lam = 1.0
-        if j >= 2 or self.root_real:
+        root = self.points[0]
+        if j == 1 and not self.root_sliding:
+            # first reversal on the virgin curve: target its mirror point on the other branch
+            dist = abs(z - root[0])
+            zt, Ft = root[0] + d * dist, root[1] + d * self.shapes.virgin(d).value(dist)
+        else:
             zt, Ft = self.points[-1][0], self.points[-1][1]
-            dt_ = d * (zt - self.z)
-            phi = shape.value(dt_) if dt_ > 0.0 else 0.0
-            if phi > 0.0:  # (a target at or behind the start closes the loop at once)
-                lam = max(d * (Ft - self.F), 0.0) / phi
-        self.points.append([self.z, self.F, d, shape, lam])
-        self._delta = 0.0
-
-    def _target(self) -> tuple[float, float] | None:
-        j = len(self.points) - 1
-        if j >= 2 or (j == 1 and self.root_real):
-            p = self.points[-2]
-            return p[0], p[1]
-        return None
+        cur = self.points[-1]
+        inside = cur[2] * (cur[5] - z) if cur[5] is not None else 0.0  # short of the extreme by
+        external = j <= (1 if self.root_sliding else 2) or inside <= self.shapes.internal_width
+        shape = self.shapes.external(d) if external else self.shapes.internal
+        span = d * (zt - z)
+        phi = shape.value(span) if span > 0.0 else 0.0
+        # (a target at or behind the start closes the loop at once; lam is then irrelevant)
+        lam = max(d * (Ft - F), 0.0) / phi if phi > 0.0 else 1.0
+        self.points.append([z, F, d, shape, lam, zt, Ft])
 
     def _close(self, zt: float, Ft: float, d: int) -> None:
-        """The current loop reached its target: remove it, continue on the outer curve."""
-        del self.points[-2:]
+        """The current curve reached its target: remove the loop, continue on the outer curve."""
+        self.points.pop()
         self.z, self.F = zt, Ft
-        if not self.points:  # passed the point where sliding ended: back on the sliding law
-            self.sliding = True
-            self.slide_dir = d
-            self.F = self.sigma0 * zt
-            return
+        if len(self.points) == 1 and not self.root_sliding:
+            # reached the mirror point: continue on the virgin curve of this direction
+            root = self.points[0]
+            root[2], root[3] = d, self.shapes.virgin(d)
+        else:
+            self.points.pop()  # the target's own reversal point (wiping-out)
+            if not self.points:  # passed the point where sliding ended: back on the sliding law
+                self.sliding = True
+                self.slide_dir = d
+                self.F = self.sigma0 * zt
+                return
         self._delta = max(d * (zt - self.points[-1][0]), 0.0)
 
     def _enter_sliding(self, z: float, d: int) -> None:
@@ -499,14 +544,13 @@ class HysteresisFunction:
                 elif t > 0.0:
                     self._slide(t, a, sg)
                 return
-            z0, F0, _, shape, lam = self.points[-1]
+            z0, F0, _, shape, lam, zt, Ft = self.points[-1]
             delta = self._delta
             j = shape.piece(delta)
-            end = shape.starts[j + 1] if j + 1 < len(shape.starts) else INF
-            bound, kind = end, "piece"
-            tgt = self._target()
-            if tgt is not None and d * (tgt[0] - z0) <= bound:
-                bound, kind = d * (tgt[0] - z0), "target"
+            bound = shape.starts[j + 1] if j + 1 < len(shape.starts) else INF
+            kind = "piece"
+            if zt is not None and d * (zt - z0) <= bound:
+                bound, kind = d * (zt - z0), "target"
             if zs - d * z0 < bound:
                 bound, kind = zs - d * z0, "threshold"
             if goal is not None and d * (goal - z0) < bound:
@@ -517,8 +561,7 @@ class HysteresisFunction:
                 G = d * sg - d * F0
                 kj = shape.k[j]
                 if kj:
-                    alpha = G - lam * (shape.values[j] + shape.c[j])
-                    A = kj * a * alpha
+                    A = kj * a * (G - lam * (shape.values[j] + shape.c[j]))
                     rate0 = A + kj * a * lam * shape.c[j] * math.exp(-kj * u)
                     dy = math.expm1(kj * (bound - delta)) if bound < INF else INF
                 else:
@@ -534,14 +577,14 @@ class HysteresisFunction:
                         self._set(z0, F0, d, shape, lam, min(delta + du, bound))
                     return
                 t -= tb
-            if kind == "target" and tgt is not None:
-                self._close(tgt[0], tgt[1], d)
+            if kind == "target":
+                self._close(zt, Ft, d)
             elif kind == "threshold":
                 self._enter_sliding(d * zs, d)
             else:
                 self._set(z0, F0, d, shape, lam, max(bound, delta))
-                if kind == "goal":
-                    self.z = goal  # type: ignore[assignment]
+                if goal is not None and kind == "goal":
+                    self.z = goal
                     return
         raise ConvergenceError("hysteresis function: too many events in one step")
 

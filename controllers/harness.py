@@ -1,0 +1,288 @@
+"""The closed-loop harness: sampled-data control of a simulated plant on the one simulation engine.
+
+A run (:func:`run_closed_loop`) wires
+
+* the **plant**: a plant of :mod:`plants` with the *true* friction model
+  (by name and parameter set), integrated between samples by the
+  simulation engine (:meth:`plants.base.OdePlant.stepper`, adaptive RODAS4,
+  input held: zero-order hold);
+* the **sensors**: position and chamber pressures with Gaussian noise and
+  quantisation (:class:`controllers.plant_model.Sensors`; the noise level
+  scaled by ``noise``, the random generator seeded);
+* the **controller**: built by name on its *own* plant model
+  (:class:`controllers.plant_model.ControlModel`) whose friction model is
+  the one named in the configuration with parameters multiplied by the
+  ``mismatch`` factors -- the controller never sees the plant's model
+  object, and by default its friction is wrong by the amounts of
+  :data:`DEFAULT_MISMATCH`;
+
+samples at the controller's rate (``step`` timed with
+:func:`time.perf_counter`), applies the command (clipped to the valve range),
+advances the plant one sample and records everything. The true friction
+force is the plant's output ``F`` at every sample, beside the controller's
+estimate.
+
+Start: the piston at rest at mid-stroke with the chambers and valve at the
+*equilibrium* that holds the load there (solved from the plant's equations:
+no flow into either chamber, zero acceleration, friction states zero), so
+every run starts from the same physical state, not from a settling load.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import casadi as ca
+import numpy as np
+from scipy.optimize import root
+
+from controllers.base import Reference
+from controllers.metrics import Metrics, compute_metrics
+from controllers.plant_model import PLANT_SETTINGS, ControlModel, friction_with_mismatch
+from controllers.tasks import check_fits_stroke, get_task
+from fcomp.errors import ConvergenceError, FcompError
+from fcomp.models import make_model
+
+#: Default friction mismatch of the controller's model (factors on the plant's values): an
+#: identification a few tens of percent off, the bristles half as stiff.
+DEFAULT_MISMATCH: dict[str, float] = {
+    "Fc": 1.2, "Fs": 0.85, "vs": 1.3, "sigma2": 1.15, "sigma0": 0.5, "sigma1": 1.5,
+    "tau_hp": 1.5, "tau_hn": 0.7, "T": 0.5,
+}
+
+
+@dataclass(frozen=True)
+class LoopConfig:
+    """One closed-loop set-up (names, SI units).
+
+    Attributes
+    ----------
+    plant
+        Plant name (``hydraulic``, ``pneumatic``).
+    params
+        Parameter set (default: the plant's).
+    friction
+        The plant's true friction model (name).
+    controller_friction
+        The friction model the controller is built with (name; parameters
+        from the same set, times ``mismatch``).
+    mismatch
+        Factors on the controller model's friction parameters (by name).
+    noise
+        Factor on the sensor noise levels (0: quantisation only).
+    seed
+        Seed of the sensor-noise generator.
+    fast
+        Use the task's fast duration.
+    rtol
+        Relative (and scaled absolute) tolerance of the plant integration.
+    """
+
+    plant: str = "hydraulic"
+    params: str | None = None
+    friction: str = "nmlgm"
+    controller_friction: str = "nmlgm"
+    mismatch: Mapping[str, float] = field(default_factory=lambda: dict(DEFAULT_MISMATCH))
+    noise: float = 1.0
+    seed: int = 0
+    fast: bool = False
+    rtol: float = 1e-5
+
+
+@dataclass
+class LoopResult:
+    """A closed-loop run: every sample (SI units) and its metrics.
+
+    Attributes
+    ----------
+    t
+        Sample times (s).
+    r, x, v
+        Reference, true position (m), true velocity (m/s).
+    y
+        Measurements ``(n, 3)``: position (m), chamber pressures (Pa abs).
+    u
+        Valve command applied from each sample on.
+    F_true, F_hat
+        The plant's friction force and the controller's estimate (N).
+    solve_times
+        Wall-clock duration of every controller step (s).
+    fallbacks
+        Per-sample flag: the controller used its fallback law.
+    metrics
+        :class:`~controllers.metrics.Metrics`.
+    """
+
+    controller: str
+    task: str
+    plant: str
+    t: np.ndarray
+    r: np.ndarray
+    x: np.ndarray
+    v: np.ndarray
+    y: np.ndarray
+    u: np.ndarray
+    F_true: np.ndarray
+    F_hat: np.ndarray
+    solve_times: np.ndarray
+    fallbacks: np.ndarray
+    metrics: Metrics
+    description: str = ""
+
+
+def equilibrium(plant: Any, x_pos: float) -> tuple[np.ndarray, float]:
+    """State at rest at ``x_pos`` holding the load, and the valve command doing it.
+
+    Unknowns: the chamber pressures, the valve states and the command ``u``;
+    equations: zero derivative of ``v``, ``p1``, ``p2`` and the valve
+    states, with ``x = x_pos``, ``v = 0`` and friction states zero.
+    """
+    names = plant.state_names
+    fr = set(plant.friction.state_names)
+    free = [n for n in names if n not in ("x", "v") and n not in fr]
+    eqs = [names.index(n) for n in names if n != "x" and n not in fr]
+    rhs = plant.casadi_functions()["rhs"]
+    x0 = plant.initial_state({"x": x_pos})
+    idx = [names.index(n) for n in free]
+    scale = np.asarray(plant.ode_model().scales, dtype=float)
+    xs = ca.SX.sym("xs", len(free))
+    us = ca.SX.sym("u")
+    state = ca.DM(x0)
+    state = ca.vertcat(*[xs[idx.index(i)] * scale[i] if i in idx else state[i]
+                         for i in range(len(names))])
+    f = rhs(state, us)
+    res = ca.vertcat(*[f[i] / scale[i] for i in eqs])
+    z = ca.vertcat(xs, us)
+    F = ca.Function("eq", [z], [res, ca.jacobian(res, z)])
+    z0 = np.concatenate([x0[idx] / scale[idx], [0.0]])
+    sol = root(lambda q: np.asarray(F(q)[0]).ravel(), z0,
+               jac=lambda q: np.asarray(F(q)[1]), method="hybr", tol=1e-13)
+    resid = np.abs(np.asarray(F(sol.x)[0])).max()
+    if not sol.success and resid > 1e-9:
+        raise ConvergenceError(f"no equilibrium of plant {plant.name} at x = {x_pos} m "
+                               f"({sol.message})")
+    out = x0.copy()
+    out[idx] = sol.x[:-1] * scale[idx]
+    return out, float(sol.x[-1])
+
+
+class SensorModel:
+    """Noise and quantisation of ``[x, p1, p2]`` (seeded)."""
+
+    def __init__(self, sensors: Any, noise: float, seed: int) -> None:
+        s = sensors.scaled(noise)
+        self.std = np.array([s.x_noise, s.p_noise, s.p_noise])
+        self.q = np.array([s.x_quantum, s.p_quantum, s.p_quantum])
+        self.rng = np.random.default_rng(seed)
+
+    def measure(self, x_true: np.ndarray) -> np.ndarray:
+        y = x_true + self.std * self.rng.standard_normal(3)
+        q = self.q
+        return np.where(q > 0, np.round(y / np.where(q > 0, q, 1.0)) * q, y)
+
+
+def build_loop(controller: str, config: LoopConfig, options: Mapping[str, Any] | None = None
+               ) -> tuple[Any, Any, Any]:
+    """The true plant, the controller's model and the controller of a configuration."""
+    from controllers import make_controller
+    from plants import make_plant
+
+    if config.plant not in PLANT_SETTINGS:
+        raise FcompError(f"closed-loop control is set up for plants "
+                         f"{', '.join(sorted(PLANT_SETTINGS))}, not {config.plant!r}")
+    true_friction = make_model(config.friction, params=config.params or _default_set(config))
+    plant = make_plant(config.plant, true_friction, config.params)
+    ctrl_friction = friction_with_mismatch(
+        make_model(config.controller_friction, params=config.params or _default_set(config)),
+        config.mismatch)
+    model = ControlModel(config.plant, ctrl_friction, config.params)
+    ctrl = make_controller(controller, model, **dict(options or {}))
+    return plant, model, ctrl
+
+
+def _default_set(config: LoopConfig) -> str:
+    from plants import PLANTS
+
+    name = PLANTS.get(config.plant).default_params
+    if name is None:
+        raise FcompError(f"plant {config.plant} has no default parameter set; give params")
+    return name
+
+
+def run_closed_loop(controller: str, task: str, config: LoopConfig | None = None,
+                    options: Mapping[str, Any] | None = None) -> LoopResult:
+    """Run ``controller`` on ``task`` in the closed loop of ``config`` (see the module docstring).
+
+    Raises
+    ------
+    FcompError
+        Unknown names, bad options, unstable gains, an infeasible MPC set-up.
+    ConvergenceError
+        The plant integration failed (for instance a loop gone unstable).
+    """
+    config = config or LoopConfig()
+    tk = get_task(task)
+    plant, model, ctrl = build_loop(controller, config, options)
+    x_mid = 0.5 * model.stroke
+    check_fits_stroke(tk, x_mid, model.stroke, config.fast)
+    dt = ctrl.dt
+    n = int(round(tk.run_duration(config.fast) / dt))
+    t = np.arange(n + 1) * dt
+    r, dr, ddr = tk.sample(t)
+    r = r + x_mid
+    x0, _u0 = equilibrium(plant, x_mid)
+    stepper = plant.stepper(dt, x0=x0, rtol=config.rtol, atol=config.rtol)
+    sensors = SensorModel(model.sensors, config.noise, config.seed)
+    names = plant.state_names
+    meas_idx = [names.index(k) for k in ("x", "p1", "p2")]
+    preview = ctrl.preview
+    r_pad = np.concatenate([r, np.full(preview, r[-1])])
+    X = np.empty((n + 1, len(names)))
+    Y = np.empty((n + 1, 3))
+    U = np.zeros(n + 1)
+    F_hat = np.zeros(n + 1)
+    times = np.zeros(n + 1)
+    fb = np.zeros(n + 1, dtype=bool)
+    state = stepper.reset()
+    y0 = sensors.measure(state[meas_idx])
+    ctrl.reset(0.0, y0, Reference(float(r[0]), float(dr[0]), float(ddr[0])))
+    u_max = model.u_max
+    for k in range(n + 1):
+        X[k] = state
+        y = y0 if k == 0 else sensors.measure(state[meas_idx])
+        Y[k] = y
+        fut = tuple(r_pad[k + 1:k + 1 + preview]) if preview else ()
+        ref = Reference(float(r[k]), float(dr[k]), float(ddr[k]), fut)
+        start = time.perf_counter()
+        u = ctrl.step(float(t[k]), y, ref)
+        times[k] = time.perf_counter() - start
+        if not math.isfinite(u):
+            raise FcompError(f"controller {controller} returned a non-finite command at "
+                             f"t = {t[k]:.4f} s")
+        u = min(max(u, -u_max), u_max)
+        U[k] = u
+        F_hat[k] = ctrl.friction_estimate
+        fb[k] = ctrl.fallback_active
+        if k < n:
+            state = stepper.step(u)
+    outs = plant.evaluate_outputs(X, U.reshape(-1, 1))
+    metrics = compute_metrics(
+        t, r, X[:, names.index("x")], U, times, u_max=u_max,
+        settle=tk.windows(config.fast), reversals=tk.reversal_times(config.fast),
+        reversal_window=tk.reversal_window, periodic=tk.kind == "periodic",
+        fallbacks=int(fb.sum()),
+    )
+    return LoopResult(
+        controller=controller, task=task, plant=config.plant, t=t, r=r,
+        x=X[:, names.index("x")], v=X[:, names.index("v")], y=Y, u=U, F_true=outs["F"],
+        F_hat=F_hat, solve_times=times, fallbacks=fb, metrics=metrics,
+        description=ctrl.describe(),
+    )
+
+
+__all__ = ["DEFAULT_MISMATCH", "LoopConfig", "LoopResult", "build_loop", "equilibrium",
+           "run_closed_loop"]

@@ -1,0 +1,144 @@
+"""``fcomp fit DATA.csv --model NAME [--offset] [--json OUT]`` -- identify a friction model.
+
+Prints a table of estimates with standard errors and confidence intervals
+and the RMS force error (N). Where the sidecar gives no ``rig.mass`` and the
+data hold a driving force (``F_ext``, pressures) but no ``F`` column, the
+moving mass is estimated as well (``mass``). JSON (``--json OUT``, ``-`` for
+standard output): ``{"model", "params", "stderr", "rms", "ci", "units",
+"fixed", "not_identifiable", "method", ...}``. A fit that does not converge
+says so on one line and exits with status 2 (no JSON is written).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from fcomp.cli.common import parse_assignments
+from fcomp.errors import FcompError
+
+if TYPE_CHECKING:
+    from fcomp.identification import FrictionFit
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("fit", help="identify a friction model from a measurement, with "
+                       "standard errors", description=__doc__,
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("data", metavar="DATA.csv", help="measurement (CSV + TOML sidecar)")
+    p.add_argument("--model", required=True, help="friction model name (fcomp list models)")
+    p.add_argument("--offset", action="store_true",
+                   help="fit a constant force offset too (params.offset, N)")
+    p.add_argument("--json", metavar="OUT", default=None,
+                   help="write the result as JSON to OUT ('-' for standard output)")
+    p.add_argument("--params", default=None, metavar="SET",
+                   help="parameter set giving the values of the fixed parameters and of those "
+                   "not read off the data (default: the model's defaults)")
+    p.add_argument("--add-effect", action="append", default=[], metavar="EFFECT",
+                   help="add an effect to the model and fit its parameters; repeatable")
+    p.add_argument("--effects", metavar="MODULE.py", default=None,
+                   help="a Python file that registers the user's own effects")
+    p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
+                   help="start value of a parameter (flat name, SI units); repeatable")
+    p.add_argument("--fix", action="append", default=[], metavar="NAME=VALUE",
+                   help="hold a parameter at VALUE (SI units) instead of fitting it; repeatable")
+    p.add_argument("--free", default=None, metavar="NAME,NAME,...",
+                   help="fit only these parameters (default: all but numerical thresholds)")
+    p.add_argument("--directional", action="store_true",
+                   help="fit separate values for v > 0 and v < 0 (Fc_pos, Fc_neg, ...)")
+    p.add_argument("--mass", type=float, default=None, metavar="KG",
+                   help="known moving mass, overriding rig.mass (no mass estimation)")
+    p.add_argument("--method", default="auto",
+                   choices=["auto", "steady-state", "samples", "trajectory"],
+                   help="auto (default): steady-state characteristic or samples for static "
+                   "maps, steady-state start then trajectory for dynamic models")
+    p.add_argument("--v-min", type=float, default=None, metavar="M/S",
+                   help="speed below which samples count as at rest (default 2%% of the "
+                   "99th percentile of |v|)")
+    p.add_argument("--cutoff", type=float, default=10.0, metavar="HZ",
+                   help="cut-off of the zero-phase filter that derives v and a from x when the "
+                   "data have no v/a columns (default 10 Hz; the force is filtered alike)")
+    p.add_argument("--confidence", type=float, default=0.95,
+                   help="level of the confidence intervals (default 0.95)")
+    p.add_argument("--max-nfev", type=int, default=200, metavar="N",
+                   help="evaluation budget of each least-squares stage (default 200)")
+    p.set_defaults(func=run)
+
+
+def _json_target(path: str | None) -> Path | None:
+    if path is None or path == "-":
+        return None
+    out = Path(path)
+    if out.is_dir():
+        raise FcompError(f"--json {path}: is a directory")
+    if not out.parent.exists():
+        raise FcompError(f"--json {path}: folder {out.parent} does not exist")
+    return out
+
+
+def _table(f: FrictionFit) -> str:
+    from fcomp.report import format_value
+
+    lines = [f"model {f.to_dict()['model']}  ({f.method_} fit, target {f.target_}, "
+             f"{f.n_samples_} samples)"]
+    pct = round(100 * f.confidence)
+    head = f"{'parameter':12s} {'value':>12s} {'stderr':>11s}   {pct}% interval{'':14s} unit"
+    lines += [head, "-" * len(head)]
+    for n, val in f.params_.items():
+        lo, hi = f.ci_[n]
+        row = (f"{n:12s} {format_value(val):>12s} {format_value(f.stderr_[n]):>11s}   "
+               f"[{format_value(lo)}, {format_value(hi)}]")
+        lines.append(row.ljust(62) + f" {f.units_[n]}")
+    lines.append(f"rms force error {f.rms_:.4g} N; residual autocorrelation time "
+                 f"{f.tau_int_:.3g} samples (effective sample size {f.n_eff_:.0f})")
+    if f.not_identifiable_:
+        lines.append("not determined by these data (held at their start value): "
+                     + ", ".join(f.not_identifiable_))
+    if f.at_bound_:
+        lines.append("at a bound (standard error not meaningful): " + ", ".join(f.at_bound_))
+    return "\n".join(lines)
+
+
+def run(args: argparse.Namespace) -> int:
+    from fcomp.effects import load_effects_module
+    from fcomp.identification import FrictionFit
+    from fcomp.measurement import Measurement
+    from fcomp.models import make_model
+    from fcomp.report import atomic_write_text
+
+    out = _json_target(args.json)
+    if args.max_nfev < 1:
+        raise FcompError(f"--max-nfev must be a positive integer, got {args.max_nfev}")
+    if args.v_min is not None and not args.v_min > 0:
+        raise FcompError(f"--v-min must be a positive speed in m/s, got {args.v_min}")
+    if not args.cutoff > 0:
+        raise FcompError(f"--cutoff must be a positive frequency in Hz, got {args.cutoff}")
+    if args.mass is not None and not args.mass >= 0:
+        raise FcompError(f"--mass must be a non-negative number of kg, got {args.mass}")
+    if args.effects:
+        load_effects_module(args.effects)
+    model = make_model(args.model, params=args.params)
+    if args.add_effect:
+        model = model.with_effects(*args.add_effect)
+    initial = parse_assignments(args.set)
+    fixed = parse_assignments(args.fix)
+    free = [s.strip() for s in args.free.split(",") if s.strip()] if args.free else None
+    data = Measurement.read(args.data)
+    fit = FrictionFit(model, offset=args.offset, mass=args.mass, free=free, fixed=fixed,
+                      directional=args.directional, initial=initial, method=args.method,
+                      v_min=args.v_min, cutoff_hz=args.cutoff, confidence=args.confidence,
+                      max_nfev=args.max_nfev)
+    fit.fit(data)
+    doc = fit.to_dict()
+    text = json.dumps(doc, indent=2, allow_nan=False) + "\n"
+    if args.json == "-":
+        sys.stdout.write(text)
+        return 0
+    print(_table(fit))
+    if out is not None:
+        atomic_write_text(out, text)
+        print(f"wrote {out}")
+    return 0

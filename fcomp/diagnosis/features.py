@@ -1,0 +1,119 @@
+"""Residual features and how strongly the residual still follows each of them.
+
+Features (per sample, SI units):
+
+==============================  ==============================================
+``t``                           time (s)
+``v``                           velocity (m/s)
+``a``                           acceleration (m/s^2)
+``x``                           position (m)
+``p1+p2``                       sum of the gauge chamber pressures (Pa)
+``time_since_reversal``         time since the last change of direction (s)
+``displacement_since_reversal`` distance from the last reversal point (m)
+``dwell_time``                  rest before the current run started (s)
+==============================  ==============================================
+
+Strength (gradient-free regression, held-out): the residual is predicted
+from one feature *and the direction of motion* (friction-like residuals
+change sign with it) by a k-nearest-neighbour mean, fitted on the training
+samples and applied to the held-out ones: for each held-out sample the mean
+training residual of the ``k`` training samples with the nearest feature
+values on the same side. The strength is the fraction of the held-out
+residual's mean square that this explains,
+
+    strength = max(0, 1 - sum((r - r_knn)^2) / sum(r^2)),
+
+the best over ``k`` in (10, 30, 100, 300). A residual that is noise gives
+strengths near 0 for every feature; a residual that still follows a feature
+(a position ripple: ``x``; a thermal drift: ``t``) gives a strength near the
+share of its mean square that the structure carries.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from fcomp.diagnosis.data import DiagnosisData
+from fcomp.diagnosis.regimes import Segmentation
+
+FEATURES: tuple[str, ...] = ("t", "v", "a", "x", "p1+p2", "time_since_reversal",
+                             "displacement_since_reversal", "dwell_time")
+NEIGHBOURS: tuple[int, ...] = (10, 30, 100, 300)
+
+
+@dataclass(frozen=True)
+class FeatureStrength:
+    """How strongly the held-out residual follows one feature."""
+
+    feature: str
+    strength: float
+    neighbours: int
+
+
+def feature_values(data: DiagnosisData, seg: Segmentation) -> dict[str, np.ndarray]:
+    """The features of :data:`FEATURES` that the data hold (see the module docstring)."""
+    out: dict[str, np.ndarray] = {"t": data.signal("t"), "v": data.signal("v")}
+    if data.available.get("a", False):
+        out["a"] = data.signal("a")
+    if data.available.get("x", False):
+        out["x"] = data.signal("x")
+    if data.available.get("p1", False):
+        out["p1+p2"] = data.signal("p1") + data.signal("p2")
+    if not data.steady_state:
+        out["time_since_reversal"] = seg.time_since_reversal
+        out["displacement_since_reversal"] = seg.displacement_since_reversal
+        if np.any(seg.dwell_time > 0):
+            out["dwell_time"] = seg.dwell_time
+    return out
+
+
+def knn_predict(f_train: np.ndarray, r_train: np.ndarray, f_test: np.ndarray, k: int
+                ) -> np.ndarray:
+    """Mean of ``r_train`` over the ``k`` training samples around ``f_test`` in sorted ``f``.
+
+    The window of ``k`` sorted training values centred on each test value's
+    insertion point (the ``k`` nearest neighbours up to one sample at the ends).
+    """
+    order = np.argsort(f_train, kind="stable")
+    fs, rs = f_train[order], r_train[order]
+    n = fs.size
+    k = min(k, n)
+    csum = np.concatenate([[0.0], np.cumsum(rs)])
+    pos = np.searchsorted(fs, f_test)
+    lo = np.clip(pos - k // 2, 0, n - k)
+    return (csum[lo + k] - csum[lo]) / k
+
+
+def strength(f: np.ndarray, r: np.ndarray, side: np.ndarray, train: np.ndarray,
+             test: np.ndarray) -> tuple[float, int]:
+    """Held-out strength of feature ``f`` for residual ``r`` and its best ``k``."""
+    ss = float(np.sum(r[test] ** 2))
+    if ss <= 0:
+        return 0.0, 0
+    best = (0.0, 0)
+    for k in NEIGHBOURS:
+        pred = np.zeros(int(test.sum()))
+        rt = r[test]
+        for s in (-1.0, 1.0):
+            tr = train & (side == s)
+            te_local = side[test] == s
+            if tr.sum() < k or not te_local.any():
+                continue
+            pred[te_local] = knn_predict(f[tr], r[tr], f[test][te_local], k)
+        val = 1.0 - float(np.sum((rt - pred) ** 2)) / ss
+        if val > best[0]:
+            best = (val, k)
+    return max(best[0], 0.0), best[1]
+
+
+def residual_structure(r: np.ndarray, data: DiagnosisData, seg: Segmentation,
+                       train: np.ndarray, test: np.ndarray) -> list[FeatureStrength]:
+    """Strength of every available feature for residual ``r``, strongest first."""
+    side = data.signal("s")
+    out = []
+    for name, f in feature_values(data, seg).items():
+        st, k = strength(f, r, side, train, test)
+        out.append(FeatureStrength(name, st, k))
+    return sorted(out, key=lambda fs: -fs.strength)

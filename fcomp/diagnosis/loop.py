@@ -1,0 +1,557 @@
+"""The add / refit / score loop: which catalogue effect is missing, if any.
+
+:class:`Diagnosis` (sklearn style: options in the constructor, :meth:`fit`
+returns ``self``, results in ``*_`` attributes) runs the whole procedure:
+
+1. **Data.** The records are cut into experiments (:mod:`.data`), segmented
+   into regimes (:mod:`.regimes`), split into training and held-out samples
+   by experiment or contiguous segment (:mod:`.split`); the noise floor is
+   estimated from them (:mod:`.noise`).
+2. **Baseline.** The baseline model is fitted on the training samples
+   (:mod:`.refit`) and scored on the held-out ones.
+3. **Search.** At every step each applicable candidate (:mod:`.catalogue`)
+   is added to the current model, the whole model is refitted from
+   data-driven starts, and scored on held-out data. A candidate
+   *qualifies* when all three hold:
+
+   * the held-out RMS falls clearly: by at least ``max(0.1*noise_floor,
+     0.02*rms_before)``;
+   * the fall is significant: the Diebold-Mariano statistic of the held-out
+     squared errors, ``z = mean(d)/(std(d)/sqrt(n_eff(d)))`` with
+     ``d = r_before^2 - r_after^2`` and ``n_eff`` from the autocorrelation of
+     ``d`` (:func:`.noise.effective_sample_size`), is at least 3;
+   * the Bayesian information criterion on the training residuals, computed
+     with the effective sample size of the candidate's residuals, agrees:
+     ``dBIC = n_eff*ln(RSS_after/RSS_before) + dk*ln(n_eff) < 0``.
+
+   The qualifying candidate with the lowest held-out RMS is added. Every
+   other qualifying candidate whose held-out RMS is within 10 % of the best
+   one's fall, or not significantly worse (Diebold-Mariano ``z < 2`` against
+   the best), explains the data equally well: they are reported together as
+   a *tie* (a confounded group), each with the experiment that would tell
+   them apart. The search stops when no candidate qualifies, when the
+   held-out RMS is within 5 % of the noise floor, or after ``max_steps``.
+   From the second step on, candidates that made the held-out error worse
+   at the previous step are not tried again unless they only now apply.
+4. **Verdict.** The final residual is tested for structure left
+   (:mod:`.features`): ``unexplained-structure`` when some feature explains
+   at least :data:`STRUCTURE_MIN` of its held-out mean square *and* the part
+   it explains is at least half the noise floor (RMS), or when the final
+   held-out RMS is more than twice the noise floor; else ``explained``.
+   The tool never accepts an effect that does not qualify just because
+   structure remains: it says so instead.
+
+:meth:`Diagnosis.add_effect` is the one call that adds an effect (from the
+catalogue or registered by the user) to the current model, refits it and
+records the step, so the error-fall chart shows it.
+"""
+
+from __future__ import annotations
+
+import math
+import multiprocessing
+import os
+import sys
+from collections.abc import Sequence
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from fcomp.diagnosis import catalogue
+from fcomp.diagnosis.compare import regime_errors
+from fcomp.diagnosis.data import DiagnosisData, prepare
+from fcomp.diagnosis.features import FeatureStrength, residual_structure
+from fcomp.diagnosis.noise import NoiseFloor, effective_sample_size, noise_floor
+from fcomp.diagnosis.refit import FitResult, Refit
+from fcomp.diagnosis.regimes import Segmentation, segment
+from fcomp.diagnosis.split import Split, make_split
+from fcomp.effects import EFFECTS
+from fcomp.errors import FcompError
+from fcomp.measurement import Measurement
+from fcomp.models import FrictionModel, make_model
+
+#: Significance (Diebold-Mariano z) a held-out fall needs.
+ACCEPT_Z = 3.0
+#: Below this z against the best candidate, a candidate ties with it.
+TIE_Z = 2.0
+#: A clear fall: at least this fraction of the noise floor ...
+FALL_NOISE = 0.1
+#: ... and of the held-out RMS before.
+FALL_RELATIVE = 0.02
+#: Candidates within this share of the best candidate's fall tie with it.
+TIE_SHARE = 0.1
+#: The search stops when the held-out RMS is within this factor of the noise floor.
+AT_FLOOR = 1.05
+#: Feature strength above which the residual "still follows" a feature.
+STRUCTURE_MIN = 0.15
+#: Structure must explain at least this RMS, in noise floors, to count.
+STRUCTURE_RMS = 0.5
+#: Residual RMS above this many noise floors is unexplained structure whatever the features say.
+EXCESS_MAX = 2.0
+VERDICTS = ("explained", "unexplained-structure")
+
+
+@dataclass
+class Candidate:
+    """One candidate effect at one step, refitted and scored.
+
+    Attributes
+    ----------
+    effect : str
+    fit : FitResult or None
+        ``None`` when the refit failed (``reason`` says why).
+    rms_heldout : N
+    fall : N
+        ``rms_before - rms_heldout``.
+    z : float
+        Diebold-Mariano statistic of the fall (held-out squared errors).
+    delta_bic : float
+        BIC change on the training residuals with the effective sample size.
+    qualifies : bool
+        Whether it passes the acceptance rule.
+    reason : str
+        Why it does not qualify (empty when it does).
+    """
+
+    effect: str
+    fit: FitResult | None
+    rms_heldout: float
+    fall: float = math.nan
+    z: float = math.nan
+    delta_bic: float = math.nan
+    qualifies: bool = False
+    reason: str = ""
+
+
+@dataclass
+class Step:
+    """One step of the loop: the effect tried (best candidate, or forced) and its outcome."""
+
+    effect: str
+    rms_before: float
+    rms_after: float
+    accepted: bool
+    forced: bool = False
+    candidates: list[Candidate] = field(default_factory=list)
+    tie: list[str] = field(default_factory=list)
+    fit: FitResult | None = None
+
+
+def _rms(r: np.ndarray) -> float:
+    return float(np.sqrt(np.mean(r**2))) if r.size else math.nan
+
+
+def diebold_mariano(r_a: np.ndarray, r_b: np.ndarray) -> float:
+    """``z`` of ``mean(r_a^2 - r_b^2) > 0`` with an autocorrelation-corrected standard error."""
+    d = r_a**2 - r_b**2
+    sd = float(np.std(d))
+    if sd == 0.0:
+        return 0.0 if float(np.mean(d)) == 0.0 else math.copysign(math.inf, float(np.mean(d)))
+    return float(np.mean(d)) / (sd / math.sqrt(max(effective_sample_size(d), 1.0)))
+
+
+def delta_bic(before: FitResult, after: FitResult, train: np.ndarray) -> float:
+    """``n_eff*ln(RSS_after/RSS_before) + (k_after - k_before)*ln(n_eff)`` (training residuals)."""
+    ra, rb = after.residual[train], before.residual[train]
+    rss_a, rss_b = float(ra @ ra), float(rb @ rb)
+    if rss_b <= 0 or rss_a <= 0:
+        return -math.inf if rss_a < rss_b else math.inf
+    n_eff = max(effective_sample_size(ra), 2.0)
+    return n_eff * math.log(rss_a / rss_b) + (after.n_params - before.n_params) * math.log(n_eff)
+
+
+# ------------------------------------------------------------- parallel jobs
+_JOB: dict[str, Any] = {}
+
+
+def _fit_job(i: int) -> tuple[int, dict[str, Any] | str]:
+    refit: Refit = _JOB["refit"]
+    prop: catalogue.Proposal = _JOB["proposals"][i]
+    try:
+        res = refit.fit(prop.model, prop.starts)
+    except (FcompError, ValueError, ArithmeticError) as exc:
+        return i, f"refit failed: {str(exc).splitlines()[0] if str(exc) else type(exc).__name__}"
+    return i, {"values": res.values, "n_params": res.n_params, "converged": res.converged,
+               "nfev": res.nfev, "F_hat": res.F_hat}
+
+
+class Diagnosis:
+    """Compare a model with measurements, find the missing effect, add it, watch the error fall.
+
+    Parameters
+    ----------
+    baseline
+        Model name (``coulomb`` ... ``gms``) or a :class:`~fcomp.models.base.FrictionModel`.
+    effects
+        Candidate effect names (default: every registered effect at :meth:`fit` time).
+    add
+        Effects to add first, in order, whatever the rule says (one step each).
+    search
+        Search the candidates after the forced additions.
+    split
+        ``"auto"``, ``"experiment"`` or ``"segment"`` (:mod:`.split`).
+    cutoff_hz
+        Cutoff of the filter deriving ``v``, ``a`` from ``x`` (default from the rate).
+    max_steps
+        Most effects the search adds.
+    n_jobs
+        Processes refitting candidates in parallel (default: the CPU count, at most 4).
+    max_nfev
+        Evaluation budget of each refit.
+    max_samples
+        Largest record a refit runs on (longer ones are block-averaged for fitting).
+    progress
+        Show a progress bar on stderr.
+
+    Attributes
+    ----------
+    data_, segmentation_, split_, noise_floor_
+        The prepared data, regimes, held-out split and noise floor.
+    baseline_fit_, fit_ : FitResult
+        The baseline and the final model fitted on the training samples.
+    steps_ : list of Step
+    candidates_ : list of Candidate
+        First-step candidates, best first.
+    ties_ : list of list of str
+    added_ : list of str
+    skipped_ : dict
+        Effect -> why it was not a candidate (at the last step it was considered).
+    rms_baseline_, rms_final_ : N
+        Held-out RMS of the baseline and the final model.
+    verdict_ : str
+        ``"explained"`` or ``"unexplained-structure"``.
+    residual_features_ : list of FeatureStrength
+        Features of the final held-out residual, strongest first.
+    """
+
+    def __init__(
+        self,
+        baseline: str | FrictionModel,
+        *,
+        effects: Sequence[str] | None = None,
+        add: Sequence[str] = (),
+        search: bool = True,
+        split: str = "auto",
+        cutoff_hz: float | None = None,
+        max_steps: int = 6,
+        n_jobs: int | None = None,
+        max_nfev: int = 60,
+        max_samples: int = 40_000,
+        progress: bool = False,
+    ) -> None:
+        self.baseline = baseline
+        self.effects = effects
+        self.add = add
+        self.search = search
+        self.split = split
+        self.cutoff_hz = cutoff_hz
+        self.max_steps = max_steps
+        self.n_jobs = n_jobs
+        self.max_nfev = max_nfev
+        self.max_samples = max_samples
+        self.progress = progress
+
+    # ------------------------------------------------------------------ fit
+    def fit(self, data: Measurement | Sequence[Measurement] | DiagnosisData) -> Diagnosis:
+        """Run the diagnosis on ``data`` (one or several measurements); returns ``self``."""
+        model = make_model(self.baseline) if isinstance(self.baseline, str) else self.baseline
+        if not isinstance(model, FrictionModel):
+            raise FcompError(f"baseline must be a model name or a FrictionModel, got "
+                             f"{self.baseline!r}")
+        names = list(self.effects) if self.effects is not None else EFFECTS.names()
+        for n in [*names, *self.add]:
+            EFFECTS.get(n)  # unknown names fail here, with the list of known ones
+        self.baseline_name_ = self.baseline if isinstance(self.baseline, str) else model.describe()
+        self.data_ = data if isinstance(data, DiagnosisData) else prepare(
+            data, cutoff_hz=self.cutoff_hz)
+        self.segmentation_ = segment(self.data_)
+        self._check_support(model)
+        self.split_ = make_split(self.data_, self.segmentation_.valid, self.split)
+        self.noise_floor_ = noise_floor(self.data_, self.segmentation_)
+        self._refit = Refit(self.data_, self.split_, self.segmentation_.d_pre,
+                            max_nfev=self.max_nfev, max_samples=self.max_samples)
+        self._bar = _progress(self.progress)
+        try:
+            starts = catalogue.baseline_starts(model, self.data_, self.segmentation_,
+                                               self.split_.train)
+            self.baseline_fit_ = self._refit.fit(model, starts)
+            self._tick(f"baseline {model.describe()}")
+            self.fit_ = self.baseline_fit_
+            self.steps_: list[Step] = []
+            self.candidates_: list[Candidate] = []
+            self.ties_: list[list[str]] = []
+            self.added_: list[str] = []
+            self.skipped_: dict[str, str] = {}
+            for name in self.add:
+                self.add_effect(name)
+            if self.search:
+                self._search(names)
+        finally:
+            self._bar.close()
+        self._conclude()
+        return self
+
+    def _tick(self, what: str) -> None:
+        self._bar.set_postfix_str(what, refresh=False)
+        self._bar.update(1)
+
+    def _check_support(self, model: FrictionModel) -> None:
+        """Refuse a baseline the data cannot support, saying why."""
+        data, seg = self.data_, self.segmentation_
+        v = data.signal("v")
+        moving = int(np.sum(np.abs(v) > max(seg.v_rest, 1e-12)))
+        label = ", ".join(data.labels[:3]) + (" ..." if len(data.labels) > 3 else "")
+        if moving < 20:
+            raise FcompError(f"{label}: the piston hardly moves ({moving} samples faster than "
+                             f"{seg.v_rest:.3g} m/s): there is no friction to compare "
+                             f"{model.describe()!r} with")
+        if model.n_states and data.steady_state:
+            raise FcompError(f"baseline {model.describe()!r} is a dynamic model (states "
+                             f"{', '.join(model.state_names)}) but the data are steady-state "
+                             "points without a motion history: use a static baseline "
+                             "(coulomb, coulomb-viscous, stribeck)")
+        if model.n_states and not seg.starts:
+            raise FcompError(f"{label}: the record has no start or reversal, so the states of "
+                             f"the dynamic baseline {model.describe()!r} are not determined; "
+                             "use a static baseline or record through reversals")
+        n_par = len(model.flat_params())
+        usable = int(seg.valid.sum())
+        if usable < 10 * n_par:
+            raise FcompError(f"{label}: only {usable} usable samples for the {n_par} "
+                             f"parameters of {model.describe()!r}; record longer")
+
+    # ---------------------------------------------------------------- steps
+    def add_effect(self, effect: str) -> Diagnosis:
+        """Add ``effect`` to the current model, refit, score and record the step (forced).
+
+        Works after :meth:`fit` (or inside it, for ``add``); the effect may be a
+        catalogue entry or one the user registered
+        (:func:`fcomp.effects.register_effect`).
+        """
+        if not hasattr(self, "fit_"):
+            raise FcompError("call fit(data) before add_effect")
+        EFFECTS.get(effect)
+        reason = catalogue.applicability(effect, self.fit_.model, self.data_, self.segmentation_)
+        if reason is not None:
+            raise FcompError(f"effect {effect!r} cannot be added to {self.fit_.model.describe()}: "
+                             f"{reason}")
+        cand = self._evaluate([effect])[0]
+        if cand.fit is None:
+            raise FcompError(f"adding {effect!r}: {cand.reason}")
+        before = self.fit_
+        self.steps_.append(Step(effect, before.rms_test, cand.rms_heldout, cand.qualifies,
+                                forced=True, candidates=[cand], fit=cand.fit))
+        self.fit_ = cand.fit
+        self.added_.append(effect)
+        if hasattr(self, "verdict_"):
+            self._conclude()
+        return self
+
+    def _context(self) -> catalogue.Context:
+        return catalogue.Context(self.data_, self.segmentation_, self.split_.train, self.fit_)
+
+    def _evaluate(self, names: list[str]) -> list[Candidate]:
+        """Refit ``current + effect`` for every name and judge it against the current fit."""
+        ctx = self._context()
+        out: list[Candidate | None] = [None] * len(names)
+        proposals = []
+        index = []
+        for i, name in enumerate(names):
+            try:
+                proposals.append(catalogue.propose(name, ctx))
+                index.append(i)
+            except (FcompError, ValueError) as exc:
+                out[i] = Candidate(name, None, math.nan, reason=f"cannot start: {exc}")
+        results = self._run(proposals)
+        for j, res in zip(index, results, strict=True):
+            name = names[j]
+            if isinstance(res, str):
+                out[j] = Candidate(name, None, math.nan, reason=res)
+                continue
+            out[j] = self._judge(name, res)
+        return [c for c in out if c is not None]
+
+    def _run(self, proposals: list[catalogue.Proposal]) -> list[FitResult | str]:
+        n_jobs = self.n_jobs if self.n_jobs is not None else min(os.cpu_count() or 1, 4)
+        results: list[FitResult | str] = [""] * len(proposals)
+        if n_jobs > 1 and len(proposals) > 1:
+            _JOB.update(refit=self._refit, proposals=proposals)
+            try:
+                ctx = multiprocessing.get_context("fork")
+                with ProcessPoolExecutor(max_workers=min(n_jobs, len(proposals)),
+                                         mp_context=ctx) as pool:
+                    for i, payload in pool.map(_fit_job, range(len(proposals))):
+                        results[i] = self._result(proposals[i], payload)
+                        self._tick(proposals[i].effect)
+            finally:
+                _JOB.clear()
+            return results
+        for i, prop in enumerate(proposals):
+            try:
+                results[i] = self._refit.fit(prop.model, prop.starts)
+            except (FcompError, ValueError, ArithmeticError) as exc:
+                results[i] = f"refit failed: {str(exc).splitlines()[0]}"
+            self._tick(prop.effect)
+        return results
+
+    def _result(self, prop: catalogue.Proposal, payload: dict[str, Any] | str
+                ) -> FitResult | str:
+        if isinstance(payload, str):
+            return payload
+        values = payload["values"]
+        model_vals = {k: v for k, v in values.items() if k != "mass"}
+        model = prop.model.with_params(**model_vals) if model_vals else prop.model
+        F_hat = payload["F_hat"]
+        r = self.data_.y - F_hat
+        tr, te = self.split_.train, self.split_.test
+        return FitResult(model, dict(values), F_hat, r, _rms(r[tr]), _rms(r[te]),
+                         payload["n_params"], payload["converged"], payload["nfev"])
+
+    def _judge(self, name: str, res: FitResult) -> Candidate:
+        before = self.fit_
+        te = self.split_.test
+        nf = self.noise_floor_.value
+        fall = before.rms_test - res.rms_test
+        z = diebold_mariano(before.residual[te], res.residual[te])
+        dbic = delta_bic(before, res, self.split_.train)
+        need = max(FALL_NOISE * nf, FALL_RELATIVE * before.rms_test)
+        reasons = []
+        if fall < need:
+            reasons.append(f"held-out RMS falls by {fall:.3g} N < {need:.3g} N")
+        if z < ACCEPT_Z:
+            reasons.append(f"fall not significant (z = {z:.2g} < {ACCEPT_Z:g})")
+        if not dbic < 0:
+            reasons.append(f"BIC does not agree (dBIC = {dbic:.3g})")
+        return Candidate(name, res, res.rms_test, fall, z, dbic, not reasons, "; ".join(reasons))
+
+    def _search(self, names: list[str]) -> None:
+        useless: set[str] = set()
+        tried_before: set[str] = set()
+        for step_no in range(self.max_steps):
+            if self.fit_.rms_test <= AT_FLOOR * self.noise_floor_.value:
+                break
+            todo = []
+            for name in names:
+                if name in self.added_:
+                    continue
+                reason = catalogue.applicability(name, self.fit_.model, self.data_,
+                                                 self.segmentation_)
+                if reason is not None:
+                    self.skipped_[name] = reason
+                    continue
+                self.skipped_.pop(name, None)
+                if name in useless and name in tried_before:
+                    continue
+                todo.append(name)
+            if not todo:
+                break
+            cands = self._evaluate(todo)
+            tried_before |= set(todo)
+            useless = {c.effect for c in cands if c.fit is None or not c.fall > 0}
+            ranked = sorted(cands, key=lambda c: (math.isnan(c.rms_heldout), c.rms_heldout))
+            if step_no == 0 and not self.added_:
+                self.candidates_ = ranked
+            good = [c for c in ranked if c.qualifies]
+            if not good:
+                best = ranked[0]
+                self.steps_.append(Step(best.effect, self.fit_.rms_test,
+                                        best.rms_heldout, False, candidates=ranked))
+                break
+            best = good[0]
+            tie = self._tie(best, good)
+            self.steps_.append(Step(best.effect, self.fit_.rms_test, best.rms_heldout, True,
+                                    candidates=ranked, tie=tie, fit=best.fit))
+            if len(tie) > 1:
+                self.ties_.append(tie)
+            self.fit_ = best.fit  # type: ignore[assignment]
+            self.added_.append(best.effect)
+
+    def _tie(self, best: Candidate, good: list[Candidate]) -> list[str]:
+        te = self.split_.test
+        group = [best.effect]
+        for c in good[1:]:
+            close = (c.rms_heldout - best.rms_heldout) <= TIE_SHARE * best.fall
+            z = diebold_mariano(c.fit.residual[te], best.fit.residual[te])  # type: ignore[union-attr]
+            if close or z < TIE_Z:
+                group.append(c.effect)
+        return group
+
+    # -------------------------------------------------------------- verdict
+    def _conclude(self) -> None:
+        data, seg, split = self.data_, self.segmentation_, self.split_
+        self.rms_baseline_ = self.baseline_fit_.rms_test
+        self.rms_final_ = self.fit_.rms_test
+        self.residual_features_ = residual_structure(self.fit_.residual, data, seg,
+                                                     split.train, split.test)
+        nf = self.noise_floor_.value
+        top = self.residual_features_[0] if self.residual_features_ else None
+        structured = (top is not None and top.strength >= STRUCTURE_MIN
+                      and self.rms_final_ * math.sqrt(top.strength) >= STRUCTURE_RMS * nf)
+        excess = self.rms_final_ > EXCESS_MAX * nf
+        self.verdict_ = "unexplained-structure" if structured or excess else "explained"
+        self.regimes_ = {
+            "baseline": regime_errors(self.baseline_fit_.residual, seg, split.test),
+            "final": regime_errors(self.fit_.residual, seg, split.test),
+        }
+
+    # ----------------------------------------------------------------- JSON
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON of ``fcomp diagnose`` (public contract, plus extra keys)."""
+        if not hasattr(self, "verdict_"):
+            raise FcompError("this Diagnosis is not fitted yet: call fit(data) first")
+
+        def num(x: float) -> float | None:
+            return float(x) if math.isfinite(x) else None
+
+        return {
+            "baseline": self.baseline_name_,
+            "rms_baseline": self.rms_baseline_,
+            "added": list(self.added_),
+            "steps": [{"effect": s.effect, "rms_before": s.rms_before, "rms_after":
+                       num(s.rms_after), "accepted": bool(s.accepted), "forced": s.forced}
+                      for s in self.steps_],
+            "candidates": [{"effect": c.effect, "rms_heldout": num(c.rms_heldout),
+                            "qualifies": c.qualifies, "z": num(c.z),
+                            "delta_bic": num(c.delta_bic), "reason": c.reason}
+                           for c in self.candidates_],
+            "ties": [list(t) for t in self.ties_],
+            "rms_final": self.rms_final_,
+            "noise_floor": self.noise_floor_.value,
+            "verdict": self.verdict_,
+            "residual_features": [{"feature": f.feature, "strength": round(f.strength, 4)}
+                                  for f in self.residual_features_],
+            "model": self.fit_.model.describe(),
+            "params": {k: num(v) for k, v in self.fit_.values.items()},
+            "regimes": self.regimes_,
+            "tie_experiments": {t[0]: {e: EFFECTS.get(e).experiment for e in t}
+                                for t in self.ties_},
+            "skipped": dict(self.skipped_),
+            "split": self.split_.description,
+            "noise_method": self.noise_floor_.method,
+            "units": "N",
+        }
+
+
+class _NoBar:
+    def update(self, n: int = 1) -> None:
+        pass
+
+    def set_postfix_str(self, s: str, refresh: bool = True) -> None:
+        pass
+
+    def close(self) -> None:
+        pass
+
+
+def _progress(enabled: bool) -> Any:
+    if not enabled:
+        return _NoBar()
+    from tqdm import tqdm
+
+    return tqdm(desc="diagnose", unit="fit", file=sys.stderr, leave=False)
+
+
+__all__ = ["VERDICTS", "Candidate", "Diagnosis", "NoiseFloor", "Segmentation", "Split", "Step",
+           "FeatureStrength", "DiagnosisData"]

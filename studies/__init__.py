@@ -19,6 +19,7 @@ STUDIES: Registry[Study] = Registry("study")
 #: Study modules of the package, in the order ``all`` runs them (``all`` itself last).
 _MODULES = (
     "coulomb_viscous",
+    "friction_models",
     "all",
 )
 

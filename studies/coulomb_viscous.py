@@ -29,7 +29,9 @@ What this module computes, from the tables shipped in
   differ, and how uncertain is B once the uncertainty of ``mean(Fc)`` is
   carried into it.
 
-All forces in N, speeds in m/s, viscous coefficients in Ns/m.
+All forces in N, speeds in m/s, viscous coefficients in Ns/m. The report's
+text and figures are in :mod:`studies.coulomb_viscous_report`; docs/seed001.md
+summarises the results.
 """
 
 from __future__ import annotations

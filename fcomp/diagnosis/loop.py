@@ -19,15 +19,16 @@ returns ``self``, results in ``*_`` attributes) runs the whole procedure:
    * the fall is significant: the Diebold-Mariano statistic of the held-out
      squared errors, ``z = mean(d)/(std(d)/sqrt(n_eff(d)))`` with
      ``d = r_before^2 - r_after^2`` and ``n_eff`` from the autocorrelation of
-     ``d`` (:func:`.noise.effective_sample_size`), is at least 3;
+     ``d`` (:func:`.noise.effective_sample_size`), has a one-sided Student-t
+     p-value (``n_eff - 1`` degrees of freedom) of at most 0.01;
    * the Bayesian information criterion on the training residuals, computed
      with the effective sample size of the candidate's residuals, agrees:
      ``dBIC = n_eff*ln(RSS_after/RSS_before) + dk*ln(n_eff) < 0``.
 
    The qualifying candidate with the lowest held-out RMS is added. Every
    other qualifying candidate whose held-out RMS is within 10 % of the best
-   one's fall, or not significantly worse (Diebold-Mariano ``z < 2`` against
-   the best), explains the data equally well: they are reported together as
+   one's fall, or not significantly worse than it (Diebold-Mariano p-value
+   above 0.05), explains the data equally well: they are reported together as
    a *tie* (a confounded group), each with the experiment that would tell
    them apart. The search stops when no candidate qualifies, when the
    held-out RMS is within 5 % of the noise floor, or after ``max_steps``.
@@ -58,6 +59,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from scipy import stats
 
 from fcomp.diagnosis import catalogue
 from fcomp.diagnosis.compare import regime_errors
@@ -72,10 +74,10 @@ from fcomp.errors import FcompError
 from fcomp.measurement import Measurement
 from fcomp.models import FrictionModel, make_model
 
-#: Significance (Diebold-Mariano z) a held-out fall needs.
-ACCEPT_Z = 3.0
-#: Below this z against the best candidate, a candidate ties with it.
-TIE_Z = 2.0
+#: Largest one-sided p-value of a held-out fall that counts as significant.
+ACCEPT_P = 0.01
+#: A candidate whose held-out error exceeds the best one's with a p-value above this ties.
+TIE_P = 0.05
 #: A clear fall: at least this fraction of the noise floor ...
 FALL_NOISE = 0.1
 #: ... and of the held-out RMS before.
@@ -105,8 +107,9 @@ class Candidate:
     rms_heldout : N
     fall : N
         ``rms_before - rms_heldout``.
-    z : float
-        Diebold-Mariano statistic of the fall (held-out squared errors).
+    z, p : float
+        Diebold-Mariano statistic of the fall (held-out squared errors) and its
+        one-sided p-value.
     delta_bic : float
         BIC change on the training residuals with the effective sample size.
     qualifies : bool
@@ -120,6 +123,7 @@ class Candidate:
     rms_heldout: float
     fall: float = math.nan
     z: float = math.nan
+    p: float = math.nan
     delta_bic: float = math.nan
     qualifies: bool = False
     reason: str = ""
@@ -143,13 +147,22 @@ def _rms(r: np.ndarray) -> float:
     return float(np.sqrt(np.mean(r**2))) if r.size else math.nan
 
 
-def diebold_mariano(r_a: np.ndarray, r_b: np.ndarray) -> float:
-    """``z`` of ``mean(r_a^2 - r_b^2) > 0`` with an autocorrelation-corrected standard error."""
+def diebold_mariano(r_a: np.ndarray, r_b: np.ndarray) -> tuple[float, float]:
+    """``(z, p)``: is the mean square of ``r_a`` larger than that of ``r_b``?
+
+    Diebold-Mariano test on ``d = r_a^2 - r_b^2``: ``z = mean(d)/(std(d)/sqrt(n_eff))``
+    with ``n_eff`` the effective sample size of ``d``; ``p`` is the one-sided
+    Student-t tail probability with ``n_eff - 1`` degrees of freedom.
+    """
     d = r_a**2 - r_b**2
     sd = float(np.std(d))
+    mean = float(np.mean(d))
     if sd == 0.0:
-        return 0.0 if float(np.mean(d)) == 0.0 else math.copysign(math.inf, float(np.mean(d)))
-    return float(np.mean(d)) / (sd / math.sqrt(max(effective_sample_size(d), 1.0)))
+        return (0.0, 0.5) if mean == 0.0 else (math.copysign(math.inf, mean),
+                                               0.0 if mean > 0 else 1.0)
+    n_eff = max(effective_sample_size(d), 2.0)
+    z = mean / (sd / math.sqrt(n_eff))
+    return z, float(stats.t.sf(z, n_eff - 1.0))
 
 
 def delta_bic(before: FitResult, after: FitResult, train: np.ndarray) -> float:
@@ -414,17 +427,18 @@ class Diagnosis:
         te = self.split_.test
         nf = self.noise_floor_.value
         fall = before.rms_test - res.rms_test
-        z = diebold_mariano(before.residual[te], res.residual[te])
+        z, p = diebold_mariano(before.residual[te], res.residual[te])
         dbic = delta_bic(before, res, self.split_.train)
         need = max(FALL_NOISE * nf, FALL_RELATIVE * before.rms_test)
         reasons = []
         if fall < need:
             reasons.append(f"held-out RMS falls by {fall:.3g} N < {need:.3g} N")
-        if z < ACCEPT_Z:
-            reasons.append(f"fall not significant (z = {z:.2g} < {ACCEPT_Z:g})")
+        if not p <= ACCEPT_P:
+            reasons.append(f"fall not significant (z = {z:.2g}, p = {p:.2g} > {ACCEPT_P:g})")
         if not dbic < 0:
             reasons.append(f"BIC does not agree (dBIC = {dbic:.3g})")
-        return Candidate(name, res, res.rms_test, fall, z, dbic, not reasons, "; ".join(reasons))
+        return Candidate(name, res, res.rms_test, fall, z, p, dbic, not reasons,
+                         "; ".join(reasons))
 
     def _search(self, names: list[str]) -> None:
         useless: set[str] = set()
@@ -473,8 +487,8 @@ class Diagnosis:
         group = [best.effect]
         for c in good[1:]:
             close = (c.rms_heldout - best.rms_heldout) <= TIE_SHARE * best.fall
-            z = diebold_mariano(c.fit.residual[te], best.fit.residual[te])  # type: ignore[union-attr]
-            if close or z < TIE_Z:
+            _, p = diebold_mariano(c.fit.residual[te], best.fit.residual[te])  # type: ignore[union-attr]
+            if close or p > TIE_P:
                 group.append(c.effect)
         return group
 
@@ -513,7 +527,7 @@ class Diagnosis:
                        num(s.rms_after), "accepted": bool(s.accepted), "forced": s.forced}
                       for s in self.steps_],
             "candidates": [{"effect": c.effect, "rms_heldout": num(c.rms_heldout),
-                            "qualifies": c.qualifies, "z": num(c.z),
+                            "qualifies": c.qualifies, "z": num(c.z), "p": num(c.p),
                             "delta_bic": num(c.delta_bic), "reason": c.reason}
                            for c in self.candidates_],
             "ties": [list(t) for t in self.ties_],

@@ -185,6 +185,7 @@ def solve(
     per-iteration SVD works on a ``(p+1) x p`` matrix instead of ``N x p``.
     """
     T = pv.transform()
+    links = [(i, j) for i, j in zip(*np.nonzero(T), strict=True) if i != j]
     q0, lo, hi, sc = pv.internal()
     cache: dict[bytes, tuple[np.ndarray, np.ndarray | None]] = {}
 
@@ -196,7 +197,9 @@ def solve(
             if not np.all(np.isfinite(r)):
                 r = np.where(np.isfinite(r), r, 1e12)
             if G is not None:
-                J = -np.nan_to_num(G, nan=0.0, posinf=0.0, neginf=0.0) @ T
+                J = -G if np.isfinite(G).all() else -np.nan_to_num(G, posinf=0.0, neginf=0.0)
+                for i, j in links:  # J_q = J_theta T: column j gains column i (Fs = Fc + ..)
+                    J[:, j] += J[:, i]
                 if compress:
                     r, J = compressed(J, r)
                 G = J

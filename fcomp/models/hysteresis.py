@@ -832,8 +832,13 @@ class HysteresisStepper:
         self.P = ParamValues(self.flat, NUMPY)
         self.function = model.hysteresis_function(self.flat)
         self.carrier = model.carrier()
-        self._cflat = {k: self.flat[k] for k in self.carrier.flat_params()}
         self._iF = len(model.base_states) - 1
+        self._cstep = None
+        if self.carrier.n_states > 1:  # film or effect states besides z: the family's step
+            from fcomp.trajectory import friction_step
+
+            self._cstep = friction_step(self.carrier)
+            self._cp = np.array([self.flat[k] for k in self.carrier.flat_params()], dtype=float)
         self.reset()
 
     def reset(self, state: Sequence[float] | np.ndarray | None = None) -> None:
@@ -860,20 +865,14 @@ class HysteresisStepper:
     def step(self, dt: float, v: float, a: float = 0.0, x: float = 0.0, p1: float = 0.0,
              p2: float = 0.0) -> np.ndarray:
         """Advance by ``dt`` (s) with ``v`` (m/s), ``a`` (m/s^2), ``x`` (m), ``p1, p2`` (Pa) held."""
-        from fcomp.trajectory import friction_along_motion
-
         if not dt > 0.0:
             raise FcompError(f"step: dt must be positive, got {dt}")
         sig = self._signals(v, a, x, p1, p2)
         g, zs = self.model.bristle_inputs(list(self.x), sig, self.P)
-        if self.carrier.n_states > 1:  # film or effect states besides z
-            held = [v, v]
-            run = friction_along_motion(
-                self.carrier, np.array([0.0, dt]), np.array(held), a=np.array([a, a]),
-                x=np.array([x, x]), p1=p1, p2=p2, state0=np.delete(self.x, self._iF),
-                values=self._cflat,
-            )
-            self.x = np.insert(run.states[-1], self._iF, 0.0)
+        if self._cstep is not None:
+            sigv = [sig.v, sig.a, sig.x, sig.p1, sig.p2, sig.s]
+            xc = np.asarray(self._cstep(np.delete(self.x, self._iF), sigv, dt, self._cp))
+            self.x = np.insert(xc.ravel(), self._iF, 0.0)
         self.function.step(dt, float(v), float(g), float(zs))
         self.x[0] = self.function.z
         self.x[self._iF] = self.function.F

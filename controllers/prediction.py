@@ -87,12 +87,13 @@ def rosenbrock_euler(f: ca.Function, dt: float, scales: np.ndarray,
     h = dt / substeps
     S = ca.DM(sc)
     Sinv = ca.DM(1.0 / sc)
+    fx = f(x, u)
+    Js = ca.jacobian(fx, x) * (Sinv @ S.T)
+    one = ca.Function("rosenbrock_euler_substep", [x, u],
+                      [ca.cse(x + h * S * ca.solve(ca.SX.eye(nx) - h * Js, Sinv * fx))])
     xk = x
-    eye = ca.SX.eye(nx)
     for _ in range(substeps):
-        fk = f(xk, u)
-        Js = ca.jacobian(fk, xk) * (Sinv @ S.T)
-        xk = xk + h * S * ca.solve(eye - h * Js, Sinv * fk)
+        xk = one(xk, u)
     return ca.Function("rosenbrock_euler", [x, u], [ca.cse(xk)], ["x", "u"], ["x_next"])
 
 

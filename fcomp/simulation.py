@@ -67,6 +67,7 @@ from __future__ import annotations
 
 import ctypes
 import math
+import re
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import lru_cache
@@ -193,6 +194,12 @@ class OdeModel:
         return len(self.input_names)
 
     @property
+    def tag(self) -> str:
+        """``name`` as a C / CasADi identifier (letters, digits, single underscores)."""
+        tag = re.sub(r"[^A-Za-z0-9]+", "_", self.name).strip("_")
+        return tag if tag[:1].isalpha() else "m_" + tag
+
+    @property
     def n_params(self) -> int:
         return int(self.rhs.size1_in(2))
 
@@ -218,7 +225,7 @@ class OdeModel:
         for _ in range(substeps):
             xk, _err = rosenbrock_step(lambda a, b: self.rhs(a, b, p), xk, u,
                                        ca.SX.zeros(self.nu), ca.SX(h), scale)
-        return ca.Function(f"{self.name}_discrete", [x, u, p], [ca.cse(xk)],
+        return ca.Function(f"{self.tag}_discrete", [x, u, p], [ca.cse(xk)],
                            ["x", "u", "p"], ["x_next"])
 
 
@@ -490,9 +497,8 @@ def _model_functions(model_key: tuple) -> tuple[ca.Function, ca.Function]:
     model = _MODELS[model_key]
     x, u, p = model.symbols()
     f = model.rhs(x, u, p)
-    tag = "".join(c if c.isalnum() else "_" for c in model.name)
-    F = ca.Function(f"fcomp_f_{tag}", [x, u, p], [f])
-    Jf = ca.Function(f"fcomp_j_{tag}", [x, u, p],
+    F = ca.Function(f"fcomp_f_{model.tag}", [x, u, p], [f])
+    Jf = ca.Function(f"fcomp_j_{model.tag}", [x, u, p],
                      [ca.densify(ca.jacobian(f, x)), ca.densify(ca.jacobian(f, u))])
     return F, Jf
 
@@ -657,7 +663,7 @@ class SolveIvp(Integrator):
         x, u, p = model.symbols()
         f = model.rhs(x, u, p)
         self.f = ca.Function("f", [x, u, p], [f])
-        self.jac = ca.Function("jac", [x, u, p], [ca.jacobian(f, x)])
+        self.jac = ca.Function("jac_x", [x, u, p], [ca.jacobian(f, x)])
 
     def run(self, x0: np.ndarray, U: np.ndarray, dU: np.ndarray, dt: np.ndarray,
             p: np.ndarray, tol: Tolerances, h: float) -> tuple[np.ndarray, Stats, float]:

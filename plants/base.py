@@ -474,8 +474,6 @@ class OdePlant(Plant):
             cols[name] = y[name]
         for j, name in enumerate(self.input_names):
             cols.setdefault(name, traj.U[:, j])
-        for name in y:
-            cols.setdefault(name, y[name])
         for i, name in enumerate(self.friction.state_names):
             col = name if name not in cols else f"friction_{name}"
             cols[col] = traj.X[:, len(self.plant_states) + i]

@@ -38,15 +38,18 @@ Meas. Control 107, 1985): with ``v_eps`` the model's ``v_eps`` (default
 1e-5 m/s) and ``F_brk+ = F0(+v_eps)``, ``F_brk- = F0(-v_eps)`` the map's
 force just outside the band (the break-away levels, effects included),
 
-* ``|v| < v_eps`` and ``F_brk- <= F_app <= F_brk+``: **stuck**, ``F = F_app``,
-  ``a = 0``;
+* ``|v| < v_eps`` and ``F_brk- <= F_app <= F_brk+``: **stuck**, the friction
+  balances the applied force and removes the residual velocity inside the
+  band: ``F = clip(F_app + m*v/tau_stick, F_brk-, F_brk+)``, so ``a = -v/tau_stick``
+  (``tau_stick`` = 1 ms by default: without it Karnopp's band lets a stuck
+  piston creep at up to ``v_eps``; with it the creep after a stop is below
+  ``v_eps*tau_stick`` = 1e-8 m, and the extra force ``m*v/tau_stick`` is
+  below ``m*v_eps/tau_stick``, 0.01 N per kg);
 * ``|v| < v_eps`` and ``F_app`` beyond a break-away level: the piston breaks
   away with ``F = F_brk``;
 * ``|v| >= v_eps``: sliding, ``F`` is the map.
 
-While stuck the velocity is held (inside the band, below ``v_eps``), so
-the piston may creep by at most ``v_eps`` m/s -- the documented price of
-the band. Dynamic models (LuGre family with a bristle state) need no band.
+Dynamic models (LuGre family with a bristle state) need no band.
 """
 
 from __future__ import annotations
@@ -85,6 +88,8 @@ PISTON_SPECS: tuple[ParamSpec, ...] = (
     _s("p_atm", "Pa", 101325.0, 0.0, INF, "atmospheric pressure", lower_open=True),
     _s("k_stop", "N/m", 1e8, 0.0, INF, "end-stop contact stiffness", lower_open=True),
     _s("zeta_stop", "-", 0.7, 0.0, INF, "end-stop damping ratio"),
+    _s("tau_stick", "s", 1e-3, 0.0, INF, "Karnopp band: decay time of the residual velocity "
+       "while stuck (static maps only)", lower_open=True),
 )
 
 
@@ -241,7 +246,8 @@ class PistonPlant(OdePlant):
             Fp, cp = fr.force_parts(be, zf, signals(v_eps, 1.0), P)
             Fn, cn = fr.force_parts(be, zf, signals(-v_eps, -1.0), P)
             band = be.abs(vel) < v_eps
-            F0 = be.if_else(band, be.fmin(be.fmax(F_app, Fn), Fp), F0)
+            stuck = F_app + m * vel / P("tau_stick")
+            F0 = be.if_else(band, be.fmin(be.fmax(stuck, Fn), Fp), F0)
             c_band = be.if_else(F_app > Fp, cp, be.if_else(F_app < Fn, cn, 0.0))
             c_a = be.if_else(band, c_band, c_a)
         a = (F_app - F0) / (m + c_a)

@@ -16,14 +16,19 @@ The piston (models.md 3.1) is :class:`plants.mechanics.PistonPlant`:
 ``m*dv/dt = p1*A1 - p2*A2 - p_atm*(A1 - A2) - F`` (+ end stops). States
 ``x, v, p1, p2`` (absolute) plus the friction states.
 
-One input signal ``u`` (the ``fcomp simulate`` SPEC) is a differential
-command about the level that holds half the supply in both chambers:
-``u1 = u_mid + u/2``, ``u2 = u_mid - u/2``, ``u_mid = u_full*ps_g/(2*p_rated)``
-(1 V for the seed's 0.4 MPa supply), so ``u = 0`` keeps the default
-pressures and ``u`` > 0 pushes the piston outward.
+Default initial state: mid-stroke, at rest, friction states zero, and the
+piston *balanced*: ``p2 = (ps + p_atm)/2`` (``ps = p_atm + ps_g``) and ``p1``
+such that ``p1*A1 - p2*A2 - p_atm*(A1 - A2) = 0`` (gauge ``p1 = p2*A2/A1``).
+This deliberately departs from the ``(ps + p_atm)/2`` in both chambers of
+the pneumatic servo: on this free, unguided piston equal pressures push
+with ``(p - p_atm)*(A1 - A2)`` (15.7 N for cylinder 1), close to the
+break-away force, before any command is given.
 
-Default initial state: mid-stroke, at rest, ``p1 = p2 = (ps + p_atm)/2``
-(``ps = p_atm + ps_g``), friction states zero.
+One input signal ``u`` (the ``fcomp simulate`` SPEC, V) is a differential
+command about the commands that hold the default pressures:
+``u1 = u1_0 + u/2``, ``u2 = u2_0 - u/2``, ``u_i0 = u_full*p_i0/p_rated``
+(gauge ``p_i0``), so ``u = 0`` keeps the piston balanced and ``u > 0``
+pushes it outward. Commands beyond 0..u_full saturate in the valves.
 """
 
 from __future__ import annotations
@@ -72,14 +77,21 @@ class PreslidingRig(PistonPlant):
         out.update({new: rig[old] for old, new in names.items() if old in rig})
         return out
 
-    def u_mid(self) -> float:
-        """Command (V) that sets half the supply pressure (gauge)."""
+    def balanced_pressures(self) -> tuple[float, float]:
+        """Gauge ``(p1, p2)`` of the default state: ``p2 = ps_g/2``, ``p1*A1 = p2*A2``."""
         p = self.plant_params.flat()
-        return p["u_full"] * p["ps_g"] / (2.0 * p["p_rated"])
+        p2 = 0.5 * p["ps_g"]
+        return p2 * (1.0 - (p["rod"] / p["bore"]) ** 2), p2
+
+    def commands_at_rest(self) -> tuple[float, float]:
+        """Valve commands (V) that hold the default pressures."""
+        p = self.plant_params.flat()
+        return tuple(p["u_full"] * pg / p["p_rated"] for pg in self.balanced_pressures())  # type: ignore[return-value]
 
     def scalar_input(self, u: np.ndarray) -> np.ndarray:
-        """``u1 = u_mid + u/2``, ``u2 = u_mid - u/2`` (module docstring)."""
-        return np.column_stack([self.u_mid() + 0.5 * u, self.u_mid() - 0.5 * u])
+        """``u1 = u1_0 + u/2``, ``u2 = u2_0 - u/2`` (module docstring)."""
+        u1, u2 = self.commands_at_rest()
+        return np.column_stack([u1 + 0.5 * u, u2 - 0.5 * u])
 
     def drive(self, be: Backend, x: dict[str, Any], u: dict[str, Any],
               P: ParamValues) -> Drive:
@@ -97,9 +109,9 @@ class PreslidingRig(PistonPlant):
                                            "p2": (setpoint(u["u2"]) - p2) / tau})
 
     def default_state(self) -> dict[str, float]:
-        p = self.plant_params.flat()
-        pm = p["p_atm"] + 0.5 * p["ps_g"]
-        return {**super().default_state(), "p1": pm, "p2": pm}
+        pa = self.plant_params.flat()["p_atm"]
+        p1, p2 = self.balanced_pressures()
+        return {**super().default_state(), "p1": pa + p1, "p2": pa + p2}
 
     def state_scales(self) -> dict[str, float]:
         p = self.plant_params.flat()

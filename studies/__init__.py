@@ -20,6 +20,7 @@ STUDIES: Registry[Study] = Registry("study")
 _MODULES = (
     "coulomb_viscous",
     "friction_models",
+    "presliding",
     "all",
 )
 

@@ -292,8 +292,10 @@ class PreslidingRig:
                    rig["valve_input_max"], rig["tau_p"], rig["ps"])
 
     def x0(self) -> list[float]:
-        pm = P_ATM + 0.5 * self.ps_g
-        return [self.L / 2, 0.0, pm, pm] + [0.0] * self.fr.n_states
+        """Balanced piston: p2 at half the supply, p1*A1 = p2*A2 in gauge."""
+        p2 = 0.5 * self.ps_g
+        p1 = p2 * (self.D ** 2 - self.d ** 2) / self.D ** 2
+        return [self.L / 2, 0.0, P_ATM + p1, P_ATM + p2] + [0.0] * self.fr.n_states
 
     def rhs(self, t: float, y: list[float], u: Callable[[float], tuple[float, float]]
             ) -> list[float]:

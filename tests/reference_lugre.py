@@ -88,7 +88,15 @@ class LuGreRef:
         return sign(v) * self.g(v) + self.sigma2 * v
 
     def zdot_partials(self, z: float, v: float) -> tuple[float, float]:
-        """``(d(dz/dt)/dz, d(dz/dt)/dv)`` by hand (for the integrator's Newton iterations)."""
+        """``(d(dz/dt)/dz, d(dz/dt)/dv)`` by hand (for the integrator's Newton iterations).
+
+        ``|v|`` has a kink at ``v = 0``; within ``|v| < 1e-12`` m/s the mean of
+        the two one-sided slopes is returned so that Newton's method does not
+        flip between them while the mass rests (accuracy is unaffected: the
+        Jacobian only steers the iterations).
+        """
+        if abs(v) < 1e-12:
+            v = 0.0
         g = self.g(v)
         r = abs(v) / self.vs
         slope = self.n * r ** (self.n - 1) / self.vs if r > 0 else 0.0

@@ -306,7 +306,7 @@ def test_repeated_displacement_cycles_stay_bounded_and_dissipate(
         cyc = slice(c * N, (c + 1) * N + 1)
         assert np.trapezoid(run.F[cyc], run.x[cyc]) > 0.0  # clockwise loop: dissipative
     vm = 0.5 * (v[1:] + v[:-1])
-    for k in range(t.size - 1):
+    for k in range(10 * N):  # the memory stays shallow (loops are closed and removed)
         st.step(t[k + 1] - t[k], vm[k])
         assert st.function.depth <= 6
 

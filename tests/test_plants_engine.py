@@ -166,7 +166,7 @@ def test_discrete_step_agrees_with_adaptive_engine(force_rig) -> None:
     ref = st.step(12.0)
     np.testing.assert_allclose(got, ref, rtol=1e-6, atol=1e-10)
     xs = ca.SX.sym("x", force_rig.nx)
-    jac = ca.Function("jac", [xs], [ca.jacobian(step(xs, 12.0, force_rig.param_vector()), xs)])
+    jac = ca.Function("jac_x", [xs], [ca.jacobian(step(xs, 12.0, force_rig.param_vector()), xs)])
     assert np.all(np.isfinite(np.asarray(jac(x0))))
 
 

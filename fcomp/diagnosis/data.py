@@ -226,11 +226,12 @@ def _motion_columns(meas: Measurement, cutoff_hz: float | None) -> Measurement:
     if "x" in meas:
         fc = cutoff_hz if cutoff_hz is not None else default_cutoff(t, meas["x"])
         _, v, a = differentiate(t, meas["x"], cutoff_hz=fc, label=meas.label)
-        cols = {"v": meas["v"] if "v" in meas else v}
-        if "a" not in meas:
-            cols["a"] = a if "v" not in meas else np.gradient(
-                smooth(t, meas["v"], cutoff_hz=fc, label=meas.label), t)
-        return meas.with_columns(**cols)
+        if "v" in meas:  # a measured velocity is kept; a from it
+            v = meas["v"]
+            a = np.gradient(smooth(t, v, cutoff_hz=fc, label=meas.label), t)
+        if "a" in meas:
+            a = meas["a"]
+        return meas.with_columns(v=v, a=a)
     if "v" in meas:
         fc = cutoff_hz if cutoff_hz is not None else 0.1 * (t.size - 1) / float(t[-1] - t[0])
         vf = smooth(t, meas["v"], cutoff_hz=fc, label=meas.label)

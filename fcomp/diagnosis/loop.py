@@ -16,22 +16,23 @@ returns ``self``, results in ``*_`` attributes) runs the whole procedure:
 
    * the held-out RMS falls clearly: by at least ``max(0.1*noise_floor,
      0.02*rms_before)``;
-   * the fall is significant: the Diebold-Mariano statistic of the held-out
-     squared errors, ``z = mean(d)/(std(d)/sqrt(n_eff(d)))`` with
-     ``d = r_before^2 - r_after^2`` and ``n_eff`` from the autocorrelation of
-     ``d`` (:func:`.noise.effective_sample_size`), has a one-sided Student-t
-     p-value (``n_eff - 1`` degrees of freedom) of at most 0.01;
+   * the fall is significant and consistent: the held-out samples are cut
+     into contiguous pieces of about 0.5 s (:func:`test_blocks`) and the
+     log ratios ``ln(MSE_before/MSE_after)`` of the pieces have a positive
+     mean with a one-sided Student-t p-value of at most 0.01
+     (:func:`fall_test`);
    * the Bayesian information criterion on the training residuals, computed
      with the effective sample size of the candidate's residuals, agrees:
      ``dBIC = n_eff*ln(RSS_after/RSS_before) + dk*ln(n_eff) < 0``.
 
    The qualifying candidate with the lowest held-out RMS is added. Every
    other qualifying candidate whose held-out RMS is within 10 % of the best
-   one's fall, or not significantly worse than it (Diebold-Mariano p-value
-   above 0.05), explains the data equally well: they are reported together as
+   one's fall, or not significantly worse than it (:func:`fall_test`
+   p-value above 0.05), explains the data equally well: they are reported together as
    a *tie* (a confounded group), each with the experiment that would tell
    them apart. The search stops when no candidate qualifies, when the
-   held-out RMS is within 5 % of the noise floor, or after ``max_steps``.
+   held-out RMS is within 5 % of the noise floor (after the first step,
+   which is always evaluated), or after ``max_steps``.
    From the second step on, candidates that made the held-out error worse
    at the previous step are not tried again unless they only now apply.
 4. **Verdict.** The final residual is tested for structure left
@@ -108,8 +109,7 @@ class Candidate:
     fall : N
         ``rms_before - rms_heldout``.
     z, p : float
-        Diebold-Mariano statistic of the fall (held-out squared errors) and its
-        one-sided p-value.
+        Statistic of the fall test (:func:`fall_test`) and its one-sided p-value.
     delta_bic : float
         BIC change on the training residuals with the effective sample size.
     qualifies : bool
@@ -147,22 +147,53 @@ def _rms(r: np.ndarray) -> float:
     return float(np.sqrt(np.mean(r**2))) if r.size else math.nan
 
 
-def diebold_mariano(r_a: np.ndarray, r_b: np.ndarray) -> tuple[float, float]:
-    """``(z, p)``: is the mean square of ``r_a`` larger than that of ``r_b``?
+def test_blocks(test: np.ndarray, starts: Sequence[int], dt: float) -> list[np.ndarray]:
+    """Held-out samples cut into contiguous pieces for the fall test.
 
-    Diebold-Mariano test on ``d = r_a^2 - r_b^2``: ``z = mean(d)/(std(d)/sqrt(n_eff))``
-    with ``n_eff`` the effective sample size of ``d``; ``p`` is the one-sided
-    Student-t tail probability with ``n_eff - 1`` degrees of freedom.
+    Each run of held-out samples (not crossing an experiment start) is cut into
+    pieces of about ``max(0.5 s, 20 samples)``; a shorter tail joins the piece
+    before it.
     """
-    d = r_a**2 - r_b**2
-    sd = float(np.std(d))
-    mean = float(np.mean(d))
+    length = max(20, int(round(0.5 / dt)))
+    cut = np.zeros(test.size, dtype=bool)
+    cut[list(starts)] = True
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], test.astype(int), [0]])))
+    pieces: list[np.ndarray] = []
+    for a, b in zip(edges[::2], edges[1::2], strict=True):
+        inner = [a, *[int(k) for k in np.flatnonzero(cut[a + 1:b]) + a + 1], b]
+        for lo, hi in zip(inner[:-1], inner[1:], strict=True):
+            n = (hi - lo) // length
+            bounds = [lo + k * length for k in range(max(n, 1))] + [hi]
+            for u, w in zip(bounds[:-1], bounds[1:], strict=True):
+                if w - u >= 5:
+                    pieces.append(np.arange(u, w))
+    return pieces
+
+
+def fall_test(r_before: np.ndarray, r_after: np.ndarray, blocks: Sequence[np.ndarray]
+              ) -> tuple[float, float]:
+    """``(t, p)``: does the error fall consistently over the held-out pieces?
+
+    ``l_b = ln(MSE_before/MSE_after)`` on each piece ``b``; ``t = mean(l)/(std(l)/sqrt(B))``
+    and ``p`` its one-sided Student-t tail probability with ``B - 1`` degrees
+    of freedom. Friction residuals are autocorrelated and concentrated in a
+    few regimes; contiguous pieces are close to independent units and the log
+    ratio is insensitive to the heavy tails of squared errors.
+    """
+    logs = []
+    for b in blocks:
+        mb, ma = float(np.mean(r_before[b] ** 2)), float(np.mean(r_after[b] ** 2))
+        if mb > 0 and ma > 0:
+            logs.append(math.log(mb / ma))
+    if len(logs) < 3:
+        return math.nan, 1.0
+    arr = np.array(logs)
+    sd = float(np.std(arr, ddof=1))
+    mean = float(np.mean(arr))
     if sd == 0.0:
-        return (0.0, 0.5) if mean == 0.0 else (math.copysign(math.inf, mean),
-                                               0.0 if mean > 0 else 1.0)
-    n_eff = max(effective_sample_size(d), 2.0)
-    z = mean / (sd / math.sqrt(n_eff))
-    return z, float(stats.t.sf(z, n_eff - 1.0))
+        return (math.copysign(math.inf, mean), 0.0 if mean > 0 else 1.0) if mean else (0.0, 0.5)
+    t = mean / (sd / math.sqrt(arr.size))
+    return t, float(stats.t.sf(t, arr.size - 1))
 
 
 def delta_bic(before: FitResult, after: FitResult, train: np.ndarray) -> float:
@@ -285,6 +316,8 @@ class Diagnosis:
         self.noise_floor_ = noise_floor(self.data_, self.segmentation_)
         self._refit = Refit(self.data_, self.split_, self.segmentation_.d_pre,
                             max_nfev=self.max_nfev, max_samples=self.max_samples)
+        self._blocks = test_blocks(self.split_.test, [e.start for e in self.data_.experiments],
+                                   self.data_.scales.dt)
         self._bar = _progress(self.progress)
         try:
             starts = catalogue.baseline_starts(model, self.data_, self.segmentation_,
@@ -424,10 +457,9 @@ class Diagnosis:
 
     def _judge(self, name: str, res: FitResult) -> Candidate:
         before = self.fit_
-        te = self.split_.test
         nf = self.noise_floor_.value
         fall = before.rms_test - res.rms_test
-        z, p = diebold_mariano(before.residual[te], res.residual[te])
+        z, p = fall_test(before.residual, res.residual, self._blocks)
         dbic = delta_bic(before, res, self.split_.train)
         need = max(FALL_NOISE * nf, FALL_RELATIVE * before.rms_test)
         reasons = []
@@ -444,7 +476,7 @@ class Diagnosis:
         useless: set[str] = set()
         tried_before: set[str] = set()
         for step_no in range(self.max_steps):
-            if self.fit_.rms_test <= AT_FLOOR * self.noise_floor_.value:
+            if step_no and self.fit_.rms_test <= AT_FLOOR * self.noise_floor_.value:
                 break
             todo = []
             for name in names:
@@ -483,11 +515,11 @@ class Diagnosis:
             self.added_.append(best.effect)
 
     def _tie(self, best: Candidate, good: list[Candidate]) -> list[str]:
-        te = self.split_.test
         group = [best.effect]
         for c in good[1:]:
             close = (c.rms_heldout - best.rms_heldout) <= TIE_SHARE * best.fall
-            _, p = diebold_mariano(c.fit.residual[te], best.fit.residual[te])  # type: ignore[union-attr]
+            _, p = fall_test(c.fit.residual, best.fit.residual,  # type: ignore[union-attr]
+                             self._blocks)
             if close or p > TIE_P:
                 group.append(c.effect)
         return group

@@ -40,7 +40,7 @@ import numpy as np
 from fcomp.diagnosis.data import DiagnosisData, Experiment, Scales
 from fcomp.diagnosis.split import Split
 from fcomp.errors import FcompError
-from fcomp.identification.dynamic import TrajectoryProblem
+from fcomp.identification.dynamic import EXTRAS, TrajectoryProblem
 from fcomp.identification.estimator import ALWAYS_FIXED, EXTRA_SPECS, default_free
 from fcomp.identification.problem import ParameterVector, base_name, solve
 from fcomp.identification.target import FitData
@@ -269,6 +269,11 @@ class Refit:
         names = list(free) if free is not None else self.free_names(model)
         if not names:
             return self.result(model, {}, 0)
+        # a model parameter named like an identification extra ("offset" of the
+        # force-offset effect) is fitted as that extra: the model's own copy is zero
+        clash = {n: 0.0 for n in names if n in EXTRAS and n in model.flat_params()}
+        if clash:
+            model = model.with_params(**clash)
         base = dict(model.flat_params())
         if "mass" in names:
             base["mass"] = 0.0

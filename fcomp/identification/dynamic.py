@@ -21,7 +21,8 @@ gives the force and all its derivatives); for models with discrete memory
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -32,6 +33,23 @@ from fcomp.models.base import FrictionModel
 from fcomp.trajectory import friction_along_motion
 
 EXTRAS = ("mass", "offset")
+
+
+@dataclass(frozen=True)
+class Dependent:
+    """A model parameter set by an affine equality, ``name = constant + sum(coef_k*theta_k)``.
+
+    E.g. the last slip fraction of the generalized Maxwell-slip model,
+    ``alpha_N = 1 - alpha_1 - ... - alpha_{N-1}``. Its sensitivity is folded
+    into the free parameters': ``dF/dtheta_k += coef_k*dF/d(name)``.
+    """
+
+    name: str
+    constant: float
+    coef: Mapping[str, float]
+
+    def value(self, values: Mapping[str, float]) -> float:
+        return self.constant + sum(c * values[k] for k, c in self.coef.items())
 
 
 class TrajectoryProblem:
@@ -50,10 +68,13 @@ class TrajectoryProblem:
         simulated over the whole record.
     substeps
         Integration steps per sample interval.
+    dependent
+        Model parameters tied to the fitted ones by :class:`Dependent` equalities.
     """
 
     def __init__(self, model: FrictionModel, data: FitData, pv: ParameterVector, *,
-                 mask: np.ndarray | None = None, substeps: int = 1) -> None:
+                 mask: np.ndarray | None = None, substeps: int = 1,
+                 dependent: Sequence[Dependent] = ()) -> None:
         self.model = model
         self.data = data
         self.pv = pv
@@ -63,17 +84,32 @@ class TrajectoryProblem:
         self.mask = np.ones(data.n, dtype=bool) if mask is None else np.asarray(mask, bool)
         self.all_samples = bool(self.mask.all())
         self.substeps = substeps
-        self.loop = (SensitivityLoop(model, self.model_free, substeps=substeps)
-                     if model.symbolic and model.n_states + len(self.model_free) > 0 else None)
+        self.dependent = tuple(dependent)
+        diff = [*self.model_free, *(dep.name for dep in self.dependent)]
+        self.loop = (SensitivityLoop(model, diff, substeps=substeps)
+                     if model.symbolic and model.n_states + len(diff) > 0 else None)
         self.evaluations = 0
 
     # ------------------------------------------------------------------ model
+    def _with_dependent(self, values: dict[str, float]) -> dict[str, float]:
+        out = dict(values)
+        for dep in self.dependent:
+            out[dep.name] = dep.value(out)
+        return out
+
     def _model_force(self, values: dict[str, float], jac: bool) -> tuple[np.ndarray, np.ndarray]:
         d = self.data
-        if self.loop is not None:
-            return self.loop(d.sig, values)
-        F = self._simulate(values)
         nf = len(self.model_free)
+        full = self._with_dependent(values)
+        if self.loop is not None:
+            F, Gall = self.loop(d.sig, full)
+            G = Gall[:, :nf].copy() if self.dependent else Gall
+            for k, dep in enumerate(self.dependent):
+                for name, c in dep.coef.items():
+                    if name in self.model_free:
+                        G[:, self.model_free.index(name)] += c * Gall[:, nf + k]
+            return F, G
+        F = self._simulate(full)
         G = np.zeros((F.size, nf))
         if jac:
             for j, name in enumerate(self.model_free):
@@ -81,7 +117,8 @@ class TrajectoryProblem:
                 h = 1e-6 * self.pv.scale[i]
                 if values[name] + h > self.pv.upper[i]:
                     h = -h
-                G[:, j] = (self._simulate({**values, name: values[name] + h}) - F) / h
+                step = self._with_dependent({**values, name: values[name] + h})
+                G[:, j] = (self._simulate(step) - F) / h
         return F, G
 
     def _simulate(self, values: dict[str, float]) -> np.ndarray:

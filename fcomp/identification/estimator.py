@@ -34,9 +34,10 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
+from scipy import stats
 
 from fcomp.errors import ConvergenceError, FcompError
-from fcomp.identification.dynamic import EXTRAS, TrajectoryProblem
+from fcomp.identification.dynamic import EXTRAS, Dependent, TrajectoryProblem
 from fcomp.identification.guess import (
     bristle_stiffness,
     default_v_min,
@@ -54,6 +55,7 @@ from fcomp.identification.target import FitData, fit_data
 from fcomp.identification.uncertainty import Uncertainty, estimate
 from fcomp.measurement import Measurement
 from fcomp.models import FrictionModel, make_model
+from fcomp.models.gms import GMSModel
 from fcomp.models.hysteresis import HYSTERESIS_NAMES, HysteresisFamily
 from fcomp.parameters import Directional, ParamSpec, spec
 
@@ -74,6 +76,26 @@ def default_free(model: FrictionModel) -> list[str]:
     """Flat names fitted by default: every finite parameter but :data:`ALWAYS_FIXED`."""
     return [n for n, v in model.flat_params().items()
             if base_name(n) not in ALWAYS_FIXED and math.isfinite(v)]
+
+
+def equality_constraints(model: FrictionModel,
+                         free: Sequence[str]) -> tuple[list[str], list[Dependent]]:
+    """Free names without the parameters tied by an equality, and those ties.
+
+    The generalized Maxwell-slip model requires ``sum(alpha_i) = 1``: the last
+    free ``alpha`` becomes ``1 - (the other alphas)``.
+    """
+    if not isinstance(model, GMSModel):
+        return list(free), []
+    alphas = [f"alpha{i}" for i in range(1, model.n_elements + 1)]
+    free_alpha = [a for a in alphas if a in free]
+    if len(free_alpha) <= 1:  # a single free alpha is fixed by the others
+        return [n for n in free if n not in free_alpha], []
+    last = free_alpha[-1]
+    flat = model.flat_params()
+    const = 1.0 - sum(flat[a] for a in alphas if a not in free_alpha)
+    return ([n for n in free if n != last],
+            [Dependent(last, const, {a: -1.0 for a in free_alpha[:-1]})])
 
 
 def directional_model(model: FrictionModel) -> FrictionModel:
@@ -379,7 +401,7 @@ class FrictionFit:
         if isinstance(model, HysteresisFamily):
             return self._fit_hysteresis_model(model, data, d)
         v_min = self.v_min if self.v_min is not None else default_v_min(d.sig["v"])
-        free = self._free_names(model)
+        free, self._deps = equality_constraints(model, self._free_names(model))
         extras = (["mass"] if d.inertia is not None else []) + (["offset"] if self.offset else [])
         if not free and not extras:
             raise FcompError(f"{model.describe()}: nothing to fit (every parameter fixed)")
@@ -533,6 +555,8 @@ class FrictionFit:
                       start: dict[str, float], v_min: float, *, required: bool,
                       final: bool) -> tuple | None:
         """Seed 002's steady-state fit; updates ``start`` (first stage) or is the result."""
+        tied = {k for dep in self._deps for k in (dep.name, *dep.coef)}
+        free = [n for n in free if n not in tied]
         y = d.y if d.inertia is None else d.y - start["mass"] * d.inertia
         s = d.sig
         pts = steady_state_points(s["t"], s["v"], s["a"], y, v_min=v_min,
@@ -579,7 +603,8 @@ class FrictionFit:
                           method: str) -> FrictionFit:
         names = free + extras
         probe_pv = ParameterVector.build(names, start, self._specs(model, names, start))
-        prob = TrajectoryProblem(model, d, probe_pv, mask=mask, substeps=self.substeps)
+        prob = TrajectoryProblem(model, d, probe_pv, mask=mask, substeps=self.substeps,
+                                 dependent=self._deps)
 
         def jacobian_at(vals: Mapping[str, float]) -> np.ndarray:
             G = prob(np.array([vals[n] for n in probe_pv.names]), True)[1]
@@ -598,7 +623,8 @@ class FrictionFit:
         G = jacobian_at(start)[:, [j for j, n in enumerate(probe_pv.names) if n in names]]
         scales = self._scales(names, start, G, d.y[mask])
         pv = ParameterVector.build(names, start, self._specs(model, names, start), scales)
-        prob = TrajectoryProblem(model, d, pv, mask=mask, substeps=self.substeps)
+        prob = TrajectoryProblem(model, d, pv, mask=mask, substeps=self.substeps,
+                                 dependent=self._deps)
         sol = solve(pv, prob, max_nfev=self.max_nfev, what=f"fit of {model.describe()}",
                     compress=prob.jacobian_is_free)
         unc = estimate(sol.jacobian, sol.residuals, sol.theta, level=self.confidence)
@@ -626,6 +652,8 @@ class FrictionFit:
                            level=self.confidence, autocorrelated=method != "steady-state")
         values = dict(zip(names, map(float, theta), strict=True))
         model_values = {k: v for k, v in values.items() if k not in EXTRAS}
+        for dep in self._deps:
+            model_values[dep.name] = dep.value(model_values)
         try:
             self.model_ = model.with_params(**model_values)
         except ValueError as exc:
@@ -639,7 +667,9 @@ class FrictionFit:
                     for n, lo, hi in zip(est, unc.ci_low, unc.ci_high, strict=True)}
         self.cov_ = unc.cov
         self.units_ = {n: u for n, u in zip(names, pv.units, strict=True) if n in est}
-        self.fixed_ = {k: float(v) for k, v in self.model_.flat_params().items() if k not in est}
+        self._add_dependent(est, unc, model_values)
+        self.fixed_ = {k: float(v) for k, v in self.model_.flat_params().items()
+                       if k not in self.params_}
         self.tau_int_ = unc.tau_int
         self.n_eff_ = unc.n_eff
         self.uncertainty_ = unc
@@ -651,7 +681,8 @@ class FrictionFit:
         self._extras = {k: values[k] for k in EXTRAS if k in values}
         self._target_kind = (d.source, d.inertia is not None)
         if prob is None:  # the steady-state fit: the record's force error over moving samples
-            prob = TrajectoryProblem(model, d, pv, mask=mask, substeps=self.substeps)
+            prob = TrajectoryProblem(model, d, pv, mask=mask, substeps=self.substeps,
+                                     dependent=self._deps)
         F_hat = prob.predict(theta)
         r = d.y[mask] - F_hat[mask]
         self.rms_ = float(np.sqrt(np.mean(r**2)))
@@ -662,6 +693,20 @@ class FrictionFit:
                 f"{d.label}: fitting {model.describe()} did not converge ({sol.message}; "
                 f"{sol.nfev} evaluations); try fixing parameters (--fix) or a longer, richer record")
         return self
+
+    def _add_dependent(self, est: list[str], unc: Uncertainty,
+                       values: Mapping[str, float]) -> None:
+        """Report parameters tied by equalities, with the propagated standard error."""
+        for dep in self._deps:
+            c = np.array([dep.coef.get(n, 0.0) for n in est])
+            var = float(c @ unc.cov @ c) if c.any() else 0.0
+            se = math.sqrt(max(var, 0.0)) if math.isfinite(var) else math.inf
+            q = float(stats.t.ppf(0.5 + self.confidence / 2.0, max(unc.n_eff - len(est), 1.0)))
+            val = values[dep.name]
+            self.params_[dep.name] = val
+            self.stderr_[dep.name] = se
+            self.ci_[dep.name] = (val - q * se, val + q * se)
+            self.units_[dep.name] = self.model_.param_specs()[dep.name].unit
 
     # -------------------------------------------------------------- predict
     def _check_fitted(self) -> None:

@@ -193,9 +193,11 @@ def solve(
         key = q.tobytes()
         if key not in cache or (need_jac and cache[key][1] is None):
             cache.clear()
-            r, G = fun(T @ q, need_jac or compress)
-            if not np.all(np.isfinite(r)):
-                r = np.where(np.isfinite(r), r, 1e12)
+            with np.errstate(all="ignore"):
+                r, G = fun(T @ q, need_jac or compress)
+            if not np.all(np.isfinite(r)):  # invalid parameters: a huge cost, no slope
+                r = np.full(r.shape, 1e10)
+                G = None if G is None else np.zeros_like(G)
             if G is not None:
                 J = -G if np.isfinite(G).all() else -np.nan_to_num(G, posinf=0.0, neginf=0.0)
                 for i, j in links:  # J_q = J_theta T: column j gains column i (Fs = Fc + ..)

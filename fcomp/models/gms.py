@@ -11,9 +11,13 @@ initial slope softens element by element, and a minor loop only rewrites the
 elements it made slip, so the force returns (approximately) to its value at
 the earlier reversal point (return-point memory).
 
-Here each element has the LuGre-type state equation of Al-Bender et al.'s
-slip phase written for the element deflection, which is continuous and
-therefore symbolic (one set of equations for numpy and CasADi)::
+The original switches each element between stick (``dF_i/dt = k_i*v``) and
+slip (a LuGre-like relaxation towards ``sign(v)*alpha_i*s(v)``), a hybrid
+model. Here each element instead obeys one continuous LuGre-type (Dahl)
+state equation for its deflection ``z_i`` (the "multi-state LuGre" reading of
+GMS), so the model is smooth, symbolic (one set of equations for numpy and
+CasADi) and exactly integrated by :mod:`fcomp.trajectory` (linear in ``z_i``
+at fixed ``v``)::
 
     dz_i/dt = v - |v| * k_i*z_i / (alpha_i*g(v))          i = 1..N
     F = sum_i k_i*z_i + sigma1*sum_i dz_i/dt + sigma2*v
@@ -24,10 +28,13 @@ Each element is a Dahl/LuGre bristle with stiffness ``k_i`` and level
 ``|k_i*z_i| << alpha_i*g`` and saturates at ``sign(v)*alpha_i*g``. At constant
 velocity ``k_i*z_i = sign(v)*alpha_i*g(v)``, so with ``sum(alpha_i) = 1``
 (validated) the steady-state map is the Stribeck curve
-``F_ss = sign(v)*g(v) + sigma2*v``. The rigid-plastic (sharp stick-slip)
-elements of the original are the limit of large ``k_i``; the smooth
-saturation makes return-point memory approximate (a loop that does not
-saturate an element leaves a residual ``~exp(-k_i*|dx|/(alpha_i*g))`` of it).
+``F_ss = sign(v)*g(v) + sigma2*v``. Return-point memory is approximate: a
+Dahl element is stiffer after a reversal from saturation (``k_i*(1 + r)``,
+``r = k_i*z_i/(alpha_i*g)``) than before it, so small loops near saturation
+do not close. On nested loops with ``Fs = 1`` N the default GMS stays within
+about 0.17 N rms of the ideal Maxwell-slip model (elasto-plastic elements,
+exact return-point memory), against 0.28 N for a one-state LuGre of the
+same stiffness (``tests/test_gms.py``).
 
 Defaults (``N = 4``): ``alpha_i = i/10`` (0.1 .. 0.4) and
 ``k_i = 1e5*(N + 1 - i)/10`` N/m (4e4 .. 1e4), i.e. the total initial

@@ -30,13 +30,13 @@ from controllers.base import Controller, Reference
 from controllers.ekf import EKFController
 from controllers.feedforward import PIDFeedforwardController
 from controllers.lugre_observer import LuGreObserverController
-# MPC-PENDING from controllers.mpc import MPCController
+from controllers.mpc import MPCController
 from controllers.pid import PIDController
 from fcomp.registry import Registry
 
 CONTROLLERS: Registry[type[Controller]] = Registry("controller")
 for _cls in (PIDController, PIDFeedforwardController, LuGreObserverController, EKFController,
-             ):
+             MPCController):
     CONTROLLERS.register(_cls.name, _cls)
 
 

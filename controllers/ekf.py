@@ -154,7 +154,8 @@ class EKFController(PIDController):
 
     def __init__(self, model: Any, **options: Any) -> None:
         super().__init__(model, **options)
-        self.ekf = make_ekf(model, self.dt, self.opts)
+        self.ekf = make_ekf(model, self.dt, self.opts,
+                            substeps=max(1, round(self.dt * model.control_rate)))
         self.iv = model.prediction.index("v")
         self._u_prev = 0.0
 
@@ -176,9 +177,9 @@ class EKFController(PIDController):
         return u
 
 
-def make_ekf(model: Any, dt: float, opts: dict[str, Any]) -> FrictionEKF:
+def make_ekf(model: Any, dt: float, opts: dict[str, Any], substeps: int = 1) -> FrictionEKF:
     """The EKF of a :class:`~controllers.plant_model.ControlModel` with option overrides."""
     q = np.array(model.process_noise(), dtype=float) * float(opts.get("q_scale", 1.0))
     if "q_friction" in opts:
         q[model.prediction.index("z")] = float(opts["q_friction"])
-    return FrictionEKF(model.prediction, dt, q, model.sensor_std(), substeps=1)
+    return FrictionEKF(model.prediction, dt, q, model.sensor_std(), substeps=substeps)

@@ -76,7 +76,6 @@ class ForceToValve:
         self.bandwidth = float(bandwidth)
         self.grid = command_grid(model.u_max)
         names = model.plant.state_names
-        x = ca.SX.sym("x", len(names))
         meas = ca.SX.sym("meas", 4)  # x, v, p1, p2
         ug = ca.SX.sym("u")
         vs = model.steady_valve()(ug)

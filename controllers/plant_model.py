@@ -47,9 +47,10 @@ from typing import Any
 
 import casadi as ca
 import numpy as np
+from scipy.optimize import root
 
 from controllers.prediction import ContinuousModel
-from fcomp.errors import FcompError
+from fcomp.errors import ConvergenceError, FcompError
 from fcomp.measurement import G
 from fcomp.models.base import FrictionModel
 
@@ -284,6 +285,42 @@ class ControlModel:
             iz = names.index("z")
             P0[iz, iz] = sc[iz] ** 2
         return x0, P0
+
+
+def equilibrium(plant: Any, x_pos: float) -> tuple[np.ndarray, float]:
+    """State at rest at ``x_pos`` holding the load, and the valve command doing it.
+
+    Unknowns: the chamber pressures, the valve states and the command ``u``;
+    equations: zero derivative of ``v``, ``p1``, ``p2`` and the valve
+    states, with ``x = x_pos``, ``v = 0`` and friction states zero.
+    """
+    names = plant.state_names
+    fr = set(plant.friction.state_names)
+    free = [n for n in names if n not in ("x", "v") and n not in fr]
+    eqs = [names.index(n) for n in names if n != "x" and n not in fr]
+    rhs = plant.casadi_functions()["rhs"]
+    x0 = plant.initial_state({"x": x_pos})
+    idx = [names.index(n) for n in free]
+    scale = np.asarray(plant.ode_model().scales, dtype=float)
+    xs = ca.SX.sym("xs", len(free))
+    us = ca.SX.sym("u")
+    state = ca.DM(x0)
+    state = ca.vertcat(*[xs[idx.index(i)] * scale[i] if i in idx else state[i]
+                         for i in range(len(names))])
+    f = rhs(state, us)
+    res = ca.vertcat(*[f[i] / scale[i] for i in eqs])
+    z = ca.vertcat(xs, us)
+    F = ca.Function("eq", [z], [res, ca.jacobian(res, z)])
+    z0 = np.concatenate([x0[idx] / scale[idx], [0.0]])
+    sol = root(lambda q: np.asarray(F(q)[0]).ravel(), z0,
+               jac=lambda q: np.asarray(F(q)[1]), method="hybr", tol=1e-13)
+    resid = np.abs(np.asarray(F(sol.x)[0])).max()
+    if not sol.success and resid > 1e-9:
+        raise ConvergenceError(f"no equilibrium of plant {plant.name} at x = {x_pos} m "
+                               f"({sol.message})")
+    out = x0.copy()
+    out[idx] = sol.x[:-1] * scale[idx]
+    return out, float(sol.x[-1])
 
 
 def friction_with_mismatch(model: FrictionModel, factors: Mapping[str, float]) -> FrictionModel:

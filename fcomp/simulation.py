@@ -70,7 +70,7 @@ import math
 import re
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from functools import lru_cache
+from functools import cached_property, lru_cache
 from typing import Any, ClassVar
 
 import casadi as ca
@@ -199,7 +199,7 @@ class OdeModel:
         tag = re.sub(r"[^A-Za-z0-9]+", "_", self.name).strip("_")
         return tag if tag[:1].isalpha() else "m_" + tag
 
-    @property
+    @cached_property
     def n_params(self) -> int:
         return int(self.rhs.size1_in(2))
 
@@ -277,6 +277,13 @@ class Stats:
     rejected: int = 0
     nfev: int = 0
     njev: int = 0
+
+    def add(self, other: Stats) -> None:
+        """Accumulate the work of another run."""
+        self.steps += other.steps
+        self.rejected += other.rejected
+        self.nfev += other.nfev
+        self.njev += other.njev
 
     def as_dict(self) -> dict[str, int]:
         return {"steps": self.steps, "rejected": self.rejected, "nfev": self.nfev,
@@ -538,26 +545,50 @@ class Rodas4(Integrator):
         self.key = _model_key(model)
         self.F, self.Jf = _model_functions(self.key)
         self.c_fn = _rodas_library(self.key) if compiled else None
+        self._one: list[np.ndarray] | None = None  # buffers of one-interval calls (closed loops)
+        self._one_ptrs: list[Any] = []
 
     @property
     def compiled(self) -> bool:
         return self.c_fn is not None
 
+    def _buffers(self, n: int) -> list[np.ndarray]:
+        m = self.model
+        shapes = [(m.nx,), (n, m.nu), (n, m.nu), (n,), (m.n_params,), (m.nx,), (4,), (1,),
+                  (n + 1, m.nx), (6,)]
+        if n == 1 and self._one is not None:
+            return self._one
+        bufs = [np.zeros(sh) for sh in shapes]
+        if n == 1 and self.c_fn is not None:
+            dp = ctypes.POINTER(ctypes.c_double)
+            self._one, self._one_ptrs = bufs, [b.ctypes.data_as(dp) for b in bufs]
+        return bufs
+
     def run(self, x0: np.ndarray, U: np.ndarray, dU: np.ndarray, dt: np.ndarray,
             p: np.ndarray, tol: Tolerances, h: float) -> tuple[np.ndarray, Stats, float]:
         m = self.model
         n = dt.size
-        args = [np.ascontiguousarray(a, dtype=float) for a in (
-            x0, U.reshape(n, m.nu), dU.reshape(n, m.nu), dt, p, m.scales,
-            [tol.rtol, tol.atol, tol.h_min, float(tol.max_steps)])]
-        h_io = np.array([h], dtype=float)
-        X = np.full((n + 1, m.nx), np.nan)
-        info = np.zeros(6)
+        bufs = self._buffers(n)
+        x0b, Ub, dUb, dtb, pb, scb, optb, h_io, X, info = bufs
+        x0b[:] = x0
+        Ub[:] = np.reshape(U, (n, m.nu))
+        dUb[:] = np.reshape(dU, (n, m.nu))
+        dtb[:] = dt
+        pb[:] = p
+        scb[:] = m.scales
+        optb[:] = (tol.rtol, tol.atol, tol.h_min, float(tol.max_steps))
+        h_io[0] = h
+        X[:] = np.nan
+        info[:] = 0.0
         if self.c_fn is not None:
-            dp = ctypes.POINTER(ctypes.c_double)
-            self.c_fn(n, *(a.ctypes.data_as(dp) for a in (*args, h_io, X, info)))
+            if n == 1:
+                self.c_fn(1, *self._one_ptrs)
+            else:
+                dp = ctypes.POINTER(ctypes.c_double)
+                self.c_fn(n, *(a.ctypes.data_as(dp) for a in bufs))
         else:
-            self._run_python(*args, h_io, X, info)
+            self._run_python(*bufs)
+        X = X.copy()
         status = int(info[0])
         steps = int(info[4] + info[5])
         stats = Stats(steps=int(info[4]), rejected=int(info[5]), nfev=6 * steps,
@@ -676,10 +707,7 @@ class SolveIvp(Integrator):
         stats = Stats()
         ends = U + dU * dt[:, None]
         continuous = n > 0 and np.allclose(ends[:-1], U[1:], rtol=1e-12, atol=1e-15)
-        if continuous:
-            pieces = [(0, n)]
-        else:
-            pieces = [(k, k + 1) for k in range(n)]
+        pieces = [(0, n)] if continuous else [(k, k + 1) for k in range(n)]
         X = np.empty((n + 1, m.nx))
         X[0] = x0
         x = np.asarray(x0, dtype=float)
@@ -850,32 +878,42 @@ class Stepper:
         self._dU = np.zeros((1, model.nu))
         self.reset()
 
+    @property
+    def state_names(self) -> tuple[str, ...]:
+        return self.model.state_names
+
     def reset(self, x0: np.ndarray | None = None) -> np.ndarray:
         """Start again at ``t = 0`` from ``x0`` (default: the initial state given at creation)."""
         x = self._x0 if x0 is None else np.asarray(x0, dtype=float).ravel()
-        if x.size != self.model.nx or not np.all(np.isfinite(x)):
-            raise FcompError(f"initial state of {self.model.name} must be {self.model.nx} "
-                             f"finite values ({', '.join(self.model.state_names)})")
+        if x.size != len(self.state_names) or not np.all(np.isfinite(x)):
+            raise FcompError(f"initial state of {self.model.name} must be "
+                             f"{len(self.state_names)} finite values "
+                             f"({', '.join(self.state_names)})")
         self.x = x.copy()
         self.t = 0.0
         self.h = self.tolerances.h0
         self.stats = Stats()
+        self._start(self.x)
         return self.x.copy()
+
+    def _start(self, x: np.ndarray) -> None:
+        """Hook: set up anything beyond the state at :meth:`reset`."""
+
+    def _advance(self, u: np.ndarray) -> np.ndarray:
+        """Hook: the state one sample later with ``u`` held."""
+        X, st, self.h = self.integrator.run(self.x, u[None, :], self._dU, self._dt, self.p,
+                                            self.tolerances, self.h)
+        self.stats.add(st)
+        return X[-1].copy()
 
     def step(self, u: Any) -> np.ndarray:
         """Hold ``u`` for one sample; return the state at the end of it."""
-        uu = np.asarray(u, dtype=float).reshape(1, self.model.nu)
+        uu = np.asarray(u, dtype=float).reshape(self.model.nu)
         if not np.all(np.isfinite(uu)):
             raise FcompError(f"input of {self.model.name} at t = {self.t:.6g} s is not finite")
         try:
-            X, st, self.h = self.integrator.run(self.x, uu, self._dU, self._dt, self.p,
-                                                self.tolerances, self.h)
+            self.x = self._advance(uu)
         except ConvergenceError as exc:
             raise ConvergenceError(f"{exc} [sample starting at t = {self.t:.6g} s]") from None
-        self.x = X[-1].copy()
         self.t += self.dt
-        self.stats.steps += st.steps
-        self.stats.rejected += st.rejected
-        self.stats.nfev += st.nfev
-        self.stats.njev += st.njev
         return self.x.copy()

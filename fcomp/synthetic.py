@@ -10,7 +10,7 @@ effect is finding the physics, not its own equations.
 Truth friction (SI units; ``s = sign(v)``, levels ``Fc``, ``Fs`` in N)
 ------------------------------------------------------------------------
 ``base = "coulomb"``
-    ``F = Fc*s`` (``F = 0`` at rest).
+    ``F = Fc*s`` (``s = tanh(v/1e-5)``: a smooth sign, ``F = 0`` at rest).
 ``base = "coulomb-viscous"``
     ``F = Fc*s + sigma2*v`` (seed 001 Eq. 4).
 ``base = "stribeck"``
@@ -26,8 +26,8 @@ Hidden effects (names of models.md 1.8, plus two that are outside it):
 effect                   truth law used here
 =======================  ====================================================
 ``viscous``              ``+ c_v*v``
-``stribeck``             Lorentzian hump ``(Fs - Fc)/(1 + (|v|/vs)^2)`` (Hess & Soom
-                         form, not the package's exponential)
+``stribeck``             hump ``(Fs - Fc)*exp(-(|v|/vs)^1.4)`` (Armstrong's exponent
+                         form with ``delta = 1.4``, not the package's default 2)
 ``presliding``           bristle compliance ``dz/dt = v - k*|v|*z/g``, ``F = k*z``
                          on a static map
 ``nonlocal-memory``      classical Maxwell-slip: ``N`` elasto-slide elements of
@@ -36,10 +36,14 @@ effect                   truth law used here
 ``frictional-lag``       Hess-Soom time lag: the Stribeck hump is evaluated at a
                          lagged speed ``dv_L/dt = (|v| - v_L)/tau_L``
 ``dwell-time``           Kato law on the *measured* dwell time ``t_d``:
-                         ``dF(t_d) = dF_inf*(1 - exp(-(t_d/tau_k)^m))``, decaying
-                         over the distance slid since the start, ``exp(-s/d_c)``
-``direction-asymmetry``  an *additive* extra level ``dF_neg`` on ``Fc, Fs`` for ``v < 0``
-``pressure-dependence``  an *additive* ``c_p*(p1 + p2 - p_mid)`` on ``Fc, Fs``
+                         ``dFs(t_d) = dF_inf*(1 - exp(-(t_d/tau_k)^m))`` added to the
+                         static level ``Fs``, erased over the distance slid since the
+                         start, ``exp(-s/d_c)`` (not an ageing state)
+``direction-asymmetry``  for ``v < 0`` the levels ``Fc, Fs`` are ``dF_neg`` newtons higher
+                         and the hump scales with them: ``(Fc, Fs)*(1 + dF_neg/Fc)``
+``pressure-dependence``  seal friction proportional to the normal force of a lip seal
+                         energised by pressure: ``(Fc, Fs)*(1 + c_p*(p1 + p2))/(1 +
+                         c_p*p_mid)`` (referenced to zero gauge pressure)
 ``position-dependence``  levels times ``1 + a_g*exp(-((x - x_g)/w)^2) + a_l*(x - x_mid)/L``
 ``viscous-lead``         ``+ sigma2*T*a`` (NMLGM lead, seed 000 Eq. 8)
 ``inertia-error``        the recorded force carries ``dm*a`` (the sidecar mass is wrong)
@@ -80,13 +84,13 @@ BASES = ("coulomb", "coulomb-viscous", "stribeck", "lugre")
 #: Default law parameters of each hidden effect (SI units).
 HIDDEN_DEFAULTS: dict[str, dict[str, float]] = {
     "viscous": {"c_v": 80.0},
-    "stribeck": {"dF": 15.0, "vs": 0.012},
+    "stribeck": {"dF": 15.0, "vs": 0.012, "delta": 1.4},
     "presliding": {"k": 1.5e5},
     "nonlocal-memory": {"n_elements": 6.0, "d_max": 4e-4},
     "frictional-lag": {"tau_L": 0.06},
-    "dwell-time": {"dF_inf": 14.0, "tau_k": 0.5, "m": 0.8, "d_c": 6e-4},
+    "dwell-time": {"dF_inf": 14.0, "tau_k": 0.5, "m": 0.8, "d_c": 3e-4},
     "direction-asymmetry": {"dF_neg": 8.0},
-    "pressure-dependence": {"c_p": 2.5e-5},
+    "pressure-dependence": {"c_p": 4e-6},
     "position-dependence": {"a_g": 0.25, "x_g_frac": 0.3, "w_frac": 0.15, "a_l": 0.12},
     "viscous-lead": {"T": 0.06},
     "inertia-error": {"dm": -2.5},
@@ -296,21 +300,21 @@ def _schedule(plan: _Plan, rng: np.random.Generator, duration: float, levels: Se
 
 
 # ---------------------------------------------------------------- truth friction
-def _stribeck_hump(speed: np.ndarray | float, dF: float, vs: float, law: str) -> Any:
-    r = np.asarray(speed) / vs
-    return dF / (1.0 + r * r) if law == "lorentz" else dF * np.exp(-r * r)
+def _stribeck_hump(speed: np.ndarray | float, dF: float, vs: float, delta: float) -> Any:
+    """``dF*exp(-(|v|/vs)^delta)`` (N)."""
+    return dF * np.exp(-((np.asarray(speed) / vs) ** delta))
 
 
-def _levels(P: TruthParams, hidden: Mapping[str, Mapping[str, float]], x: np.ndarray,
-            S: np.ndarray, t: np.ndarray, neg: np.ndarray, S_mid: float) -> np.ndarray:
-    """Level modification ``(scale, add)`` stacked: ``Fc -> (Fc + add)*scale``, same for ``Fs``."""
+def _level_scale(P: TruthParams, hidden: Mapping[str, Mapping[str, float]], x: np.ndarray,
+                 S: np.ndarray, t: np.ndarray, neg: np.ndarray, S_mid: float) -> np.ndarray:
+    """Factor multiplying both levels ``Fc`` and ``Fs`` at every fine step (-)."""
     scale = np.ones_like(x)
-    add = np.zeros_like(x)
     L = P.stroke
     if "pressure-dependence" in hidden:
-        add += hidden["pressure-dependence"]["c_p"] * (S - S_mid)
+        c = hidden["pressure-dependence"]["c_p"]
+        scale *= (1.0 + c * S) / (1.0 + c * S_mid)
     if "direction-asymmetry" in hidden:
-        add += np.where(neg, hidden["direction-asymmetry"]["dF_neg"], 0.0)
+        scale *= np.where(neg, 1.0 + hidden["direction-asymmetry"]["dF_neg"] / P.Fc, 1.0)
     if "position-dependence" in hidden:
         h = hidden["position-dependence"]
         xg, w = h["x_g_frac"] * L, h["w_frac"] * L
@@ -320,7 +324,7 @@ def _levels(P: TruthParams, hidden: Mapping[str, Mapping[str, float]], x: np.nda
         scale *= 1.0 + h["A"] * np.sin(2 * np.pi * x / h["wavelength"])
     if "drift" in hidden:
         scale *= 1.0 + hidden["drift"]["beta"] * (t - t[0]) / max(t[-1] - t[0], 1e-9)
-    return np.vstack([scale, add])
+    return scale
 
 
 def _truth_friction(P: TruthParams, base: str, hidden: Mapping[str, Mapping[str, float]],
@@ -333,16 +337,16 @@ def _truth_friction(P: TruthParams, base: str, hidden: Mapping[str, Mapping[str,
         if vi != 0.0:
             last = vi < 0.0
         neg_side[i] = last
-    mod = _levels(P, hidden, x, S, t, neg_side, S_mid)
-    scale, add = mod[0], mod[1]
-    Fc = (P.Fc + add) * scale
+    scale = _level_scale(P, hidden, x, S, t, neg_side, S_mid)
+    Fc = P.Fc * scale
     speed = np.abs(v)
     # static excess over Fc (the hump), with its law
     has_hump = base in ("stribeck", "lugre") or "stribeck" in hidden
     if "stribeck" in hidden:
-        hump_dF, hump_vs, law = hidden["stribeck"]["dF"], hidden["stribeck"]["vs"], "lorentz"
+        h = hidden["stribeck"]
+        hump_dF, hump_vs, delta = h["dF"], h["vs"], h["delta"]
     else:
-        hump_dF, hump_vs, law = P.Fs - P.Fc, P.vs, "exp"
+        hump_dF, hump_vs, delta = P.Fs - P.Fc, P.vs, 2.0
     if "frictional-lag" in hidden and has_hump:  # Hess-Soom lagged speed
         tau = hidden["frictional-lag"]["tau_L"]
         vL = np.empty_like(speed)
@@ -354,10 +358,12 @@ def _truth_friction(P: TruthParams, base: str, hidden: Mapping[str, Mapping[str,
         hump_speed = vL
     else:
         hump_speed = speed
-    hump = _stribeck_hump(hump_speed, hump_dF, hump_vs, law) * scale if has_hump else 0.0
+    dwell = _dwell_bump(hidden["dwell-time"], v, dt) if "dwell-time" in hidden else 0.0
+    if has_hump:
+        hump = _stribeck_hump(hump_speed, 1.0, hump_vs, delta) * (hump_dF + dwell) * scale
+    else:  # without a Stribeck curve the dwell excess decays with the sliding distance only
+        hump = dwell * scale
     g = Fc + hump
-    if "dwell-time" in hidden:
-        g = g + _dwell_bump(hidden["dwell-time"], v, dt) * scale
     visc = 0.0
     if base in ("coulomb-viscous", "stribeck", "lugre"):
         visc = P.sigma2
@@ -373,7 +379,7 @@ def _truth_friction(P: TruthParams, base: str, hidden: Mapping[str, Mapping[str,
         damp = P.sigma1 if base == "lugre" else 0.0
         F_dry = _bristle(v, g, k, damp, dt)
     else:
-        F_dry = np.sign(v) * g
+        F_dry = np.tanh(v / 1e-5) * g
     return F_dry + F_visc
 
 
@@ -421,7 +427,7 @@ def _maxwell_slip(h: Mapping[str, float], x: np.ndarray, g: np.ndarray,
 
 
 def _dwell_bump(h: Mapping[str, float], v: np.ndarray, dt: float) -> np.ndarray:
-    """Kato-law break-away excess after a dwell, decaying over the sliding distance."""
+    """Kato-law excess of the static level after a dwell, erased over the sliding distance."""
     out = np.zeros_like(v)
     t_rest = 5.0  # the rig rested before the record
     bump = 0.0

@@ -92,10 +92,10 @@ def friction_step(model: FrictionModel, substeps: int = 1) -> ca.Function:
     P = ParamValues({n: p[i] for i, n in enumerate(names)}, CASADI)
     h = dt / substeps
     xk = x
+    f_x = ca.vertcat(*model.rhs(CASADI, [x[i] for i in range(nx)], sig, P))
+    J_x = ca.diag(ca.jacobian(f_x, x))  # differentiate w.r.t. the symbol, then substitute
     for _ in range(substeps):
-        xl = [xk[i] for i in range(nx)]
-        f = ca.vertcat(*model.rhs(CASADI, xl, sig, P))
-        J = ca.diag(ca.jacobian(f, xk))
+        f, J = ca.substitute([f_x, J_x], [x], [xk])
         xk = xk + h * _phi1(h * J) * f
     return ca.Function("fcomp_friction_step", [x, sigv, dt, p], [xk])
 

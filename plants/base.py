@@ -168,6 +168,9 @@ class Plant(ABC):
 
 
 def _friction_structure(model: FrictionModel) -> tuple:
+    key = getattr(model, "structure_key", None)
+    if callable(key):
+        return key()
     return (
         type(model),
         tuple((type(e), tuple(sorted(e.config.items()))) for e in model.effects),
@@ -208,11 +211,12 @@ class OdePlant(Plant):
         overrides: Mapping[str, float] | None = None,
     ) -> None:
         super().__init__(friction, params)
-        if not friction.symbolic:
+        from plants.discrete_memory import has_discrete_memory
+
+        if not friction.symbolic and not has_discrete_memory(friction):
             raise NotSymbolicError(
-                f"plant {self.name}: friction model {friction.describe()!r} has discrete memory "
-                "and no symbolic form, which the plant engine needs; use 'nmlgm' (or another "
-                "model of the LuGre family) in plant simulations"
+                f"plant {self.name}: friction model {friction.describe()!r} has no symbolic "
+                "form and no discrete-memory coupling; plants need one of the two"
             )
         values = self.params_from_set(self.paramset)
         known = set(self.Params.names())
@@ -223,8 +227,8 @@ class OdePlant(Plant):
             values[k] = v
         try:
             self.plant_params: ParamSet = self.Params(**values)
-        except ValueError as exc:
-            raise FcompError(f"plant {self.name}: {exc}") from None
+        except ValueError as exc:  # names the plant and the parameter already
+            raise FcompError(str(exc)) from None
         clash = set(self.plant_params.flat()) & set(friction.flat_params())
         if clash:
             raise FcompError(
@@ -334,6 +338,7 @@ class OdePlant(Plant):
             ``B = df/du``, ``C = dg/dx``, ``D = dg/du``. ``p`` (only with
             ``symbolic_params``) is the vector of :meth:`flat_params`.
         """
+        self.friction.require_symbolic()
         x = ca.SX.sym("x", self.nx)
         u = ca.SX.sym("u", self.nu)
         names = list(self.flat_params())
@@ -363,7 +368,7 @@ class OdePlant(Plant):
     @cached_property
     def _ode(self) -> OdeModel:
         rhs = self.casadi_functions(symbolic_params=True)["rhs"]
-        label = f"{self.name}_{self.friction.describe()}"
+        label = f"{self.name} with {self.friction.describe()}"
         return OdeModel(label, rhs, self.state_names, self.input_names,
                         self._scale_vector(), key=self.structure_key())
 
@@ -424,6 +429,7 @@ class OdePlant(Plant):
         atol: float = DEFAULT_TOLERANCES.atol,
         hold: str = "linear",
         max_steps: int = DEFAULT_TOLERANCES.max_steps,
+        coupling: float | None = None,
         **options: Any,
     ) -> Measurement:
         """Simulate over ``[0, duration]`` s, output at ``rate`` Hz (:mod:`fcomp.simulation`).
@@ -440,6 +446,9 @@ class OdePlant(Plant):
             state names to values overriding the default, or a full vector.
         method, rtol, atol, hold, max_steps
             Engine options (:class:`~fcomp.simulation.Tolerances`, ``METHODS``).
+        coupling
+            Longest coupling interval (s) for friction with discrete memory
+            (:mod:`plants.discrete_memory`, default 1e-4 s); not allowed otherwise.
         """
         if options:
             raise FcompError(f"plant {self.name}: unknown option(s) {', '.join(options)}")
@@ -447,28 +456,56 @@ class OdePlant(Plant):
         U = self.input_samples(u, t)
         tol = Tolerances(rtol=rtol, atol=atol, max_steps=max_steps)
         start = self._x0(x0)
-        traj = integrate(self.ode_model(), start, t, U, self.param_vector(), hold=hold,
-                         method=method, tolerances=tol)
-        return self.to_measurement(traj)
+        if self.friction.symbolic:
+            if coupling is not None:
+                raise FcompError(f"plant {self.name}: --coupling applies to friction with "
+                                 "discrete memory (nmlgm-hysteresis) only")
+            traj = integrate(self.ode_model(), start, t, U, self.param_vector(), hold=hold,
+                             method=method, tolerances=tol)
+            return self.to_measurement(traj)
+        mem = self._memory(coupling)
+        traj, y = mem.integrate(start, t, U, hold=hold, method=method, tolerances=tol)
+        out = self.to_measurement(traj, y)
+        out.meta["simulation"]["coupling"] = mem.coupling
+        return out
+
+    def _memory(self, coupling: float | None) -> Any:
+        from plants.discrete_memory import COUPLING, MemoryCoupling
+
+        return MemoryCoupling(self, COUPLING if coupling is None else coupling)
 
     def stepper(self, dt: float, *, x0: Any = None, method: str = "rodas4",
                 rtol: float = DEFAULT_TOLERANCES.rtol,
-                atol: float = DEFAULT_TOLERANCES.atol) -> Stepper:
-        """A :class:`~fcomp.simulation.Stepper` advancing the plant ``dt`` s per ``step(u)``."""
-        return Stepper(self.ode_model(), dt, self.param_vector(), self._x0(x0), method=method,
-                       tolerances=Tolerances(rtol=rtol, atol=atol))
+                atol: float = DEFAULT_TOLERANCES.atol, coupling: float | None = None) -> Any:
+        """A :class:`~fcomp.simulation.Stepper` advancing the plant ``dt`` s per ``step(u)``
+        (:class:`plants.discrete_memory.MemoryStepper` for friction with discrete memory)."""
+        tol = Tolerances(rtol=rtol, atol=atol)
+        if self.friction.symbolic:
+            return Stepper(self.ode_model(), dt, self.param_vector(), self._x0(x0),
+                           method=method, tolerances=tol)
+        from plants.discrete_memory import MemoryStepper
 
-    def evaluate_outputs(self, X: np.ndarray, U: np.ndarray) -> dict[str, np.ndarray]:
-        """Every output and extra signal at the samples ``X (n, nx)``, ``U (n, nu)`` (numpy)."""
-        P = self.param_values(NUMPY)
+        return MemoryStepper(self._memory(coupling), dt, self._x0(x0), method=method,
+                             tolerances=tol)
+
+    def evaluate_outputs(self, X: np.ndarray, U: np.ndarray,
+                         values: Mapping[str, Any] | None = None) -> dict[str, np.ndarray]:
+        """Every output at the samples ``X (n, nx)``, ``U (n, nu)`` (numpy; ``values``:
+        flat parameters, scalars or one value per sample)."""
+        if not self.friction.symbolic:
+            return self._memory(None).outputs(X, U)
+        P = self.param_values(NUMPY, values)
         _, y = self._evaluate(NUMPY, [X[:, i] for i in range(self.nx)],
                               [U[:, j] for j in range(self.nu)], P)
         n = X.shape[0]
         return {k: np.broadcast_to(np.asarray(v, dtype=float), (n,)).copy() for k, v in y.items()}
 
-    def to_measurement(self, traj: Trajectory) -> Measurement:
-        """A simulated run as a :class:`~fcomp.measurement.Measurement` (data-format.md)."""
-        y = self.evaluate_outputs(traj.X, traj.U)
+    def to_measurement(self, traj: Trajectory,
+                       y: Mapping[str, np.ndarray] | None = None) -> Measurement:
+        """A simulated run as a :class:`~fcomp.measurement.Measurement` (data-format.md);
+        ``y``: the outputs if already evaluated."""
+        if y is None:
+            y = self.evaluate_outputs(traj.X, traj.U)
         cols: dict[str, np.ndarray] = {"t": traj.t}
         for name in self.output_names:
             cols[name] = y[name]
@@ -515,9 +552,10 @@ class OdePlant(Plant):
         functions of :meth:`casadi_functions`; ``params`` (python-control's
         dict) may change any parameter of :meth:`flat_params` by name.
         """
+        fns = self.casadi_functions(symbolic_params=True)  # first: refuse non-symbolic models
+
         import control as ct
 
-        fns = self.casadi_functions(symbolic_params=True)
         f, g = fns["rhs"], fns["outputs"]
         base = self.flat_params()
         names = list(base)

@@ -56,13 +56,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
 from fcomp.backend import NUMPY, Backend
 from fcomp.errors import FcompError
-from fcomp.measurement import G, ORIENTATIONS
+from fcomp.measurement import ORIENTATIONS, G
 from fcomp.models.base import FrictionModel, Signals
 from fcomp.parameters import ParamSpec, ParamValues, spec
 from fcomp.paramsets import ParameterSet
@@ -185,10 +185,10 @@ class Drive:
 class PistonPlant(OdePlant):
     """A piston with friction and end stops, driven by :meth:`drive` (module docstring)."""
 
-    plant_states = ("x", "v")
-    state_units = {"x": "m", "v": "m/s"}
-    output_names = ("x", "v", "a", "p1", "p2", "F")
-    output_units = {"x": "m", "v": "m/s", "a": "m/s^2", "p1": "Pa (gauge)", "p2": "Pa (gauge)",
+    plant_states: ClassVar[tuple[str, ...]] = ("x", "v")
+    state_units: ClassVar[dict[str, str]] = {"x": "m", "v": "m/s"}
+    output_names: ClassVar[tuple[str, ...]] = ("x", "v", "a", "p1", "p2", "F")
+    output_units: ClassVar[dict[str, str]] = {"x": "m", "v": "m/s", "a": "m/s^2", "p1": "Pa (gauge)", "p2": "Pa (gauge)",
                     "F": "N"}
 
     def drive(self, be: Backend, x: dict[str, Any], u: dict[str, Any],

@@ -21,6 +21,7 @@ _MODULES = (
     "coulomb_viscous",
     "friction_models",
     "presliding",
+    "missing_physics",
     "all",
 )
 

@@ -389,32 +389,49 @@ def memory_paths(amplitude: float = MEM_AMPLITUDE, start: float = MEM_LOOP_START
 
 def memory_properties(model: FrictionModel, tol: float = MEMORY_TOL,
                       segment: float = MEM_SEGMENT, rate: float = MEM_RATE) -> dict[str, Any]:
-    """Measure return to the loop start (closing) and wiping-out on the memory protocol."""
+    """Closing of the internal loops and wiping-out, measured on the memory protocol.
+
+    In the force-displacement plane (the plane seed 000 measures in): for
+    each internal loop, ``gap`` = ``|F|`` difference between leaving the loop's
+    starting reversal point and coming back to it; ``deviation`` = largest
+    ``|F|`` difference, over the rest of the branch, from the run without the
+    internal loops. Both are divided by the internal loop's own force range
+    and compared with ``tol``. ``slip_shift`` is the difference of the slip
+    ``x - z`` (displacement minus bristle deflection) at the end of the branch
+    between the two runs: how far the loop moved the rest of the curve.
+    """
     with_pts, without_pts = memory_paths()
     n = int(round(segment * rate))
     runs = {}
     for key, pts in (("with", with_pts), ("without", without_pts)):
         t, x, v, a = _path(pts, segment, rate)
-        runs[key] = (t, x, friction_along_motion(model, t, v, a=a, x=x, substeps=4).F)
-    Fw, Fo = runs["with"][2], runs["without"][2]
-    ext = Fo[3 * n:]  # the steady external loop (from the third waypoint on)
-    frange = float(ext.max() - ext.min())
-    # indices (sample numbers) of the waypoints
-    gap1 = abs(Fw[6 * n] - Fw[4 * n])      # back at s after loop 1
-    gap2 = abs(Fw[10 * n] - Fw[8 * n])     # back at s after loop 2
-    # continuation after each loop against the same segment without it
-    wipe1 = float(np.max(np.abs(Fw[6 * n:7 * n + 1] - Fo[4 * n:5 * n + 1])))
-    wipe2 = float(np.max(np.abs(Fw[10 * n:11 * n + 1] - Fo[6 * n:7 * n + 1])))
-    limit = tol * frange
+        fr = friction_along_motion(model, t, v, a=a, x=x, substeps=4)
+        runs[key] = (x, fr.F, x - fr.states[:, 0])
+    (xw, Fw, sw), (xo, Fo, so) = runs["with"], runs["without"]
+    # waypoint k of the "with" path is sample k*n; loops: 4 -> 5 -> 6 and 8 -> 9 -> 10;
+    # the branch after loop i is 6 -> 7 (8 -> 9 without) and 10 -> 11 (6 -> 7 without)
+    loops = [(4, 6, 6, 4), (8, 10, 10, 6)]
+    gaps, devs, ranges, shifts = [], [], [], []
+    for start, back, after, after_o in loops:
+        rng = float(np.ptp(Fw[start * n:back * n + 1]))
+        gaps.append(abs(float(Fw[back * n] - Fw[start * n])))
+        devs.append(float(np.max(np.abs(Fw[after * n:(after + 1) * n + 1]
+                                        - Fo[after_o * n:(after_o + 1) * n + 1]))))
+        shifts.append(abs(float(sw[(after + 1) * n] - so[(after_o + 1) * n])))
+        ranges.append(rng)
+    rel_gap = [g / r for g, r in zip(gaps, ranges, strict=True)]
+    rel_dev = [d / r for d, r in zip(devs, ranges, strict=True)]
     return {
-        "minor_loops_closed": bool(max(gap1, gap2) <= limit),
-        "wiping_out": bool(max(wipe1, wipe2) <= limit),
-        "closing_gaps": [float(gap1), float(gap2)],
-        "wiping_deviation": [wipe1, wipe2],
-        "external_force_range": frange,
-        "tolerance": limit,
-        "curves": {"x_with": runs["with"][1], "F_with": Fw, "x_without": runs["without"][1],
-                   "F_without": Fo},
+        "minor_loops_closed": bool(max(rel_gap) <= tol),
+        "wiping_out": bool(max(rel_dev) <= tol),
+        "closing_gaps": gaps,
+        "closing_gaps_relative": rel_gap,
+        "wiping_deviation": devs,
+        "wiping_deviation_relative": rel_dev,
+        "internal_loop_force_range": ranges,
+        "slip_shift": shifts,
+        "tolerance": tol,
+        "curves": {"x_with": xw, "F_with": Fw, "x_without": xo, "F_without": Fo},
     }
 
 
@@ -456,7 +473,7 @@ def model_loop_area(model: HysteresisFamily, cycles: int = 3) -> float:
         [np.linspace(hi, lo, 400), np.linspace(lo, hi, 400)]) for _ in range(cycles)])
     F = np.array([hf.move_to(z) for z in zs])
     last = slice(zs.size - 800, zs.size)
-    return float(-np.trapezoid(F[last], zs[last]))
+    return float(np.trapezoid(F[last], zs[last]))  # the dissipated work: ascending above
 
 
 # -------------------------------------------------------------------- study
@@ -573,8 +590,9 @@ def analyse(cases: list[Case], fast: bool) -> dict[str, Any]:
             "loop_area_error": (W - W_ref) / W_ref,
             "friction_work": W,
             "force_rms_error": float(np.sqrt(np.mean((Fm - ref.F) ** 2))),
-            "closing_gaps": mem["closing_gaps"],
-            "wiping_deviation": mem["wiping_deviation"],
+            **{k: mem[k] for k in ("closing_gaps", "closing_gaps_relative",
+                                   "wiping_deviation", "wiping_deviation_relative",
+                                   "internal_loop_force_range", "slip_shift")},
             "memory_tolerance": mem["tolerance"],
         }
     hyst = models["nmlgm-hysteresis"]

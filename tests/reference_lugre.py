@@ -170,25 +170,40 @@ class Trajectory:
     sol: Callable[[np.ndarray], np.ndarray]
 
 
-def _solve(
-    fun: Callable[[float, np.ndarray], list[float]],
+Rhs = Callable[[float, np.ndarray], Sequence[float]]
+Jac = Callable[[float, np.ndarray], np.ndarray]
+
+
+def solve_radau(
+    fun: Rhs | Sequence[Rhs],
     t_span: tuple[float, float],
     y0: Sequence[float],
     t_eval: np.ndarray,
     atol: Sequence[float],
     breaks: Sequence[float] = (),
     max_step: float = math.inf,
-    jac: Callable[[float, np.ndarray], np.ndarray] | None = None,
+    jac: Jac | Sequence[Jac | None] | None = None,
 ) -> Trajectory:
-    """Radau at ``rtol = 1e-10``, restarted at every break point (kinks of the input)."""
+    """Radau at ``rtol = 1e-10``, restarted at every break point.
+
+    ``breaks`` are the kinks or jumps of the input. ``fun`` (and ``jac``) is
+    one right-hand side, or one per piece between consecutive break points:
+    an input that *jumps* at a break must use the latter, since the
+    integrator evaluates each piece at both of its ends.
+    """
     edges = sorted({t_span[0], t_span[1], *[b for b in breaks if t_span[0] < b < t_span[1]]})
+    n = len(edges) - 1
+    funs = list(fun) if isinstance(fun, Sequence) else [fun] * n
+    jacs = list(jac) if isinstance(jac, Sequence) else [jac] * n
+    if len(funs) != n or len(jacs) != n:
+        raise ValueError(f"{n} pieces but {len(funs)} right-hand sides / {len(jacs)} Jacobians")
     y = np.asarray(y0, dtype=float)
     pieces = []
     t_eval = np.asarray(t_eval, dtype=float)
     out = np.empty((y.size, t_eval.size))
-    for a, b in zip(edges[:-1], edges[1:], strict=True):
-        sol = solve_ivp(fun, (a, b), y, method="Radau", rtol=RTOL, atol=np.asarray(atol),
-                        dense_output=True, max_step=max_step, jac=jac)
+    for a, b, f, J in zip(edges[:-1], edges[1:], funs, jacs, strict=True):
+        sol = solve_ivp(f, (a, b), y, method="Radau", rtol=RTOL, atol=np.asarray(atol),
+                        dense_output=True, max_step=max_step, jac=J)
         if not sol.success:
             raise RuntimeError(f"reference integration failed on [{a}, {b}]: {sol.message}")
         mask = (t_eval >= a) & (t_eval <= b)
@@ -239,7 +254,7 @@ def mass_with_force(
                          [du_dx / mass, -dF_dv / mass, -dF_dz / mass],
                          [0.0, dz_dv, dz_dz]])
 
-    return _solve(fun, (float(t_eval[0]), float(t_eval[-1])), y0, t_eval,
+    return solve_radau(fun, (float(t_eval[0]), float(t_eval[-1])), y0, t_eval,
                   atol=(1e-14, 1e-14, 1e-19), breaks=breaks, max_step=max_step, jac=jac)
 
 
@@ -269,13 +284,16 @@ def along_velocity(
         def fun(t: float, y: np.ndarray) -> list[float]:
             return [p.zdot(y[0], v(t))]
 
-        return _solve(fun, (float(t_eval[0]), float(t_eval[-1])), y0 or (0.0,), t_eval,
-                      atol=(1e-19,), breaks=breaks, max_step=max_step)
+        def jac(t: float, y: np.ndarray) -> np.ndarray:
+            return np.array([[p.zdot_partials(y[0], v(t))[0]]])
+
+        return solve_radau(fun, (float(t_eval[0]), float(t_eval[-1])), y0 or (0.0,), t_eval,
+                           atol=(1e-19,), breaks=breaks, max_step=max_step, jac=jac)
 
     sfun = side or (lambda t: 1.0 if v(t) >= 0 else -1.0)
 
     def fun2(t: float, y: np.ndarray) -> list[float]:
         return list(p.rates(y[0], y[1], v(t), sfun(t)))
 
-    return _solve(fun2, (float(t_eval[0]), float(t_eval[-1])), y0 or (0.0, 0.0), t_eval,
+    return solve_radau(fun2, (float(t_eval[0]), float(t_eval[-1])), y0 or (0.0, 0.0), t_eval,
                   atol=(1e-19, 1e-14), breaks=breaks, max_step=max_step)

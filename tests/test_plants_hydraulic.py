@@ -4,12 +4,12 @@ from __future__ import annotations
 
 import math
 
+import independent_plants as ip
 import numpy as np
 import pytest
 from scipy.integrate import trapezoid
 from scipy.optimize import brentq
 
-import independent_plants as ip
 from fcomp.inputs import parse_input
 from fcomp.measurement import G
 from fcomp.models import make_model

@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import math
 
+import independent_plants as ip
 import numpy as np
 import pytest
 from scipy.integrate import trapezoid
 
-import independent_plants as ip
 from fcomp.backend import NUMPY
 from fcomp.measurement import G
 from fcomp.models import make_model

@@ -7,6 +7,7 @@ moving mass is estimated as well (``mass``). JSON (``--json OUT``, ``-`` for
 standard output): ``{"model", "params", "stderr", "rms", "ci", "units",
 "fixed", "not_identifiable", "method", ...}``. A fit that does not converge
 says so on one line and exits with status 2 (no JSON is written).
+``--set NAME=VALUE`` gives a start value, ``--fix NAME=VALUE`` holds a parameter.
 """
 
 from __future__ import annotations
@@ -17,7 +18,7 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from fcomp.cli.common import parse_assignments
+from fcomp.cli.common import add_model_options, build_model, parse_assignments
 from fcomp.errors import FcompError
 
 if TYPE_CHECKING:
@@ -37,12 +38,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--params", default=None, metavar="SET",
                    help="parameter set giving the values of the fixed parameters and of those "
                    "not read off the data (default: the model's defaults)")
-    p.add_argument("--add-effect", action="append", default=[], metavar="EFFECT",
-                   help="add an effect to the model and fit its parameters; repeatable")
-    p.add_argument("--effects", metavar="MODULE.py", default=None,
-                   help="a Python file that registers the user's own effects")
-    p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
-                   help="start value of a parameter (flat name, SI units); repeatable")
+    add_model_options(p)  # --add-effect, --effects, --set (start values of the fit)
     p.add_argument("--fix", action="append", default=[], metavar="NAME=VALUE",
                    help="hold a parameter at VALUE (SI units) instead of fitting it; repeatable")
     p.add_argument("--free", default=None, metavar="NAME,NAME,...",
@@ -103,10 +99,8 @@ def _table(f: FrictionFit) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
-    from fcomp.effects import load_effects_module
     from fcomp.identification import FrictionFit
     from fcomp.measurement import Measurement
-    from fcomp.models import make_model
     from fcomp.report import atomic_write_text
 
     out = _json_target(args.json)
@@ -118,13 +112,9 @@ def run(args: argparse.Namespace) -> int:
         raise FcompError(f"--cutoff must be a positive frequency in Hz, got {args.cutoff}")
     if args.mass is not None and not args.mass >= 0:
         raise FcompError(f"--mass must be a non-negative number of kg, got {args.mass}")
-    if args.effects:
-        load_effects_module(args.effects)
-    model = make_model(args.model, params=args.params)
-    if args.add_effect:
-        model = model.with_effects(*args.add_effect)
+    model = build_model(args.model, args.params, args)
     initial = parse_assignments(args.set)
-    fixed = parse_assignments(args.fix)
+    fixed = parse_assignments(args.fix, "--fix")
     free = [s.strip() for s in args.free.split(",") if s.strip()] if args.free else None
     data = Measurement.read(args.data)
     fit = FrictionFit(model, offset=args.offset, mass=args.mass, free=free, fixed=fixed,

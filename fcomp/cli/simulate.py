@@ -7,7 +7,8 @@ command, V), force-rig (external force, N). ``--set NAME=VALUE`` changes a
 friction *or* plant parameter (SI units, e.g. ``--set mass=50``); ``--x0
 NAME=VALUE`` changes one state of the documented default initial state
 (e.g. ``--x0 x=0.05``). The ODE plants run on the engine of
-``fcomp.simulation`` (``--method``, ``--rtol``, ``--atol``, ``--max-steps``).
+``fcomp.simulation`` (``--method``, ``--rtol``, ``--atol``, ``--max-steps``; ``--coupling`` for
+friction with discrete memory, ``nmlgm-hysteresis``).
 """
 
 from __future__ import annotations
@@ -42,6 +43,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="absolute tolerance in units of each state's scale (default 1e-6)")
     p.add_argument("--max-steps", type=int, default=None, dest="max_steps",
                    help="largest number of integration steps (default 1e7)")
+    p.add_argument("--coupling", type=float, default=None, metavar="S",
+                   help="longest coupling interval (s) for friction with discrete memory "
+                   "(nmlgm-hysteresis; default 1e-4)")
     add_model_options(p)
     p.set_defaults(func=run)
 
@@ -54,7 +58,7 @@ def run(args: argparse.Namespace) -> int:
     plant_cls = PLANTS.get(args.plant)
     params = args.params if args.params is not None else plant_cls.default_params
     u = parse_input(args.input)
-    engine = {k: getattr(args, k) for k in ("method", "rtol", "atol", "max_steps")
+    engine = {k: getattr(args, k) for k in ("method", "rtol", "atol", "max_steps", "coupling")
               if getattr(args, k) is not None}
     assignments = parse_assignments(args.set)
     plant_names: set[str] = set()
@@ -66,8 +70,8 @@ def run(args: argparse.Namespace) -> int:
     plant_set = {k: v for k, v in assignments.items() if k in plant_names}
     args.set = [f"{k}={v!r}" for k, v in assignments.items() if k not in plant_names]
     model = build_model(args.friction, params, args)
-    plant: Any = (plant_cls(model, params, overrides=plant_set) if plant_set
-                  else plant_cls(model, params))
+    plant: Any = (plant_cls(model, params, overrides=plant_set)  # type: ignore[call-arg]
+                  if plant_set else plant_cls(model, params))
     x0 = parse_assignments(args.x0, option="--x0") if args.x0 else None
     result = plant.simulate(u, args.duration, args.rate, x0=x0, **engine)
     result.meta.setdefault("simulation", {})["input"] = args.input

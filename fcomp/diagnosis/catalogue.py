@@ -59,11 +59,16 @@ class Context:
 
 @dataclass(frozen=True)
 class Proposal:
-    """A candidate model and the starts of its refit (flat values of that model)."""
+    """A candidate model and the starts of its refit (flat values of that model).
+
+    ``free`` lists the parameters to refit (``None``: all of them); models
+    without exact sensitivities (discrete memory) refit a reduced set.
+    """
 
     effect: str
     model: FrictionModel
     starts: list[dict[str, float]]
+    free: list[str] | None = None
 
 
 def describe(name: str) -> dict[str, str]:
@@ -127,7 +132,10 @@ def propose(name: str, ctx: Context) -> Proposal:
     if "mass" in ctx.current.values:
         for s in starts:
             s["mass"] = ctx.current.values["mass"]
-    return Proposal(name, models[0], starts)
+    free = None
+    if not models[0].symbolic:  # finite-difference Jacobians: refit the new shape only
+        free = [n for n in REDUCED_FREE.get(name, ()) if n in starts[0]] or None
+    return Proposal(name, models[0], starts, free)
 
 
 # ------------------------------------------------------------------ guesses
@@ -272,6 +280,33 @@ def _offset(ctx: Context) -> list[dict[str, float]]:
     return [{"offset": float(np.mean(ctx.current.residual[ctx.train]))}]
 
 
+def _nonlocal_memory(ctx: Context) -> list[dict[str, float]]:
+    """Seed 000's cylinder-1 hysteresis shape scaled to this record.
+
+    Widths ``z_i`` (and ``1/k_i``) scaled so that the external loop spans
+    ``3*d_pre`` (seed: ``z1 + z5`` = 0.354 mm); amplitudes ``c_i`` scaled so
+    that its exponential part rises by the friction level (seed: 5.49 N).
+    """
+    from fcomp.models.hysteresis import SEED_DEFAULTS
+
+    sd = SEED_DEFAULTS
+    sz = 3.0 * ctx.seg.d_pre / (sd["z1"] + sd["z5"])
+    sc = _level(ctx) / (sd["c1"] + sd["c2"] + sd["c3"])
+    out = {}
+    for k, val in sd.items():
+        if k.startswith("c"):
+            out[k] = val * sc
+        elif k.startswith("k"):
+            out[k] = val / sz
+        else:
+            out[k] = val * sz
+    return [out]
+
+
+#: Parameters refitted for a candidate whose model has no exact sensitivities.
+REDUCED_FREE: dict[str, tuple[str, ...]] = {"nonlocal-memory": ("c1", "c2", "c3", "c8")}
+
+
 GUESSES: dict[str, Callable[[Context], list[dict[str, float]]]] = {
     "viscous": _viscous,
     "stribeck": _stribeck,
@@ -284,6 +319,7 @@ GUESSES: dict[str, Callable[[Context], list[dict[str, float]]]] = {
     "viscous-lead": _viscous_lead,
     "inertia-error": _inertia,
     "force-offset": _offset,
+    "nonlocal-memory": _nonlocal_memory,
 }
 
 

@@ -260,12 +260,15 @@ class Refit:
         return out
 
     def fit(self, model: FrictionModel, starts: Sequence[Mapping[str, float]] = (),
-            free: Sequence[str] | None = None) -> FitResult:
+            free: Sequence[str] | None = None, *, max_nfev: int | None = None) -> FitResult:
         """Fit ``model`` on the training samples from the best of ``starts``.
 
         Each start maps flat names to values (missing names: the model's
-        current values). Returns the :class:`FitResult`, scored on the full record.
+        current values); ``free`` the names to fit (default :meth:`free_names`);
+        ``max_nfev`` overrides the evaluation budget. Returns the
+        :class:`FitResult`, scored on the full record.
         """
+        max_nfev = max_nfev or self.max_nfev
         names = list(free) if free is not None else self.free_names(model)
         if not names:
             return self.result(model, {}, 0)
@@ -281,7 +284,7 @@ class Refit:
         specs = self.specs(model, names)
         best = None
         nfev = 0
-        budget = PROBE_NFEV if len(start_list) > 1 else self.max_nfev
+        budget = min(PROBE_NFEV, max_nfev) if len(start_list) > 1 else max_nfev
         for st in start_list:
             pv = ParameterVector.build(names, st, specs, self.scales(model, names, st))
             try:
@@ -299,7 +302,7 @@ class Refit:
         if len(start_list) > 1:
             st = dict(base, **dict(zip(names, map(float, sol.theta), strict=True)))
             pv = ParameterVector.build(names, st, specs, self.scales(model, names, st))
-            sol, n = self._solve(model, pv, self.max_nfev)
+            sol, n = self._solve(model, pv, max_nfev)
             nfev += n
         values = dict(zip(names, map(float, sol.theta), strict=True))
         return self.result(model, values, len(names), sol.converged, nfev)

@@ -128,14 +128,15 @@ class TrajectoryProblem:
                                     substeps=self.substeps)
         return run.F
 
-    def values(self, theta: Sequence[float]) -> dict[str, float]:
+    def values(self, theta: Sequence[float] | np.ndarray) -> dict[str, float]:
         return dict(zip(self.pv.names, map(float, theta), strict=True))
 
-    def predict(self, theta: Sequence[float]) -> np.ndarray:
+    def predict(self, theta: Sequence[float] | np.ndarray) -> np.ndarray:
         """``F_hat`` at every sample (N)."""
         return self._predict(theta, jac=False)[0]
 
-    def _predict(self, theta: Sequence[float], jac: bool) -> tuple[np.ndarray, np.ndarray]:
+    def _predict(self, theta: Sequence[float] | np.ndarray,
+                 jac: bool) -> tuple[np.ndarray, np.ndarray]:
         vals = self.values(theta)
         model_vals = {k: v for k, v in vals.items() if k not in EXTRAS}
         F, Gm = self._model_force(model_vals, jac)

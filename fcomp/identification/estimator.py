@@ -21,9 +21,10 @@ Procedure (docs/identification.md has the full account):
 5. **Uncertainty** (:mod:`.uncertainty`): standard errors from the
    autocorrelation-robust (batch-means) sandwich covariance, Student-t
    confidence intervals on the effective sample size. Parameters the data do
-   not determine (zero sensitivity at the start, or a null direction at the
-   solution) are held at their start value and listed in
-   ``not_identifiable_``.
+   not determine (zero sensitivity at the start; or, at the solution, a null
+   direction, a negligible effect or a standard error above 1000 times the
+   value) are held (at the start value, resp. the value reached) and listed
+   in ``not_identifiable_``.
 """
 
 from __future__ import annotations
@@ -34,7 +35,7 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
-from scipy import stats
+from scipy.special import stdtrit
 
 from fcomp.errors import ConvergenceError, FcompError
 from fcomp.identification.dynamic import EXTRAS, Dependent, TrajectoryProblem
@@ -196,7 +197,7 @@ class FrictionFit:
     fixed_ : dict
         Model parameters held fixed, with their values.
     not_identifiable_ : list
-        Parameters the data did not determine (held at their start value).
+        Parameters the data did not determine (held, not reported in ``params_``).
     method_ : str
         ``"steady-state"``, ``"samples"`` or ``"trajectory"``.
     n_samples_, n_eff_, tau_int_ :
@@ -207,6 +208,33 @@ class FrictionFit:
     target_ : str
         Where the fitted force came from (``"F"``, ``"reconstructed"``, ``"driving-force"``).
     """
+
+    # results (set by fit)
+    params_: dict[str, float]
+    stderr_: dict[str, float]
+    ci_: dict[str, tuple[float, float]]
+    units_: dict[str, str]
+    cov_: np.ndarray
+    param_names_: list[str]
+    rms_: float
+    converged_: bool
+    message_: str
+    model_: FrictionModel
+    fixed_: dict[str, float]
+    not_identifiable_: list[str]
+    at_bound_: list[str]
+    method_: str
+    n_samples_: int
+    n_eff_: float
+    tau_int_: float
+    nfev_: int
+    v_min_: float
+    stages_: list[dict[str, Any]]
+    target_: str
+    uncertainty_: Uncertainty | None
+    _extras: dict[str, float]
+    _target_kind: tuple[str, bool]
+    _deps: list[Dependent]
 
     def __init__(
         self,
@@ -406,8 +434,8 @@ class FrictionFit:
         if not free and not extras:
             raise FcompError(f"{model.describe()}: nothing to fit (every parameter fixed)")
         start = self._start(model, d, v_min)
-        self.stages_: list[dict[str, Any]] = []
-        self.not_identifiable_: list[str] = []
+        self.stages_ = []
+        self.not_identifiable_ = []
         self.target_ = d.source
         dynamic = model.n_states > 0
         moving = np.abs(d.sig["v"]) >= v_min
@@ -639,17 +667,28 @@ class FrictionFit:
                 prob: TrajectoryProblem | None) -> FrictionFit:
         names = list(pv.names)
         theta = sol.theta
-        # a null direction at the solution, or a parameter whose 100 % change moves the
-        # prediction by less than 1e-6 of the residual RMS: hold it, keep the others' errors
+        # a parameter the record does not determine: a null direction at the solution, a
+        # 100 % change moving the prediction by less than 1e-6 of the residual RMS, or a
+        # standard error above 1000 times its magnitude. Held; the others' errors recomputed.
         r_rms = float(np.sqrt(np.mean(sol.residuals**2))) or 1e-300
-        effect = np.sqrt(np.mean(sol.jacobian**2, axis=0)) * np.maximum(np.abs(theta), pv.scale)
-        bad = [n for n, ok, e in zip(names, unc.identifiable, effect, strict=True)
-               if not ok or e < 1e-6 * r_rms]
-        if bad:
-            self.not_identifiable_ += bad
+        mag = np.maximum(np.abs(theta), pv.scale)
+        effect = np.sqrt(np.mean(sol.jacobian**2, axis=0)) * mag
+        bad: list[str] = []
+        for _ in range(len(names)):
             keep = [j for j, n in enumerate(names) if n not in bad]
+            new = [names[j] for i, j in enumerate(keep)
+                   if not unc.identifiable[i] or effect[j] < 1e-6 * r_rms
+                   or unc.stderr[i] > 1e3 * mag[j]]
+            if not new:
+                break
+            bad += new
+            keep = [j for j, n in enumerate(names) if n not in bad]
+            if not keep:
+                raise FcompError(f"{d.label}: the record determines none of the parameters of "
+                                 f"{model.describe()}")
             unc = estimate(sol.jacobian[:, keep], sol.residuals, theta[keep],
                            level=self.confidence, autocorrelated=method != "steady-state")
+        self.not_identifiable_ += bad
         values = dict(zip(names, map(float, theta), strict=True))
         model_values = {k: v for k, v in values.items() if k not in EXTRAS}
         for dep in self._deps:
@@ -701,7 +740,7 @@ class FrictionFit:
             c = np.array([dep.coef.get(n, 0.0) for n in est])
             var = float(c @ unc.cov @ c) if c.any() else 0.0
             se = math.sqrt(max(var, 0.0)) if math.isfinite(var) else math.inf
-            q = float(stats.t.ppf(0.5 + self.confidence / 2.0, max(unc.n_eff - len(est), 1.0)))
+            q = float(stdtrit(max(unc.n_eff - len(est), 1.0), 0.5 + self.confidence / 2.0))
             val = values[dep.name]
             self.params_[dep.name] = val
             self.stderr_[dep.name] = se

@@ -122,12 +122,12 @@ def bristle_stiffness(x: np.ndarray, v: np.ndarray, f: np.ndarray, g: float) -> 
     s = np.sign(v)
     rev = np.nonzero((s[1:] != 0) & (s[:-1] != 0) & (s[1:] != s[:-1]))[0] + 1
     estimates = []
-    for k in rev:
-        new = s[k]
+    for k in map(int, rev):
+        new = float(s[k])
         if new * f[k - 1] > -0.5 * g:  # the force did not sit on the other side: no full swing
             continue
         j = k
-        stop = min(f.size, k + 10_000)
+        stop = min(int(f.size), k + 10_000)
         while j < stop and s[j] == new and new * f[j] < 0.0:
             j += 1
         if j >= stop or s[j] != new:

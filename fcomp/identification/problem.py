@@ -2,14 +2,14 @@
 
 A fit adjusts a vector ``theta`` of *flat* parameters (model names such as
 ``Fc``, ``sigma0``, ``Fs_pos``, plus the extras ``mass`` and ``offset``) to
-minimise ``sum(r_k^2)`` with ``r = y - F_hat(theta)``. The optimiser works on
-an *internal* vector ``q`` with ``theta = T q`` for a fixed invertible matrix
-``T``: the identity, except that a static level ``Fs`` is written as
-``Fs = Fc + Fs_excess`` with ``Fs_excess >= 0``, which keeps every iterate
-inside the model's constraint ``Fc <= Fs`` (models.md 1.3) with simple bounds.
-Jacobians and covariances transform linearly (``J_q = J_theta T``,
-``cov_theta = T cov_q T^T``), so standard errors are reported for the
-external names.
+minimise ``sum(r_k^2)`` with ``r = y - F_hat(theta)``. The models require
+``Fc <= Fs`` (models.md 1.3). The solve first runs on ``theta`` itself (the
+constraint is rarely active, and the plain coordinates converge in about half
+the iterations); if the result violates the constraint it runs again on an
+*internal* vector ``q`` with ``theta = T q``, ``T`` the identity except that a
+static level is written ``Fs = Fc + Fs_excess`` with ``Fs_excess >= 0``,
+which keeps every iterate feasible with simple bounds. The Jacobian
+transforms linearly (``J_q = J_theta T``).
 
 Bounds come from each parameter's :class:`~fcomp.parameters.ParamSpec`; an
 open lower bound (``sigma0 > 0``) becomes ``1e-9`` times the parameter's scale.
@@ -99,14 +99,21 @@ class ParameterVector:
         """The matrix ``T`` with ``theta = T q`` (identity but ``Fs = Fc + excess``)."""
         n = len(self.names)
         T = np.eye(n)
+        for i, j in self.level_pairs():
+            T[i, j] = 1.0
+        return T
+
+    def level_pairs(self) -> list[tuple[int, int]]:
+        """Index pairs ``(Fs, Fc)`` (same side, or a scalar ``Fc``) among the fitted names."""
+        out = []
         for i, name in enumerate(self.names):
             if base_name(name) == "Fs":
                 partner = "Fc" + side_suffix(name)
                 if partner not in self.names and side_suffix(name):
                     partner = "Fc"
                 if partner in self.names:
-                    T[i, self.names.index(partner)] = 1.0
-        return T
+                    out.append((i, self.names.index(partner)))
+        return out
 
     def internal(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """``(q0, lower_q, upper_q, scale_q)`` of the internal vector."""
@@ -145,10 +152,12 @@ def compressed(J: np.ndarray, r: np.ndarray, block: int = 512) -> tuple[np.ndarr
     except np.linalg.LinAlgError:
         R = None
     if R is None:
-        Rb = [np.linalg.qr(A[i : i + block], mode="r") for i in range(0, A.shape[0], block)]
-        R = np.linalg.qr(np.vstack(Rb), mode="r") if len(Rb) > 1 else Rb[0]
-        if R.shape[0] < p1:  # fewer rows than columns: pad with zero rows
-            R = np.vstack([R, np.zeros((p1 - R.shape[0], p1))])
+        Rb = [np.asarray(np.linalg.qr(A[i : i + block], mode="r"))
+              for i in range(0, A.shape[0], block)]
+        Rq = np.asarray(np.linalg.qr(np.vstack(Rb), mode="r")) if len(Rb) > 1 else Rb[0]
+        if Rq.shape[0] < p1:  # fewer rows than columns: pad with zero rows
+            Rq = np.vstack([Rq, np.zeros((p1 - Rq.shape[0], p1))])
+        R = Rq
     return R[:, -1].copy(), R[:, :-1].copy()
 
 
@@ -184,9 +193,25 @@ def solve(
     the trust-region iterations are unchanged while the solver's
     per-iteration SVD works on a ``(p+1) x p`` matrix instead of ``N x p``.
     """
-    T = pv.transform()
+    r0 = fun(pv.start, False)[0]
+    if not np.all(np.isfinite(r0)):
+        raise FcompError(f"{what}: the model gives non-finite forces at the initial guess")
+    sol = _solve(pv, fun, max_nfev, compress, constrained=False)
+    pairs = pv.level_pairs()
+    if any(sol.theta[i] < sol.theta[j] for i, j in pairs):
+        sol = _solve(pv, fun, max_nfev, compress, constrained=True)
+    return sol
+
+
+def _solve(pv: ParameterVector, fun: ResidualFn, max_nfev: int, compress: bool,
+           constrained: bool) -> Solution:
+    if constrained:
+        T = pv.transform()
+        q0, lo, hi, sc = pv.internal()
+    else:
+        T = np.eye(len(pv.names))
+        q0, lo, hi, sc = pv.start.copy(), pv.lower, pv.upper, pv.scale
     links = [(i, j) for i, j in zip(*np.nonzero(T), strict=True) if i != j]
-    q0, lo, hi, sc = pv.internal()
     cache: dict[bytes, tuple[np.ndarray, np.ndarray | None]] = {}
 
     def evaluate(q: np.ndarray, need_jac: bool) -> tuple[np.ndarray, np.ndarray | None]:
@@ -217,11 +242,8 @@ def solve(
             raise RuntimeError("the residual function returned no Jacobian")
         return J
 
-    r0 = fun(T @ q0, False)[0]
-    if not np.all(np.isfinite(r0)):
-        raise FcompError(f"{what}: the model gives non-finite forces at the initial guess")
     out = least_squares(res, q0, jac=jac, bounds=(lo, hi), x_scale=sc, method="trf",
-                        max_nfev=max_nfev, ftol=1e-10, xtol=1e-10, gtol=1e-10)
+                        max_nfev=max_nfev, ftol=1e-8, xtol=1e-8, gtol=1e-8)
     theta = T @ out.x
     r, G = fun(theta, True)
     if G is None:

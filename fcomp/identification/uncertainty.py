@@ -36,7 +36,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import stats
+from scipy.special import stdtrit
 
 
 @dataclass(frozen=True)
@@ -178,7 +178,7 @@ def estimate(
     stderr = np.sqrt(np.maximum(var, 0.0))
     n_eff = n / tau
     dof = max(n_eff - p, 1.0)
-    q = float(stats.t.ppf(0.5 + level / 2.0, dof))
+    q = float(stdtrit(dof, 0.5 + level / 2.0))
     return Uncertainty(cov=cov, stderr=stderr, ci_low=theta - q * stderr,
                        ci_high=theta + q * stderr, level=level, tau_int=float(tau),
                        n_eff=float(n_eff), batch=int(batch), identifiable=identifiable)

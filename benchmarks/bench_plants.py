@@ -51,14 +51,17 @@ DURATION = 3.0
 RATE = 1000.0
 
 
-def timed(fn: Callable[[], Any], repeat: int) -> tuple[float, Any]:
-    """Median wall time (s) of ``repeat`` calls and the last result."""
-    times, out = [], None
+def timed(fn: Callable[[], Any], repeat: int) -> tuple[float, float, Any]:
+    """Median wall time and median CPU time (s) of ``repeat`` calls, and the last result.
+
+    CPU time (this process) is the fairer figure on a shared, loaded machine."""
+    wall, cpu, out = [], [], None
     for _ in range(repeat):
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         out = fn()
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times), out
+        wall.append(time.perf_counter() - t0)
+        cpu.append(time.process_time() - c0)
+    return statistics.median(wall), statistics.median(cpu), out
 
 
 def rel_err(got: np.ndarray, ref: np.ndarray) -> float:
@@ -85,14 +88,14 @@ def case(name: str, plant_name: str, params: str, amp: float, freq: float, plain
     ref = ip.reference(rhs, y0, t, rtol=1e-10, atol=1e-12 * scale, method="LSODA")
     ref_v, ref_p1 = ref[:, 1], ref[:, 2]
 
-    t_fc, run = timed(lambda: plant.simulate(U, DURATION, RATE), args.repeat)
+    t_fc, c_fc, run = timed(lambda: plant.simulate(U, DURATION, RATE), args.repeat)
     fc_err = max(rel_err(run["v"], ref_v), rel_err(run["p1"] + P_ATM, ref_p1))
 
     def radau() -> Any:
         return solve_ivp(rhs, (0.0, DURATION), y0, method="Radau", t_eval=t, rtol=1e-6,
                          atol=1e-6 * scale)
 
-    t_ra, sol = timed(radau, args.repeat_slow)
+    t_ra, c_ra, sol = timed(radau, args.repeat_slow)
     ra_err = max(rel_err(sol.y[1], ref_v), rel_err(sol.y[2], ref_p1))
 
     import control as ct
@@ -103,18 +106,20 @@ def case(name: str, plant_name: str, params: str, amp: float, freq: float, plain
         return ct.input_output_response(sys_, t, U, plant.initial_state(),
                                         solve_ivp_kwargs={"rtol": 1e-6})
 
-    t_ct, resp = timed(pyctrl, args.repeat_slow)
+    t_ct, c_ct, resp = timed(pyctrl, args.repeat_slow)
     iv, ip1 = list(plant.output_names).index("v"), list(plant.output_names).index("p1")
     ct_err = max(rel_err(resp.outputs[iv], ref_v), rel_err(resp.outputs[ip1] + P_ATM, ref_p1))
 
     return {
         "case": name, "simulated_s": DURATION, "output_rate_hz": RATE,
-        "fcomp_s": t_fc, "fcomp_error": fc_err, "fcomp_steps": run.meta["simulation"]["steps"],
-        "fcomp_compile_s": compile_s,
-        "solve_ivp_radau_s": t_ra, "solve_ivp_radau_error": ra_err,
-        "python_control_s": t_ct, "python_control_error": ct_err,
-        "speedup_vs_radau": t_ra / t_fc, "speedup_vs_python_control": t_ct / t_fc,
-        "realtime_factor": DURATION / t_fc,
+        "fcomp_s": t_fc, "fcomp_cpu_s": c_fc, "fcomp_error": fc_err,
+        "fcomp_steps": run.meta["simulation"]["steps"], "fcomp_compile_s": compile_s,
+        "solve_ivp_radau_s": t_ra, "solve_ivp_radau_cpu_s": c_ra, "solve_ivp_radau_error": ra_err,
+        "python_control_s": t_ct, "python_control_cpu_s": c_ct, "python_control_error": ct_err,
+        "speedup_vs_radau": t_ra / t_fc, "speedup_vs_radau_cpu": c_ra / c_fc,
+        "speedup_vs_python_control": t_ct / t_fc,
+        "speedup_vs_python_control_cpu": c_ct / c_fc,
+        "realtime_factor": DURATION / t_fc, "realtime_factor_cpu": DURATION / c_fc,
     }
 
 
@@ -134,14 +139,21 @@ def main() -> int:
              0.1, 1.0, pne, np.array([0.3, 1, 6e5, 6e5, 1, 1e-3, 0.5]), args),
     ]
     for r in results:
-        print(f"\n{r['case']}: {r['simulated_s']:g} s simulated, output {r['output_rate_hz']:g} Hz")
-        print(f"  fcomp (rodas4, compiled) {r['fcomp_s'] * 1e3:9.1f} ms  error {r['fcomp_error']:.1e}"
-              f"  ({r['fcomp_steps']} steps; one-time build {r['fcomp_compile_s']:.1f} s)")
-        print(f"  solve_ivp Radau (plain)  {r['solve_ivp_radau_s'] * 1e3:9.1f} ms  error "
-              f"{r['solve_ivp_radau_error']:.1e}   x{r['speedup_vs_radau']:.0f} slower")
-        print(f"  python-control (RK45)    {r['python_control_s'] * 1e3:9.1f} ms  error "
-              f"{r['python_control_error']:.1e}   x{r['speedup_vs_python_control']:.0f} slower")
-        print(f"  fcomp runs {r['realtime_factor']:.0f}x faster than real time")
+        print(f"\n{r['case']}: {r['simulated_s']:g} s simulated, output {r['output_rate_hz']:g} Hz"
+              "   [median wall ms / CPU ms, error = max |e|/range of v, p1]")
+        rows = [("fcomp (rodas4, compiled)", "fcomp", ""),
+                ("solve_ivp Radau (plain)", "solve_ivp_radau", "radau"),
+                ("python-control (RK45)", "python_control", "python_control")]
+        for label, key, ratio in rows:
+            line = (f"  {label:26s} {r[key + '_s'] * 1e3:9.1f} / {r[key + '_cpu_s'] * 1e3:9.1f}"
+                    f"  error {r[key + '_error']:.1e}")
+            if ratio:
+                line += (f"  x{r['speedup_vs_' + ratio]:.0f} (wall) x{r['speedup_vs_' + ratio + '_cpu']:.0f}"
+                         " (CPU) slower than fcomp")
+            print(line)
+        print(f"  fcomp: {r['fcomp_steps']} steps, one-time model build {r['fcomp_compile_s']:.1f} s"
+              f" (cached), {r['realtime_factor']:.0f}x (wall) / {r['realtime_factor_cpu']:.0f}x (CPU)"
+              " faster than real time")
     if args.json:
         Path(args.json).write_text(json.dumps(results, indent=2))
     return 0

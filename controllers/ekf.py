@@ -87,10 +87,14 @@ class FrictionEKF:
         step = rosenbrock_euler(model.f, dt, sc, substeps)
         xi = ca.SX.sym("xi", nx)
         u = ca.SX.sym("u")
+        p = ca.SX.sym("p", model.p.size)
         S = ca.DM(sc)
-        xn = step(S * xi, u) / S
-        self._predict = native(ca.Function("ekf_predict", [xi, u], [xn, ca.jacobian(xn, xi)]))
-        self._friction = native(ca.Function("ekf_friction", [xi, u], [model.friction(S * xi, u)]))
+        xn = step(S * xi, u, p) / S
+        self.p = np.asarray(model.p, dtype=float)
+        self._predict = native(ca.Function("ekf_predict", [xi, u, p],
+                                           [xn, ca.jacobian(xn, xi)]))
+        self._friction = native(ca.Function("ekf_friction", [xi, u, p],
+                                            [model.friction(S * xi, u, p)]))
         self.kf = _ModelEKF(dim_x=nx, dim_z=len(model.measured))
         H = np.zeros((len(model.measured), nx))
         for row, i in enumerate(model.measured):
@@ -112,7 +116,7 @@ class FrictionEKF:
     def step(self, y: np.ndarray, u_prev: float) -> np.ndarray:
         """Predict with the input held over the last interval, update with ``y``; return ``x_hat``."""
         kf = self.kf
-        xn, A = self._predict(kf.x[:, 0], u_prev)
+        xn, A = self._predict(kf.x[:, 0], u_prev, self.p)
         if not np.all(np.isfinite(xn)):
             raise FloatingPointError("ekf prediction is not finite")
         kf.x_pred = xn.reshape(-1, 1)
@@ -133,7 +137,7 @@ class FrictionEKF:
 
     def friction(self, u: float) -> float:
         """Friction force (N) of the model at the current estimate."""
-        return float(self._friction(self.kf.x[:, 0], u)[0][0])
+        return float(self._friction(self.kf.x[:, 0], u, self.p)[0][0])
 
 
 class EKFController(PIDController):

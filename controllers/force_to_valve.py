@@ -78,17 +78,19 @@ class ForceToValve:
         names = model.plant.state_names
         meas = ca.SX.sym("meas", 4)  # x, v, p1, p2
         ug = ca.SX.sym("u")
-        vs = model.steady_valve()(ug)
+        p = ca.SX.sym("p", model.prediction.p.size)
+        vs = model.steady_valve()(ug, p)
         subs = {"x": meas[0], "v": meas[1], "p1": meas[2], "p2": meas[3]}
         for i, n in enumerate(model.valve_states()):
             subs[n] = vs[i]
         state = ca.vertcat(*[subs.get(n, 0.0) for n in names])
-        f = model.prediction.f(state, ug)
+        f = model.prediction.f(state, ug, p)
         rate = model.A1 * f[names.index("p1")] - model.A2 * f[names.index("p2")]
-        one = ca.Function("force_rate", [meas, ug], [rate])
+        one = ca.Function("force_rate", [meas, ug, p], [rate])
         grid = ca.SX.sym("grid", self.grid.size)
-        rates = ca.vertcat(*[one(meas, grid[k]) for k in range(self.grid.size)])
-        self._rates = native(ca.Function("force_rate_grid", [meas, grid], [rates]))
+        rates = ca.vertcat(*[one(meas, grid[k], p) for k in range(self.grid.size)])
+        self._rates = native(ca.Function("force_rate_grid", [meas, grid, p], [rates]))
+        self.p = np.asarray(model.prediction.p, dtype=float)
         self._meas = np.zeros(4)
 
     def reset(self) -> None:
@@ -98,7 +100,7 @@ class ForceToValve:
         """``dF_a/dt`` (N/s) on :attr:`grid` at measurement ``y`` and velocity ``v``."""
         m = self._meas
         m[0], m[1], m[2], m[3] = y[0], v, y[1], y[2]
-        return self._rates(m, self.grid)[0]
+        return self._rates(m, self.grid, self.p)[0]
 
     def command(self, F_d: float, y: np.ndarray, v: float) -> tuple[float, int]:
         """Valve command for force demand ``F_d`` (N); and +1/-1 if saturated high/low, else 0."""

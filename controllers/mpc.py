@@ -79,14 +79,14 @@ DEFAULTS: dict[str, float] = {
     "rate": 500.0,          # Hz
     "horizon": 20,          # steps
     "substeps": 2,          # integration steps per MPC step
-    "position_tol": 1e-5,   # m, e_x
+    "position_tol": 5e-5,   # m, e_x
     "velocity_tol": 5e-3,   # m/s, e_v
-    "du_tol": 0.02,         # e_du, fraction of u_max per step
+    "du_tol": 0.005,        # e_du, fraction of u_max per step
 }
 
 
 def step_with_sensitivities(model: ContinuousModel, dt: float, substeps: int = 1) -> ca.Function:
-    """``(x, u) -> (x_next, A, B)``: linearly implicit Euler steps and their step Jacobians.
+    """``(x, u, p) -> (x_next, A, B)``: linearly implicit Euler steps and their step Jacobians.
 
     Each of the ``substeps`` steps of ``h = dt/substeps`` is ``x+ = x + h*S*M^-1*S^-1*f``,
     ``M = I - h*S^-1 J S`` (scaled, see :func:`controllers.prediction.rosenbrock_euler`),
@@ -97,22 +97,23 @@ def step_with_sensitivities(model: ContinuousModel, dt: float, substeps: int = 1
     h = dt / substeps
     xs = ca.SX.sym("x", nx)
     us = ca.SX.sym("u")
-    f = model.f(xs, us)
+    ps = ca.SX.sym("p", model.p.size)
+    f = model.f(xs, us, ps)
     J = ca.jacobian(f, xs)
     fu = ca.jacobian(f, us)
     S, Si = ca.DM(sc), ca.DM(1.0 / sc)
     M = ca.SX.eye(nx) - h * J * (Si @ S.T)
     Minv = ca.solve(M, ca.SX.eye(nx))
     A1 = ca.mtimes(ca.diag(S), ca.mtimes(Minv, ca.diag(Si)))
-    one = ca.Function("mpc_substep", [xs, us],
+    one = ca.Function("mpc_substep", [xs, us, ps],
                       [ca.cse(xs + h * S * ca.mtimes(Minv, Si * f)), ca.cse(A1),
                        ca.cse(h * ca.mtimes(A1, fu))])
-    x_next, A, B = one(xs, us)
+    x_next, A, B = one(xs, us, ps)
     for _ in range(substeps - 1):
-        x_next, A2, B2 = one(x_next, us)
+        x_next, A2, B2 = one(x_next, us, ps)
         A, B = ca.mtimes(A2, A), ca.mtimes(A2, B) + B2
-    return ca.Function("mpc_step", [xs, us], [ca.cse(x_next), ca.cse(A), ca.cse(B)],
-                       ["x", "u"], ["x_next", "A", "B"])
+    return ca.Function("mpc_step", [xs, us, ps], [ca.cse(x_next), ca.cse(A), ca.cse(B)],
+                       ["x", "u", "p"], ["x_next", "A", "B"])
 
 
 @dataclass(frozen=True)
@@ -156,6 +157,7 @@ class RTISolver:
         u_prev = ca.MX.sym("u_prev")
         R = ca.MX.sym("R", N)
         V = ca.MX.sym("V", N)
+        P = ca.MX.sym("p", model.p.size)
         wx, wv = 1.0 / problem.position_tol, 1.0 / problem.velocity_tol
         wdu = 1.0 / (problem.du_tol * problem.u_max)
         xk = x0
@@ -163,7 +165,7 @@ class RTISolver:
         res, jac, xs = [], [], []
         E = np.eye(N)
         for k in range(N):
-            xk, A, B = step(xk, U[k])
+            xk, A, B = step(xk, U[k], P)
             Sk = ca.mtimes(A, Sk) + ca.mtimes(B, ca.DM(E[k:k + 1, :]))
             res += [wx * (xk[ix] - R[k]), wv * (xk[iv] - V[k])]
             jac += [wx * Sk[ix, :], wv * Sk[iv, :]]
@@ -175,9 +177,10 @@ class RTISolver:
         H = ca.mtimes(Jm.T, Jm)
         g = ca.mtimes(Jm.T, r)
         cost = 0.5 * ca.dot(r, r)
-        fn = ca.Function(f"mpc_rti_N{N}", [x0, U, u_prev, R, V],
-                         [H, g, cost, ca.vertcat(*xs)], ["x0", "U", "u_prev", "R", "V"],
+        fn = ca.Function(f"mpc_rti_N{N}", [x0, U, u_prev, R, V, P],
+                         [H, g, cost, ca.vertcat(*xs)], ["x0", "U", "u_prev", "R", "V", "p"],
                          ["H", "g", "cost", "X"])
+        self.p = np.asarray(model.p, dtype=float)
         self._lin = native(fn)
         self.D = D
         self.reg = 1e-10
@@ -197,7 +200,7 @@ class RTISolver:
     def iterate(self, x0: np.ndarray, u_prev: float, R: np.ndarray, V: np.ndarray) -> bool:
         """One Gauss-Newton step of the QP from the current ``U``; ``False`` if it failed."""
         p = self.problem
-        H, g, cost, _X = self._lin(x0, self.U, u_prev, R, V)
+        H, g, cost, _X = self._lin(x0, self.U, u_prev, R, V, self.p)
         if not (np.all(np.isfinite(H)) and np.all(np.isfinite(g))):
             return False
         N = p.horizon

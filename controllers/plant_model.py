@@ -203,15 +203,17 @@ class ControlModel:
 
     # ------------------------------------------------------------ symbolic
     def _prediction(self) -> ContinuousModel:
-        fns = self.plant.casadi_functions()
+        fns = self.plant.casadi_functions(symbolic_params=True)
         names = self.plant.state_names
         out_names = self.plant.output_names
         x = ca.SX.sym("x", len(names))
         u = ca.SX.sym("u")
-        F = fns["outputs"](x, u)[out_names.index("F")]
+        p = ca.SX.sym("p", fns["rhs"].size1_in(2))
+        F = fns["outputs"](x, u, p)[out_names.index("F")]
         return ContinuousModel(
             f=fns["rhs"],
-            friction=ca.Function("friction", [x, u], [F], ["x", "u"], ["F"]),
+            friction=ca.Function("friction", [x, u, p], [F], ["x", "u", "p"], ["F"]),
+            p=np.asarray(self.plant.param_vector(), dtype=float),
             state_names=tuple(names),
             measured=tuple(names.index(n) for n in MEASURED),
             scales=np.asarray(self.plant.ode_model().scales, dtype=float),
@@ -223,7 +225,7 @@ class ControlModel:
         return tuple(n for n in self.plant.state_names if n not in skip)
 
     def steady_valve(self) -> ca.Function:
-        """``(u) -> valve states`` at rest under a constant command ``u``.
+        """``(u, p) -> valve states`` at rest under a constant command ``u``.
 
         One Newton step from zero on the valve equations, exact for the
         linear valve models of the plants (second-order servo valve,
@@ -233,14 +235,15 @@ class ControlModel:
         iv = [names.index(n) for n in self.valve_states()]
         x = ca.SX.sym("x", len(names))
         u = ca.SX.sym("u")
-        f = self.prediction.f(x, u)
+        p = ca.SX.sym("p", self.prediction.p.size)
+        f = self.prediction.f(x, u, p)
         fv = ca.vertcat(*[f[i] for i in iv])
         xv = ca.vertcat(*[x[i] for i in iv])
         zero = {names[i]: 0.0 for i in range(len(names))}
         x0 = ca.DM([zero[n] for n in names])
         J = ca.substitute(ca.jacobian(fv, xv), x, x0)
         r = ca.substitute(fv, x, x0)
-        return ca.Function("steady_valve", [u], [-ca.solve(J, r)])
+        return ca.Function("steady_valve", [u, p], [-ca.solve(J, r)])
 
     # ---------------------------------------------------------- estimation
     def initial_state(self, y0: np.ndarray) -> np.ndarray:

@@ -24,7 +24,6 @@ the same equations.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
 from dataclasses import dataclass
 
 import casadi as ca
@@ -38,9 +37,13 @@ class ContinuousModel:
     Attributes
     ----------
     f
-        ``(x, u) -> dx/dt`` (CasADi function; ``u`` scalar valve command).
+        ``(x, u, p) -> dx/dt`` (CasADi function; ``u`` scalar valve command,
+        ``p`` the model parameters, inputs so that one compiled function
+        serves every parameter value).
     friction
-        ``(x, u) -> F`` the friction force (N) at state ``x``.
+        ``(x, u, p) -> F`` the friction force (N) at state ``x``.
+    p
+        The parameter values (the order of ``f``'s ``p``).
     state_names
         Names of the states (``x``, ``v``, ``p1``, ``p2``, valve states,
         friction states ``z``, ``h``, ...).
@@ -54,6 +57,7 @@ class ContinuousModel:
 
     f: ca.Function
     friction: ca.Function
+    p: np.ndarray
     state_names: tuple[str, ...]
     measured: tuple[int, ...]
     scales: np.ndarray
@@ -68,7 +72,7 @@ class ContinuousModel:
 
 def rosenbrock_euler(f: ca.Function, dt: float, scales: np.ndarray,
                      substeps: int = 1) -> ca.Function:
-    """``(x, u) -> x_next``: ``substeps`` linearly implicit Euler steps over ``dt`` (s).
+    """``(x, u, p) -> x_next``: ``substeps`` linearly implicit Euler steps over ``dt`` (s).
 
     The linear system is solved in the scaled states ``xi = x/scales``:
     ``x_next = x + h*S*(I - h*S^-1 J S)^-1 * S^-1 f`` with ``S = diag(scales)``.
@@ -84,30 +88,16 @@ def rosenbrock_euler(f: ca.Function, dt: float, scales: np.ndarray,
         raise ValueError("scales must be one positive number per state")
     x = ca.SX.sym("x", nx)
     u = ca.SX.sym("u", f.size1_in(1))
+    p = ca.SX.sym("p", f.size1_in(2))
     h = dt / substeps
     S = ca.DM(sc)
     Sinv = ca.DM(1.0 / sc)
-    fx = f(x, u)
+    fx = f(x, u, p)
     Js = ca.jacobian(fx, x) * (Sinv @ S.T)
-    one = ca.Function("rosenbrock_euler_substep", [x, u],
+    one = ca.Function("rosenbrock_euler_substep", [x, u, p],
                       [ca.cse(x + h * S * ca.solve(ca.SX.eye(nx) - h * Js, Sinv * fx))])
     xk = x
     for _ in range(substeps):
-        xk = one(xk, u)
-    return ca.Function("rosenbrock_euler", [x, u], [ca.cse(xk)], ["x", "u"], ["x_next"])
-
-
-def rollout(step: ca.Function, horizon: int, outputs: Sequence[int]) -> ca.Function:
-    """``(x0, U) -> Y``: ``horizon`` steps from ``x0`` under ``U`` (horizon,), outputs stacked.
-
-    ``Y`` is ``(len(outputs), horizon)``: the selected states after each step.
-    """
-    nx = step.size1_in(0)
-    x0 = ca.SX.sym("x0", nx)
-    U = ca.SX.sym("U", horizon)
-    xk = x0
-    cols = []
-    for k in range(horizon):
-        xk = step(xk, U[k])
-        cols.append(ca.vertcat(*[xk[i] for i in outputs]))
-    return ca.Function("rollout", [x0, U], [ca.horzcat(*cols)], ["x0", "U"], ["Y"])
+        xk = one(xk, u, p)
+    return ca.Function("rosenbrock_euler", [x, u, p], [ca.cse(xk)], ["x", "u", "p"],
+                       ["x_next"])

@@ -294,10 +294,11 @@ class Stats:
 class Integrator:
     """Base of the integration methods: ``run`` integrates over sample intervals.
 
-    ``run(x0, U, dU, dt, p, tol, h)`` integrates from ``x0`` over the
+    ``run(x0, U, dU, dt, p, tol, h, t0)`` integrates from ``x0`` over the
     intervals ``dt[k]`` with the input ``U[k] + dU[k]*(t - t_k)`` on interval
     ``k`` and returns ``(X, stats, h)``: the states at the ``n + 1`` instants,
-    the work done and the step size to continue with.
+    the work done and the step size to continue with; ``t0`` (s) is the time
+    of ``x0``, for messages.
     """
 
     name: ClassVar[str] = ""
@@ -306,7 +307,8 @@ class Integrator:
         self.model = model
 
     def run(self, x0: np.ndarray, U: np.ndarray, dU: np.ndarray, dt: np.ndarray,
-            p: np.ndarray, tol: Tolerances, h: float) -> tuple[np.ndarray, Stats, float]:
+            p: np.ndarray, tol: Tolerances, h: float,
+            t0: float = 0.0) -> tuple[np.ndarray, Stats, float]:
         raise NotImplementedError
 
 
@@ -565,7 +567,8 @@ class Rodas4(Integrator):
         return bufs
 
     def run(self, x0: np.ndarray, U: np.ndarray, dU: np.ndarray, dt: np.ndarray,
-            p: np.ndarray, tol: Tolerances, h: float) -> tuple[np.ndarray, Stats, float]:
+            p: np.ndarray, tol: Tolerances, h: float,
+            t0: float = 0.0) -> tuple[np.ndarray, Stats, float]:
         m = self.model
         n = dt.size
         bufs = self._buffers(n)
@@ -595,7 +598,7 @@ class Rodas4(Integrator):
                       njev=int(info[4]))
         if status:
             k = int(info[1])
-            t_fail = float(np.sum(dt[:k]) + info[2])
+            t_fail = t0 + float(np.sum(dt[:k]) + info[2])
             why = {1: f"the step size fell below h_min = {tol.h_min:g} s",
                    2: f"more than max_steps = {tol.max_steps} steps were needed",
                    3: "the model gave a non-finite value"}[status]
@@ -697,7 +700,8 @@ class SolveIvp(Integrator):
         self.jac = ca.Function("jac_x", [x, u, p], [ca.jacobian(f, x)])
 
     def run(self, x0: np.ndarray, U: np.ndarray, dU: np.ndarray, dt: np.ndarray,
-            p: np.ndarray, tol: Tolerances, h: float) -> tuple[np.ndarray, Stats, float]:
+            p: np.ndarray, tol: Tolerances, h: float,
+            t0: float = 0.0) -> tuple[np.ndarray, Stats, float]:
         m = self.model
         n = dt.size
         U = U.reshape(n, m.nu)
@@ -712,7 +716,7 @@ class SolveIvp(Integrator):
         X[0] = x0
         x = np.asarray(x0, dtype=float)
         for a, b in pieces:
-            t0, t1 = knots[a], knots[b]
+            ta, tb = knots[a], knots[b]
 
             def u_at(t: float, a: int = a, b: int = b) -> np.ndarray:
                 k = min(max(int(np.searchsorted(knots, t, side="right")) - 1, a), b - 1)
@@ -724,12 +728,12 @@ class SolveIvp(Integrator):
             def jac(t: float, y: np.ndarray) -> np.ndarray:
                 return np.asarray(self.jac(y, u_at(t), p))
 
-            sol = solve_ivp(fun, (t0, t1), x, method=self.scipy_method, t_eval=knots[a + 1:b + 1],
-                            rtol=tol.rtol, atol=atol, first_step=min(h, t1 - t0), jac=jac)
+            sol = solve_ivp(fun, (ta, tb), x, method=self.scipy_method, t_eval=knots[a + 1:b + 1],
+                            rtol=tol.rtol, atol=atol, first_step=min(h, tb - ta), jac=jac)
             if sol.status != 0 or not np.all(np.isfinite(sol.y)):
                 raise ConvergenceError(
-                    f"simulation of {m.name} did not converge between t = {t0:.6g} s and "
-                    f"{t1:.6g} s ({self.name}): {sol.message}"
+                    f"simulation of {m.name} did not converge between t = {t0 + ta:.6g} s "
+                    f"and {t0 + tb:.6g} s ({self.name}): {sol.message}"
                 )
             X[a + 1:b + 1] = sol.y.T
             x = sol.y[:, -1]
@@ -902,7 +906,7 @@ class Stepper:
     def _advance(self, u: np.ndarray) -> np.ndarray:
         """Hook: the state one sample later with ``u`` held."""
         X, st, self.h = self.integrator.run(self.x, u[None, :], self._dU, self._dt, self.p,
-                                            self.tolerances, self.h)
+                                            self.tolerances, self.h, self.t)
         self.stats.add(st)
         return X[-1].copy()
 
@@ -911,9 +915,6 @@ class Stepper:
         uu = np.asarray(u, dtype=float).reshape(self.model.nu)
         if not np.all(np.isfinite(uu)):
             raise FcompError(f"input of {self.model.name} at t = {self.t:.6g} s is not finite")
-        try:
-            self.x = self._advance(uu)
-        except ConvergenceError as exc:
-            raise ConvergenceError(f"{exc} [sample starting at t = {self.t:.6g} s]") from None
+        self.x = self._advance(uu)
         self.t += self.dt
         return self.x.copy()

@@ -88,7 +88,7 @@ HIDDEN_DEFAULTS: dict[str, dict[str, float]] = {
     "presliding": {"k": 1.5e5},
     "nonlocal-memory": {"n_elements": 6.0, "d_max": 4e-4},
     "frictional-lag": {"tau_L": 0.06},
-    "dwell-time": {"dF_inf": 14.0, "tau_k": 0.5, "m": 0.8, "d_c": 3e-4},
+    "dwell-time": {"dF_inf": 25.0, "tau_k": 0.5, "m": 0.8, "d_c": 1e-3},
     "direction-asymmetry": {"dF_neg": 8.0},
     "pressure-dependence": {"c_p": 4e-6},
     "position-dependence": {"a_g": 0.25, "x_g_frac": 0.3, "w_frac": 0.15, "a_l": 0.12},
@@ -327,84 +327,95 @@ def _level_scale(P: TruthParams, hidden: Mapping[str, Mapping[str, float]], x: n
     return scale
 
 
+def _node_average(mid: np.ndarray) -> np.ndarray:
+    """Values at the nodes (interval ends) from interval values: the mean of the two neighbours."""
+    out = np.empty_like(mid)
+    out[0] = 0.5 * mid[0]
+    out[1:] = 0.5 * (mid[1:] + mid[:-1])
+    return out
+
+
 def _truth_friction(P: TruthParams, base: str, hidden: Mapping[str, Mapping[str, float]],
-                    t: np.ndarray, v: np.ndarray, a: np.ndarray, x: np.ndarray,
-                    S: np.ndarray, dt: float, S_mid: float) -> np.ndarray:
-    """Friction on the fine grid (own explicit/exact-exponential integration, see module doc)."""
-    neg_side = np.empty(v.size, dtype=bool)  # side held at rest (last direction)
+                    t: np.ndarray, v: np.ndarray, a: np.ndarray, x: np.ndarray, S: np.ndarray,
+                    dt: float, S_mid: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Friction at the nodes of the fine grid; returns ``(F, v_node, a_node)``.
+
+    ``v``, ``a`` hold the velocity and acceleration of each fine interval (its
+    midpoint values), ``x`` and ``t`` the nodes where intervals start. States (bristle, lagged speed,
+    dwell age, Maxwell-slip deflections) advance interval by interval; the
+    force is evaluated at the nodes with the node velocity (mean of the two
+    neighbouring intervals) so that it lines up with the sampled ``x``.
+    """
+    n = v.size
+    vn = _node_average(v)
+    an = _node_average(a)
+    neg_side = np.empty(n, dtype=bool)  # side held at rest (last direction)
     last = False
-    for i, vi in enumerate(v):
+    for i, vi in enumerate(vn):
         if vi != 0.0:
             last = vi < 0.0
         neg_side[i] = last
     scale = _level_scale(P, hidden, x, S, t, neg_side, S_mid)
-    Fc = P.Fc * scale
-    speed = np.abs(v)
-    # static excess over Fc (the hump), with its law
     has_hump = base in ("stribeck", "lugre") or "stribeck" in hidden
     if "stribeck" in hidden:
         h = hidden["stribeck"]
         hump_dF, hump_vs, delta = h["dF"], h["vs"], h["delta"]
     else:
         hump_dF, hump_vs, delta = P.Fs - P.Fc, P.vs, 2.0
-    if "frictional-lag" in hidden and has_hump:  # Hess-Soom lagged speed
-        tau = hidden["frictional-lag"]["tau_L"]
-        vL = np.empty_like(speed)
-        c = 1.0 - math.exp(-dt / tau)
+    hump_speed = np.abs(vn)
+    if "frictional-lag" in hidden and has_hump:  # Hess-Soom lagged speed, at the nodes
+        c = 1.0 - math.exp(-dt / hidden["frictional-lag"]["tau_L"])
+        hump_speed = np.empty(n)
         cur = 0.0
-        for i, s in enumerate(speed):
-            cur += (s - cur) * c
-            vL[i] = cur
-        hump_speed = vL
-    else:
-        hump_speed = speed
+        for i, sp in enumerate(np.abs(v)):
+            hump_speed[i] = cur
+            cur += (sp - cur) * c
     dwell = _dwell_bump(hidden["dwell-time"], v, dt) if "dwell-time" in hidden else 0.0
     if has_hump:
         hump = _stribeck_hump(hump_speed, 1.0, hump_vs, delta) * (hump_dF + dwell) * scale
     else:  # without a Stribeck curve the dwell excess decays with the sliding distance only
         hump = dwell * scale
-    g = Fc + hump
-    visc = 0.0
-    if base in ("coulomb-viscous", "stribeck", "lugre"):
-        visc = P.sigma2
+    g = P.Fc * scale + hump
+    visc = P.sigma2 if base in ("coulomb-viscous", "stribeck", "lugre") else 0.0
     if "viscous" in hidden:
         visc += hidden["viscous"]["c_v"]
-    F_visc = visc * v
+    F_visc = visc * vn
     if "viscous-lead" in hidden:
-        F_visc = F_visc + visc * hidden["viscous-lead"]["T"] * a
+        F_visc = F_visc + visc * hidden["viscous-lead"]["T"] * an
     if "nonlocal-memory" in hidden:
-        F_dry = _maxwell_slip(hidden["nonlocal-memory"], x, g, P)
+        F_dry = _maxwell_slip(hidden["nonlocal-memory"], x, g)
     elif base == "lugre" or "presliding" in hidden:
         k = P.sigma0 if base == "lugre" else hidden["presliding"]["k"]
         damp = P.sigma1 if base == "lugre" else 0.0
-        F_dry = _bristle(v, g, k, damp, dt)
+        F_dry = _bristle(v, vn, g, k, damp, dt)
     else:
-        F_dry = np.tanh(v / 1e-5) * g
-    return F_dry + F_visc
+        F_dry = np.tanh(vn / 1e-5) * g
+    return F_dry + F_visc, vn, an
 
 
-def _bristle(v: np.ndarray, g: np.ndarray, k: float, damp: float, dt: float) -> np.ndarray:
-    """``dz/dt = v - k*|v|*z/g``, exact for the velocity held over each fine step.
+def _bristle(v: np.ndarray, vn: np.ndarray, g: np.ndarray, k: float, damp: float, dt: float
+             ) -> np.ndarray:
+    """``dz/dt = v - k*|v|*z/g``, exact for the velocity held over each fine interval.
 
-    Returns ``k*z + damp*dz/dt`` (N).
+    ``g`` is at the nodes (its interval value is the mean of the two ends);
+    returns ``k*z + damp*dz/dt`` at the nodes (N).
     """
     z = 0.0
     out = np.empty_like(v)
-    for i in range(v.size):
-        vi, gi = float(v[i]), float(g[i])
-        if vi != 0.0:
-            rate = k * abs(vi) / gi
-            zss = gi / k * (1.0 if vi > 0 else -1.0)
-            z = zss + (z - zss) * math.exp(-rate * dt)
-            dz = vi - rate * z
-        else:
-            dz = 0.0
+    n = v.size
+    for i in range(n):
+        gi = float(g[i])
+        dz = float(vn[i]) - k * abs(float(vn[i])) * z / gi
         out[i] = k * z + damp * dz
+        vi = float(v[i])
+        if vi != 0.0:
+            gm = 0.5 * (gi + float(g[min(i + 1, n - 1)]))
+            zss = gm / k * (1.0 if vi > 0 else -1.0)
+            z = zss + (z - zss) * math.exp(-k * abs(vi) / gm * dt)
     return out
 
 
-def _maxwell_slip(h: Mapping[str, float], x: np.ndarray, g: np.ndarray,
-                  P: TruthParams) -> np.ndarray:
+def _maxwell_slip(h: Mapping[str, float], x: np.ndarray, g: np.ndarray) -> np.ndarray:
     """Classical Maxwell-slip model: elasto-slide elements in parallel (nonlocal memory).
 
     Element ``i`` has slip force ``f_i = w_i*g`` (weights summing to 1) and
@@ -419,30 +430,32 @@ def _maxwell_slip(h: Mapping[str, float], x: np.ndarray, g: np.ndarray,
     out = np.empty_like(x)
     x_prev = float(x[0])
     for i in range(x.size):
-        dx = float(x[i]) - x_prev
+        delta = np.clip(delta + (float(x[i]) - x_prev), -d, d)
         x_prev = float(x[i])
-        delta = np.clip(delta + dx, -d, d)
         out[i] = float(np.sum(w * g[i] * delta / d))
     return out
 
 
 def _dwell_bump(h: Mapping[str, float], v: np.ndarray, dt: float) -> np.ndarray:
-    """Kato-law excess of the static level after a dwell, erased over the sliding distance."""
+    """Kato-law excess of the static level after a dwell, erased over the sliding distance.
+
+    ``v`` per fine interval; returns the excess at the nodes (interval starts).
+    """
     out = np.zeros_like(v)
     t_rest = 5.0  # the rig rested before the record
     bump = 0.0
     s = 0.0
     for i, vi in enumerate(v):
+        out[i] = bump * math.exp(-s / h["d_c"]) if bump else 0.0
         if vi == 0.0:
             t_rest += dt
-            out[i] = bump * math.exp(-s / h["d_c"]) if bump else 0.0
             continue
         if t_rest > 0.0:  # a start: the excess is set by the dwell just ended
             bump = h["dF_inf"] * (1.0 - math.exp(-((t_rest / h["tau_k"]) ** h["m"])))
             s = 0.0
             t_rest = 0.0
+            out[i] = bump
         s += abs(vi) * dt
-        out[i] = bump * math.exp(-s / h["d_c"])
     return out
 
 
@@ -568,9 +581,9 @@ def generate(
     x_f = np.concatenate(x_parts)
     S_f = np.concatenate(S_parts)
     e_f = np.concatenate(e_parts)
-    fric_f = _truth_friction(P, base, laws, t_f, v_f, a_f, x_f, S_f, dt, S_mid)
-    idx = np.arange(0, t_f.size, fine)  # samples at the start of each interval
-    t_s, v_s, a_s, x_s, S_s, e_s = (arr[idx] for arr in (t_f, v_f, a_f, x_f, S_f, e_f))
+    fric_f, vn_f, an_f = _truth_friction(P, base, laws, t_f, v_f, a_f, x_f, S_f, dt, S_mid)
+    idx = np.arange(0, t_f.size, fine)  # samples at nodes: the start of every fine interval
+    t_s, v_s, a_s, x_s, S_s, e_s = (arr[idx] for arr in (t_f, vn_f, an_f, x_f, S_f, e_f))
     fric = fric_f[idx]
     recorded = fric.copy()
     if "inertia-error" in laws:

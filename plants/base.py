@@ -66,9 +66,12 @@ Running it:
 * ``plant.to_iosys()`` -- a python-control ``NonlinearIOSystem`` (its
   ``linearize``, ``input_output_response``, ``find_eqpt`` work on it).
 
-Friction models without a symbolic form (discrete memory,
-``nmlgm-hysteresis``) are refused with a one-line
-:class:`~fcomp.models.base.NotSymbolicError`.
+Friction with discrete memory (``nmlgm-hysteresis``, the ``nonlocal-memory``
+effect) has no symbolic form: ``simulate``, ``stepper`` and
+``evaluate_outputs`` then run through :mod:`plants.discrete_memory` (the
+memory coupled to the engine in short intervals, ``coupling=`` s), while
+``casadi_functions``, ``discrete_step``, ``ode_model`` and ``to_iosys``
+refuse with a one-line :class:`~fcomp.models.base.NotSymbolicError`.
 """
 
 from __future__ import annotations

@@ -7,7 +7,9 @@ can take whole. The engine takes it in short *coupling intervals* ``D``
 
 1. At the start of an interval the memory gives ``F_k = F(z_k)`` and the
    local slope ``K_k = dF/dz`` of the current curve in the direction of the
-   motion (probed on a copy of the memory, 1 nm ahead).
+   motion (probed on a copy of the memory, 1 nm ahead; kept within
+   ``[0, 10*max(sigma0, c_i*k_i)]``, since a regime change just ahead --
+   entering sliding, closing a loop -- is a jump of ``F``, not a slope).
 2. The engine (:mod:`fcomp.simulation`) integrates the plant with a *twin*
    friction model, :class:`LocalBristle`: the LuGre-family model the
    hysteresis model is built on (same ``g(v, h)``, film state, effects,
@@ -161,6 +163,8 @@ class MemoryCoupling:
         self._ip = [states.index(n) if n in states else None for n in ("p1", "p2")]
         # without effects the levels are the parameters: zs = Fs/sigma0 of the side
         flat = self.model.flat_params()
+        steep = [abs(flat.get(f"c{i}", 0.0) * flat.get(f"k{i}", 0.0)) for i in (1, 2, 3, 8)]
+        self.k_max = 10.0 * max(flat["sigma0"], *steep)
         if not self.model.effects:
             zs = [self.P("Fs" if self.P.has("Fs") else "Fc", s) / flat["sigma0"]
                   for s in (1.0, -1.0)]
@@ -187,12 +191,15 @@ class MemoryCoupling:
         return float(zs)
 
     def slope(self, hf: Any, v: float, zs: float) -> float:
-        """``dF/dz`` of the memory's current curve in the direction of ``v``."""
+        """``dF/dz`` of the memory's current curve in the direction of ``v``, within
+        ``[0, K_max]``: a regime change one probe ahead (entering sliding, closing a loop)
+        is a jump of ``F``, not a slope."""
         d = 1.0 if v > 0 else -1.0 if v < 0 else float(hf.direction or 1)
         snap = hf.snapshot()
         F1 = hf.move_to(hf.z + d * _PROBE, zs)
         hf.restore(snap)
-        return (F1 - hf.F) / (d * _PROBE)
+        K = (F1 - hf.F) / (d * _PROBE)
+        return min(max(K, 0.0), self.k_max) if math.isfinite(K) else self.k_max
 
     # --------------------------------------------------------------- run
     def start(self, x0: np.ndarray) -> Any:
@@ -203,8 +210,10 @@ class MemoryCoupling:
         return hf
 
     def advance(self, integ: Any, hf: Any, xt: np.ndarray, u0: np.ndarray, du: np.ndarray,
-                T: float, tol: Tolerances, h: float, stats: Stats) -> tuple[np.ndarray, float]:
-        """Advance the twin state ``xt`` and the memory ``hf`` over ``T`` s, input ``u0 + du*t``."""
+                T: float, tol: Tolerances, h: float, stats: Stats,
+                t0: float = 0.0) -> tuple[np.ndarray, float]:
+        """Advance the twin state ``xt`` and the memory ``hf`` over ``T`` s, input ``u0 + du*t``
+        (``t0``: time at the start, for messages)."""
         n = max(1, math.ceil(T / self.coupling - 1e-9))
         dt = np.array([T / n])
         p = self.p_twin.copy()
@@ -212,7 +221,8 @@ class MemoryCoupling:
         for j in range(n):
             zs = self.threshold(xt, hf.F)
             p[self.i_tan] = hf.F, self.slope(hf, float(xt[1]), zs), hf.z
-            X, st, h = integ.run(xt, (u0 + du * j * dt[0])[None, :], du[None, :], dt, p, tol, h)
+            X, st, h = integ.run(xt, (u0 + du * j * dt[0])[None, :], du[None, :], dt, p, tol, h,
+                                 t0 + j * dt[0])
             xt = X[-1]
             hf.move_to(float(xt[iz]), zs)
             xt[iz] = hf.z
@@ -235,7 +245,7 @@ class MemoryCoupling:
         h = tolerances.h0
         for k in range(t.size - 1):
             xt, h = self.advance(integ, hf, xt, U[k], dU[k], t[k + 1] - t[k], tolerances, h,
-                                 stats)
+                                 stats, t[k])
             Xt[k + 1], Fz[k + 1] = xt, hf.F
         X = self.from_twin(Xt, Fz)
         traj = Trajectory(t=t, X=X, U=U, stats=stats, method=method, tolerances=tolerances,
@@ -277,5 +287,5 @@ class MemoryStepper(Stepper):
     def _advance(self, u: np.ndarray) -> np.ndarray:
         self._xt, self.h = self.coupling.advance(self.integrator, self.memory, self._xt, u,
                                                  self._dU[0], self.dt, self.tolerances, self.h,
-                                                 self.stats)
+                                                 self.stats, self.t)
         return self.coupling.from_twin(self._xt, self.memory.F)

@@ -27,6 +27,7 @@ import casadi as ca
 import numpy as np
 import pytest
 import reference_lugre as ref
+
 from fcomp.models import FrictionModel, make_model
 from fcomp.trajectory import friction_along_motion
 

@@ -445,9 +445,11 @@ def test_passivity_identity_of_the_docstring() -> None:
     lhs = S[0] * model.force(NUMPY, [z], sig, P) - 1e5 * z * dz
     g = 1.0 + 0.5 * np.exp(-((S[0] / 1e-3) ** 2))
     alpha = 1e5 * np.abs(S[0]) / g
-    s1 = math.sqrt(1e5)
+    s1 = model.flat_params()["sigma1"]  # the set's 316.2277660 (sqrt(1e5) to 10 digits)
     rhs = s1 * dz**2 + s1 * alpha * z * dz + 1e5 * alpha * z**2
-    np.testing.assert_allclose(lhs, rhs, rtol=1e-9, atol=1e-18)
+    terms = (np.abs(S[0] * 1e5 * z) + np.abs(S[0] * s1 * dz) + np.abs(1e5 * z * dz)
+             + s1 * dz**2 + np.abs(s1 * alpha * z * dz) + 1e5 * alpha * z**2)
+    assert np.all(np.abs(lhs - rhs) <= 1e-12 * terms + 1e-20)
 
 
 def test_lugre_dissipates_within_v_max() -> None:
@@ -458,10 +460,10 @@ def test_lugre_dissipates_within_v_max() -> None:
     vmax = info["v_max"]
     assert vmax == pytest.approx(4 * 1.0 / math.sqrt(1e5))
     rng = np.random.default_rng(8)
-    for _ in range(3):
-        vs = rng.choice([-1.0, 1.0], 12) * rng.uniform(0.0, 1.0, 12) ** 3 * vmax
-        vs[rng.integers(0, 12, 3)] = vmax * rng.choice([-1.0, 1.0], 3)  # the edge itself
-        D = _dissipation(model, vs, rng.uniform(1e-4, 5e-3, 12))
+    for _ in range(2):
+        vs = rng.choice([-1.0, 1.0], 8) * rng.uniform(0.0, 1.0, 8) ** 3 * vmax
+        vs[rng.integers(0, 8, 3)] = vmax * rng.choice([-1.0, 1.0], 3)  # the edge itself
+        D = _dissipation(model, vs, rng.uniform(1e-4, 5e-3, 8), samples=2000)
         assert D.min() >= -1e-15
         assert np.all(np.diff(D) >= -1e-15), "bristle power must be non-negative pointwise"
 

@@ -76,3 +76,12 @@ def test_symbolic_forms_refused_in_one_line(rig) -> None:
         rig.to_iosys()
     with pytest.raises(NotSymbolicError):
         rig.discrete_step(1e-3)
+
+
+def test_sliding_switch_jump_is_not_taken_for_a_slope() -> None:
+    """Seed 000's curves with seed 002's much stiffer bristles: F(z) jumps where the memory
+    enters sliding; the coupling must step over the jump (slope kept in [0, K_max])."""
+    plant = PLANTS.get("hydraulic")(make_model("nmlgm-hysteresis", params="seed002-type1"))
+    run = plant.simulate(parse_input("sine:amplitude=0.0045,frequency=1"), 0.08, 1000.0)
+    assert np.all(np.isfinite(run["F"])) and run["v"].max() > 0.02
+    assert run["z"].max() > 1.3e-4  # the sliding threshold Fs/sigma0 was crossed

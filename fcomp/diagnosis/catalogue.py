@@ -129,6 +129,13 @@ def propose(name: str, ctx: Context) -> Proposal:
     alternatives = guess(ctx) if guess is not None else [{}]
     models = [_attach(model, name, p, ctx.data) for p in alternatives]
     starts = [m.flat_params() for m in models]
+    # the same effect guess on a fresh start of the other parameters: the warm
+    # start may sit in a local minimum the missing effect pushed it into
+    base = models[0]
+    own = {k: v for k, v in type(base.params)().flat().items() if k in base.params.flat()}
+    fresh = {**own, **baseline_starts(base, ctx.data, ctx.seg, ctx.train)[0]}
+    starts.append({**starts[0], **{k: v for k, v in fresh.items() if k in starts[0]
+                                   and k not in alternatives[0] and math.isfinite(v)}})
     if "mass" in ctx.current.values:
         for s in starts:
             s["mass"] = ctx.current.values["mass"]

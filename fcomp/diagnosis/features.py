@@ -18,8 +18,12 @@ from one feature *and the direction of motion* (friction-like residuals
 change sign with it) by a k-nearest-neighbour mean, fitted on the training
 samples and applied to the held-out ones: for each held-out sample the mean
 training residual of the ``k`` training samples with the nearest feature
-values on the same side. The strength is the fraction of the held-out
-residual's mean square that this explains,
+values on the same side (0 where those neighbours lie further than 2 % of
+the feature's range: the training samples do not cover that value). For time
+``t`` a cubic in ``t`` per side replaces the neighbours (neighbours in time
+are the adjacent training blocks and would credit any autocorrelated
+residual to ``t``; a drift is slow). The strength is the fraction of the
+held-out residual's mean square that this explains,
 
     strength = max(0, 1 - sum((r - r_knn)^2) / sum(r^2)),
 
@@ -69,12 +73,15 @@ def feature_values(data: DiagnosisData, seg: Segmentation) -> dict[str, np.ndarr
     return out
 
 
-def knn_predict(f_train: np.ndarray, r_train: np.ndarray, f_test: np.ndarray, k: int
-                ) -> np.ndarray:
+def knn_predict(f_train: np.ndarray, r_train: np.ndarray, f_test: np.ndarray, k: int,
+                max_span: float = np.inf) -> np.ndarray:
     """Mean of ``r_train`` over the ``k`` training samples around ``f_test`` in sorted ``f``.
 
     The window of ``k`` sorted training values centred on each test value's
     insertion point (the ``k`` nearest neighbours up to one sample at the ends).
+    Where the window spans more than ``max_span`` or does not contain the test
+    value's neighbourhood (the training samples do not cover it) the
+    prediction is 0: no information, rather than a guess from far away.
     """
     order = np.argsort(f_train, kind="stable")
     fs, rs = f_train[order], r_train[order]
@@ -83,25 +90,46 @@ def knn_predict(f_train: np.ndarray, r_train: np.ndarray, f_test: np.ndarray, k:
     csum = np.concatenate([[0.0], np.cumsum(rs)])
     pos = np.searchsorted(fs, f_test)
     lo = np.clip(pos - k // 2, 0, n - k)
-    return (csum[lo + k] - csum[lo]) / k
+    pred = (csum[lo + k] - csum[lo]) / k
+    far = np.maximum(fs[lo + k - 1] - f_test, f_test - fs[lo]) > max_span
+    return np.where(far, 0.0, pred)
+
+
+def poly_predict(f_train: np.ndarray, r_train: np.ndarray, f_test: np.ndarray,
+                 degree: int = 3) -> np.ndarray:
+    """A least-squares polynomial of ``degree`` in ``f`` (centred, scaled), fitted and applied."""
+    c, w = float(np.mean(f_train)), float(np.ptp(f_train)) or 1.0
+    coef = np.polyfit((f_train - c) / w, r_train, min(degree, max(f_train.size - 1, 0)))
+    return np.polyval(coef, (f_test - c) / w)
 
 
 def strength(f: np.ndarray, r: np.ndarray, side: np.ndarray, train: np.ndarray,
-             test: np.ndarray) -> tuple[float, int]:
-    """Held-out strength of feature ``f`` for residual ``r`` and its best ``k``."""
+             test: np.ndarray, *, smooth: bool = False) -> tuple[float, int]:
+    """Held-out strength of feature ``f`` for residual ``r``, and its best ``k``.
+
+    ``smooth`` replaces the nearest-neighbour mean by a cubic in ``f`` (returned
+    ``k`` = 0): used for time, where neighbours in time are the adjacent
+    training blocks and would credit any autocorrelated residual to ``t``;
+    a cubic only sees slow trends (drift).
+    """
     ss = float(np.sum(r[test] ** 2))
     if ss <= 0:
         return 0.0, 0
+    lo, hi = np.percentile(f[train | test], [1.0, 99.0])
+    max_span = max(float(hi - lo), 1e-300) / 50.0
     best = (0.0, 0)
-    for k in NEIGHBOURS:
+    for k in ((0,) if smooth else NEIGHBOURS):
         pred = np.zeros(int(test.sum()))
         rt = r[test]
         for s in (-1.0, 1.0):
             tr = train & (side == s)
             te_local = side[test] == s
-            if tr.sum() < k or not te_local.any():
+            if tr.sum() < max(k, 10) or not te_local.any():
                 continue
-            pred[te_local] = knn_predict(f[tr], r[tr], f[test][te_local], k)
+            if smooth:
+                pred[te_local] = poly_predict(f[tr], r[tr], f[test][te_local])
+            else:
+                pred[te_local] = knn_predict(f[tr], r[tr], f[test][te_local], k, max_span)
         val = 1.0 - float(np.sum((rt - pred) ** 2)) / ss
         if val > best[0]:
             best = (val, k)
@@ -114,6 +142,6 @@ def residual_structure(r: np.ndarray, data: DiagnosisData, seg: Segmentation,
     side = data.signal("s")
     out = []
     for name, f in feature_values(data, seg).items():
-        st, k = strength(f, r, side, train, test)
+        st, k = strength(f, r, side, train, test, smooth=name == "t")
         out.append(FeatureStrength(name, st, k))
     return sorted(out, key=lambda fs: -fs.strength)

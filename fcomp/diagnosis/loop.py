@@ -26,8 +26,8 @@ returns ``self``, results in ``*_`` attributes) runs the whole procedure:
 
    The qualifying candidate with the lowest held-out RMS is added. Every
    other qualifying candidate whose held-out RMS is within 10 % of the best
-   one's fall, or not significantly worse than it (:func:`fall_test`
-   p-value above 0.05), explains the data equally well: they are reported together as
+   one's fall and not significantly worse than it (:func:`fall_test`
+   p-value above 0.05) explains the data equally well: they are reported together as
    a *tie* (a confounded group), each with the experiment that would tell
    them apart. The search stops when no candidate qualifies, when the
    held-out RMS is within 5 % of the noise floor (after the first step,
@@ -538,7 +538,7 @@ class Diagnosis:
             close = (c.rms_heldout - best.rms_heldout) <= TIE_SHARE * best.fall
             _, p = fall_test(c.fit.residual, best.fit.residual,  # type: ignore[union-attr]
                              self._blocks)
-            if close or p > TIE_P:
+            if close and p > TIE_P:
                 group.append(c.effect)
         return group
 

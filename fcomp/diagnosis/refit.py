@@ -250,13 +250,14 @@ class Refit:
 
     def scales(self, model: FrictionModel, names: Sequence[str], start: Mapping[str, float]
                ) -> dict[str, float]:
+        """Typical magnitudes (solver ``x_scale``): ``|start|``, at least 1 % of the unit scale."""
         specs = dict(model.param_specs())
         specs.update(EXTRA_SPECS)
         out = {}
         for n in names:
             v = abs(float(start[n]))
-            out[n] = v if v > 0 and math.isfinite(v) else 0.1 * unit_scale(
-                specs[n].unit, self.data.scales, self.d_pre)
+            floor = 0.01 * unit_scale(specs[n].unit, self.data.scales, self.d_pre)
+            out[n] = max(v, floor) if math.isfinite(v) else 10.0 * floor
         return out
 
     def fit(self, model: FrictionModel, starts: Sequence[Mapping[str, float]] = (),

@@ -35,6 +35,7 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
+from scipy.linalg import block_diag
 from scipy.special import stdtrit
 
 from fcomp.errors import ConvergenceError, FcompError
@@ -110,17 +111,6 @@ def directional_model(model: FrictionModel) -> FrictionModel:
     if not flat:
         return model
     return model._rebuild(type(params).from_flat(flat, base=params), model.effects)
-
-
-def _block_diag(blocks: Sequence[np.ndarray]) -> np.ndarray:
-    n = sum(b.shape[0] for b in blocks)
-    out = np.zeros((n, n))
-    i = 0
-    for b in blocks:
-        k = b.shape[0]
-        out[i : i + k, i : i + k] = b
-        i += k
-    return out
 
 
 class FrictionFit:
@@ -553,7 +543,7 @@ class FrictionFit:
             not_ident += [hyst_names[j] for j, ok in enumerate(h_unc.identifiable) if not ok]
             covs.append(h_unc.cov[np.ix_(keep, keep)])
         self.param_names_ = list(self.params_)
-        self.cov_ = _block_diag(covs)
+        self.cov_ = block_diag(*covs) if covs else np.zeros((0, 0))
         self.not_identifiable_ = not_ident
         self.stages_ = stages
         self.fixed_ = {k: float(v) for k, v in self.model_.flat_params().items()

@@ -28,10 +28,11 @@ mass-plus-force-loop at ``-w`` (``w = bandwidth`` rad/s):
 ``kp = 3*m*w^2``, ``ki = m*w^3``, ``kd = 3*m*w``.
 
 **Unstable gains are refused**: :func:`check_stability` builds the sampled
-loop of the nominal model (mass ``m``, first-order force loop with the
-bandwidth of :mod:`controllers.force_to_valve`, zero-order hold at the
-controller rate) with python-control and raises :class:`FcompError` when a
-closed-loop pole lies on or outside the unit circle.
+loop of the nominal model (mass ``m`` with the viscous friction slope, the
+force loop of :mod:`controllers.force_to_valve` through the valve's linear
+dynamics, zero-order hold at the controller rate) with python-control and
+raises :class:`FcompError` when a closed-loop pole lies on or outside the
+unit circle.
 """
 
 from __future__ import annotations
@@ -75,16 +76,21 @@ class PIDGains:
         return cls(kp=3 * mass * w**2, ki=mass * w**3, kd=3 * mass * w, **extra)
 
 
-def check_stability(gains: PIDGains, mass: float, force_bandwidth: float, dt: float) -> float:
+def check_stability(gains: PIDGains, mass: float, damping: float, force_bandwidth: float,
+                    valve: Any, dt: float) -> float:
     """Largest closed-loop pole magnitude of the nominal sampled loop; raise if >= 1.
 
-    Nominal plant ``1/(m s^2) * 1/(s/w_F + 1)`` discretised with a zero-order
-    hold at ``dt``; controller the discrete PID of this module.
+    Nominal plant: the piston ``1/(m s^2 + c s)`` (``c`` the viscous friction
+    slope of the controller's friction model) driven by the force loop of
+    :mod:`controllers.force_to_valve`, ``F_a/F_d = w_F*G_v/(s + w_F*G_v)`` with
+    ``G_v`` the valve's linear dynamics (unit DC gain), discretised with a
+    zero-order hold at ``dt``; controller the discrete PID of this module.
     """
     import control as ct
 
-    tau = 1.0 / force_bandwidth
-    plant = ct.c2d(ct.tf([1.0], [mass * tau, mass, 0.0, 0.0]), dt, "zoh")
+    s = ct.tf("s")
+    inner = ct.feedback(force_bandwidth * valve / s, 1)
+    plant = ct.c2d(ct.ss(inner / (mass * s**2 + damping * s)), dt, "zoh")
     z = ct.tf([1.0, 0.0], [1.0], dt)
     Tf = 1.0 / (2 * math.pi * gains.derivative_cutoff)
     C = gains.kp + gains.ki * dt * z / (z - 1) + gains.kd * (z - 1) / ((Tf + dt) * z - Tf)
@@ -177,8 +183,9 @@ class PIDController(Controller):
         from controllers.force_to_valve import ForceToValve
 
         self.valve = ForceToValve(model, float(o.get("force_bandwidth", model.force_bandwidth)))
-        self.stability_radius = check_stability(self.gains, model.mass, self.valve.bandwidth,
-                                                self.dt)
+        self.stability_radius = check_stability(
+            self.gains, model.mass, model.viscous_damping(), self.valve.bandwidth,
+            model.valve_transfer(), self.dt)
         self.law = PIDLaw(self.gains, self.dt)
         self.F_demand = 0.0
 

@@ -32,8 +32,10 @@ position sensor      1 um resolution,        1 um resolution, 0.5 um noise
                      0.5 um noise (encoder)
 pressure sensors     12-bit over 0-10 MPa    12-bit over 0-1 MPa (244 Pa),
                      (2.44 kPa), 5 kPa noise  1 kPa noise
-PID bandwidth        40 rad/s                40 rad/s
-force-loop bandwidth 150 rad/s               150 rad/s
+PID bandwidth        40 rad/s                30 rad/s
+force-loop bandwidth 150 rad/s               120 rad/s (the 5 ms spool lag and
+                                             the air's compliance: 150/40 is
+                                             unstable, the nominal check says so)
 observer gain k      see the table of        controllers.lugre_observer
 =================== ======================= =======================================
 """
@@ -106,7 +108,7 @@ PLANT_SETTINGS: dict[str, PlantSettings] = {
     "pneumatic": PlantSettings(
         control_rate=1000.0, u_max=1.0, du_max=200.0,
         sensors=Sensors(x_noise=0.5e-6, x_quantum=1e-6, p_noise=1e3, p_quantum=1e6 / 4096),
-        pid_bandwidth=40.0, force_bandwidth=150.0, observer_gain=20.0,
+        pid_bandwidth=30.0, force_bandwidth=120.0, observer_gain=20.0,
     ),
 }
 
@@ -244,6 +246,34 @@ class ControlModel:
         J = ca.substitute(ca.jacobian(fv, xv), x, x0)
         r = ca.substitute(fv, x, x0)
         return ca.Function("steady_valve", [u, p], [-ca.solve(J, r)])
+
+    def valve_transfer(self) -> Any:
+        """The valve's linear dynamics from command to opening, unit DC gain (python-control).
+
+        From the Jacobian of the controller model's valve equations at rest
+        (exact for the linear valves of the plants); the opening is the first
+        valve state (``xv``, ``xs``).
+        """
+        import control as ct
+
+        names = self.plant.state_names
+        iv = [names.index(n) for n in self.valve_states()]
+        x = ca.SX.sym("x", len(names))
+        u = ca.SX.sym("u")
+        f = self.prediction.f(x, u, self.prediction.p)
+        fv = ca.vertcat(*[f[i] for i in iv])
+        xv = ca.vertcat(*[x[i] for i in iv])
+        jac = ca.Function("valve_jac", [x, u], [ca.jacobian(fv, xv), ca.jacobian(fv, u)])
+        A, B = (np.asarray(m, dtype=float) for m in jac(np.zeros(len(names)), 0.0))
+        C = np.zeros((1, len(iv)))
+        C[0, 0] = 1.0
+        sys = ct.ss(A, B, C, 0.0)
+        return ct.tf(sys) / float(np.asarray(ct.dcgain(sys)).ravel()[0])
+
+    def viscous_damping(self) -> float:
+        """Slope of the controller's steady-state friction map at 0.1-0.2 m/s (N s/m, >= 0)."""
+        F = self.friction.steady_state(np.array([0.1, 0.2]))
+        return max(float(F[1] - F[0]) / 0.1, 0.0)
 
     # ---------------------------------------------------------- estimation
     def initial_state(self, y0: np.ndarray) -> np.ndarray:

@@ -348,9 +348,10 @@ What the fits show, and what they cannot:
   (a load-cell zero or a vertical mounting); the two are confounded.
 * **Coulomb-viscous on two speeds.** With one speed per direction, `Fc` and
   `B` are separated only by the samples in the transitions at the reversals,
-  which are dynamic (the seal's pre-sliding), so the static split is model
-  error rather than physics; see their large standard errors. `coulomb + offset`
-  gives the robust quantity: the level at the test speeds.
+  which are dynamic (the seal's pre-sliding, which a static map cannot
+  follow), so the split is model error rather than physics, however small
+  its standard errors (they measure noise, not the model's inadequacy).
+  `coulomb + offset` gives the robust quantity: the level at the test speeds.
 * LuGre reproduces the transitions after each reversal (the bristle
   stiffness and damping) and lowers the RMS error by {lugre_gain:.0f} % on average
   against coulomb + offset; on a two-speed record its Stribeck parameters

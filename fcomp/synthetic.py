@@ -88,7 +88,7 @@ HIDDEN_DEFAULTS: dict[str, dict[str, float]] = {
     "presliding": {"k": 1.5e5},
     "nonlocal-memory": {"n_elements": 6.0, "d_max": 4e-4},
     "frictional-lag": {"tau_L": 0.06},
-    "dwell-time": {"dF_inf": 25.0, "tau_k": 0.5, "m": 0.8, "d_c": 1e-3},
+    "dwell-time": {"dF_inf": 40.0, "tau_k": 0.5, "m": 1.0, "d_c": 2e-4},
     "direction-asymmetry": {"dF_neg": 8.0},
     "pressure-dependence": {"c_p": 4e-6},
     "position-dependence": {"a_g": 0.25, "x_g_frac": 0.3, "w_frac": 0.15, "a_l": 0.12},

@@ -25,9 +25,11 @@ Per sample, with the *run* the maximal stretch of motion in one direction:
   ``reversal`` after a change of direction (with or without a short stop);
 * otherwise ``sliding``.
 
-Samples before the first excursion of ``6*d_pre`` in an experiment are the
-*warm-up*: the model's friction states start from rest while the real seal
-carries an unknown history, so they are left out of every fit and score.
+Samples up to the end of the first run that travels ``6*d_pre`` in an
+experiment are the *warm-up*: the model's friction states (bristle, film,
+contact age) start from rest while the real seal carries an unknown history
+(how long it rested, where it stopped), so they are left out of every fit
+and score.
 """
 
 from __future__ import annotations
@@ -57,7 +59,7 @@ class Segmentation:
     regime : (N,) int
         Index into :data:`REGIMES`.
     valid : (N,) bool
-        Not in a warm-up.
+        Not in a warm-up (see the module docstring).
     time_since_reversal, displacement_since_reversal : (N,) s, m
         Since the last change of direction (or the experiment start).
     dwell_time : (N,) s
@@ -181,6 +183,9 @@ def _segment_one(t: np.ndarray, x: np.ndarray, v: np.ndarray, v_rest: float, zon
         dwell[a:b] = rest_len if after_dwell else 0.0
         rest_len = 0.0
         last_dir = d
-    path = np.concatenate([[0.0], np.cumsum(np.abs(np.diff(x)))])
-    valid = path >= warmup
+    valid = np.ones(n, dtype=bool)
+    for a, b in zip(bounds[:-1], bounds[1:], strict=True):  # warm-up: to the end of the
+        valid[a:b] = False                                  # first run of >= `warmup`
+        if direction[a] != 0 and float(np.ptp(x[a:b])) >= warmup:
+            break
     return regime, valid, tsr, dsr, dwell, starts

@@ -72,6 +72,9 @@ EXTRA_SPECS: dict[str, ParamSpec] = {
                    directional=False),
 }
 METHODS = ("auto", "steady-state", "samples", "trajectory")
+#: Evaluation budget of the finite-difference refinement of the hysteresis segments
+#: (each evaluation costs one simulation per parameter).
+HYSTERESIS_REFINE_NFEV = 50
 
 
 def default_free(model: FrictionModel) -> list[str]:
@@ -502,8 +505,8 @@ class FrictionFit:
         if hyst_names and self.refine_hysteresis:
             pv = ParameterVector.build(hyst_names, values, {n: specs[n] for n in hyst_names})
             prob = TrajectoryProblem(hmodel, fd, pv, substeps=self.substeps)
-            sol = solve(pv, prob, max_nfev=self.max_nfev, compress=False,
-                        what=f"{d.label}: hysteresis refinement")
+            sol = solve(pv, prob, max_nfev=min(self.max_nfev, HYSTERESIS_REFINE_NFEV),
+                        compress=False, what=f"{d.label}: hysteresis refinement")
             unc = estimate(sol.jacobian, sol.residuals, sol.theta, level=self.confidence)
             stages.append({"stage": "hysteresis-trajectory", "parameters": hyst_names,
                            "rms": float(np.sqrt(np.mean(sol.residuals**2))),

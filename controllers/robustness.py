@@ -1,0 +1,231 @@
+"""Monte Carlo robustness of the compensators: friction mismatch and sensor noise, run in parallel.
+
+A sweep (:class:`Sweep`) draws ``samples`` plant/controller mismatches: for
+each sample ``i`` every friction parameter the controller's model has is
+multiplied by a factor ``exp(N(0, spread^2))`` (log-normal, median 1: the
+controller's model is wrong by about ``spread`` in either direction), and the
+sensor noise is scaled by a factor drawn uniformly from ``noise``. Every
+controller is run on the *same* draws (common random numbers), so the
+per-compensator distributions of the metrics compare like with like.
+
+The closed-loop runs are independent jobs (:class:`Job`, picklable),
+executed by :func:`run_jobs`
+
+* on a local **process pool** (:class:`concurrent.futures.ProcessPoolExecutor`,
+  ``workers`` processes, default the number of CPUs), or
+* on a **Dask distributed** cluster when given a scheduler address
+  (``tcp://host:8786``; ``distributed.Client(address).map``), e.g. a
+  :class:`distributed.LocalCluster` or a cluster started with
+  ``dask scheduler`` / ``dask worker`` on other machines.
+
+A run that fails (a plant integration that does not converge, a loop gone
+unstable) is returned with ``status = "failed: ..."`` and no metrics: it is
+counted, never dropped.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Callable, Mapping, Sequence
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+
+from controllers.harness import LoopConfig, run_closed_loop
+from fcomp.errors import FcompError
+
+#: Friction parameters perturbed by the sweep (those a model lacks are ignored).
+MISMATCH_PARAMS: tuple[str, ...] = ("Fc", "Fs", "vs", "sigma0", "sigma1", "sigma2", "vb",
+                                    "tau_hp", "tau_hn", "T")
+
+
+@dataclass(frozen=True)
+class Job:
+    """One closed-loop run: controller, task, configuration, options, and a label."""
+
+    controller: str
+    task: str
+    config: LoopConfig
+    options: Mapping[str, Any] = field(default_factory=dict)
+    sample: int = 0
+    keep_signals: bool = False
+
+
+def run_job(job: Job) -> dict[str, Any]:
+    """Run one job; a dict with the metrics (or the failure) and the sample's draw."""
+    out: dict[str, Any] = {
+        "controller": job.controller, "task": job.task, "plant": job.config.plant,
+        "sample": job.sample, "noise": job.config.noise, "mismatch": dict(job.config.mismatch),
+    }
+    try:
+        res = run_closed_loop(job.controller, job.task, job.config, job.options)
+    except FcompError as exc:  # ConvergenceError included: an unstable or failed run
+        out.update(status=f"failed: {str(exc).splitlines()[0]}", metrics=None)
+        return out
+    out.update(status="ok", metrics=res.metrics.as_dict(), description=res.description)
+    if job.keep_signals:
+        out["signals"] = {k: getattr(res, k) for k in ("t", "r", "x", "u", "F_true", "F_hat")}
+    return out
+
+
+def run_jobs(jobs: Sequence[Job], *, workers: int | None = None, scheduler: str | None = None,
+             progress: Callable[[int, int], None] | None = None) -> list[dict[str, Any]]:
+    """Run ``jobs`` in parallel; results in the order of ``jobs``.
+
+    Parameters
+    ----------
+    jobs
+        The runs.
+    workers
+        Local processes (default: CPU count; 1 runs in this process).
+    scheduler
+        Address of a Dask distributed scheduler: run there instead.
+    progress
+        Called with ``(done, total)`` as results arrive.
+    """
+    jobs = list(jobs)
+    total = len(jobs)
+    if scheduler:
+        return _run_dask(jobs, scheduler, progress)
+    n = workers or os.cpu_count() or 1
+    if n < 1:
+        raise FcompError(f"workers must be >= 1, got {workers}")
+    if n == 1 or total <= 1:
+        out = []
+        for i, job in enumerate(jobs):
+            out.append(run_job(job))
+            if progress:
+                progress(i + 1, total)
+        return out
+    results: list[dict[str, Any] | None] = [None] * total
+    with ProcessPoolExecutor(max_workers=min(n, total)) as pool:
+        futures = {pool.submit(run_job, job): i for i, job in enumerate(jobs)}
+        from concurrent.futures import as_completed
+
+        for done, fut in enumerate(as_completed(futures), start=1):
+            results[futures[fut]] = fut.result()
+            if progress:
+                progress(done, total)
+    return [r for r in results if r is not None]
+
+
+def _run_dask(jobs: list[Job], scheduler: str,
+              progress: Callable[[int, int], None] | None) -> list[dict[str, Any]]:
+    try:
+        from distributed import Client, as_completed
+    except ImportError:
+        raise FcompError("a Dask scheduler was given but dask.distributed is not installed "
+                         "(pip install 'fcomp[distributed]')") from None
+    try:
+        client = Client(scheduler, timeout=10)
+    except (OSError, TimeoutError) as exc:
+        raise FcompError(f"cannot connect to the Dask scheduler {scheduler}: {exc}") from None
+    try:
+        futures = client.map(run_job, jobs, pure=False)
+        index = {f.key: i for i, f in enumerate(futures)}
+        results: list[dict[str, Any] | None] = [None] * len(jobs)
+        for done, fut in enumerate(as_completed(futures), start=1):
+            results[index[fut.key]] = fut.result()
+            if progress:
+                progress(done, len(jobs))
+        return [r for r in results if r is not None]
+    finally:
+        client.close()
+
+
+@dataclass(frozen=True)
+class Sweep:
+    """A Monte Carlo sweep (see the module docstring).
+
+    Attributes
+    ----------
+    plant, task
+        Plant and task names.
+    controllers
+        Controller names.
+    samples
+        Number of draws.
+    spread
+        Log-normal standard deviation of the mismatch factors.
+    noise
+        Range ``(lo, hi)`` of the sensor-noise factor.
+    seed
+        Seed of the draws.
+    fast
+        Fast task durations.
+    base
+        Configuration the draws modify (plant, friction models, tolerances).
+    """
+
+    plant: str = "hydraulic"
+    task: str = "low-velocity-ramp"
+    controllers: tuple[str, ...] = ("pid", "pid-ff", "lugre-observer", "ekf", "mpc")
+    samples: int = 20
+    spread: float = 0.3
+    noise: tuple[float, float] = (0.5, 3.0)
+    seed: int = 2026
+    fast: bool = True
+    base: LoopConfig = field(default_factory=LoopConfig)
+
+    def __post_init__(self) -> None:
+        if not (isinstance(self.samples, int) and self.samples >= 1):
+            raise FcompError(f"robustness sweep: samples must be a positive integer, "
+                             f"got {self.samples!r}")
+        if not (math.isfinite(self.spread) and self.spread >= 0):
+            raise FcompError(f"robustness sweep: spread must be >= 0, got {self.spread}")
+        lo, hi = self.noise
+        if not (0 <= lo <= hi and math.isfinite(hi)):
+            raise FcompError(f"robustness sweep: noise range must be 0 <= lo <= hi, "
+                             f"got {self.noise}")
+
+    def draws(self) -> list[tuple[dict[str, float], float]]:
+        """``(mismatch factors, noise factor)`` of every sample (reproducible)."""
+        rng = np.random.default_rng(self.seed)
+        out = []
+        for _ in range(self.samples):
+            f = np.exp(self.spread * rng.standard_normal(len(MISMATCH_PARAMS)))
+            noise = float(rng.uniform(*self.noise))
+            out.append(({k: float(v) for k, v in zip(MISMATCH_PARAMS, f, strict=True)}, noise))
+        return out
+
+    def jobs(self) -> list[Job]:
+        """One job per (sample, controller)."""
+        out = []
+        for i, (mismatch, noise) in enumerate(self.draws()):
+            cfg = replace(self.base, plant=self.plant, mismatch=mismatch, noise=noise,
+                          seed=self.seed + i, fast=self.fast)
+            for c in self.controllers:
+                out.append(Job(c, self.task, cfg, sample=i))
+        return out
+
+
+def distributions(results: Sequence[Mapping[str, Any]],
+                  metrics: Sequence[str] = ("rms_error", "max_error", "steady_state_error")
+                  ) -> dict[str, dict[str, Any]]:
+    """Per-controller distribution of each metric: values, median, 10/90 % quantiles, failures."""
+    out: dict[str, dict[str, Any]] = {}
+    for r in results:
+        d = out.setdefault(r["controller"], {"runs": 0, "failed": 0,
+                                             **{m: [] for m in metrics}})
+        d["runs"] += 1
+        if r["status"] != "ok":
+            d["failed"] += 1
+            continue
+        for m in metrics:
+            d[m].append(float(r["metrics"][m]))
+    for d in out.values():
+        for m in metrics:
+            vals = np.asarray(d[m], dtype=float)
+            d[m] = {
+                "values": vals.tolist(),
+                "median": float(np.median(vals)) if vals.size else math.nan,
+                "p10": float(np.quantile(vals, 0.1)) if vals.size else math.nan,
+                "p90": float(np.quantile(vals, 0.9)) if vals.size else math.nan,
+            }
+    return out
+
+
+__all__ = ["MISMATCH_PARAMS", "Job", "Sweep", "distributions", "run_job", "run_jobs"]

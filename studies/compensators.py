@@ -1,0 +1,332 @@
+"""Study ``compensators``: friction compensators against PID in closed loop, both fluid plants.
+
+Every controller of :mod:`controllers` (``pid``, ``pid-ff``,
+``lugre-observer``, ``ekf``, ``mpc``) runs every task of
+:mod:`controllers.tasks` (``slow-sine``, ``steps``, ``low-velocity-ramp``,
+``seed002-sine``) on both plants (``hydraulic``: seed 002's servo,
+``pneumatic``: seed 000's cylinder with the assumed servo valve), in the
+sampled-data harness of :mod:`controllers.harness`: sensor noise and
+quantisation, and a controller whose friction model is *wrong* (the default
+mismatch of :data:`controllers.harness.DEFAULT_MISMATCH`) -- the plant
+integrates the true NMLGM friction, the controllers know a different one.
+
+Outputs:
+
+* ``summary.json``: ``{"results": [{"plant", "controller", "task",
+  "rms_error", "max_error", "steady_state_error", "solve_time_median",
+  "solve_time_max", ...}, ...]}`` (errors in m, times in s), plus the
+  robustness distributions, the MPC timing and the verdict;
+* the report: ranked tables (RMS error, ratio to ``pid``), tracking-error
+  plots, friction estimate against the true friction, the Monte Carlo
+  robustness sweep (friction mismatch and sensor noise, per-compensator
+  distributions), and the MPC step time beside do-mpc where do-mpc is
+  installed (``pip install 'fcomp[bench]'``; ``benchmarks/bench_mpc.py``).
+
+The runs go to a local process pool (2 workers by default; ``FCOMP_WORKERS``)
+or, if ``FCOMP_DASK_SCHEDULER`` holds a scheduler address, to that Dask
+cluster.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from typing import Any
+
+import numpy as np
+
+from controllers import CONTROLLERS
+from controllers.harness import DEFAULT_MISMATCH, LoopConfig
+from controllers.plant_model import PLANT_SETTINGS
+from controllers.robustness import Job, Sweep, distributions, run_jobs
+from controllers.tasks import TASKS
+from studies.base import Study, StudyConfig, StudyOutput
+
+PLANTS = ("hydraulic", "pneumatic")
+CONTROLLER_ORDER = ("pid", "pid-ff", "lugre-observer", "ekf", "mpc")
+TASK_ORDER = ("slow-sine", "steps", "low-velocity-ramp", "seed002-sine")
+#: Tasks at low velocity (the verdict: best compensator vs pid).
+LOW_VELOCITY = ("slow-sine", "low-velocity-ramp")
+SUMMARY_FIELDS = ("rms_error", "max_error", "steady_state_error", "solve_time_median",
+                  "solve_time_max")
+
+
+def _workers() -> int:
+    raw = os.environ.get("FCOMP_WORKERS", "")
+    return int(raw) if raw.isdigit() and int(raw) > 0 else min(2, os.cpu_count() or 1)
+
+
+def _scheduler() -> str | None:
+    return os.environ.get("FCOMP_DASK_SCHEDULER") or None
+
+
+class CompensatorsStudy(Study):
+    """Every controller on every task on both plants (see the module docstring)."""
+
+    name = "compensators"
+    title = "Friction compensation in closed loop"
+    summary = ("PID, static feedforward, LuGre observer, EKF and MPC on a hydraulic and a "
+               "pneumatic servo whose friction the controllers know only approximately.")
+
+    def build(self, out: StudyOutput, config: StudyConfig) -> dict[str, Any]:
+        fast = config.fast
+        jobs = [Job(c, t, LoopConfig(plant=p, fast=fast), keep_signals=True)
+                for p in PLANTS for t in TASK_ORDER for c in CONTROLLER_ORDER]
+        runs = run_jobs(jobs, workers=_workers(), scheduler=_scheduler())
+        results = [self._row(r) for r in runs]
+        sweeps = {p: Sweep(plant=p, samples=3 if fast else 12, fast=True,
+                           controllers=CONTROLLER_ORDER) for p in PLANTS}
+        robust = {}
+        for p, sw in sweeps.items():
+            robust[p] = distributions(run_jobs(sw.jobs(), workers=_workers(),
+                                               scheduler=_scheduler()))
+        timing = self._timing(runs)
+        bench = self._do_mpc(fast)
+        verdict = self._verdict(results)
+        self._report(out, config, runs, results, robust, sweeps, timing, bench, verdict)
+        return {"results": results, "robustness": robust, "mpc_timing": timing,
+                "benchmark": bench, "verdict": verdict}
+
+    # --------------------------------------------------------------- results
+    @staticmethod
+    def _row(run: dict[str, Any]) -> dict[str, Any]:
+        m = run["metrics"] or {}
+        row = {"plant": run["plant"], "controller": run["controller"], "task": run["task"]}
+        for k in SUMMARY_FIELDS:
+            row[k] = m.get(k, math.nan)
+        for k in ("hunting_amplitude", "reversal_error", "valve_activity", "fallbacks"):
+            row[k] = m.get(k)
+        row["status"] = run["status"]
+        return row
+
+    @staticmethod
+    def _timing(runs: list[dict[str, Any]]) -> dict[str, Any]:
+        out: dict[str, Any] = {}
+        for p in PLANTS:
+            for c in ("ekf", "mpc"):
+                ms = [r["metrics"] for r in runs
+                      if r["plant"] == p and r["controller"] == c and r["metrics"]]
+                if ms:
+                    out[f"{p}/{c}"] = {
+                        "median_of_medians": float(np.median([m["solve_time_median"] for m in ms])),
+                        "max": float(max(m["solve_time_max"] for m in ms)),
+                        "fallbacks": int(sum(m["fallbacks"] for m in ms)),
+                    }
+        return out
+
+    @staticmethod
+    def _do_mpc(fast: bool) -> dict[str, Any]:
+        from controllers.mpc_benchmark import compare, do_mpc_available
+
+        if not do_mpc_available():
+            return {"available": False,
+                    "note": "do-mpc is not installed (pip install 'fcomp[bench]'); "
+                            "run benchmarks/bench_mpc.py for the comparison"}
+        return {"available": True, **compare(steps=60 if fast else 300)}
+
+    @staticmethod
+    def _verdict(results: list[dict[str, Any]]) -> dict[str, Any]:
+        out: dict[str, Any] = {}
+        for p in PLANTS:
+            for t in LOW_VELOCITY:
+                rows = {r["controller"]: r for r in results
+                        if r["plant"] == p and r["task"] == t and r["status"] == "ok"}
+                if "pid" not in rows:
+                    out[f"{p}/{t}"] = {"best": None, "ratio": None, "halved": False}
+                    continue
+                comp = {c: r for c, r in rows.items() if c != "pid"}
+                best = min(comp, key=lambda c: comp[c]["rms_error"]) if comp else None
+                ratio = comp[best]["rms_error"] / rows["pid"]["rms_error"] if best else None
+                out[f"{p}/{t}"] = {"best": best, "ratio": ratio,
+                                   "halved": bool(ratio is not None and ratio <= 0.5)}
+        return out
+
+    def headline(self, results: dict[str, Any]) -> str:
+        v = results["verdict"]
+        parts = [f"{k}: {d['best']} {d['ratio']:.2f}x pid" for k, d in v.items()
+                 if d["ratio"] is not None]
+        return "best compensator RMS error vs PID at low velocity -- " + "; ".join(parts)
+
+    # ---------------------------------------------------------------- report
+    def _report(self, out: StudyOutput, config: StudyConfig, runs: list[dict[str, Any]],
+                results: list[dict[str, Any]], robust: dict[str, Any],
+                sweeps: dict[str, Sweep], timing: dict[str, Any], bench: dict[str, Any],
+                verdict: dict[str, Any]) -> None:
+        rep = out.report
+        rep.section("Set-up")
+        rep.paragraph(
+            "Each run: the plant integrates the *true* NMLGM friction (its parameter set), "
+            "the controller is built on its own plant model whose NMLGM parameters are "
+            "multiplied by the mismatch factors below; position and chamber pressures are "
+            "measured with noise and quantisation. Errors are `r - x` on the true position. "
+            + ("Fast mode: shortened tasks." if config.fast else "Full-length tasks."))
+        rep.table(["parameter", "factor"], [[k, v] for k, v in DEFAULT_MISMATCH.items()],
+                  caption="Mismatch of the controllers' friction model (factor on the "
+                  "plant's value).", digits=[None, 2])
+        rows = []
+        for p, s in PLANT_SETTINGS.items():
+            rows.append([p, s.control_rate, s.u_max, s.pid_bandwidth, s.force_bandwidth,
+                         s.sensors.x_quantum * 1e6, s.sensors.p_quantum])
+        rep.table(["plant", "rate [Hz]", "u_max", "PID bw [rad/s]", "force bw [rad/s]",
+                   "x quantum [um]", "p quantum [Pa]"], rows,
+                  caption="Controller settings (MPC: 500 Hz, horizon 20 steps).",
+                  digits=[None, 0, 3, 0, 0, 1, 0])
+        rep.table(["task", "what it exercises", "duration [s]"],
+                  [[t, TASKS.get(t).description, TASKS.get(t).run_duration(config.fast)]
+                   for t in TASK_ORDER], caption="Tasks.", digits=[None, None, 1])
+
+        rep.section("Verdict: low-velocity tasks")
+        for key, d in verdict.items():
+            if d["ratio"] is None:
+                rep.note(f"{key}: no comparison (pid or every compensator failed).", kind="bad")
+                continue
+            kind = "ok" if d["halved"] else "warn"
+            rep.note(f"{key}: best compensator `{d['best']}` has {d['ratio']:.2f} times the "
+                     f"RMS error of `pid` ({'halved or better' if d['halved'] else 'NOT halved'}).",
+                     kind=kind)
+
+        rep.section("Ranked results")
+        for p in PLANTS:
+            rep.section(f"{p}", level=3)
+            for t in TASK_ORDER:
+                rows_t = [r for r in results if r["plant"] == p and r["task"] == t]
+                pid = next((r for r in rows_t if r["controller"] == "pid"
+                            and r["status"] == "ok"), None)
+                ok = sorted((r for r in rows_t if r["status"] == "ok"),
+                            key=lambda r: r["rms_error"])
+                bad = [r for r in rows_t if r["status"] != "ok"]
+                table = []
+                for rank, r in enumerate(ok, start=1):
+                    ratio = r["rms_error"] / pid["rms_error"] if pid else None
+                    table.append([rank, r["controller"], r["rms_error"] * 1e6,
+                                  r["max_error"] * 1e6, r["steady_state_error"] * 1e6,
+                                  None if r["hunting_amplitude"] is None
+                                  else r["hunting_amplitude"] * 1e6,
+                                  None if r["reversal_error"] is None
+                                  else r["reversal_error"] * 1e6,
+                                  ratio, r["valve_activity"], r["solve_time_median"] * 1e6,
+                                  r["solve_time_max"] * 1e3, r["fallbacks"], "ok"])
+                for r in bad:
+                    table.append([None, r["controller"], None, None, None, None, None, None,
+                                  None, None, None, None, r["status"]])
+                rep.table(["rank", "controller", "RMS [um]", "max [um]", "steady [um]",
+                           "hunting [um]", "reversal [um]", "RMS/pid", "valve act. [1/s]",
+                           "step median [us]", "step max [ms]", "fallbacks", "status"],
+                          table, caption=f"{p}, task `{t}`, ranked by RMS tracking error.",
+                          digits=[0, None, 1, 1, 1, 1, 1, 2, 2, 0, 2, 0, None])
+        self._tracking_figures(out, runs)
+        self._friction_figures(out, runs)
+        self._robustness(out, robust, sweeps)
+        self._benchmark(out, timing, bench)
+
+    @staticmethod
+    def _signals(runs: list[dict[str, Any]], plant: str, task: str) -> dict[str, Any]:
+        return {r["controller"]: r["signals"] for r in runs
+                if r["plant"] == plant and r["task"] == task and r.get("signals")}
+
+    def _tracking_figures(self, out: StudyOutput, runs: list[dict[str, Any]]) -> None:
+        rep = out.report
+        rep.section("Tracking")
+        for p in PLANTS:
+            fig, axes = out.subplots(len(TASK_ORDER), 1, figsize=(9, 2.6 * len(TASK_ORDER)))
+            for ax, t in zip(axes, TASK_ORDER, strict=True):
+                for c, s in self._signals(runs, p, t).items():
+                    ax.plot(s["t"], (s["r"] - s["x"]) * 1e6, lw=0.9, label=c)
+                ax.set_title(f"{p}: {t}", fontsize=9)
+                ax.set_ylabel("r - x [um]")
+                ax.grid(alpha=0.3)
+            axes[0].legend(fontsize=7, ncol=5)
+            axes[-1].set_xlabel("t [s]")
+            fig.tight_layout()
+            out.figure(fig, f"tracking-{p}", f"Tracking error of every controller on every "
+                       f"task, {p} plant (true position).")
+
+    def _friction_figures(self, out: StudyOutput, runs: list[dict[str, Any]]) -> None:
+        rep = out.report
+        rep.section("Friction estimate against the true friction")
+        rep.paragraph("The force each compensator fed forward beside the plant's true NMLGM "
+                      "friction force (`pid` feeds none). `pid-ff` uses the static map at the "
+                      "reference velocity; the observer and the EKF estimate the bristle (and "
+                      "film) state on line; the MPC uses the EKF estimate.")
+        for p in PLANTS:
+            fig, axes = out.subplots(2, 1, figsize=(9, 5.5))
+            for ax, t in zip(axes, LOW_VELOCITY, strict=True):
+                sig = self._signals(runs, p, t)
+                true = next(iter(sig.values()), None)
+                for c, s in sig.items():
+                    if c != "pid":
+                        ax.plot(s["t"], s["F_hat"], lw=0.8, label=f"{c} estimate")
+                if true is not None:
+                    ax.plot(true["t"], true["F_true"], "k", lw=1.2, label="true (pid run)")
+                ax.set_title(f"{p}: {t}", fontsize=9)
+                ax.set_ylabel("F [N]")
+                ax.grid(alpha=0.3)
+            axes[0].legend(fontsize=7, ncol=3)
+            axes[-1].set_xlabel("t [s]")
+            fig.tight_layout()
+            out.figure(fig, f"friction-{p}", f"Friction estimate vs true friction, {p} plant.")
+
+    def _robustness(self, out: StudyOutput, robust: dict[str, Any],
+                    sweeps: dict[str, Sweep]) -> None:
+        rep = out.report
+        rep.section("Robustness: friction mismatch and sensor noise (Monte Carlo)")
+        sw = next(iter(sweeps.values()))
+        rep.paragraph(
+            f"{sw.samples} draws per plant on task `{sw.task}` (fast): every friction "
+            f"parameter of the controllers' model multiplied by `exp(N(0, {sw.spread}^2))`, "
+            f"sensor noise scaled by a factor uniform in {list(sw.noise)}; every controller "
+            "sees the same draws. Runs on a process pool, or a Dask cluster "
+            "(`FCOMP_DASK_SCHEDULER`).")
+        rows = []
+        for p, dist in robust.items():
+            for c in CONTROLLER_ORDER:
+                d = dist.get(c)
+                if d is None:
+                    continue
+                r = d["rms_error"]
+                rows.append([p, c, r["median"] * 1e6, r["p10"] * 1e6, r["p90"] * 1e6,
+                             d["max_error"]["median"] * 1e6, d["runs"], d["failed"]])
+        rep.table(["plant", "controller", "RMS median [um]", "RMS p10 [um]", "RMS p90 [um]",
+                   "max-error median [um]", "runs", "failed"], rows,
+                  caption="Distribution of the metrics over the draws.",
+                  digits=[None, None, 1, 1, 1, 1, 0, 0])
+        fig, axes = out.subplots(1, len(robust), figsize=(10, 3.8))
+        axes = np.atleast_1d(axes)
+        for ax, (p, dist) in zip(axes, robust.items(), strict=True):
+            names = [c for c in CONTROLLER_ORDER if c in dist and dist[c]["rms_error"]["values"]]
+            ax.boxplot([np.asarray(dist[c]["rms_error"]["values"]) * 1e6 for c in names])
+            ax.set_xticks(range(1, len(names) + 1), names, rotation=30, fontsize=8)
+            ax.set_yscale("log")
+            ax.set_title(p, fontsize=9)
+            ax.set_ylabel("RMS error [um]")
+            ax.grid(alpha=0.3)
+        fig.tight_layout()
+        out.figure(fig, "robustness", "RMS tracking error over the Monte Carlo draws, per "
+                   "compensator (log scale).")
+
+    @staticmethod
+    def _benchmark(out: StudyOutput, timing: dict[str, Any], bench: dict[str, Any]) -> None:
+        rep = out.report
+        rep.section("Compute time: EKF and MPC steps")
+        rows = [[k, v["median_of_medians"] * 1e6, v["max"] * 1e3, v["fallbacks"]]
+                for k, v in timing.items()]
+        rep.table(["plant/controller", "median step [us]", "max step [ms]", "fallbacks"], rows,
+                  caption="Controller step time in the closed-loop runs above (whole step: "
+                  "EKF + law/QP; wall clock on this machine).", digits=[None, 0, 2, 0])
+        if not bench.get("available"):
+            rep.note(bench.get("note", "do-mpc comparison not run"), kind="warn")
+            return
+        rows = [[name, d["median"] * 1e3, d["max"] * 1e3, d["steps"]]
+                for name, d in bench["solvers"].items()]
+        rep.table(["solver", "median [ms]", "max [ms]", "steps"], rows,
+                  caption=f"MPC step on the hydraulic servo with NMLGM in the prediction model, "
+                  f"horizon {bench['horizon']} steps of {bench['dt'] * 1e3:g} ms, same problem "
+                  f"for both ({bench['note']}).", digits=[None, 3, 3, 0])
+        rep.paragraph(f"Speed-up of fcomp's RTI over do-mpc: median "
+                      f"{bench['speedup_median']:.1f}x, max {bench['speedup_max']:.1f}x.")
+
+
+STUDY = CompensatorsStudy()
+main = STUDY.main
+
+__all__ = ["CONTROLLERS", "STUDY", "CompensatorsStudy", "main"]

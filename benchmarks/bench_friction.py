@@ -39,13 +39,12 @@ import argparse
 import ctypes
 import math
 import shutil
-import statistics
 import subprocess
+import sys
 import tempfile
-import time
 from collections.abc import Callable
+from functools import partial
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
@@ -53,6 +52,9 @@ from fcomp.backend import NUMPY
 from fcomp.compiled import compiler, stepping_loop
 from fcomp.models import FrictionModel, Signals, make_model, side_of
 from fcomp.trajectory import friction_along_motion, friction_step, midpoint_signals
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_plants import timed  # noqa: E402  (median wall and CPU time of repeated calls)
 
 RATE = 1000.0  # Hz
 
@@ -198,18 +200,6 @@ def hand_c_loop(workdir: Path) -> Callable[..., np.ndarray] | None:
     return run
 
 
-# ---------------------------------------------------------------------- timing
-def timed(fn: Callable[[], Any], repeat: int) -> tuple[float, float, Any]:
-    """Median wall and CPU time (s) of ``repeat`` calls, and the last result."""
-    wall, cpu, out = [], [], None
-    for _ in range(repeat):
-        t0, c0 = time.perf_counter(), time.process_time()
-        out = fn()
-        wall.append(time.perf_counter() - t0)
-        cpu.append(time.process_time() - c0)
-    return statistics.median(wall), statistics.median(cpu), out
-
-
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--repeat", type=int, default=7, help="runs of the fast methods (>= 5)")
@@ -223,13 +213,12 @@ def main() -> None:
         for name in ("lugre", "nmlgm"):
             model = make_model(name, params="seed000-cylinder1")
             ours = friction_along_motion(model, t, v, a=a)  # warm-up: compiles once
-            w_f, c_f, run = timed(lambda m=model: friction_along_motion(m, t, v, a=a),
-                                  args.repeat)
+            w_f, c_f, run = timed(partial(friction_along_motion, model, t, v, a=a), args.repeat)
             results = {"fcomp": (w_f, c_f, 0.0)}
-            w, c, F = timed(lambda m=model: plain_python(m, t, v, a), args.repeat_python)
+            w, c, F = timed(partial(plain_python, model, t, v, a), args.repeat_python)
             results["plain Python"] = (w, c, float(np.abs(F - run.F).max()))
             if hand is not None:
-                w, c, F = timed(lambda m=model: hand(m, t, v, a), args.repeat)
+                w, c, F = timed(partial(hand, model, t, v, a), args.repeat)
                 results["hand-written C"] = (w, c, float(np.abs(F - run.F).max()))
             step = stepping_loop(friction_step(model))
             M, dts = midpoint_signals({"t": t, "v": v, "a": a, "x": 0 * t, "p1": 0 * t,
@@ -237,7 +226,7 @@ def main() -> None:
             U = np.ascontiguousarray(M.T)
             pvec = np.array(list(model.flat_params().values()))
             x0 = model.initial_state()
-            w, c, X = timed(lambda s=step, x0=x0, p=pvec: s(x0, U, dts, p), args.repeat)
+            w, c, X = timed(partial(step, x0, U, dts, pvec), args.repeat)
             results["CasADi step loop"] = (w, c, float(np.abs(X - ours.states).max()))
             rows.append((name, results))
 

@@ -24,8 +24,9 @@ if_else     ``if_else(c, a, b)``: ``a`` where ``c`` is true, else ``b``
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any, Callable
+from typing import Any
 
 import casadi as ca
 import numpy as np

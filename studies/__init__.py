@@ -22,6 +22,7 @@ _MODULES = (
     "friction_models",
     "presliding",
     "missing_physics",
+    "compensators",
     "all",
 )
 

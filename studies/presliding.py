@@ -140,9 +140,14 @@ def rig_plant(cyl: int) -> Any:
     return PLANTS.get("presliding-rig")(make_model("nmlgm", params=pset), pset)
 
 
-def new_model(cyl: int) -> HysteresisFamily:
-    """Seed 000's new model for cylinder ``cyl`` (Table 4 + Tables 2-3 of cylinder 1)."""
+def new_model(cyl: int, **changes: float) -> HysteresisFamily:
+    """Seed 000's new model for cylinder ``cyl`` (Table 4 + Tables 2-3 of cylinder 1).
+
+    ``changes``: flat parameters to change (e.g. the no-op hysteresis values).
+    """
     model = make_model("nmlgm-hysteresis", params=paramset(cyl))
+    if changes:
+        model = model.with_params(**changes)
     if not isinstance(model, HysteresisFamily):  # pragma: no cover - registry guarantees it
         raise FcompError("nmlgm-hysteresis is not a hysteresis model")
     return model
@@ -546,7 +551,7 @@ def run_cases(fast: bool) -> list[Case]:
 def engine_check(dt: float) -> dict[str, float]:
     """Co-simulation against the plant engine: the no-op new model (= NMLGM) on Fig. 4a."""
     rig = rig_plant(1)
-    noop = new_model(1).with_params(**NONLOCAL_MEMORY_DEFAULTS)
+    noop = new_model(1, **NONLOCAL_MEMORY_DEFAULTS)
     prog = programme("fig4", FIG4_P1MAX[1][0])
     ref = plant_run(rig, prog, dt)
     co = RigCosim(noop, rig).run(prog, dt, pressures=ref)
@@ -595,7 +600,9 @@ def fig4_summary(case: Case, idx: int) -> dict[str, Any]:
 
 def analyse(cases: list[Case], fast: bool) -> dict[str, Any]:
     """The summary: memory properties, loop-area errors, loop size against pressure."""
-    models = {"nmlgm": make_model("nmlgm", params=paramset(1)), "nmlgm-hysteresis": new_model(1)}
+    hyst = new_model(1)
+    models: dict[str, FrictionModel] = {"nmlgm": make_model("nmlgm", params=paramset(1)),
+                                        "nmlgm-hysteresis": hyst}
     ref_case = next(c for c in cases if c.cylinder == 1 and c.figure == "fig10")
     ref = ref_case.new
     W_ref = ref.friction_work
@@ -619,7 +626,6 @@ def analyse(cases: list[Case], fast: bool) -> dict[str, Any]:
                                    "internal_loop_force_range", "slip_shift")},
             "memory_tolerance": mem["tolerance"],
         }
-    hyst = models["nmlgm-hysteresis"]
     a_tab = table3_loop_area(hyst.flat_params())
     a_mod = model_loop_area(hyst)
     res["nmlgm-hysteresis"]["table3_check"] = {

@@ -255,7 +255,7 @@ def mass_with_force(
                          [0.0, dz_dv, dz_dz]])
 
     return solve_radau(fun, (float(t_eval[0]), float(t_eval[-1])), y0, t_eval,
-                  atol=(1e-14, 1e-14, 1e-19), breaks=breaks, max_step=max_step, jac=jac)
+                       atol=(1e-14, 1e-14, 1e-19), breaks=breaks, max_step=max_step, jac=jac)
 
 
 def stick_slip(
@@ -296,4 +296,4 @@ def along_velocity(
         return list(p.rates(y[0], y[1], v(t), sfun(t)))
 
     return solve_radau(fun2, (float(t_eval[0]), float(t_eval[-1])), y0 or (0.0, 0.0), t_eval,
-                  atol=(1e-19, 1e-14), breaks=breaks, max_step=max_step)
+                       atol=(1e-19, 1e-14), breaks=breaks, max_step=max_step)

@@ -22,6 +22,8 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
+from functools import partial
+from typing import Any
 
 import casadi as ca
 import numpy as np
@@ -284,14 +286,19 @@ def _break_away(t: np.ndarray, F: np.ndarray) -> float:
     return float(f1 + (f2 - f0) ** 2 / (8.0 * (2.0 * f1 - f0 - f2)))
 
 
+def _ramp(rate: float, t: Any, x: Any) -> Any:
+    """Applied force ``rate*t`` (N), for floats and CasADi symbols."""
+    return rate * t
+
+
 @pytest.fixture(scope="module")
 def break_away(lugre: FrictionModel) -> dict[str, list[float]]:
     mass = PackageMass(lugre)
     out: dict[str, list[float]] = {"pkg": [], "ref": []}
     for rate in RATES:
         t = np.linspace(0.0, 1.6 * P_REF.Fs / rate, 3001)
-        pkg = mass.simulate(lambda tt, x, r=rate: r * tt, t)
-        rf = ref.mass_with_force(P_REF, lambda tt, x, r=rate: r * tt, t, mass=MASS)
+        pkg = mass.simulate(partial(_ramp, rate), t)
+        rf = ref.mass_with_force(P_REF, partial(_ramp, rate), t, mass=MASS)
         out["pkg"].append(_break_away(t, mass.friction(pkg)))
         out["ref"].append(_break_away(t, ref_friction(rf.y)))
     return out

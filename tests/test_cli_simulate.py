@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from test_effects import USER_MODULE
 
 from fcomp.inputs import parse_input
 from fcomp.measurement import Measurement
@@ -110,30 +111,9 @@ def test_every_family_model_name_is_accepted() -> None:
                       "modified-lugre", "nmlgm"]
 
 
-USER_EFFECTS = '''
-"""A user's effects module: a constant load on the rod (N)."""
-from fcomp.effects import Effect, register_effect
-from fcomp.parameters import make_params_class, spec
-
-
-@register_effect
-class RodLoad(Effect):
-    """A constant external load on the rod."""
-
-    name = "rod-load"
-    Params = make_params_class("RodLoadParams", [spec("load", "N", 0.0, -1e3, 1e3, "load")],
-                               owner="effect rod-load")
-    signature = "constant offset"
-    experiment = "none"
-
-    def extra_force(self, be, sig, P):
-        return P("load"), 0.0
-'''
-
-
 def test_user_effect_from_a_module_via_effects_option(tmp_path: Path, runs: dict) -> None:
     module = tmp_path / "my_effects.py"
-    module.write_text(USER_EFFECTS)
+    module.write_text(USER_MODULE.format(name="rod-load"))
     out = tmp_path / "loaded.csv"
     proc = subprocess.run(_args("lugre", "canudas1995", out, "--effects", str(module),
                                 "--add-effect", "rod-load", "--set", "load=2.5"),

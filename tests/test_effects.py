@@ -15,10 +15,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 import reference_lugre as ref
+from test_models import attachable
 
 from fcomp.backend import NUMPY, Backend
 from fcomp.effects import EFFECTS, Effect, load_effects_module, make_effect, register_effect
-from fcomp.effects.catalogue import StructuralEffect
 from fcomp.errors import FcompError, UnknownNameError
 from fcomp.models import FrictionModel, Signals, make_model
 from fcomp.models.lugre_family import PRESETS
@@ -49,18 +49,8 @@ def _run(model: FrictionModel, m: dict[str, np.ndarray]) -> FrictionRun:
                                  p2=m["p2"])
 
 
-def _attachable(effect: str, model: FrictionModel) -> bool:
-    eff = make_effect(effect)
-    if not eff.applies_to(model):
-        return False
-    if isinstance(eff, StructuralEffect):
-        needs = set(eff.requires) | ({"stribeck"} if effect == "frictional-lag" else set())
-        return needs <= set(model.features)  # type: ignore[attr-defined]
-    return True
-
-
 CASES = [(name, eff) for name in PRESETS for eff in CATALOGUE
-         if _attachable(eff, make_model(name, params="seed000-cylinder1"))]
+         if attachable(eff, make_model(name, params="seed000-cylinder1"))]
 
 
 #: (model, effect) pairs where ``applies_to`` holds but the defaults are not a no-op:

@@ -56,7 +56,8 @@ ADD_ONS = ("dwell-time", "direction-asymmetry", "pressure-dependence", "position
            "inertia-error", "force-offset")
 
 
-def _attachable(effect: str, model: FrictionModel) -> bool:
+def attachable(effect: str, model: FrictionModel) -> bool:
+    """Whether ``effect`` applies to ``model`` and the terms it needs are there."""
     eff = make_effect(effect)
     if not eff.applies_to(model):
         return False
@@ -73,7 +74,7 @@ def _variants() -> list[tuple[str, FrictionModel]]:
         base = make_model(name, params="seed000-cylinder1")
         out.append((name, base))
         for eff in EFFECT_PARAMS:
-            if _attachable(eff, base):
+            if attachable(eff, base):
                 out.append((f"{name}+{eff}", base.with_effects(make_effect(eff, EFFECT_PARAMS[eff]))))
         out.append((f"{name}+add-ons", base.with_effects(
             *[make_effect(e, EFFECT_PARAMS[e]) for e in ADD_ONS])))
@@ -197,7 +198,8 @@ def test_jacobians_match_finite_differences(label: str, model: FrictionModel) ->
         u = np.array([v, rng.normal(), rng.uniform(0, 0.3), rng.uniform(0, 6e5),
                       rng.uniform(0, 6e5)])
         if "h" in model.state_names and isinstance(model, LuGreFamily):
-            L = model.levels(NUMPY, list(X), Signals(*u, s), P)
+            sig = Signals(v=u[0], a=u[1], x=u[2], p1=u[3], p2=u[4], s=s)
+            L = model.levels(NUMPY, list(X), sig, P)
             hss = float(model.h_ss(NUMPY, v, P, L, s))
             if abs(X[model.state_names.index("h")] - hss) < 1e-3:
                 continue
@@ -303,13 +305,14 @@ def test_long_run_force_equals_steady_state_map(name: str, params: str, effects:
 
 
 def _reference_of(model: FrictionModel) -> ref.LuGreRef | ref.FilmLuGreRef:
-    params = {}
+    if model.name == "lugre" and not model.params.is_directional():
+        flat = model.flat_params()
+        return ref.LuGreRef(**{k: flat[k] for k in
+                               ("Fc", "Fs", "vs", "n", "sigma0", "sigma1", "sigma2")})
+    params: dict[str, float | tuple[float, float]] = {}
     for s in type(model.params).SPECS:
         val = getattr(model.params, s.name)
         params[s.name] = val.values() if isinstance(val, Directional) else float(val)
-    if model.name == "lugre" and not model.params.is_directional():
-        return ref.LuGreRef(**{k: params[k] for k in
-                               ("Fc", "Fs", "vs", "n", "sigma0", "sigma1", "sigma2")})
     return ref.FilmLuGreRef(params)
 
 
@@ -342,13 +345,14 @@ def test_nmlgm_along_reversing_motion_matches_independent_integration() -> None:
     """
     model = make_model("nmlgm", params="seed000-cylinder1").with_params(T=0.01)
     r = _reference_of(model)
+    assert isinstance(r, ref.FilmLuGreRef)
     w = math.pi
     t = np.linspace(0.0, 2.0, 40001)
     v, a = 0.08 * np.sin(w * t) + 0.01, 0.08 * w * np.cos(w * t)
     run = friction_along_motion(model, t, v, a=a)
     tr = ref.along_velocity(r, lambda tt: 0.08 * math.sin(w * tt) + 0.01, t)
     s = np.where(v >= 0, 1.0, -1.0)
-    F_ref = np.array([r.friction(z, h, vv, aa, ss)  # type: ignore[union-attr]
+    F_ref = np.array([r.friction(z, h, vv, aa, ss)
                       for z, h, vv, aa, ss in zip(*tr.y, v, a, s, strict=True)])
     assert np.abs(run.states[:, 0] - tr.y[0]).max() < 2e-7  # m, z up to 1.7e-3
     assert np.abs(run.states[:, 1] - tr.y[1]).max() < 2e-4  # film h in [0, 0.78]
@@ -408,8 +412,8 @@ def test_olsson_bound_in_continuous_time_and_tight() -> None:
 
 
 # --------------------------------------------------------------- passivity
-def _dissipation(model: FrictionModel, velocities: Sequence[float], durations: Sequence[float],
-                 samples: int = 4000) -> np.ndarray:
+def _dissipation(model: FrictionModel, velocities: Sequence[float] | np.ndarray,
+                 durations: Sequence[float] | np.ndarray, samples: int = 4000) -> np.ndarray:
     """``D(t) = int v*(sigma0*z + sigma1*dz/dt) dt - sigma0*z^2/2`` (J) along piecewise-constant v.
 
     Integrated with Radau on the package's numeric equations, from ``z = 0``.

@@ -26,6 +26,7 @@ Guesses only start the refit; every parameter of the model is refitted.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -335,23 +336,29 @@ def baseline_starts(model: FrictionModel, data: DiagnosisData, seg: Segmentation
                     train: np.ndarray) -> list[dict[str, float]]:
     """Starts of the baseline fit, read off the training samples.
 
-    Levels and the viscous coefficient by linear least squares on the moving
+    Levels and the viscous coefficient by linear least squares on the sliding
     samples (:func:`fcomp.identification.guess.linear_start`), the Stribeck
-    hump (:func:`~fcomp.identification.guess.stribeck_start`), the bristle
+    hump (:func:`~fcomp.identification.guess.stribeck_start`), then the
+    steady-state map fitted to the steady sliding points (:func:`_static_stage`,
+    seed 002's procedure), the bristle
     stiffness ``Fc/d_pre`` from the presliding length (three starts, a factor
     of four apart), a small bristle damping (its term a tenth of ``Fc`` at the
     median speed), the film speed ``vb`` ten times the speed scale (almost the
     classical curve); everything else from the model's defaults.
     """
+    from fcomp.diagnosis.regimes import SLIDING
     from fcomp.identification.guess import linear_start
     from fcomp.identification.target import FitData
 
     flat = dict(model.flat_params())
-    sig = {k: data.signal(k)[train] for k in ("t", "v", "a", "x", "p1", "p2", "s")}
+    use = train & (seg.regime == SLIDING)  # no presliding / reversal / break-away transients
+    if use.sum() < 20:
+        use = train
+    sig = {k: data.signal(k)[use] for k in ("t", "v", "a", "x", "p1", "p2", "s")}
     inertia = None
     if data.fits_mass:
-        inertia = np.concatenate([e.data.inertia for e in data.experiments])[train]
-    d = FitData(sig, data.y[train], inertia, data.source, None, "training samples")
+        inertia = np.concatenate([e.data.inertia for e in data.experiments])[use]
+    d = FitData(sig, data.y[use], inertia, data.source, None, "training samples")
     names = {n.removesuffix("_pos").removesuffix("_neg") for n in flat}
     visc = "B" if "B" in names else ("sigma2" if "sigma2" in names else None)
     v_min = max(seg.v_rest, 0.02 * data.scales.speed)
@@ -380,7 +387,79 @@ def baseline_starts(model: FrictionModel, data: DiagnosisData, seg: Segmentation
         moving = np.abs(d.sig["v"]) >= v_min
         med = float(np.median(np.abs(d.sig["v"][moving]))) if moving.any() else data.scales.speed
         put("sigma1", 0.1 * Fc / med)
+    static = _static_stage(model, data, seg, train, start, v_min)
+    variants = [dict(start, **static), start] if static else [start]
     if "sigma0" not in names:
-        return [start]
-    s0 = Fc / seg.d_pre
-    return [dict(start, sigma0=s0 * k) for k in (1.0, 4.0, 0.25)]
+        return variants
+    out = []
+    for k in (1.0, 4.0):
+        for var in variants:
+            out.append(dict(var, sigma0=k * var.get("Fc", Fc) / seg.d_pre))
+    return out
+
+
+def _static_stage(model: FrictionModel, data: DiagnosisData, seg: Segmentation,
+                  train: np.ndarray, start: dict[str, float], v_min: float
+                  ) -> dict[str, float]:
+    """The model's own steady-state parameters fitted to the steady sliding points (seed 002).
+
+    Steady runs of the training samples are binned by speed per direction
+    (:func:`fcomp.identification.static.steady_state_points`) and the model's
+    steady-state map is fitted to them (:func:`~fcomp.identification.static.fit_steady_state`)
+    in the parameters it depends on; effect parameters keep their values.
+    Returns the fitted values (empty when there are too few points).
+    """
+    from fcomp.diagnosis.refit import data_bounds, fixed_names
+    from fcomp.errors import FcompError
+    from fcomp.identification.problem import ParameterVector
+    from fcomp.identification.static import SteadyStateMap, fit_steady_state, steady_state_points
+
+    if not model.symbolic:
+        return {}
+    own = [n for n in model.params.flat() if n not in fixed_names(model)
+           and math.isfinite(model.params.flat()[n])]
+    from fcomp.identification.static import SteadyStatePoints
+
+    def points(min_duration: float, rel_change: float) -> SteadyStatePoints:
+        found = []
+        for e in data.experiments:
+            m = train[e.start:e.stop]
+            s = e.data.sig
+            if m.sum() >= 10:
+                found.append(steady_state_points(
+                    s["t"][m], s["v"][m], s["a"][m], e.data.y[m], v_min=v_min,
+                    min_duration=min_duration, rel_change=rel_change, x=s["x"][m],
+                    p1=s["p1"][m], p2=s["p2"][m]))
+        found = [p for p in found if len(p)]
+        if not found:
+            return SteadyStatePoints(*[np.zeros(0)] * 6)
+        return SteadyStatePoints(*[np.concatenate([getattr(p, f) for p in found])
+                                   for f in ("v", "F", "count", "x", "p1", "p2")])
+
+    def distinct(p: SteadyStatePoints) -> int:  # speeds more than 20 % apart, per side
+        key = np.sign(p.v) * np.round(np.log(np.maximum(np.abs(p.v), 1e-12)) / 0.2)
+        return int(np.unique(key).size)
+
+    pts = points(0.05, 0.1)
+    if distinct(pts) < 8:  # few steady runs: admit slower-changing stretches too
+        pts = points(max(10 * data.scales.dt, 0.02), 0.3)
+    values = {**model.flat_params(), **start}
+    try:
+        _, G = SteadyStateMap(model, own)(pts, {k: values[k] for k in own})
+    except (ValueError, FcompError):
+        return {}
+    norm = np.sqrt(np.mean(G**2, axis=0)) * np.array([abs(values[n]) or 1.0 for n in own])
+    free = [n for n, c in zip(own, norm, strict=True) if c > 1e-9 * max(norm.max(), 1e-300)]
+    if distinct(pts) < len(free) + 3 or not free:
+        return {}
+    specs = {}
+    for n, sp in model.param_specs().items():
+        if n in free:
+            lo, hi = data_bounds(sp, data.scales, seg.d_pre)
+            specs[n] = dataclasses.replace(sp, lower=lo, upper=hi, lower_open=False)
+    pv = ParameterVector.build(free, values, specs, {n: max(abs(values[n]), 1e-6) for n in free})
+    try:
+        res = fit_steady_state(model, pts, pv, max_nfev=100)
+    except (ValueError, FcompError, np.linalg.LinAlgError):
+        return {}
+    return {k: float(v) for k, v in res.values.items() if k in free}

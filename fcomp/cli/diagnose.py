@@ -1,0 +1,142 @@
+"""``fcomp diagnose DATA.csv [DATA2.csv ...] --baseline NAME [--json OUT] [--report DIR]``.
+
+Compare the baseline friction model with the measurement(s), find which
+physical effect is missing, add it, refit, and watch the held-out error fall
+(:class:`fcomp.diagnosis.Diagnosis`). Several files are several experiments
+(e.g. runs at different pressure levels); a file with an ``experiment``
+column is split by it. Prints a summary; ``--json OUT`` writes
+
+    {"baseline", "rms_baseline", "added", "steps": [{"effect", "rms_before",
+     "rms_after", "accepted"}, ...], "candidates": [{"effect", "rms_heldout"}, ...],
+     "ties", "rms_final", "noise_floor", "verdict", "residual_features": [{"feature",
+     "strength"}, ...], ...}
+
+(all errors in newtons, on held-out data; ``-`` writes to standard output)
+and ``--report DIR`` a self-contained ``DIR/report.html`` with every figure.
+``--add EFFECT`` adds an effect (catalogue or registered with ``--effects
+MODULE.py``) before the search, whatever the acceptance rule says.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import shlex
+import sys
+from pathlib import Path
+
+from fcomp.errors import FcompError
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("diagnose", help="compare a model with measurements, find and add the "
+                       "missing effect", description=__doc__,
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("data", nargs="+", metavar="DATA.csv",
+                   help="measurement(s) (CSV + TOML sidecar); several files = several experiments")
+    p.add_argument("--baseline", required=True, help="friction model name (fcomp list models)")
+    p.add_argument("--json", metavar="OUT", default=None,
+                   help="write the result as JSON to OUT ('-' for standard output)")
+    p.add_argument("--report", metavar="DIR", default=None,
+                   help="write a self-contained HTML report to DIR/report.html")
+    p.add_argument("--add", action="append", default=[], metavar="EFFECT",
+                   help="add this effect first (and refit), whatever the rule says; repeatable")
+    p.add_argument("--effects", metavar="MODULE.py", default=None,
+                   help="a Python file that registers the user's own effects (they become "
+                   "candidates too)")
+    p.add_argument("--candidates", metavar="E1,E2,...", default=None,
+                   help="effects to try (default: every registered effect)")
+    p.add_argument("--no-search", action="store_true",
+                   help="only the baseline and the --add effects; no search")
+    p.add_argument("--split", default="auto", choices=["auto", "experiment", "segment"],
+                   help="held-out split: by experiment (4+ experiments under auto) or by "
+                   "contiguous segment")
+    p.add_argument("--cutoff", type=float, default=None, metavar="HZ",
+                   help="cutoff of the zero-phase filter deriving v, a from x (default: from "
+                   "the sample rate and the position noise)")
+    p.add_argument("--max-steps", type=int, default=6, metavar="N",
+                   help="most effects the search adds (default 6)")
+    p.add_argument("--jobs", type=int, default=None, metavar="N",
+                   help="parallel refits (default: CPU count, at most 4)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
+    p.set_defaults(func=run)
+
+
+def _json_target(path: str | None) -> Path | None:
+    if path is None or path == "-":
+        return None
+    out = Path(path)
+    if out.is_dir():
+        raise FcompError(f"--json {path}: is a directory")
+    if not out.parent.exists():
+        raise FcompError(f"--json {path}: folder {out.parent} does not exist")
+    return out
+
+
+def summary(doc: dict) -> str:
+    """The printed summary of a diagnosis JSON."""
+    lines = [f"baseline {doc['baseline']}: held-out RMS {doc['rms_baseline']:.4g} N "
+             f"(noise floor {doc['noise_floor']:.3g} N, {doc['noise_method']}; {doc['split']})"]
+    for i, s in enumerate(doc["steps"], 1):
+        tag = "accepted" if s["accepted"] else "rejected"
+        if s.get("forced"):
+            tag = "added on request" + ("" if s["accepted"] else " (the rule would reject it)")
+        after = "-" if s["rms_after"] is None else f"{s['rms_after']:.4g}"
+        lines.append(f"step {i}: + {s['effect']:22s} {s['rms_before']:.4g} -> {after} N  {tag}")
+    if doc["ties"]:
+        for t in doc["ties"]:
+            lines.append(f"tie (confounded, {t[0]} added): " + ", ".join(t))
+            for e, exp in doc["tie_experiments"][t[0]].items():
+                lines.append(f"    {e}: {exp}")
+    lines.append(f"added: {', '.join(doc['added']) or 'nothing'}; final model {doc['model']}; "
+                 f"held-out RMS {doc['rms_final']:.4g} N")
+    feats = ", ".join(f"{f['feature']} {f['strength']:.2f}" for f in doc["residual_features"][:4])
+    lines.append(f"verdict: {doc['verdict']} (residual follows: {feats})")
+    return "\n".join(lines)
+
+
+def run(args: argparse.Namespace) -> int:
+    from fcomp.diagnosis import Diagnosis
+    from fcomp.diagnosis.report import write_report
+    from fcomp.effects import load_effects_module
+    from fcomp.measurement import Measurement
+    from fcomp.report import atomic_write_text
+
+    out = _json_target(args.json)
+    if args.report is not None and Path(args.report).exists() and not Path(args.report).is_dir():
+        raise FcompError(f"--report {args.report}: exists and is not a directory")
+    if args.max_steps < 0:
+        raise FcompError(f"--max-steps must be a non-negative integer, got {args.max_steps}")
+    if args.jobs is not None and args.jobs < 1:
+        raise FcompError(f"--jobs must be a positive integer, got {args.jobs}")
+    if args.cutoff is not None and not args.cutoff > 0:
+        raise FcompError(f"--cutoff must be a positive frequency in Hz, got {args.cutoff}")
+    if args.effects:
+        load_effects_module(args.effects)
+    candidates = None
+    if args.candidates is not None:
+        candidates = [c.strip() for c in args.candidates.split(",") if c.strip()]
+        if not candidates:
+            raise FcompError("--candidates: give at least one effect name")
+    data = [Measurement.read(p) for p in args.data]
+    diag = Diagnosis(args.baseline, effects=candidates, add=args.add,
+                     search=not args.no_search, split=args.split, cutoff_hz=args.cutoff,
+                     max_steps=args.max_steps, n_jobs=args.jobs,
+                     progress=not args.no_progress)
+    diag.fit(data)
+    doc = diag.to_dict()
+    text = json.dumps(doc, indent=2, allow_nan=False) + "\n"
+    command = "fcomp diagnose " + " ".join(shlex.quote(a) for a in sys.argv[2:]) \
+        if len(sys.argv) > 2 else None
+    if args.report is not None:
+        path = write_report(diag, args.report, command=command)
+        if args.json != "-":
+            print(f"wrote {path}")
+    if args.json == "-":
+        sys.stdout.write(text)
+        return 0
+    print(summary(doc))
+    if out is not None:
+        atomic_write_text(out, text)
+        print(f"wrote {out}")
+    return 0

@@ -274,3 +274,18 @@ class ParamValues:
 
     def has(self, name: str) -> bool:
         return name in self.values or name + "_pos" in self.values
+
+    @classmethod
+    def symbolic(cls, names: Iterable[str], label: str = "p") -> tuple[Any, ParamValues]:
+        """A CasADi symbol vector for the flat parameters ``names`` and its view.
+
+        Used wherever parameters are function *inputs* (compiled loops,
+        sensitivities, symbolic plant and model functions).
+        """
+        import casadi as ca
+
+        from fcomp.backend import CASADI
+
+        names = list(names)
+        p = ca.SX.sym(label, len(names))
+        return p, cls({n: p[i] for i, n in enumerate(names)}, CASADI)

@@ -346,8 +346,7 @@ class OdePlant(Plant):
         u = ca.SX.sym("u", self.nu)
         names = list(self.flat_params())
         if symbolic_params:
-            p = ca.SX.sym("p", len(names))
-            P = ParamValues({n: p[i] for i, n in enumerate(names)}, CASADI)
+            p, P = ParamValues.symbolic(names)
             args, argn = [x, u, p], ["x", "u", "p"]
         else:
             P = self.param_values(CASADI)

@@ -38,10 +38,9 @@ def _build(model: FrictionModel, free: tuple[str, ...], substeps: int,
     names = list(model.flat_params())
     fi = [names.index(n) for n in free]
     nx, nf = model.n_states, len(free)
-    p = ca.SX.sym("p", len(names))
+    p, P = ParamValues.symbolic(names)
     u = ca.SX.sym("u", 2 * len(SIGNAL_NAMES))
     dt = ca.SX.sym("dt")
-    P = ParamValues({n: p[i] for i, n in enumerate(names)}, CASADI)
     sig_next = Signals(*[u[len(SIGNAL_NAMES) + i] for i in range(len(SIGNAL_NAMES))])
     xs = ca.SX.sym("xs", nx)
     F = model.force(CASADI, [xs[i] for i in range(nx)], sig_next, P)

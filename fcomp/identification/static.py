@@ -125,11 +125,10 @@ class SteadyStateMap:
         self.names = list(model.flat_params())
         self.free = tuple(free)
         fi = [self.names.index(n) for n in self.free]
-        p = ca.SX.sym("p", len(self.names))
+        p, P = ParamValues.symbolic(self.names)
         v, x, p1, p2 = (ca.SX.sym(k) for k in ("v", "x", "p1", "p2"))
         s = ca.if_else(v >= 0, 1.0, -1.0)
         sig = Signals(v=v, a=0.0, x=x, p1=p1, p2=p2, s=s)
-        P = ParamValues({n: p[i] for i, n in enumerate(self.names)}, CASADI)
         xs = model.steady_state_states(CASADI, sig, P)
         F = model.force(CASADI, xs, sig, P)
         F = ca.SX(F) if not isinstance(F, ca.SX) else F

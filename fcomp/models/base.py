@@ -371,8 +371,7 @@ class FrictionModel(ABC):
         sig, sigv = Signals.symbolic()
         names = list(self.flat_params())
         if symbolic_params:
-            pv = ca.SX.sym("p", len(names))
-            P = ParamValues({n: pv[i] for i, n in enumerate(names)}, CASADI)
+            pv, P = ParamValues.symbolic(names)
             args, argn = [xs, sigv, pv], ["x", "sig", "p"]
         else:
             P = self.param_values(CASADI)

@@ -7,6 +7,7 @@ no-ops: adding an effect with default parameters does not change the force.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from typing import TYPE_CHECKING, Any, ClassVar
 
@@ -19,6 +20,7 @@ from fcomp.models.hysteresis import (
     hysteresis_specs,
     with_hysteresis,
 )
+from fcomp.models.lugre_family import FAMILY_SPECS
 from fcomp.parameters import ParamValues, make_params_class, spec
 
 if TYPE_CHECKING:
@@ -156,14 +158,8 @@ class FrictionalLag(StructuralEffect):
     adds = frozenset({"film", "film-lag"})
     requires = frozenset({"stribeck"})
     Params = make_params_class("FrictionalLagParams", [
-        spec("vb", "m/s", INF, 0.0, INF, "velocity up to which the film thickens",
-             lower_open=True),
-        spec("tau_hp", "s", 0.02, 0.0, INF, "film time constant, acceleration",
-             lower_open=True, directional=False),
-        spec("tau_hn", "s", 0.12, 0.0, INF, "film time constant, deceleration",
-             lower_open=True, directional=False),
-        spec("tau_h0", "s", 10.0, 0.0, INF, "film time constant, dwell",
-             lower_open=True, directional=False),
+        dataclasses.replace(FAMILY_SPECS["vb"], default=INF),
+        *(FAMILY_SPECS[n] for n in ("tau_hp", "tau_hn", "tau_h0")),
     ], owner="effect frictional-lag")
     signature = "residual loop against v: rising and falling |v| branches differ"
     experiment = "velocity sweeps up and down at several rates; dwell before restart"

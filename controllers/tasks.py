@@ -182,30 +182,30 @@ _P = _HOLD + _BLEND
 
 TASKS.register("slow-sine", Task(
     "slow-sine", "slow sine, 10 mm at 0.25 Hz: velocity reversals in the Stribeck region",
-    duration=8.0, fast_duration=2.6,
+    duration=8.0, fast_duration=2.3,
     reference=cosine_reference(0.010, 0.25),
     settle=((4.0, 8.0),), reversals=(2.0, 4.0, 6.0), reversal_window=0.4,
-    fast_settle=((1.6, 2.6),), kind="periodic",
+    fast_settle=((1.3, 2.3),), kind="periodic",
 ))
 TASKS.register("steps", Task(
     "steps", "2 mm position steps held 1.5 s: hunting (integral action + static friction)",
-    duration=len(_STEPS) * _P, fast_duration=2 * _P,
+    duration=len(_STEPS) * _P, fast_duration=_P,
     reference=staircase_reference(_STEPS, _HOLD, _BLEND),
     settle=tuple((i * _P + _BLEND + 0.6 * _HOLD, (i + 1) * _P) for i in range(len(_STEPS))),
     kind="regulation",
 ))
 TASKS.register("low-velocity-ramp", Task(
     "low-velocity-ramp", "constant 2 mm/s ramp, far below the Stribeck velocity: stick-slip",
-    duration=5.0, fast_duration=2.0,
+    duration=5.0, fast_duration=1.5,
     reference=ramp_reference(0.002, 0.3),
-    settle=((1.0, 5.0),), fast_settle=((1.0, 2.0),), kind="ramp",
+    settle=((1.0, 5.0),), fast_settle=((0.8, 1.5),), kind="ramp",
 ))
 TASKS.register("seed002-sine", Task(
     "seed002-sine", "seed 002's sinusoidal case in closed loop: +-0.14 m/s at 1 Hz",
-    duration=3.0, fast_duration=1.6,
+    duration=3.0, fast_duration=1.2,
     reference=cosine_reference(0.14 / (2 * math.pi), 1.0),
     settle=((2.0, 3.0),), reversals=(0.5, 1.0, 1.5, 2.0, 2.5), reversal_window=0.1,
-    fast_settle=((0.6, 1.6),), kind="periodic",
+    fast_settle=((0.2, 1.2),), kind="periodic",
 ))
 
 

@@ -335,16 +335,31 @@ def _node_average(mid: np.ndarray) -> np.ndarray:
     return out
 
 
-def _truth_friction(P: TruthParams, base: str, hidden: Mapping[str, Mapping[str, float]],
-                    t: np.ndarray, v: np.ndarray, a: np.ndarray, x: np.ndarray, S: np.ndarray,
-                    dt: float, S_mid: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Friction at the nodes of the fine grid; returns ``(F, v_node, a_node)``.
+def truth_friction(P: TruthParams, base: str, hidden: Mapping[str, Mapping[str, float]],
+                   t: np.ndarray, v: np.ndarray, a: np.ndarray, x: np.ndarray, S: np.ndarray,
+                   dt: float, S_mid: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The truth friction along a fine-grid motion; returns ``(F, v_node, a_node)`` (SI).
 
-    ``v``, ``a`` hold the velocity and acceleration of each fine interval (its
-    midpoint values), ``x`` and ``t`` the nodes where intervals start. States (bristle, lagged speed,
-    dwell age, Maxwell-slip deflections) advance interval by interval; the
-    force is evaluated at the nodes with the node velocity (mean of the two
-    neighbouring intervals) so that it lines up with the sampled ``x``.
+    Parameters
+    ----------
+    P, base, hidden
+        Base parameters, base law (:data:`BASES`) and hidden laws (name -> law
+        parameters, complete; see :data:`HIDDEN_DEFAULTS`).
+    t, x : (n,) s, m
+        Time and position at the nodes where the fine intervals start.
+    v, a : (n,) m/s, m/s^2
+        Velocity and acceleration of each fine interval (midpoint values).
+    S : (n,) Pa
+        Pressure sum ``p1 + p2`` (gauge) at the nodes.
+    dt : s
+        Fine step.
+    S_mid : Pa
+        Reference pressure sum of the pressure law.
+
+    States (bristle, lagged speed, dwell age, Maxwell-slip deflections)
+    advance interval by interval; the force is evaluated at the nodes with
+    the node velocity (mean of the two neighbouring intervals) so that it
+    lines up with the sampled ``x``.
     """
     n = v.size
     vn = _node_average(v)
@@ -581,7 +596,7 @@ def generate(
     x_f = np.concatenate(x_parts)
     S_f = np.concatenate(S_parts)
     e_f = np.concatenate(e_parts)
-    fric_f, vn_f, an_f = _truth_friction(P, base, laws, t_f, v_f, a_f, x_f, S_f, dt, S_mid)
+    fric_f, vn_f, an_f = truth_friction(P, base, laws, t_f, v_f, a_f, x_f, S_f, dt, S_mid)
     idx = np.arange(0, t_f.size, fine)  # samples at nodes: the start of every fine interval
     t_s, v_s, a_s, x_s, S_s, e_s = (arr[idx] for arr in (t_f, vn_f, an_f, x_f, S_f, e_f))
     fric = fric_f[idx]

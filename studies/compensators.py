@@ -122,7 +122,7 @@ class CompensatorsStudy(Study):
             return {"available": False,
                     "note": "do-mpc is not installed (pip install 'fcomp[bench]'); "
                             "run benchmarks/bench_mpc.py for the comparison"}
-        return {"available": True, **compare(steps=60 if fast else 300)}
+        return {"available": True, **compare(steps=40 if fast else 300)}
 
     @staticmethod
     def _verdict(results: list[dict[str, Any]]) -> dict[str, Any]:

@@ -54,10 +54,9 @@ CASES = [(name, eff) for name in PRESETS for eff in CATALOGUE
 
 
 #: (model, effect) pairs where ``applies_to`` holds but the defaults are not a no-op:
-#: ``presliding`` at its default (rigid bristles) cannot be added to Dahl, which already
-#: has compliant bristles; ``frictional-lag`` on the ``stribeck`` map keeps the map's
+#: ``frictional-lag`` on the ``stribeck`` map keeps the map's
 #: static film (its vb) and makes it lag, which changes the force while the speed changes.
-NOT_A_NO_OP = {("dahl", "presliding"), ("stribeck", "frictional-lag")}
+NOT_A_NO_OP = {("stribeck", "frictional-lag")}
 
 
 NO_OP_CASES = [c for c in CASES if c not in NOT_A_NO_OP]
@@ -86,13 +85,12 @@ def test_effect_at_defaults_leaves_the_force_unchanged(name: str, effect: str,
     np.testing.assert_allclose(F1, F0, rtol=1e-12, atol=1e-12 * np.abs(F0).max())
 
 
-def test_presliding_default_is_refused_on_dahl() -> None:
-    with pytest.raises(ValueError, match="already has effect 'presliding'"):
-        make_model("dahl").with_effects("presliding")
-    # with a finite stiffness it adds the missing bristle damping
-    model = make_model("dahl").with_effects(make_effect("presliding",
-                                                        {"sigma0": 2e4, "sigma1": 3.0}))
+def test_presliding_on_dahl_adds_only_the_bristle_damping() -> None:
+    dahl = make_model("dahl")
+    model = dahl.with_effects(make_effect("presliding", {"sigma0": 2e4, "sigma1": 3.0}))
     assert "damping" in model.features  # type: ignore[attr-defined]
+    assert model.flat_params()["sigma1"] == 3.0
+    assert model.flat_params()["sigma0"] == dahl.flat_params()["sigma0"]  # Dahl's own kept
 
 
 def test_frictional_lag_default_on_the_stribeck_map_changes_only_transients(

@@ -135,8 +135,13 @@ def propose(name: str, ctx: Context) -> Proposal:
     base = models[0]
     own = {k: v for k, v in type(base.params)().flat().items() if k in base.params.flat()}
     fresh = {**own, **baseline_starts(base, ctx.data, ctx.seg, ctx.train)[0]}
-    starts.append({**starts[0], **{k: v for k, v in fresh.items() if k in starts[0]
-                                   and k not in alternatives[0] and math.isfinite(v)}})
+    fresh = {k: v for k, v in fresh.items() if k in starts[0] and k not in alternatives[0]
+             and math.isfinite(v)}
+    # parameters the current fit pushed to a bound of their box were likely bent by the
+    # missing effect: the warm starts take their fresh values instead
+    for st in starts:
+        st.update({k: fresh[k] for k in _at_bound(ctx, st) if k in fresh})
+    starts.append({**starts[0], **fresh})
     if "mass" in ctx.current.values:
         for s in starts:
             s["mass"] = ctx.current.values["mass"]
@@ -144,6 +149,23 @@ def propose(name: str, ctx: Context) -> Proposal:
     if not models[0].symbolic:  # finite-difference Jacobians: refit the new shape only
         free = [n for n in REDUCED_FREE.get(name, ()) if n in starts[0]] or None
     return Proposal(name, models[0], starts, free)
+
+
+def _at_bound(ctx: Context, values: dict[str, float]) -> list[str]:
+    """Names of the current fit's parameters that sit on a bound of their data box."""
+    from fcomp.diagnosis.refit import data_bounds
+
+    model = ctx.current.model
+    out = []
+    for n, sp in model.param_specs().items():
+        if n not in ctx.current.values or n not in values:
+            continue
+        lo, hi = data_bounds(sp, ctx.data.scales, ctx.seg.d_pre)
+        v = ctx.current.values[n]
+        span = hi - lo if math.isfinite(hi - lo) else max(abs(v), 1.0)
+        if v <= lo + 1e-6 * span or v >= hi - 1e-6 * span:
+            out.append(n)
+    return out
 
 
 # ------------------------------------------------------------------ guesses
@@ -406,7 +428,8 @@ def _static_stage(model: FrictionModel, data: DiagnosisData, seg: Segmentation,
     Steady runs of the training samples are binned by speed per direction
     (:func:`fcomp.identification.static.steady_state_points`) and the model's
     steady-state map is fitted to them (:func:`~fcomp.identification.static.fit_steady_state`)
-    in the parameters it depends on; effect parameters keep their values.
+    in the parameters it depends on (but the exponent ``n``, see
+    :data:`fcomp.diagnosis.refit.STAGED`); effect parameters keep their values.
     Returns the fitted values (empty when there are too few points).
     """
     from fcomp.diagnosis.refit import data_bounds, fixed_names
@@ -416,8 +439,11 @@ def _static_stage(model: FrictionModel, data: DiagnosisData, seg: Segmentation,
 
     if not model.symbolic:
         return {}
+    from fcomp.diagnosis.refit import STAGED
+    from fcomp.identification.problem import base_name
+
     own = [n for n in model.params.flat() if n not in fixed_names(model)
-           and math.isfinite(model.params.flat()[n])]
+           and math.isfinite(model.params.flat()[n]) and base_name(n) not in STAGED]
     from fcomp.identification.static import SteadyStatePoints
 
     def points(min_duration: float, rel_change: float) -> SteadyStatePoints:

@@ -20,7 +20,7 @@ returns ``self``, results in ``*_`` attributes) runs the whole procedure:
      into contiguous pieces of about 0.25 s (:func:`test_blocks`); on the
      pieces where the candidate changes the prediction materially the log
      ratios ``ln(MSE_before/MSE_after)`` have a positive mean with a
-     one-sided Student-t p-value of at most 0.01 (:func:`fall_test`);
+     one-sided Student-t p-value of at most 0.05 (:func:`fall_test`);
    * the Bayesian information criterion on the training residuals, computed
      with the effective sample size of the candidate's residuals, agrees:
      ``dBIC = n_eff*ln(RSS_after/RSS_before) + dk*ln(n_eff) < 0``.
@@ -76,7 +76,7 @@ from fcomp.measurement import Measurement
 from fcomp.models import FrictionModel, make_model
 
 #: Largest one-sided p-value of a held-out fall that counts as significant.
-ACCEPT_P = 0.01
+ACCEPT_P = 0.05
 #: A candidate whose held-out error exceeds the best one's with a p-value above this ties.
 TIE_P = 0.05
 #: A clear fall: at least this fraction of the noise floor ...

@@ -18,9 +18,13 @@ diagnosis needs:
   (:func:`data_bounds`), so no fit can run away to a value the record could
   not support (a stiffness softer than the stroke allows, a time constant
   shorter than a sample...).
-* **Several starts.** The guesses of :mod:`.catalogue` may give several
-  starting points; each gets a short fit (:data:`PROBE_NFEV` evaluations)
-  and the best continues to convergence.
+* **Several starts, two stages.** The guesses of :mod:`.catalogue` may give
+  several starting points; each gets a short fit (:data:`PROBE_NFEV`
+  evaluations) and the best continues to convergence. The Stribeck exponent
+  ``n`` is held at its start value in this first stage and freed in a second
+  one: with ``n`` free from the outset a record with few distinct sliding
+  speeds lets the fit slide into a flat valley (``n < 1`` with a large
+  viscous term) that matches the training speeds and fails on the others.
 
 Long records are fitted on a block-averaged copy with at most
 ``max_samples`` samples (every signal and the target averaged over blocks of
@@ -49,7 +53,9 @@ from fcomp.parameters import ParamSpec
 from fcomp.trajectory import friction_along_motion
 
 #: Evaluations of each short probe fit when there are several starts.
-PROBE_NFEV = 12
+PROBE_NFEV = 20
+#: Parameters held at their start values in the first stage of a fit.
+STAGED = ("n",)
 
 
 def unit_scale(unit: str, sc: Scales, d_pre: float) -> float:
@@ -283,30 +289,40 @@ class Refit:
             base["mass"] = 0.0
         start_list = [dict(base, **s) for s in starts] or [base]
         specs = self.specs(model, names)
+        # stage 1: shape exponents held at their start values (they open flat
+        # valleys, e.g. n < 1 with a large viscous term, when few speeds are seen)
+        first = [n for n in names if base_name(n) not in STAGED] or names
         best = None
         nfev = 0
         budget = min(PROBE_NFEV, max_nfev) if len(start_list) > 1 else max_nfev
         for st in start_list:
-            pv = ParameterVector.build(names, st, specs, self.scales(model, names, st))
             try:
-                sol, n = self._solve(model, pv, budget)
+                sol, k = self._solve(model, self._pv(model, first, st, specs), budget)
             except FcompError:
                 continue
-            nfev += n
+            nfev += k
             cost = float(sol.residuals @ sol.residuals)
             if best is None or cost < best[0]:
-                best = (cost, sol, pv)
+                best = (cost, sol, st)
         if best is None:
             raise FcompError(f"fitting {model.describe()}: the model gives non-finite forces at "
                              "every start")
-        _, sol, pv = best
+        _, sol, st = best
+        st = dict(st, **dict(zip(first, map(float, sol.theta), strict=True)))
         if len(start_list) > 1:
-            st = dict(base, **dict(zip(names, map(float, sol.theta), strict=True)))
-            pv = ParameterVector.build(names, st, specs, self.scales(model, names, st))
-            sol, n = self._solve(model, pv, max_nfev)
-            nfev += n
+            sol, k = self._solve(model, self._pv(model, first, st, specs), max_nfev)
+            nfev += k
+            st = dict(st, **dict(zip(first, map(float, sol.theta), strict=True)))
+        if first != names:  # stage 2: everything free
+            sol, k = self._solve(model, self._pv(model, names, st, specs), max_nfev)
+            nfev += k
         values = dict(zip(names, map(float, sol.theta), strict=True))
         return self.result(model, values, len(names), sol.converged, nfev)
+
+    def _pv(self, model: FrictionModel, names: Sequence[str], start: Mapping[str, float],
+            specs: Mapping[str, ParamSpec]) -> ParameterVector:
+        return ParameterVector.build(list(names), start, {n: specs[n] for n in names},
+                                     self.scales(model, names, start))
 
     def _solve(self, model: FrictionModel, pv: ParameterVector, budget: int):
         problems = [TrajectoryProblem(model, d, pv, mask=m) for d, m in self._records]

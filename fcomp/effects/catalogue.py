@@ -208,8 +208,14 @@ class Presliding(StructuralEffect):
     experiment = "small-amplitude displacement cycles (well below break-away)"
 
     def attach(self, model: FrictionModel) -> FrictionModel:
+        fam = _family(model, self.name)
+        if "presliding" in fam.features and "damping" not in fam.features:
+            # Dahl: compliant bristles already, only the damping is missing; the model's
+            # own sigma0 is kept and sigma1 = 0 (the default) is a no-op.
+            new = fam.with_features({"damping"}, {"sigma1": self.params.sigma1})  # type: ignore[attr-defined]
+            new.lineage = (*(fam.lineage or (fam.name,)), self.name)
+            return new
         if math.isinf(self.params.sigma0):  # type: ignore[attr-defined]
-            fam = _family(model, self.name)
             if "presliding" in fam.features:
                 raise ValueError(f"model {fam.describe()!r} already has effect {self.name!r}")
             return Effect.attach(self, model)  # rigid bristles: the static map, unchanged

@@ -1,0 +1,180 @@
+"""Pieces of the diagnosis: data preparation, regimes, held-out splits, noise floor, features,
+the acceptance statistics."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from fcomp.diagnosis import Diagnosis
+from fcomp.diagnosis.data import default_cutoff, position_noise, prepare
+from fcomp.diagnosis.features import knn_predict, residual_structure, strength
+from fcomp.diagnosis.loop import fall_test, test_blocks
+from fcomp.diagnosis.noise import effective_sample_size, noise_floor
+from fcomp.diagnosis.regimes import DWELL, PRESLIDING, REVERSAL, SLIDING, segment
+from fcomp.diagnosis.split import make_split
+from fcomp.errors import FcompError
+from fcomp.measurement import Measurement
+from fcomp.synthetic import generate
+
+
+@pytest.fixture(scope="module")
+def record():
+    return generate([], duration=9.0, seed=11)
+
+
+def _runs(mask: np.ndarray) -> int:
+    return int(np.sum(np.diff(np.concatenate([[0], mask.astype(int), [0]])) == 1))
+
+
+def test_experiments_from_column_and_from_time_gaps(record) -> None:
+    data = prepare(record.measurement)
+    assert len(data.experiments) == 3
+    m = record.measurement
+    no_col = Measurement({k: v for k, v in m.columns.items() if k != "experiment"}, m.meta)
+    assert len(prepare(no_col).experiments) == 3  # the generator leaves 1 s gaps
+    assert data.source == "F"
+    assert data.available["x"] and data.available["p1"]
+
+
+def test_cutoff_follows_the_position_noise() -> None:
+    t = np.arange(5000) / 1000.0
+    x = 0.01 * np.sin(2 * np.pi * 0.5 * t)
+    clean = np.round(x / 1e-6) * 1e-6
+    noisy = x + np.random.default_rng(0).normal(0, 2e-5, t.size)
+    assert position_noise(clean) == pytest.approx(1e-6 / math.sqrt(12), rel=0.3)
+    assert default_cutoff(t, clean) == pytest.approx(250.0)  # fs/4 for a clean encoder
+    assert default_cutoff(t, noisy) < 50.0  # a noisy sensor is filtered harder
+
+
+def test_regimes_of_a_designed_motion() -> None:
+    """Rest, a long slide, a reversal, small loops: each gets its regime."""
+    dt = 1e-3
+    parts = [np.zeros(500), np.full(1000, 0.02), np.full(1000, -0.02), np.zeros(300),
+             5e-5 * 2 * np.pi * 2 * np.sin(2 * np.pi * 2 * np.arange(1000) * dt)]
+    v = np.concatenate(parts)
+    t = np.arange(v.size) * dt
+    x = 0.05 + np.concatenate([[0.0], np.cumsum(v[:-1] * dt)])
+    F = 30.0 * np.tanh(v / 1e-3)
+    m = Measurement({"t": t, "x": np.round(x / 1e-7) * 1e-7, "v": v, "F": F},
+                    {"name": "designed"})
+    data = prepare(m)
+    seg = segment(data)
+    assert np.all(seg.regime[100:450] == DWELL)
+    assert np.all(seg.regime[1100:1450] == SLIDING)
+    assert np.any(seg.regime[1500:1560] == REVERSAL)
+    assert np.mean(seg.regime[2900:3700] == PRESLIDING) > 0.8
+    assert not seg.valid[:1400].any() and seg.valid[1600:].all()  # warm-up: the first run
+    starts = [k for k, _, rev in seg.starts if rev]
+    assert any(abs(k - 1500) < 5 for k in starts)
+
+
+def test_splits_are_contiguous_never_shuffled(record) -> None:
+    data = prepare(record.measurement)
+    seg = segment(data)
+    sp = make_split(data, seg.valid, "segment")
+    assert not np.any(sp.train & sp.test)
+    assert not np.any((sp.train | sp.test) & ~seg.valid)
+    assert _runs(sp.test) <= 12  # a few long blocks, not scattered samples
+    assert 0.2 < sp.test.sum() / seg.valid.sum() < 0.5
+    sp2 = make_split(data, seg.valid, "experiment")
+    held = data.experiments[1]
+    assert sp2.test[held.start:held.stop].sum() == seg.valid[held.start:held.stop].sum()
+    assert not sp2.test[: data.experiments[0].stop].any()
+    with pytest.raises(FcompError, match="split"):
+        make_split(data, seg.valid, "random")
+
+
+def test_noise_floor_is_estimated_from_the_data() -> None:
+    for std in (0.2, 1.0):
+        rec = generate([], duration=8.0, seed=12, noise_std=std)
+        data = prepare(rec.measurement)
+        nf = noise_floor(data, segment(data))
+        assert nf.method == "rest"
+        assert nf.value == pytest.approx(std, rel=0.15)
+
+
+def test_effective_sample_size_of_correlated_noise() -> None:
+    rng = np.random.default_rng(1)
+    white = rng.normal(size=20000)
+    assert effective_sample_size(white) == pytest.approx(20000, rel=0.1)
+    phi = 0.8
+    ar = np.empty(20000)
+    ar[0] = 0.0
+    for i in range(1, ar.size):
+        ar[i] = phi * ar[i - 1] + white[i]
+    # n/tau with tau = (1 + phi)/(1 - phi) = 9
+    assert effective_sample_size(ar) == pytest.approx(20000 / 9, rel=0.25)
+
+
+def test_knn_strength_finds_a_ripple_and_not_noise() -> None:
+    rng = np.random.default_rng(2)
+    n = 6000
+    x = rng.uniform(0.0, 0.1, n)
+    side = np.where(rng.uniform(size=n) > 0.5, 1.0, -1.0)
+    train = (np.arange(n) // 500) % 3 != 1
+    test = ~train
+    ripple = side * np.sin(2 * np.pi * x / 3e-3)
+    noise = rng.normal(size=n)
+    assert strength(x, ripple + 0.3 * noise, side, train, test)[0] > 0.8
+    assert strength(x, noise, side, train, test)[0] < 0.05
+    # no training sample near a test value: no information, prediction 0
+    far = knn_predict(np.array([0.0, 0.01]), np.array([1.0, 1.0]), np.array([1.0]), 2, 0.1)
+    assert far[0] == 0.0
+
+
+def test_residual_structure_of_a_noise_residual(record) -> None:
+    data = prepare(record.measurement)
+    seg = segment(data)
+    sp = make_split(data, seg.valid)
+    r = np.random.default_rng(3).normal(0, 0.4, data.n)
+    feats = residual_structure(r, data, seg, sp.train, sp.test)
+    assert {f.feature for f in feats} >= {"t", "v", "x", "p1+p2", "time_since_reversal"}
+    assert max(f.strength for f in feats) < 0.05
+
+
+def test_fall_test_separates_consistent_falls_from_chance() -> None:
+    rng = np.random.default_rng(4)
+    n = 4000
+    blocks = test_blocks(np.ones(n, dtype=bool), [0], 0.002)
+    assert len(blocks) == 32
+    noise = rng.normal(0, 0.4, n)
+    structure = 2.0 * np.sin(np.arange(n) / 50.0)
+    t_good, p_good = fall_test(noise + structure, noise, blocks, 0.04)
+    assert p_good < 1e-6 and t_good > 0
+    other = noise + 0.05 * rng.normal(size=n)  # a candidate that only refits noise
+    _, p_none = fall_test(noise, other, blocks, 0.04)
+    assert p_none == 1.0 or p_none > 0.05
+    _, p_worse = fall_test(noise, noise + structure, blocks, 0.04)
+    assert p_worse > 0.99
+
+
+def test_bad_records_are_refused_with_a_reason(record) -> None:
+    m = record.measurement
+    still = Measurement({"t": m.t, "x": np.full(len(m), 0.1), "F": m["F"]}, {"name": "still"})
+    with pytest.raises(FcompError, match="hardly moves"):
+        Diagnosis("coulomb").fit(still)
+    no_motion_signal = Measurement({"t": m.t, "F": m["F"]}, {"name": "nomotion"})
+    with pytest.raises(FcompError, match="position 'x' or velocity 'v'"):
+        Diagnosis("coulomb").fit(no_motion_signal)
+    no_force = Measurement({"t": m.t, "x": m["x"]}, {"name": "noforce"})
+    with pytest.raises(FcompError, match="no force"):
+        Diagnosis("coulomb").fit(no_force)
+    with pytest.raises(FcompError, match="unknown friction model"):
+        Diagnosis("no-such-model").fit(m)
+    with pytest.raises(FcompError, match="unknown effect"):
+        Diagnosis("lugre", add=["no-such-effect"]).fit(m)
+
+
+def test_dynamic_baseline_on_steady_state_points_says_why() -> None:
+    v = np.array([0.01, 0.02, 0.05, 0.1, -0.01, -0.02, -0.05, -0.1] * 5)
+    F = np.sign(v) * 20.0 + 50.0 * v
+    m = Measurement({"t": np.arange(v.size, dtype=float), "v": v, "F": F},
+                    {"name": "table", "diagnosis": {"samples": "steady-state"}})
+    with pytest.raises(FcompError, match="steady-state points"):
+        Diagnosis("lugre").fit(m)
+    d = Diagnosis("coulomb", n_jobs=1).fit(m)
+    assert d.added_ == ["viscous"]
+    assert d.rms_final_ < 1e-3

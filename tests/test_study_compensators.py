@@ -1,0 +1,74 @@
+"""Study ``compensators``: the summary contract, the verdict, the report (shared fast run)."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+from browser import build_site, study_summary
+
+from studies import STUDIES
+
+FIELDS = ("plant", "controller", "task", "rms_error", "max_error", "steady_state_error",
+          "solve_time_median", "solve_time_max")
+
+
+@pytest.fixture(scope="module")
+def summary() -> dict:
+    return study_summary("compensators")
+
+
+def test_registered() -> None:
+    assert "compensators" in STUDIES
+
+
+def test_summary_has_every_plant_controller_task(summary: dict) -> None:
+    rows = summary["results"]
+    combos = {(r["plant"], r["controller"], r["task"]) for r in rows}
+    assert len(rows) == len(combos) == 2 * 5 * 4
+    for r in rows:
+        for k in FIELDS:
+            assert k in r, k
+        assert r["status"] == "ok", r
+        # errors in metres: a servo tracking within millimetres
+        assert 0 < r["rms_error"] <= r["max_error"] < 0.01
+        assert 0 <= r["steady_state_error"] < 0.01
+        # step times in seconds
+        assert 0 < r["solve_time_median"] <= r["solve_time_max"] < 5.0
+        assert r["fallbacks"] == 0
+
+
+def test_best_compensator_halves_pid_error_at_low_velocity(summary: dict) -> None:
+    v = summary["verdict"]
+    assert set(v) == {f"{p}/{t}" for p in ("hydraulic", "pneumatic")
+                      for t in ("slow-sine", "low-velocity-ramp")}
+    for key, d in v.items():
+        assert d["halved"] and d["ratio"] <= 0.5, key
+        rows = {r["controller"]: r["rms_error"] for r in summary["results"]
+                if f"{r['plant']}/{r['task']}" == key}
+        assert rows[d["best"]] == min(v for c, v in rows.items() if c != "pid")
+        assert math.isclose(d["ratio"], rows[d["best"]] / rows["pid"], rel_tol=1e-12)
+
+
+def test_robustness_distributions_per_compensator(summary: dict) -> None:
+    for plant in ("hydraulic", "pneumatic"):
+        dist = summary["robustness"][plant]
+        assert set(dist) == {"pid", "pid-ff", "lugre-observer", "ekf", "mpc"}
+        for d in dist.values():
+            vals = d["rms_error"]["values"]
+            assert len(vals) + d["failed"] == d["runs"] >= 3
+            if vals:
+                assert min(vals) <= d["rms_error"]["median"] <= max(vals)
+
+
+def test_report_has_tables_figures_and_timing(summary: dict) -> None:
+    out, _, _ = build_site()
+    html = (out / "compensators" / "report.html").read_text(encoding="utf-8")
+    for text in ("Ranked results", "Friction estimate against the true friction",
+                 "Robustness", "Compute time"):
+        assert text in html
+    figs = summary["meta"]["figures"]
+    assert {"fig-tracking-hydraulic.png", "fig-friction-pneumatic.png",
+            "fig-robustness.png"} <= set(figs)
+    t = summary["mpc_timing"]
+    assert {"hydraulic/mpc", "pneumatic/mpc", "hydraulic/ekf"} <= set(t)

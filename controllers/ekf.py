@@ -70,8 +70,8 @@ class FrictionEKF:
         Integration substeps per sample.
     """
 
-    def __init__(self, model: ContinuousModel, dt: float, q: Sequence[float],
-                 r: Sequence[float], substeps: int = 1) -> None:
+    def __init__(self, model: ContinuousModel, dt: float, q: Sequence[float] | np.ndarray,
+                 r: Sequence[float] | np.ndarray, substeps: int = 1) -> None:
         nx = model.nx
         if len(q) != nx or len(r) != len(model.measured):
             raise FcompError(f"ekf: need {nx} process-noise and {len(model.measured)} "

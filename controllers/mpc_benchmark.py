@@ -90,8 +90,13 @@ def benchmark_rti(steps: int = 300, horizon: int = 20, dt: float = 2e-3) -> dict
 
 def benchmark_do_mpc(steps: int = 300, horizon: int = 20, dt: float = 2e-3) -> dict[str, Any]:
     """The same closed loop with do-mpc (collocation + IPOPT); solve times and tracking error."""
+    import warnings
+
     import casadi as ca
-    import do_mpc
+
+    with warnings.catch_warnings():  # do-mpc announces its optional features on import
+        warnings.simplefilter("ignore", UserWarning)
+        import do_mpc
 
     with contextlib.suppress(AttributeError):  # do-mpc calls numpy on casadi values: keep the
         ca.GlobalOptions.setNumpyMode(-1)       # legacy behaviour, without the notice

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import ctypes
 from collections.abc import Sequence
+from typing import Any
 
 import casadi as ca
 import numpy as np
@@ -104,8 +105,8 @@ class NativeFunction:
         if len(args) != len(self._in_views):
             raise TypeError(f"{self.fn.name()}: expected {len(self._in_views)} inputs")
         if self._fn is None:
-            res = self.fn(*args)
-            res = res if isinstance(res, tuple) else (res,)
+            raw: Any = self.fn(*args)
+            res = raw if isinstance(raw, tuple) else (raw,)
             return tuple(np.asarray(r, dtype=float).reshape(v.shape, order="F")
                          for r, v in zip(res, self._out_views, strict=True))
         for view, a in zip(self._in_views, args, strict=True):

@@ -133,7 +133,7 @@ class ControlModel:
 
     def __init__(self, plant: str, friction: FrictionModel, params: str | None = None,
                  **settings: Any) -> None:
-        from plants import make_plant
+        from plants import OdePlant, make_plant
 
         if plant not in PLANT_SETTINGS:
             raise FcompError(f"closed-loop control is set up for plants "
@@ -145,7 +145,10 @@ class ControlModel:
         self.settings = replace(base, **settings)
         self.plant_name = plant
         self.friction = friction
-        self.plant = make_plant(plant, friction, params)
+        own = make_plant(plant, friction, params)
+        if not isinstance(own, OdePlant):
+            raise FcompError(f"plant {plant} is not given by differential equations")
+        self.plant: OdePlant = own
         flat = self.plant.flat_params()
         self.params = flat
         self.mass = float(flat["mass"])
@@ -162,33 +165,13 @@ class ControlModel:
         self.prediction = self._prediction()
 
     # ------------------------------------------------------------ settings
-    @property
-    def control_rate(self) -> float:
-        return self.settings.control_rate
-
-    @property
-    def u_max(self) -> float:
-        return self.settings.u_max
-
-    @property
-    def du_max(self) -> float:
-        return self.settings.du_max
-
-    @property
-    def pid_bandwidth(self) -> float:
-        return self.settings.pid_bandwidth
-
-    @property
-    def force_bandwidth(self) -> float:
-        return self.settings.force_bandwidth
-
-    @property
-    def observer_gain(self) -> float:
-        return self.settings.observer_gain
-
-    @property
-    def sensors(self) -> Sensors:
-        return self.settings.sensors
+    control_rate = property(lambda self: self.settings.control_rate, doc="Hz")
+    u_max = property(lambda self: self.settings.u_max, doc="valve command limit")
+    du_max = property(lambda self: self.settings.du_max, doc="valve rate limit, 1/s")
+    pid_bandwidth = property(lambda self: self.settings.pid_bandwidth, doc="rad/s")
+    force_bandwidth = property(lambda self: self.settings.force_bandwidth, doc="rad/s")
+    observer_gain = property(lambda self: self.settings.observer_gain, doc="1/s")
+    sensors = property(lambda self: self.settings.sensors, doc=":class:`Sensors`")
 
     def describe(self) -> str:
         return self.plant.describe()

@@ -88,7 +88,7 @@ HIDDEN_DEFAULTS: dict[str, dict[str, float]] = {
     "presliding": {"k": 1.5e5},
     "nonlocal-memory": {"n_elements": 6.0, "d_max": 4e-4},
     "frictional-lag": {"tau_L": 0.06},
-    "dwell-time": {"dF_inf": 40.0, "tau_k": 0.5, "m": 1.0, "d_c": 2e-4},
+    "dwell-time": {"dF_inf": 40.0, "tau_k": 0.5, "m": 1.0, "d_c": 5e-4},
     "direction-asymmetry": {"dF_neg": 8.0},
     "pressure-dependence": {"c_p": 4e-6},
     "position-dependence": {"a_g": 0.25, "x_g_frac": 0.3, "w_frac": 0.15, "a_l": 0.12},
@@ -262,40 +262,61 @@ class _Plan:
         self.level = level
 
 
+#: Speed classes (m/s) the slides cycle through, so every record spans two decades.
+SPEED_CLASSES = ((0.003, 0.015), (0.015, 0.06), (0.06, 0.25))
+#: Dwell classes (s) before the dwell-slides, alternating short and long.
+DWELL_CLASSES = ((0.1, 0.4), (0.8, 3.0))
+MOTION_KINDS = ("slide", "reverse", "dwell-slide", "loops", "sweep")
+
+
 def _schedule(plan: _Plan, rng: np.random.Generator, duration: float, levels: Sequence[float],
               a_max: float) -> None:
-    """Fill ``plan`` with a realistic random motion of about ``duration`` seconds."""
+    """Fill ``plan`` with a realistic motion of about ``duration`` seconds.
+
+    The motion kinds (:data:`MOTION_KINDS`) are drawn from a shuffled deck, so
+    every kind comes before any repeats; slide speeds cycle through
+    :data:`SPEED_CLASSES` and dwells through :data:`DWELL_CLASSES` (values
+    log-uniform within a class). The pressure level changes once, half way.
+    """
     L = plan.stroke
-    kinds = ["slide", "slide", "reverse", "dwell-slide", "loops", "sweep"]
     plan.level = float(levels[0])
     plan.dwell(0.3)
     changed = len(levels) < 2
+    deck: list[str] = []
+    n_slide = n_dwell = int(rng.integers(3))
+
+    def log_uniform(lo: float, hi: float) -> float:
+        return float(np.exp(rng.uniform(np.log(lo), np.log(hi))))
+
     while plan.duration < duration:
         if not changed and plan.duration > 0.5 * duration:
             plan.pressure(float(levels[1]))
             changed = True
-        kind = kinds[int(rng.integers(len(kinds)))]
-        V = float(np.exp(rng.uniform(np.log(0.003), np.log(0.25))))
+        if not deck:
+            deck = [MOTION_KINDS[i] for i in rng.permutation(len(MOTION_KINDS))]
+        kind = deck.pop()
+        V = log_uniform(*SPEED_CLASSES[n_slide % len(SPEED_CLASSES)])
+        n_slide += 1
         t_ramp = max(0.01, V / a_max * rng.uniform(1.0, 2.5))
         towards = 1.0 if plan.x < 0.5 * L else -1.0
         d = towards * min(V * rng.uniform(0.4, 1.2) + V * t_ramp, 0.35 * L)
         if kind == "slide":
             plan.move(d, V, t_ramp)
-            plan.dwell(float(np.exp(rng.uniform(np.log(0.05), np.log(0.4)))))
+            plan.dwell(log_uniform(0.05, 0.4))
         elif kind == "reverse":  # out and straight back: a reversal without a stop
             plan.move(d, V, t_ramp)
             plan.move(-0.6 * d, V, t_ramp)
         elif kind == "dwell-slide":
-            plan.dwell(float(np.exp(rng.uniform(np.log(0.1), np.log(3.0)))))
+            plan.dwell(log_uniform(*DWELL_CLASSES[n_dwell % len(DWELL_CLASSES)]))
+            n_dwell += 1
             plan.move(d, V, t_ramp)
-        elif kind == "loops":
-            plan.loops(float(np.exp(rng.uniform(np.log(2e-5), np.log(3e-4)))),
-                       float(rng.uniform(1.0, 4.0)), int(rng.integers(2, 4)))
+        elif kind == "loops":  # small displacement cycles (presliding), at most 1 s
+            plan.loops(log_uniform(2e-5, 3e-4), float(rng.uniform(2.0, 5.0)), 2)
             plan.dwell(0.1)
-        else:  # sinusoidal sweep
-            f = float(rng.uniform(0.6, 2.0))
+        else:  # one sinusoidal sweep, at most 1 s
+            f = float(rng.uniform(1.0, 2.5))
             A = min(0.12 * L, 0.15 / (2 * np.pi * f))
-            plan.loops(A, f, 2)
+            plan.loops(A, f, 1)
             plan.dwell(0.1)
 
 

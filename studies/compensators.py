@@ -232,39 +232,30 @@ class CompensatorsStudy(Study):
             for ax, t in zip(axes, TASK_ORDER, strict=True):
                 for c, s in self._signals(runs, p, t).items():
                     ax.plot(s["t"], (s["r"] - s["x"]) * 1e6, lw=0.9, label=c)
-                ax.set_title(f"{p}: {t}", fontsize=9)
-                ax.set_ylabel("r - x [um]")
-                ax.grid(alpha=0.3)
-            axes[0].legend(fontsize=7, ncol=5)
-            axes[-1].set_xlabel("t [s]")
-            fig.tight_layout()
-            out.figure(fig, f"tracking-{p}", f"Tracking error of every controller on every "
-                       f"task, {p} plant (true position).")
+                _panel(ax, f"{p}: {t}", "r - x [um]")
+            _finish(out, fig, axes, 5, f"tracking-{p}", f"Tracking error of every controller "
+                    f"on every task, {p} plant (true position).")
 
     def _friction_figures(self, out: StudyOutput, runs: list[dict[str, Any]]) -> None:
         rep = out.report
         rep.section("Friction estimate against the true friction")
         rep.paragraph("The force each compensator fed forward beside the plant's true NMLGM "
-                      "friction force (`pid` feeds none). `pid-ff` uses the static map at the "
+                      "friction force in the same run (`pid` feeds none). `pid-ff` uses the static map at the "
                       "reference velocity; the observer and the EKF estimate the bristle (and "
                       "film) state on line; the MPC uses the EKF estimate.")
         for p in PLANTS:
             fig, axes = out.subplots(2, 1, figsize=(9, 5.5))
             for ax, t in zip(axes, LOW_VELOCITY, strict=True):
-                sig = self._signals(runs, p, t)
-                true = next(iter(sig.values()), None)
-                for c, s in sig.items():
-                    if c != "pid":
-                        ax.plot(s["t"], s["F_hat"], lw=0.8, label=f"{c} estimate")
-                if true is not None:
-                    ax.plot(true["t"], true["F_true"], "k", lw=1.2, label="true (pid run)")
-                ax.set_title(f"{p}: {t}", fontsize=9)
-                ax.set_ylabel("F [N]")
-                ax.grid(alpha=0.3)
-            axes[0].legend(fontsize=7, ncol=3)
-            axes[-1].set_xlabel("t [s]")
-            fig.tight_layout()
-            out.figure(fig, f"friction-{p}", f"Friction estimate vs true friction, {p} plant.")
+                for c, s in self._signals(runs, p, t).items():
+                    if c == "pid":
+                        continue
+                    line = ax.plot(s["t"], s["F_hat"], lw=0.9, label=f"{c} estimate")[0]
+                    ax.plot(s["t"], s["F_true"], "--", lw=0.8, color=line.get_color(),
+                            label=f"{c} true")
+                _panel(ax, f"{p}: {t}", "F [N]")
+            _finish(out, fig, axes, 4, f"friction-{p}",
+                    f"Friction estimate (solid) vs the true friction of the same run (dashed), "
+                    f"{p} plant.")
 
     def _robustness(self, out: StudyOutput, robust: dict[str, Any],
                     sweeps: dict[str, Sweep]) -> None:
@@ -324,6 +315,19 @@ class CompensatorsStudy(Study):
                   f"for both ({bench['note']}).", digits=[None, 3, 3, 0])
         rep.paragraph(f"Speed-up of fcomp's RTI over do-mpc: median "
                       f"{bench['speedup_median']:.1f}x, max {bench['speedup_max']:.1f}x.")
+
+
+def _panel(ax: Any, title: str, ylabel: str) -> None:
+    ax.set_title(title, fontsize=9)
+    ax.set_ylabel(ylabel)
+    ax.grid(alpha=0.3)
+
+
+def _finish(out: StudyOutput, fig: Any, axes: Any, ncol: int, name: str, caption: str) -> None:
+    axes[0].legend(fontsize=7, ncol=ncol)
+    axes[-1].set_xlabel("t [s]")
+    fig.tight_layout()
+    out.figure(fig, name, caption)
 
 
 STUDY = CompensatorsStudy()

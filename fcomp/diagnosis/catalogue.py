@@ -466,9 +466,18 @@ def _static_stage(model: FrictionModel, data: DiagnosisData, seg: Segmentation,
         key = np.sign(p.v) * np.round(np.log(np.maximum(np.abs(p.v), 1e-12)) / 0.2)
         return int(np.unique(key).size)
 
-    pts = points(0.05, 0.1)
-    if distinct(pts) < 8:  # few steady runs: admit slower-changing stretches too
-        pts = points(max(10 * data.scales.dt, 0.02), 0.3)
+    if data.steady_state:  # every sample is a steady-state point
+        v = data.signal("v")[train]
+        keep = v != 0
+        pts = SteadyStatePoints(v[keep], data.y[train][keep], np.ones(int(keep.sum())),
+                                data.signal("x")[train][keep], data.signal("p1")[train][keep],
+                                data.signal("p2")[train][keep])
+    else:
+        pts = points(0.05, 0.1)
+        if distinct(pts) < 8:  # few steady runs: admit slower-changing stretches too
+            pts = points(max(10 * data.scales.dt, 0.02), 0.3)
+    if len(pts) == 0:
+        return {}
     values = {**model.flat_params(), **start}
     try:
         _, G = SteadyStateMap(model, own)(pts, {k: values[k] for k in own})

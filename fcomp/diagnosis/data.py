@@ -281,7 +281,7 @@ def prepare(
     sources = set()
     start = 0
     x_measured = all("x" in m for m in meas_list)
-    p_measured = all("p1" in m and "p2" in m for m in meas_list)
+    p_measured = all("p1" in m or "p2" in m for m in meas_list)  # a missing one: 0 gauge
     for meas in meas_list:
         for sub in ([meas] if steady else _cut(meas)):
             if steady:
@@ -347,7 +347,7 @@ def _availability(data: DiagnosisData, x_measured: bool, p_measured: bool) -> No
     for k in ("p1", "p2"):
         data.available[k] = ok_p
         if not p_measured:
-            data.reasons[k] = "no p1, p2 columns"
+            data.reasons[k] = "no pressure column (p1, p2)"
         elif not ok_p:
             data.reasons[k] = (f"p1 + p2 hardly varies (range {sc.p_span:.3g} Pa around "
                                f"{sc.p_mid:.3g} Pa)")

@@ -15,9 +15,13 @@ returns ``self``, results in ``*_`` attributes) runs the whole procedure:
    *qualifies* when all three hold:
 
    * the held-out RMS falls clearly: by at least ``max(0.1*noise_floor,
-     0.02*rms_before)``;
+     0.02*rms_before)``, and by at least a quarter of the excess mean square
+     over the noise floor, ``rms_before^2 - rms_after^2 >= 0.25*(rms_before^2 -
+     noise_floor^2)`` (a small dent in a large unexplained residual is not a
+     found effect);
    * the fall is significant and consistent: the held-out samples are cut
-     into contiguous pieces of about 0.25 s (:func:`test_blocks`); on the
+     into contiguous pieces of about 0.25 s (:func:`heldout_pieces`; steady-state
+     points are pieces of their own); on the
      pieces where the candidate changes the prediction materially the log
      ratios ``ln(MSE_before/MSE_after)`` have a positive mean with a
      one-sided Student-t p-value of at most 0.05 (:func:`fall_test`);
@@ -81,6 +85,8 @@ ACCEPT_P = 0.05
 TIE_P = 0.05
 #: A clear fall: at least this fraction of the noise floor ...
 FALL_NOISE = 0.1
+#: ... and this share of the excess mean square over the noise floor.
+EXCESS_SHARE = 0.25
 #: ... and of the held-out RMS before.
 FALL_RELATIVE = 0.02
 #: Candidates within this share of the best candidate's fall tie with it.
@@ -147,7 +153,7 @@ def _rms(r: np.ndarray) -> float:
     return float(np.sqrt(np.mean(r**2))) if r.size else math.nan
 
 
-def test_blocks(test: np.ndarray, starts: Sequence[int], dt: float) -> list[np.ndarray]:
+def heldout_pieces(test: np.ndarray, starts: Sequence[int], dt: float) -> list[np.ndarray]:
     """Held-out samples cut into contiguous pieces for the fall test.
 
     Each run of held-out samples (not crossing an experiment start) is cut into
@@ -188,9 +194,9 @@ def fall_test(r_before: np.ndarray, r_after: np.ndarray, blocks: Sequence[np.nda
         rb, ra = r_before[b], r_after[b]
         if float(np.sqrt(np.mean((rb - ra) ** 2))) < min_change:
             continue
-        mb, ma = float(np.mean(rb**2)), float(np.mean(ra**2))
-        if mb > 0 and ma > 0:
-            logs.append(math.log(mb / ma))
+        floor = (1e-3 * min_change) ** 2 or 1e-300  # an exact fit is a finite, large ratio
+        mb, ma = max(float(np.mean(rb**2)), floor), max(float(np.mean(ra**2)), floor)
+        logs.append(math.log(mb / ma))
     if len(logs) < 3:
         return math.nan, 1.0
     arr = np.array(logs)
@@ -342,7 +348,9 @@ class Diagnosis:
         self.noise_floor_ = noise_floor(self.data_, self.segmentation_)
         self._refit = Refit(self.data_, self.split_, self.segmentation_.d_pre,
                             max_nfev=self.max_nfev, max_samples=self.max_samples)
-        self._blocks = test_blocks(self.split_.test, [e.start for e in self.data_.experiments],
+        self._blocks = [np.array([k]) for k in np.flatnonzero(self.split_.test)] \
+            if self.data_.steady_state else \
+            heldout_pieces(self.split_.test, [e.start for e in self.data_.experiments],
                                    self.data_.scales.dt)
         self._bar = _progress(self.progress)
         try:
@@ -488,6 +496,11 @@ class Diagnosis:
         reasons = []
         if fall < need:
             reasons.append(f"held-out RMS falls by {fall:.3g} N < {need:.3g} N")
+        excess = before.rms_test**2 - nf**2
+        share = (before.rms_test**2 - res.rms_test**2) / excess if excess > 0 else 0.0
+        if fall >= need and share < EXCESS_SHARE:
+            reasons.append(f"explains only {100 * share:.0f} % of the excess over the noise "
+                           f"floor (< {100 * EXCESS_SHARE:.0f} %)")
         if not p <= ACCEPT_P:
             reasons.append(f"fall not significant (z = {z:.2g}, p = {p:.2g} > {ACCEPT_P:g})")
         if not dbic < 0:

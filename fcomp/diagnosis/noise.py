@@ -12,7 +12,10 @@ known to be smooth, so that what varies there is noise:
 2. ``sliding`` -- otherwise, runs of steady sliding (regime ``sliding``,
    ``|a|`` below a tenth of the acceleration scale) of at least 20 samples,
    each with a quadratic in time removed.
-3. ``difference`` -- otherwise ``std(diff(y))/sqrt(2)`` over the whole record
+3. ``repeats`` -- for steady-state points, the pooled standard deviation of
+   points repeated at the same ``(v, x, p1, p2)`` (e.g. the ten experiments
+   of seed 001 at each position).
+4. ``difference`` -- otherwise ``std(diff(y))/sqrt(2)`` over the whole record
    (exact for white noise, a lower bound for coloured noise).
 
 Removing a trend from a run of ``n`` samples of noise with correlation time
@@ -51,7 +54,7 @@ class NoiseFloor:
     value : N
         Standard deviation of the force noise.
     method : str
-        ``"rest"``, ``"sliding"`` or ``"difference"`` (see the module docstring).
+        ``"rest"``, ``"sliding"``, ``"repeats"`` or ``"difference"`` (module docstring).
     n_samples : int
         Samples the estimate rests on.
     runs : int
@@ -113,9 +116,23 @@ def noise_floor(data: DiagnosisData, seg: Segmentation) -> NoiseFloor:
         if sum(e - s for s, e in runs) >= MIN_REST_TOTAL:
             var, n, res = _pooled(t, y, runs, 2)
             return NoiseFloor(math.sqrt(var), "sliding", n, len(runs), _tau(res, runs, dt))
+    else:
+        groups = _repeat_groups(data)
+        if groups:
+            ss = sum(float(np.sum((y[g] - y[g].mean()) ** 2)) for g in groups)
+            dof = sum(g.size - 1 for g in groups)
+            return NoiseFloor(math.sqrt(ss / dof), "repeats", int(sum(g.size for g in groups)),
+                              len(groups), 0.0)
     d = np.diff(y)
     d = d[~boundaries[1:]]
     return NoiseFloor(float(np.std(d) / math.sqrt(2.0)), "difference", int(d.size), 1, dt)
+
+
+def _repeat_groups(data: DiagnosisData) -> list[np.ndarray]:
+    """Steady-state points measured repeatedly at the same ``(v, x, p1, p2)``."""
+    keys = np.column_stack([data.signal(k) for k in ("v", "x", "p1", "p2")])
+    _, inverse, counts = np.unique(keys, axis=0, return_inverse=True, return_counts=True)
+    return [np.flatnonzero(inverse.ravel() == g) for g in np.flatnonzero(counts > 1)]
 
 
 def _tau(res: np.ndarray, runs: list[tuple[int, int]], dt: float) -> float:

@@ -34,13 +34,17 @@ import numpy as np
 from fcomp.errors import FcompError
 from fcomp.identification.target import FitData, fit_data
 from fcomp.measurement import Measurement
-from fcomp.reconstruction import differentiate, smooth
+from fcomp.reconstruction import differentiate, hold_rest, smooth
 
 #: A time step longer than this many median steps starts a new experiment.
 GAP_FACTOR = 20.0
 #: Fewest samples an experiment must have.
 MIN_SAMPLES = 20
 STEADY_STATE = "steady-state"
+#: Width of the position band (in position-noise standard deviations) within which
+#: the piston counts as at rest, so the derived ``v`` and ``a`` are held at zero
+#: (6 noise standard deviations: one step for an encoder, ``q/sqrt(12)`` each).
+REST_NOISE_BAND = 6.0
 
 
 #: Candidate cutoffs of the derivation filter, as fractions of the sample rate.
@@ -57,9 +61,7 @@ def position_noise(x: np.ndarray) -> float:
     """
     q = _resolution(x)
     d3 = np.diff(x, 3)
-    moving = d3 != 0
-    white = 1.4826 * float(np.median(np.abs(d3[moving]))) / math.sqrt(20.0) if moving.any() \
-        else 0.0
+    white = 1.4826 * float(np.median(np.abs(d3))) / math.sqrt(20.0) if d3.size else 0.0
     return max(q / math.sqrt(12.0), white)
 
 
@@ -226,6 +228,7 @@ def _motion_columns(meas: Measurement, cutoff_hz: float | None) -> Measurement:
     if "x" in meas:
         fc = cutoff_hz if cutoff_hz is not None else default_cutoff(t, meas["x"])
         _, v, a = differentiate(t, meas["x"], cutoff_hz=fc, label=meas.label)
+        v, a = hold_rest(t, meas["x"], v, a, tol=REST_NOISE_BAND * position_noise(meas["x"]))
         if "v" in meas:  # a measured velocity is kept; a from it
             v = meas["v"]
             a = np.gradient(smooth(t, v, cutoff_hz=fc, label=meas.label), t)

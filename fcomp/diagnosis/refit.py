@@ -54,6 +54,8 @@ from fcomp.trajectory import friction_along_motion
 
 #: Evaluations of each short probe fit when there are several starts.
 PROBE_NFEV = 20
+#: Softest stiffness allowed: its presliding range ``F/k`` is at most this many ``d_pre``.
+PRESLIDING_SPAN = 20.0
 #: Parameters held at their start values in the first stage of a fit.
 STAGED = ("n",)
 
@@ -80,7 +82,13 @@ def data_bounds(spec: ParamSpec, sc: Scales, d_pre: float) -> tuple[float, float
 
     Positive quantities (spec lower bound >= 0) are confined to
     ``[lo_u, hi_u]`` by unit: forces ``[0, 20 F]``; viscous coefficients
-    ``[0, 50 F/V]``; stiffnesses ``[F/(0.5*stroke), F/(0.2*resolution)]``;
+    ``[0, 50 F/V]``; stiffnesses ``[F/min(0.5*stroke, 20*d_pre), F/(0.2*resolution)]``
+    (a bristle softer than that would make the presliding range twenty times
+    the record's measured presliding length ``d_pre``: a soft spring then acts
+    as a slow integrator that fits training segments and fails on others);
+    the bristle damping ``sigma1 <= 4 F/V``, so that the model stays
+    dissipative at the record's speeds (``sigma1*|v| <= 4*Fc``,
+    :meth:`~fcomp.models.lugre_family.LuGreFamily.passivity`);
     speeds ``[1e-4 V, 100 V]``; lengths ``[0.2*resolution, stroke]``;
     time constants ``[dt/2, 10*duration]``; dimensionless numbers keep their
     spec box (an open lower bound becomes 1e-3). Signed quantities get
@@ -93,7 +101,8 @@ def data_bounds(spec: ParamSpec, sc: Scales, d_pre: float) -> tuple[float, float
         box = {
             "N": (0.0, 20.0 * s),
             "Ns/m": (0.0, 50.0 * s),
-            "N/m": (sc.force / (0.5 * sc.stroke), sc.force / (0.2 * sc.resolution)),
+            "N/m": (sc.force / min(0.5 * sc.stroke, PRESLIDING_SPAN * max(d_pre, sc.resolution)),
+                    sc.force / (0.2 * sc.resolution)),
             "m/s": (1e-4 * sc.speed, 100.0 * sc.speed),
             "m": (0.2 * sc.resolution, sc.stroke),
             "s": (0.5 * sc.dt, 10.0 * sc.duration),
@@ -108,6 +117,8 @@ def data_bounds(spec: ParamSpec, sc: Scales, d_pre: float) -> tuple[float, float
     if spec.name == "n":
         lo = max(lo, 0.2)
         hi = min(hi, 6.0)
+    if spec.name == "sigma1":  # dissipative bristle over the record's speeds
+        hi = min(hi, 4.0 * sc.force / sc.speed)
     return float(lo), float(hi)
 
 
@@ -329,12 +340,14 @@ class Refit:
 
         def fun(theta: np.ndarray, need_jac: bool = True
                 ) -> tuple[np.ndarray, np.ndarray | None]:
-            rs, Gs = [], []
+            rs: list[np.ndarray] = []
+            Gs: list[np.ndarray] = []
             for p in problems:
                 r, G = p(theta, need_jac)
                 rs.append(r)
-                Gs.append(G)
-            if any(G is None for G in Gs):
+                if G is not None:
+                    Gs.append(G)
+            if len(Gs) < len(problems):
                 return np.concatenate(rs), None
             return np.concatenate(rs), np.vstack(Gs)
 

@@ -153,7 +153,7 @@ class CompensatorsStudy(Study):
                 sweeps: dict[str, Sweep], timing: dict[str, Any], bench: dict[str, Any],
                 verdict: dict[str, Any]) -> None:
         rep = out.report
-        rep.section("Set-up")
+        rep.section("Settings")
         rep.paragraph(
             "Each run: the plant integrates the *true* NMLGM friction (its parameter set), "
             "the controller is built on its own plant model whose NMLGM parameters are "

@@ -1,4 +1,4 @@
-"""Pieces shared by the sub-commands: building models from options, output paths."""
+"""Pieces shared by the sub-commands: building models from options, output paths, --json targets."""
 
 from __future__ import annotations
 
@@ -50,3 +50,22 @@ def output_path(path: str, suffix: str = ".csv") -> Path:
     if p.exists() and p.is_dir():
         raise FcompError(f"-o {path}: is a directory")
     return p
+
+
+def json_target(path: str | None) -> Path | None:
+    """The file ``--json PATH`` writes to; ``None`` for standard output (``-``) or no ``--json``.
+
+    Raises
+    ------
+    FcompError
+        If ``path`` is a directory or its folder does not exist (checked
+        before any work, so a failure never leaves a half-written result).
+    """
+    if path is None or path == "-":
+        return None
+    out = Path(path)
+    if out.is_dir():
+        raise FcompError(f"--json {path}: is a directory")
+    if not out.parent.exists():
+        raise FcompError(f"--json {path}: folder {out.parent} does not exist")
+    return out

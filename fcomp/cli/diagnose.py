@@ -25,6 +25,7 @@ import shlex
 import sys
 from pathlib import Path
 
+from fcomp.cli.common import json_target
 from fcomp.errors import FcompError
 
 
@@ -62,17 +63,6 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
-def _json_target(path: str | None) -> Path | None:
-    if path is None or path == "-":
-        return None
-    out = Path(path)
-    if out.is_dir():
-        raise FcompError(f"--json {path}: is a directory")
-    if not out.parent.exists():
-        raise FcompError(f"--json {path}: folder {out.parent} does not exist")
-    return out
-
-
 def summary(doc: dict) -> str:
     """The printed summary of a diagnosis JSON."""
     lines = [f"baseline {doc['baseline']}: held-out RMS {doc['rms_baseline']:.4g} N "
@@ -102,7 +92,7 @@ def run(args: argparse.Namespace) -> int:
     from fcomp.measurement import Measurement
     from fcomp.report import atomic_write_text
 
-    out = _json_target(args.json)
+    out = json_target(args.json)
     if args.report is not None and Path(args.report).exists() and not Path(args.report).is_dir():
         raise FcompError(f"--report {args.report}: exists and is not a directory")
     if args.max_steps < 0:

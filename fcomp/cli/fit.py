@@ -15,10 +15,9 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from pathlib import Path
 from typing import TYPE_CHECKING
 
-from fcomp.cli.common import add_model_options, build_model, parse_assignments
+from fcomp.cli.common import add_model_options, build_model, json_target, parse_assignments
 from fcomp.errors import FcompError
 
 if TYPE_CHECKING:
@@ -64,17 +63,6 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
-def _json_target(path: str | None) -> Path | None:
-    if path is None or path == "-":
-        return None
-    out = Path(path)
-    if out.is_dir():
-        raise FcompError(f"--json {path}: is a directory")
-    if not out.parent.exists():
-        raise FcompError(f"--json {path}: folder {out.parent} does not exist")
-    return out
-
-
 def _table(f: FrictionFit) -> str:
     from fcomp.report import format_value
 
@@ -103,7 +91,7 @@ def run(args: argparse.Namespace) -> int:
     from fcomp.measurement import Measurement
     from fcomp.report import atomic_write_text
 
-    out = _json_target(args.json)
+    out = json_target(args.json)
     if args.max_nfev < 1:
         raise FcompError(f"--max-nfev must be a positive integer, got {args.max_nfev}")
     if args.v_min is not None and not args.v_min > 0:

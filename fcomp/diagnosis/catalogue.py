@@ -38,6 +38,7 @@ from fcomp.diagnosis.data import DiagnosisData
 from fcomp.diagnosis.refit import FitResult
 from fcomp.diagnosis.regimes import Segmentation
 from fcomp.effects import EFFECTS, Effect, make_effect
+from fcomp.errors import FcompError
 from fcomp.identification.guess import stribeck_start
 from fcomp.models.base import FrictionModel
 
@@ -311,26 +312,66 @@ def _offset(ctx: Context) -> list[dict[str, float]]:
 
 
 def _nonlocal_memory(ctx: Context) -> list[dict[str, float]]:
-    """Seed 000's cylinder-1 hysteresis shape scaled to this record.
+    """Seed 000's hysteresis shape scaled to this record, then fitted to its transition curves.
 
     Widths ``z_i`` (and ``1/k_i``) scaled so that the external loop spans
     ``3*d_pre`` (seed: ``z1 + z5`` = 0.354 mm); amplitudes ``c_i`` scaled so
     that its exponential part rises by the friction level (seed: 5.49 N).
+    That shape is one start; a second has its ``c_i, k_i`` fitted to the
+    force-displacement transition curves of each experiment's training
+    samples (:func:`fcomp.identification.hysteresis_fit.fit_hysteresis`,
+    seed 000's own identification), with the current fit's ``sigma0`` and
+    levels. Both go to the refit; the better one on the training samples
+    wins.
     """
     from fcomp.models.hysteresis import SEED_DEFAULTS
 
     sd = SEED_DEFAULTS
     sz = 3.0 * ctx.seg.d_pre / (sd["z1"] + sd["z5"])
     sc = _level(ctx) / (sd["c1"] + sd["c2"] + sd["c3"])
-    out = {}
+    scaled = {}
     for k, val in sd.items():
         if k.startswith("c"):
-            out[k] = val * sc
+            scaled[k] = val * sc
         elif k.startswith("k"):
-            out[k] = val / sz
+            scaled[k] = val / sz
         else:
-            out[k] = val * sz
-    return [out]
+            scaled[k] = val * sz
+    fitted = _curves_start(ctx, scaled)
+    return [scaled, fitted] if fitted else [scaled]
+
+
+def _curves_start(ctx: Context, scaled: dict[str, float]) -> dict[str, float] | None:
+    """``scaled`` with ``c_i, k_i`` fitted to the training transition curves (None if none)."""
+    from fcomp.identification.hysteresis_fit import fit_hysteresis
+
+    cur = ctx.current.model
+    probe = _attach(cur, "nonlocal-memory", scaled, ctx.data)
+    values = {**probe.flat_params(), **{k: v for k, v in ctx.current.values.items()
+                                        if k in probe.flat_params()}}
+    specs = probe.param_specs()
+    xs, Fs = [], []
+    for e in ctx.data.experiments:  # the longest training run of each experiment
+        tr = ctx.train[e.start:e.stop]
+        edges = np.flatnonzero(np.diff(np.concatenate([[0], tr.astype(int), [0]])))
+        if not edges.size:
+            continue
+        runs = list(zip(edges[::2], edges[1::2], strict=True))
+        lo, hi = max(runs, key=lambda r: r[1] - r[0])
+        xs.append(e.data.sig["x"][lo:hi])
+        Fs.append(e.data.y[lo:hi])
+    best = None
+    for x, F in zip(xs, Fs, strict=True):
+        try:
+            fit = fit_hysteresis(x, F, values, specs, max_nfev=60, label="training run")
+        except (FcompError, ValueError, ArithmeticError):
+            continue
+        n = sum(fit.curves.values())
+        if best is None or n > best[0]:
+            best = (n, fit.values)
+    if best is None:
+        return None
+    return {**scaled, **best[1]}
 
 
 #: Parameters refitted for a candidate whose model has no exact sensitivities.

@@ -69,6 +69,8 @@ def summary(doc: dict) -> str:
              f"(noise floor {doc['noise_floor']:.3g} N, {doc['noise_method']}; {doc['split']})"]
     for i, s in enumerate(doc["steps"], 1):
         tag = "accepted" if s["accepted"] else "rejected"
+        if s.get("removed"):
+            tag = "accepted, then removed (redundant once later effects were in)"
         if s.get("forced"):
             tag = "added on request" + ("" if s["accepted"] else " (the rule would reject it)")
         after = "-" if s["rms_after"] is None else f"{s['rms_after']:.4g}"

@@ -118,6 +118,11 @@ def _config(name: str, data: DiagnosisData) -> dict[str, Any]:
     return {}
 
 
+def attach(model: FrictionModel, name: str, data: DiagnosisData) -> FrictionModel:
+    """``model`` with the effect ``name`` at its defaults, configured for the record."""
+    return _attach(model, name, {}, data)
+
+
 def _attach(model: FrictionModel, name: str, params: dict[str, float],
             data: DiagnosisData) -> FrictionModel:
     effect: Effect = make_effect(name, params or None, **_config(name, data))

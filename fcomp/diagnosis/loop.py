@@ -43,6 +43,10 @@ returns ``self``, results in ``*_`` attributes) runs the whole procedure:
    which is always evaluated), or after ``max_steps``.
    From the second step on, candidates that made the held-out error worse
    at the previous step are not tried again unless they only now apply.
+   Once the search stops, a *backward check* takes each searched effect out
+   again (last added first) and refits the rest: an effect that would no
+   longer qualify when put back is redundant -- it stood in for part of what
+   a later effect explains -- and stays out (``removed_``).
 4. **Verdict.** The final residual is tested for structure left
    (:mod:`.features`): ``unexplained-structure`` when some feature explains
    at least :data:`STRUCTURE_MIN` of its held-out mean square *and* the part
@@ -155,6 +159,7 @@ class Step:
     candidates: list[Candidate] = field(default_factory=list)
     tie: list[str] = field(default_factory=list)
     fit: FitResult | None = None
+    removed: str = ""
 
 
 def _rms(r: np.ndarray) -> float:
@@ -327,6 +332,10 @@ class Diagnosis:
         First-step candidates, best first.
     ties_ : list of list of str
     added_ : list of str
+        Effects in the final model, in the order they were added.
+    removed_ : list of str
+        Searched effects the backward check took out again (redundant once
+        later effects were in; their steps are marked not accepted).
     skipped_ : dict
         Effect -> why it was not a candidate (at the last step it was considered).
     rms_baseline_, rms_final_ : N
@@ -399,10 +408,12 @@ class Diagnosis:
             self.ties_: list[list[str]] = []
             self.added_: list[str] = []
             self.skipped_: dict[str, str] = {}
+            self.removed_: list[str] = []
             for name in self.add:
                 self.add_effect(name)
             if self.search:
                 self._search(names)
+                self._backward()
         finally:
             self._bar.close()
         self._conclude()
@@ -597,6 +608,50 @@ class Diagnosis:
             self.fit_ = fit
             self.added_.append(best.effect)
 
+    def _rebuilt(self, names: Sequence[str]) -> FitResult:
+        """The baseline with the effects ``names`` (in order) refitted from the current values."""
+        model = self.baseline_fit_.model
+        for n in names:
+            model = catalogue.attach(model, n, self.data_)
+        flat = model.flat_params()
+        start = {k: v for k, v in self.fit_.values.items() if k in flat or k == "mass"}
+        return self._polish(self._refit.fit(model, [start]))
+
+    def _backward(self) -> None:
+        """Drop searched effects that later additions made redundant (a backward check).
+
+        Effects are added one at a time, so an early one may only have stood
+        in for part of what a later one explains (a position-dependent level
+        for a direction asymmetry seen at the ends of the stroke). Once the
+        search stops, each searched effect -- last added first -- is taken out
+        and the rest refitted; if putting it back would no longer qualify by
+        the acceptance rule, it stays out (listed in ``removed_``, its step
+        marked not accepted). Forced effects (``add``) are never removed.
+        """
+        searched = [s.effect for s in self.steps_ if s.accepted and not s.forced]
+        if len(self.added_) < 2:
+            return
+        for effect in reversed(searched):
+            others = [n for n in self.added_ if n != effect]
+            try:
+                reduced = self._rebuilt(others)
+            except FcompError:
+                continue
+            self._tick(f"without {effect}")
+            full = self.fit_
+            self.fit_ = reduced
+            verdict = self._judge(effect, full)
+            self.fit_ = full
+            if verdict.qualifies:
+                continue
+            self.fit_ = reduced
+            self.added_ = others
+            self.removed_.append(effect)
+            for st in self.steps_:
+                if st.effect == effect and st.accepted and not st.forced:
+                    st.accepted = False
+                    st.removed = verdict.reason
+
     def _polish(self, fit: FitResult) -> FitResult:
         """``fit`` continued to convergence (:data:`POLISH_NFEV` times the budget), if that helps.
 
@@ -651,13 +706,15 @@ class Diagnosis:
             "rms_baseline": self.rms_baseline_,
             "added": list(self.added_),
             "steps": [{"effect": s.effect, "rms_before": s.rms_before, "rms_after":
-                       num(s.rms_after), "accepted": bool(s.accepted), "forced": s.forced}
+                       num(s.rms_after), "accepted": bool(s.accepted), "forced": s.forced,
+                       "removed": bool(s.removed)}
                       for s in self.steps_],
             "candidates": [{"effect": c.effect, "rms_heldout": num(c.rms_heldout),
                             "qualifies": c.qualifies, "z": num(c.z), "p": num(c.p),
                             "delta_bic": num(c.delta_bic), "reason": c.reason}
                            for c in self.candidates_],
             "ties": [list(t) for t in self.ties_],
+            "removed": list(self.removed_),
             "rms_final": self.rms_final_,
             "noise_floor": self.noise_floor_.value,
             "verdict": self.verdict_,

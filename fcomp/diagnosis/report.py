@@ -179,9 +179,12 @@ def fig_error_fall(diag: Diagnosis) -> Figure:
     labels = ["baseline"]
     vals = [diag.rms_baseline_]
     for s in diag.steps_:
-        if s.accepted or s.forced:
+        if s.accepted or s.forced or s.removed:
             labels.append(f"+ {s.effect}")
             vals.append(s.rms_after)
+    if diag.removed_:
+        labels.append("- " + ", ".join(diag.removed_))
+        vals.append(diag.rms_final_)
     fig = Figure(figsize=(7.0, 3.4))
     ax = fig.add_subplot()
     ax.plot(range(len(vals)), vals, "o-", color=_COLORS["final"])

@@ -19,9 +19,10 @@ returns ``self``, results in ``*_`` attributes) runs the whole procedure:
      steady-state points are pieces of their own) where the candidate changes
      the prediction materially (by a tenth of the noise floor, RMS), the RMS
      falls by at least ``max(0.1*noise_floor, 0.02*rms_before)`` and by at
-     least a quarter of the excess mean square over the noise floor there,
-     ``rms_before^2 - rms_after^2 >= 0.25*(rms_before^2 - noise_floor^2)`` (a
-     small dent in a large unexplained residual is not a found effect).
+     least half the excess mean square over the noise floor there,
+     ``rms_before^2 - rms_after^2 >= 0.5*(rms_before^2 - noise_floor^2)`` (a
+     small dent in a large unexplained residual is not a found effect); both
+     RMS values without the largest 1 % of samples (:func:`trimmed_rms`).
      Judging the fall where the candidate acts lets an effect that shows only
      at break-aways or reversals be found in a record that is mostly sliding;
    * the fall is significant: a Diebold-Mariano test on the squared-error
@@ -41,8 +42,10 @@ returns ``self``, results in ``*_`` attributes) runs the whole procedure:
    would tell them apart. The search stops when no candidate qualifies, when the
    held-out RMS is within 5 % of the noise floor (after the first step,
    which is always evaluated), or after ``max_steps``.
-   From the second step on, candidates that made the held-out error worse
-   at the previous step are not tried again unless they only now apply.
+   Every applicable candidate is tried again at every step: an effect
+   masked by a larger one (a direction asymmetry under a pressure
+   dependence) can make the error worse at the first step and be the right
+   one at the second.
    Once the search stops, a *backward check* takes each searched effect out
    again (last added first) and refits the rest: an effect that would no
    longer qualify when put back is redundant -- it stood in for part of what
@@ -93,7 +96,7 @@ ACCEPT_P = 0.05
 #: A clear fall: at least this fraction of the noise floor ...
 FALL_NOISE = 0.1
 #: ... and this share of the excess mean square over the noise floor.
-EXCESS_SHARE = 0.25
+EXCESS_SHARE = 0.5
 #: ... and of the held-out RMS before.
 FALL_RELATIVE = 0.02
 #: Candidates within this share of the best candidate's fall tie with it.
@@ -545,8 +548,8 @@ class Diagnosis:
                            f"{res.rms_test:.4g} N)")
         pieces = changed_pieces(before.residual, res.residual, self._blocks, FALL_NOISE * nf)
         changed = np.concatenate(pieces) if pieces else np.zeros(0, dtype=int)
-        if changed.size:
-            rb, ra = _rms(before.residual[changed]), _rms(res.residual[changed])
+        if changed.size:  # isolated timing spikes are in both and no effect explains them
+            rb, ra = trimmed_rms(before.residual[changed]), trimmed_rms(res.residual[changed])
         else:
             rb = ra = before.rms_test
         need = max(FALL_NOISE * nf, FALL_RELATIVE * rb)
@@ -566,8 +569,6 @@ class Diagnosis:
                          "; ".join(reasons))
 
     def _search(self, names: list[str]) -> None:
-        useless: set[str] = set()
-        tried_before: set[str] = set()
         for step_no in range(self.max_steps):
             if step_no and self.fit_.rms_test <= AT_FLOOR * self.noise_floor_.value:
                 break
@@ -581,14 +582,10 @@ class Diagnosis:
                     self.skipped_[name] = reason
                     continue
                 self.skipped_.pop(name, None)
-                if name in useless and name in tried_before:
-                    continue
                 todo.append(name)
             if not todo:
                 break
             cands = self._evaluate(todo)
-            tried_before |= set(todo)
-            useless = {c.effect for c in cands if c.fit is None or not c.fall > 0}
             ranked = sorted(cands, key=lambda c: (math.isnan(c.rms_heldout), c.rms_heldout))
             if step_no == 0 and not self.added_:
                 self.candidates_ = ranked

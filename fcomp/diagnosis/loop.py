@@ -644,6 +644,7 @@ class Diagnosis:
             self.fit_ = reduced
             self.added_ = others
             self.removed_.append(effect)
+            self.ties_ = [t for t in self.ties_ if t[0] != effect]  # its tie went with it
             for st in self.steps_:
                 if st.effect == effect and st.accepted and not st.forced:
                     st.accepted = False

@@ -182,3 +182,26 @@ def test_dynamic_baseline_on_steady_state_points_says_why() -> None:
     d = Diagnosis("coulomb", n_jobs=1).fit(m)
     assert d.added_ == ["viscous"]
     assert d.rms_final_ < 1e-3
+
+
+def test_plant_domain_comparison_starts_from_the_measured_gauge_state() -> None:
+    """A pneumatic run replayed with its own friction model matches; another model does not.
+
+    The recorded chamber pressures are gauge while the plant's states are
+    absolute: a wrong start would leave a 1 atm (101 kPa) transient in ``p1, p2``.
+    """
+    from fcomp.diagnosis import compare_plant
+    from fcomp.models import make_model
+    from plants import PLANTS
+
+    lugre = make_model("lugre")
+    run = PLANTS.get("pneumatic")(lugre, "seed000-servo").simulate(
+        lambda t: 0.3 * np.sin(2 * np.pi * 0.5 * t), 4.0, 500.0)
+    assert run.meta["pressure"] == "gauge" and run["p1"][0] < 3e5  # gauge, not absolute
+    same = compare_plant(run, "pneumatic", lugre)["rms"]
+    assert same["x"] < 1e-9 and same["p1"] < 1e-3 and same["p2"] < 1e-3  # m, Pa
+    other = compare_plant(run, "pneumatic", make_model("coulomb"))["rms"]
+    assert other["x"] > 1e-5 and other["p1"] > 100.0  # the friction model shows in x and p
+    with pytest.raises(FcompError, match="command column 'u'"):
+        compare_plant(Measurement({k: run[k] for k in ("t", "x", "p1", "p2")}, run.meta),
+                      "pneumatic", lugre)

@@ -126,10 +126,12 @@ def compare_plant(meas: Measurement, plant: str, friction: FrictionModel, *,
     """Simulate ``plant`` with the measured command ``u`` and compare ``x``, ``p1``, ``p2``.
 
     The plant starts from the measured ``x``, ``p1``, ``p2`` at the first
-    sample (gauge pressures converted to the plant's absolute ones by the
-    plant itself where it needs them) and is driven by ``u`` interpolated
-    linearly between samples. Returns the simulated measurement and the RMS
-    error of every compared signal (m, Pa).
+    sample (gauge pressures, converted to the plant's states with the offset
+    between each state and the recorded output of the same name, e.g. the
+    atmospheric pressure of a pneumatic plant's absolute chamber pressures)
+    and is driven by ``u`` interpolated linearly between samples. Returns
+    the simulated measurement and the RMS error of every compared signal
+    (m, gauge Pa).
     """
     from plants import PLANTS
 
@@ -142,18 +144,26 @@ def compare_plant(meas: Measurement, plant: str, friction: FrictionModel, *,
     def u_of(tt: Any) -> Any:
         return np.interp(tt, t - t[0], u)
 
-    x0: dict[str, float] = {}
     names = p.state_names
-    for k in ("x", "p1", "p2"):
-        if k in meas and k in names:
-            x0[k] = float(meas[k][0])
+    measured = {k: (meas.gauge_pressure(k) if k in ("p1", "p2") else meas[k])
+                for k in ("x", "p1", "p2") if k in meas}
+    # the plant's states may be absolute pressures while its recorded outputs are gauge:
+    # the offset between a state and the output of the same name maps one onto the other
+    default = p.initial_state()
+    y0 = p.evaluate_outputs(default[None, :], np.array([[float(u[0])]]))
+    x0: dict[str, float] = {}
+    for k, col in measured.items():
+        if k in names:
+            offset = float(default[names.index(k)] - y0[k][0]) if k in y0 else 0.0
+            x0[k] = float(col[0]) + offset
     rate = (t.size - 1) / float(t[-1] - t[0])
     sim = p.simulate(u_of, float(t[-1] - t[0]), rate, x0=p.initial_state(x0))
     errors = {}
-    for k in ("x", "p1", "p2"):
-        if k in meas and k in sim:
-            ys = np.interp(t - t[0], sim.t, sim[k])
-            errors[k] = float(np.sqrt(np.mean((ys - meas[k]) ** 2)))
+    for k, col in measured.items():
+        if k in sim:
+            ys = np.interp(t - t[0], sim.t, sim.gauge_pressure(k) if k in ("p1", "p2")
+                           else sim[k])
+            errors[k] = float(np.sqrt(np.mean((ys - col) ** 2)))
     if not errors:
         raise FcompError(f"{meas.label}: no signal (x, p1, p2) to compare with plant {plant!r}")
     return {"simulated": sim, "rms": errors}

@@ -150,7 +150,8 @@ def compare_plant(meas: Measurement, plant: str, friction: FrictionModel, *,
     # the plant's states may be absolute pressures while its recorded outputs are gauge:
     # the offset between a state and the output of the same name maps one onto the other
     default = p.initial_state()
-    y0 = p.evaluate_outputs(default[None, :], np.array([[float(u[0])]]))
+    outputs = getattr(p, "evaluate_outputs", None)  # ODE plants; others record their states
+    y0 = outputs(default[None, :], np.array([[float(u[0])]])) if outputs is not None else {}
     x0: dict[str, float] = {}
     for k, col in measured.items():
         if k in names:

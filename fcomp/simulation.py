@@ -68,6 +68,7 @@ from __future__ import annotations
 import ctypes
 import math
 import re
+from abc import ABC, abstractmethod
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import cached_property, lru_cache
@@ -291,7 +292,7 @@ class Stats:
 
 
 # ----------------------------------------------------------------- methods
-class Integrator:
+class Integrator(ABC):
     """Base of the integration methods: ``run`` integrates over sample intervals.
 
     ``run(x0, U, dU, dt, p, tol, h, t0)`` integrates from ``x0`` over the
@@ -306,10 +307,11 @@ class Integrator:
     def __init__(self, model: OdeModel) -> None:
         self.model = model
 
+    @abstractmethod
     def run(self, x0: np.ndarray, U: np.ndarray, dU: np.ndarray, dt: np.ndarray,
             p: np.ndarray, tol: Tolerances, h: float,
             t0: float = 0.0) -> tuple[np.ndarray, Stats, float]:
-        raise NotImplementedError
+        """Integrate over the sample intervals (the contract in the class docstring)."""
 
 
 _DRIVER = r"""

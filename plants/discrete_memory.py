@@ -112,7 +112,9 @@ class LocalBristle(FrictionModel):
 
     def base_force(self, be: Backend, x: list[Any], dx: list[Any], sig: Signals,
                    P: ParamValues, L: dict) -> tuple[Any, Any]:  # pragma: no cover - unused
-        raise NotImplementedError
+        """Not part of this view: its force comes from the carrier's equations (class docstring)."""
+        raise TypeError(f"{self.name}: evaluated through its carrier "
+                        f"{self.carrier.describe()!r}; base_force is never called on the view")
 
     def _states(self, x: Sequence[Any], P: ParamValues) -> list[Any]:
         x = list(x)

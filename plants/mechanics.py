@@ -55,6 +55,7 @@ Dynamic models (LuGre family with a bristle state) need no band.
 from __future__ import annotations
 
 import math
+from abc import abstractmethod
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
@@ -191,10 +192,10 @@ class PistonPlant(OdePlant):
     output_units: ClassVar[dict[str, str]] = {"x": "m", "v": "m/s", "a": "m/s^2", "p1": "Pa (gauge)", "p2": "Pa (gauge)",
                     "F": "N"}
 
+    @abstractmethod
     def drive(self, be: Backend, x: dict[str, Any], u: dict[str, Any],
               P: ParamValues) -> Drive:
         """The driving force, chamber pressures and other state derivatives."""
-        raise NotImplementedError
 
     # --------------------------------------------------------------- checks
     def check_params(self) -> None:

@@ -1,8 +1,10 @@
-"""Pieces shared by the sub-commands: building models from options, output paths, --json targets."""
+"""Pieces shared by the sub-commands: building models from options, output paths, JSON results."""
 
 from __future__ import annotations
 
 import argparse
+import json
+import sys
 from pathlib import Path
 
 from fcomp.effects import load_effects_module
@@ -69,3 +71,23 @@ def json_target(path: str | None) -> Path | None:
     if not out.parent.exists():
         raise FcompError(f"--json {path}: folder {out.parent} does not exist")
     return out
+
+
+def result_text(doc: dict) -> str:
+    """A command's JSON result as text (strict JSON: a NaN raises before anything is written)."""
+    return json.dumps(doc, indent=2, allow_nan=False) + "\n"
+
+
+def emit_result(text: str, json_arg: str | None, out: Path | None, summary: str) -> None:
+    """Write a command's result: the JSON ``text`` alone to standard output for
+    ``--json -``; otherwise the human ``summary``, then ``text`` to ``out``
+    (atomically, so no half-written file is left) when ``--json OUT`` was given."""
+    from fcomp.report import atomic_write_text
+
+    if json_arg == "-":
+        sys.stdout.write(text)
+        return
+    print(summary)
+    if out is not None:
+        atomic_write_text(out, text)
+        print(f"wrote {out}")

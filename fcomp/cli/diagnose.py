@@ -20,12 +20,11 @@ MODULE.py``) before the search, whatever the acceptance rule says.
 from __future__ import annotations
 
 import argparse
-import json
 import shlex
 import sys
 from pathlib import Path
 
-from fcomp.cli.common import json_target
+from fcomp.cli.common import emit_result, json_target, result_text
 from fcomp.errors import FcompError
 
 
@@ -92,7 +91,6 @@ def run(args: argparse.Namespace) -> int:
     from fcomp.diagnosis.report import write_report
     from fcomp.effects import load_effects_module
     from fcomp.measurement import Measurement
-    from fcomp.report import atomic_write_text
 
     out = json_target(args.json)
     if args.report is not None and Path(args.report).exists() and not Path(args.report).is_dir():
@@ -117,18 +115,12 @@ def run(args: argparse.Namespace) -> int:
                      progress=not args.no_progress)
     diag.fit(data)
     doc = diag.to_dict()
-    text = json.dumps(doc, indent=2, allow_nan=False) + "\n"
+    text = result_text(doc)
     command = "fcomp diagnose " + " ".join(shlex.quote(a) for a in sys.argv[2:]) \
         if len(sys.argv) > 2 else None
     if args.report is not None:
         path = write_report(diag, args.report, command=command)
         if args.json != "-":
             print(f"wrote {path}")
-    if args.json == "-":
-        sys.stdout.write(text)
-        return 0
-    print(summary(doc))
-    if out is not None:
-        atomic_write_text(out, text)
-        print(f"wrote {out}")
+    emit_result(text, args.json, out, summary(doc))
     return 0

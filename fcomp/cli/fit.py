@@ -13,11 +13,16 @@ says so on one line and exits with status 2 (no JSON is written).
 from __future__ import annotations
 
 import argparse
-import json
-import sys
 from typing import TYPE_CHECKING
 
-from fcomp.cli.common import add_model_options, build_model, json_target, parse_assignments
+from fcomp.cli.common import (
+    add_model_options,
+    build_model,
+    emit_result,
+    json_target,
+    parse_assignments,
+    result_text,
+)
 from fcomp.errors import FcompError
 
 if TYPE_CHECKING:
@@ -89,7 +94,6 @@ def _table(f: FrictionFit) -> str:
 def run(args: argparse.Namespace) -> int:
     from fcomp.identification import FrictionFit
     from fcomp.measurement import Measurement
-    from fcomp.report import atomic_write_text
 
     out = json_target(args.json)
     if args.max_nfev < 1:
@@ -111,12 +115,5 @@ def run(args: argparse.Namespace) -> int:
                       max_nfev=args.max_nfev)
     fit.fit(data)
     doc = fit.to_dict()
-    text = json.dumps(doc, indent=2, allow_nan=False) + "\n"
-    if args.json == "-":
-        sys.stdout.write(text)
-        return 0
-    print(_table(fit))
-    if out is not None:
-        atomic_write_text(out, text)
-        print(f"wrote {out}")
+    emit_result(result_text(doc), args.json, out, _table(fit))
     return 0

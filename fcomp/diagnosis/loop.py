@@ -540,13 +540,13 @@ class Diagnosis:
         before = self.fit_
         nf = self.noise_floor_.value
         fall = before.rms_test - res.rms_test
-        z, p = fall_test(before.residual, res.residual, self._blocks, FALL_NOISE * nf)
+        pieces = changed_pieces(before.residual, res.residual, self._blocks, FALL_NOISE * nf)
+        z, p = fall_test(before.residual, res.residual, pieces, 0.0)  # pieces already chosen
         dbic = delta_bic(before, res, self.split_.train)
         reasons = []
         if not fall > 0:
             reasons.append(f"held-out RMS does not fall ({before.rms_test:.4g} -> "
                            f"{res.rms_test:.4g} N)")
-        pieces = changed_pieces(before.residual, res.residual, self._blocks, FALL_NOISE * nf)
         changed = np.concatenate(pieces) if pieces else np.zeros(0, dtype=int)
         if changed.size:  # isolated timing spikes are in both and no effect explains them
             rb, ra = trimmed_rms(before.residual[changed]), trimmed_rms(res.residual[changed])

@@ -92,6 +92,10 @@ class Measurement:
     def __contains__(self, name: object) -> bool:
         return name in self.columns
 
+    def get(self, name: str, default: np.ndarray | None = None) -> np.ndarray | None:
+        """Column ``name``, or ``default`` when the measurement does not have it."""
+        return self.columns.get(name, default)
+
     def __len__(self) -> int:
         return self.t.size
 

@@ -112,6 +112,28 @@ def smooth(t: np.ndarray, y: np.ndarray, *, cutoff_hz: float = 10.0, order: int 
     return out if same else np.interp(t, tu, out)
 
 
+def band_limit(t: np.ndarray, y: np.ndarray, cutoff_hz: float, *, order: int = 2
+               ) -> np.ndarray:
+    """:func:`smooth` along the first axis of ``y`` (one signal or columns ``(n, k)``).
+
+    The cut-off is capped at 0.45 of the sample rate (a record averaged over
+    blocks keeps its filter where it still can). Used for "parallel filtering":
+    a fit whose target was low-passed passes its prediction and sensitivities
+    through the same filter.
+    """
+    tu, same = _grid(t, "prediction")
+    fs = (tu.size - 1) / float(tu[-1] - tu[0])
+    fc = min(cutoff_hz, 0.45 * fs)
+    if y.ndim == 1:
+        return smooth(t, y, cutoff_hz=fc, order=order, label="prediction")
+    if not same:
+        return np.column_stack([smooth(t, y[:, j], cutoff_hz=fc, order=order,
+                                       label="prediction") for j in range(y.shape[1])])
+    sos = butter(order, fc, fs=fs, output="sos")
+    padlen = min(y.shape[0] - 1, int(math.ceil(3.0 * fs / fc)))
+    return sosfiltfilt(sos, y, axis=0, padtype="odd", padlen=padlen)
+
+
 def differentiate(t: np.ndarray, x: np.ndarray, *, cutoff_hz: float = 10.0, order: int = 2,
                   label: str = "signal") -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Zero-phase filtered ``x`` and its first two derivatives at the times ``t``.

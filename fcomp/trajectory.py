@@ -20,6 +20,8 @@ step (``h`` approaches ``h_ss`` monotonically), so the step is *exact* for
 piecewise-constant velocity and unconditionally stable however stiff
 (``sigma0*|v|/g*dt`` may be 1e4). Models with discrete memory
 (``nmlgm-hysteresis``) provide their own stepping (``integrate_motion``).
+States with hard limits (Maxwell-slip element deflections) are projected back
+onto their admissible set after every step (:meth:`FrictionModel.project`).
 
 The step is a CasADi function of ``(x, signals, dt, params)``, rolled over
 chunks of samples with ``mapaccum`` and compiled to native code
@@ -93,9 +95,11 @@ def friction_step(model: FrictionModel, substeps: int = 1) -> ca.Function:
     xk = x
     f_x = ca.vertcat(*model.rhs(CASADI, [x[i] for i in range(nx)], sig, P))
     J_x = ca.diag(ca.jacobian(f_x, x))  # differentiate w.r.t. the symbol, then substitute
+    proj = ca.vertcat(*model.project(CASADI, [x[i] for i in range(nx)], sig, P))
     for _ in range(substeps):
         f, J = ca.substitute([f_x, J_x], [x], [xk])
         xk = xk + h * _phi1(h * J) * f
+        xk = ca.substitute(proj, x, xk)
     return ca.Function("fcomp_friction_step", [x, sigv, dt, p], [xk])
 
 

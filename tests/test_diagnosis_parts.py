@@ -8,8 +8,9 @@ import math
 import numpy as np
 import pytest
 
+from fcomp.conditioning import default_cutoff, position_noise
 from fcomp.diagnosis import Diagnosis
-from fcomp.diagnosis.data import default_cutoff, position_noise, prepare
+from fcomp.diagnosis.data import prepare
 from fcomp.diagnosis.features import knn_predict, residual_structure, strength
 from fcomp.diagnosis.loop import fall_test, heldout_pieces
 from fcomp.diagnosis.noise import effective_sample_size, noise_floor

@@ -111,6 +111,8 @@ def applicability(name: str, model: FrictionModel, data: DiagnosisData,
 
 
 def _config(name: str, data: DiagnosisData) -> dict[str, Any]:
+    if name == "nonlocal-memory":  # the form with continuous states and exact sensitivities
+        return {"form": "maxwell-slip"}
     if name == "position-dependence":
         sc = data.scales
         pad = 0.02 * sc.stroke
@@ -134,8 +136,13 @@ def propose(name: str, ctx: Context) -> Proposal:
     model = ctx.current.model
     guess = GUESSES.get(name)
     alternatives = guess(ctx) if guess is not None else [{}]
-    models = [_attach(model, name, p, ctx.data) for p in alternatives]
-    starts = [m.flat_params() for m in models]
+    own_names = set(EFFECTS.get(name).Params.from_flat({}).flat())
+    models = [_attach(model, name, {k: v for k, v in p.items() if k in own_names}, ctx.data)
+              for p in alternatives]
+    # a guess may also move parameters of the model itself (a stiffer bristle)
+    starts = [{**m.flat_params(), **{k: v for k, v in p.items()
+                                     if k not in own_names and k in m.flat_params()}}
+              for m, p in zip(models, alternatives, strict=True)]
     # the same effect guess on a fresh start of the other parameters: the warm
     # start may sit in a local minimum the missing effect pushed it into
     base = models[0]
@@ -151,10 +158,7 @@ def propose(name: str, ctx: Context) -> Proposal:
     if "mass" in ctx.current.values:
         for s in starts:
             s["mass"] = ctx.current.values["mass"]
-    free = None
-    if not models[0].symbolic:  # finite-difference Jacobians: refit the new shape only
-        free = [n for n in REDUCED_FREE.get(name, ()) if n in starts[0]] or None
-    return Proposal(name, models[0], starts, free)
+    return Proposal(name, models[0], starts)
 
 
 def _at_bound(ctx: Context, values: dict[str, float]) -> list[str]:
@@ -317,70 +321,18 @@ def _offset(ctx: Context) -> list[dict[str, float]]:
 
 
 def _nonlocal_memory(ctx: Context) -> list[dict[str, float]]:
-    """Seed 000's hysteresis shape scaled to this record, then fitted to its transition curves.
+    """Maxwell-slip elements spread over one and two decades of slip displacement.
 
-    Widths ``z_i`` (and ``1/k_i``) scaled so that the external loop spans
-    ``3*d_pre`` (seed: ``z1 + z5`` = 0.354 mm); amplitudes ``c_i`` scaled so
-    that its exponential part rises by the friction level (seed: 5.49 N).
-    That shape is one start; a second has its ``c_i, k_i`` fitted to the
-    force-displacement transition curves of each experiment's training
-    samples (:func:`fcomp.identification.hysteresis_fit.fit_hysteresis`,
-    seed 000's own identification), with the current fit's ``sigma0`` and
-    levels. Both go to the refit; the better one on the training samples
-    wins.
+    The fitted LuGre bristle is a compromise between the stiff start of a
+    transition curve and its soft approach to sliding; the elements start
+    from it with their slip displacements spread ``ms_spread`` = 10 and 100
+    times (equal shares), and from twice its stiffness with the narrower
+    spread (the initial slope the one bristle under-estimates).
     """
-    from fcomp.models.hysteresis import SEED_DEFAULTS
-
-    sd = SEED_DEFAULTS
-    sz = 3.0 * ctx.seg.d_pre / (sd["z1"] + sd["z5"])
-    sc = _level(ctx) / (sd["c1"] + sd["c2"] + sd["c3"])
-    scaled = {}
-    for k, val in sd.items():
-        if k.startswith("c"):
-            scaled[k] = val * sc
-        elif k.startswith("k"):
-            scaled[k] = val / sz
-        else:
-            scaled[k] = val * sz
-    fitted = _curves_start(ctx, scaled)
-    return [scaled, fitted] if fitted else [scaled]
-
-
-def _curves_start(ctx: Context, scaled: dict[str, float]) -> dict[str, float] | None:
-    """``scaled`` with ``c_i, k_i`` fitted to the training transition curves (None if none)."""
-    from fcomp.identification.hysteresis_fit import fit_hysteresis
-
-    cur = ctx.current.model
-    probe = _attach(cur, "nonlocal-memory", scaled, ctx.data)
-    values = {**probe.flat_params(), **{k: v for k, v in ctx.current.values.items()
-                                        if k in probe.flat_params()}}
-    specs = probe.param_specs()
-    xs, Fs = [], []
-    for e in ctx.data.experiments:  # the longest training run of each experiment
-        tr = ctx.train[e.start:e.stop]
-        edges = np.flatnonzero(np.diff(np.concatenate([[0], tr.astype(int), [0]])))
-        if not edges.size:
-            continue
-        runs = list(zip(edges[::2], edges[1::2], strict=True))
-        lo, hi = max(runs, key=lambda r: r[1] - r[0])
-        xs.append(e.data.sig["x"][lo:hi])
-        Fs.append(e.data.y[lo:hi])
-    best = None
-    for x, F in zip(xs, Fs, strict=True):
-        try:
-            fit = fit_hysteresis(x, F, values, specs, max_nfev=60, label="training run")
-        except (FcompError, ValueError, ArithmeticError):
-            continue
-        n = sum(fit.curves.values())
-        if best is None or n > best[0]:
-            best = (n, fit.values)
-    if best is None:
-        return None
-    return {**scaled, **best[1]}
-
-
-#: Parameters refitted for a candidate whose model has no exact sensitivities.
-REDUCED_FREE: dict[str, tuple[str, ...]] = {"nonlocal-memory": ("c1", "c2", "c3", "c8")}
+    s0 = ctx.current.model.flat_params().get("sigma0", _level(ctx) / ctx.seg.d_pre)
+    return [{"ms_spread": 10.0, "ms_shape": 0.0, "sigma0": s0},
+            {"ms_spread": 100.0, "ms_shape": 0.0, "sigma0": 3.0 * s0},
+            {"ms_spread": 10.0, "ms_shape": 0.0, "sigma0": 2.0 * s0}]
 
 
 GUESSES: dict[str, Callable[[Context], list[dict[str, float]]]] = {
@@ -479,7 +431,6 @@ def _static_stage(model: FrictionModel, data: DiagnosisData, seg: Segmentation,
     Returns the fitted values (empty when there are too few points).
     """
     from fcomp.diagnosis.refit import data_bounds, fixed_names
-    from fcomp.errors import FcompError
     from fcomp.identification.problem import ParameterVector
     from fcomp.identification.static import SteadyStateMap, fit_steady_state, steady_state_points
 

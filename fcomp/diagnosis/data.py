@@ -25,68 +25,31 @@ position resolution), so nothing is tuned to one rig.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from fcomp.conditioning import (
+    Conditioning,
+    condition_motion,
+    force_cutoff,
+    resolution,
+    rest_noise,
+    sample_rate,
+)
 from fcomp.errors import FcompError
 from fcomp.identification.target import FitData, fit_data
 from fcomp.measurement import Measurement
-from fcomp.reconstruction import differentiate, hold_rest, smooth
+from fcomp.reconstruction import driving_force
 
 #: A time step longer than this many median steps starts a new experiment.
 GAP_FACTOR = 20.0
 #: Fewest samples an experiment must have.
 MIN_SAMPLES = 20
 STEADY_STATE = "steady-state"
-#: Width of the position band (in position-noise standard deviations) within which
-#: the piston counts as at rest, so the derived ``v`` and ``a`` are held at zero
-#: (6 noise standard deviations: one step for an encoder, ``q/sqrt(12)`` each).
-REST_NOISE_BAND = 6.0
-
-
-#: Candidate cutoffs of the derivation filter, as fractions of the sample rate.
-CUTOFF_FRACTIONS = (1 / 4, 1 / 5, 1 / 6, 1 / 8, 1 / 10, 1 / 15, 1 / 20, 1 / 30, 1 / 50, 1 / 100)
-
-
-def position_noise(x: np.ndarray) -> float:
-    """Standard deviation (m) of the position noise: quantisation or sensor noise.
-
-    The larger of the quantisation noise ``q/sqrt(12)`` (``q`` the smallest
-    clearly non-zero step of ``x``) and ``1.4826*median|d3x|/sqrt(20)``, the
-    robust spread of third differences (for white noise ``var(d3x) = 20*sigma^2``;
-    smooth motion contributes only ``jerk*dt^3``).
-    """
-    q = _resolution(x)
-    d3 = np.diff(x, 3)
-    white = 1.4826 * float(np.median(np.abs(d3))) / math.sqrt(20.0) if d3.size else 0.0
-    return max(q / math.sqrt(12.0), white)
-
-
-def default_cutoff(t: np.ndarray, x: np.ndarray) -> float:
-    """Cutoff (Hz) of the zero-phase filter that derives ``v``, ``a`` from ``x``.
-
-    The highest of :data:`CUTOFF_FRACTIONS` of the sample rate ``fs`` at which
-    the position noise ``sigma_x`` (:func:`position_noise`) leaves a velocity
-    noise ``sigma_v = 2*pi*sigma_x*sqrt(2*fc^3/(3*fs))`` (an ideal low-pass of
-    white noise, differentiated) below 0.2 % of the speed scale (95th
-    percentile of ``|v|`` at ``fs/10``). A clean encoder gets ``fs/4``, so
-    presliding transients of a few milliseconds keep their timing; a noisy
-    sensor gets a lower cutoff.
-    """
-    fs = (t.size - 1) / float(t[-1] - t[0])
-    sx = position_noise(x)
-    _, v0, _ = differentiate(t, x, cutoff_hz=0.1 * fs, label="x")
-    speed = float(np.percentile(np.abs(v0), 95.0))
-    for frac in CUTOFF_FRACTIONS:
-        fc = frac * fs
-        if 2 * math.pi * sx * math.sqrt(2 * fc**3 / (3 * fs)) <= 2e-3 * speed:
-            return float(fc)
-    return float(CUTOFF_FRACTIONS[-1] * fs)
-
-
 @dataclass(frozen=True)
 class Scales:
     """Magnitudes of a record, the reference of every data-derived threshold (SI).
@@ -161,6 +124,11 @@ class DiagnosisData:
         Whether the samples are independent steady-state points.
     source
         Where the force came from (``"F"``, ``"reconstructed"``, ``"driving-force"``).
+    labels
+        Experiment labels.
+    signals
+        Per measurement file: how its motion was conditioned
+        (:class:`fcomp.conditioning.Conditioning`); empty for steady-state points.
     """
 
     experiments: list[Experiment]
@@ -170,6 +138,7 @@ class DiagnosisData:
     steady_state: bool
     source: str
     labels: list[str] = field(default_factory=list)
+    signals: list[Conditioning] = field(default_factory=list)
 
     @property
     def n(self) -> int:
@@ -220,26 +189,37 @@ def _cut(meas: Measurement) -> list[Measurement]:
     return out
 
 
-def _motion_columns(meas: Measurement, cutoff_hz: float | None) -> Measurement:
-    """``meas`` with ``v`` and ``a`` columns (derived from ``x`` where absent)."""
-    if "v" in meas and "a" in meas:
-        return meas
-    t = meas.t
-    if "x" in meas:
-        fc = cutoff_hz if cutoff_hz is not None else default_cutoff(t, meas["x"])
-        _, v, a = differentiate(t, meas["x"], cutoff_hz=fc, label=meas.label)
-        v, a = hold_rest(t, meas["x"], v, a, tol=REST_NOISE_BAND * position_noise(meas["x"]))
-        if "v" in meas:  # a measured velocity is kept; a from it
-            v = meas["v"]
-            a = np.gradient(smooth(t, v, cutoff_hz=fc, label=meas.label), t)
-        if "a" in meas:
-            a = meas["a"]
-        return meas.with_columns(v=v, a=a)
-    if "v" in meas:
-        fc = cutoff_hz if cutoff_hz is not None else 0.1 * (t.size - 1) / float(t[-1] - t[0])
-        vf = smooth(t, meas["v"], cutoff_hz=fc, label=meas.label)
-        return meas.with_columns(a=np.gradient(vf, t))
-    raise FcompError(f"{meas.label}: a diagnosis needs a position 'x' or velocity 'v' column")
+def _condition(subs: list[Measurement], cutoff_hz: float | None
+               ) -> tuple[list[Measurement], Conditioning]:
+    """The experiments of one file with conditioned ``v``, ``a`` columns (:mod:`fcomp.conditioning`)."""
+    if not all("x" in m or "v" in m for m in subs):
+        raise FcompError(f"{subs[0].label}: a diagnosis needs a position 'x' or velocity 'v' "
+                         "column")
+    pieces = [(m.t, m.get("x"), m.get("v")) for m in subs]
+    motions, cond = condition_motion(pieces, cutoff_hz=cutoff_hz)
+    out = []
+    for m, mo in zip(subs, motions, strict=True):
+        a = np.where(mo.rest, 0.0, m["a"]) if "a" in m else mo.a
+        out.append(m.with_columns(v=mo.v, a=a))
+    return out, cond
+
+
+def _force_band(subs: list[Measurement], motions: list[Measurement], cond: Conditioning
+                ) -> Conditioning:
+    """``cond`` with the force source and the band of the parallel filtering (reconstructed)."""
+    if "F" in subs[0] or not any(k in subs[0] for k in ("p1", "p2", "F_ext")):
+        return dataclasses.replace(cond, force="F" if "F" in subs[0] else "")
+    mass = subs[0].rig.get("mass")
+    longest = max(range(len(subs)), key=lambda i: len(subs[i]))
+    m, mo = subs[longest], motions[longest]
+    rest = (mo["v"] == 0.0) & (mo["a"] == 0.0)
+    noise = rest_noise(m.t, driving_force(m), rest)
+    fs = sample_rate(m.t)
+    if mass is None or not math.isfinite(noise):
+        return dataclasses.replace(cond, force="driving-force" if mass is None else
+                                   "reconstructed", force_cutoff_hz=cond.cutoff_hz)
+    fc = force_cutoff(fs, cond.cutoff_hz, cond.x_noise, float(mass), noise)
+    return dataclasses.replace(cond, force="reconstructed", force_cutoff_hz=fc)
 
 
 def _steady_state(meas: Measurement) -> bool:
@@ -249,14 +229,6 @@ def _steady_state(meas: Measurement) -> bool:
         raise FcompError(f"{meas.label}: sidecar diagnosis.samples must be 'motion' or "
                          f"'{STEADY_STATE}', got {mode!r}")
     return mode == STEADY_STATE
-
-
-def _resolution(x: np.ndarray) -> float:
-    steps = np.abs(np.diff(x))
-    steps = steps[steps > 1e-12 * max(float(np.max(np.abs(x))), 1e-12)]
-    if steps.size == 0:
-        return 1e-6
-    return float(np.percentile(steps, 1.0))
 
 
 def prepare(
@@ -285,16 +257,21 @@ def prepare(
     start = 0
     x_measured = all("x" in m for m in meas_list)
     p_measured = all("p1" in m or "p2" in m for m in meas_list)  # a missing one: 0 gauge
+    signals: list[Conditioning] = []
     for meas in meas_list:
-        for sub in ([meas] if steady else _cut(meas)):
-            if steady:
-                cols = {"a": np.zeros(len(sub))} if "a" not in sub else {}
-                if "v" not in sub:
-                    raise FcompError(f"{sub.label}: steady-state points need a 'v' column")
-                sub = sub.with_columns(**cols)
-            else:
-                sub = _motion_columns(sub, cutoff_hz)
-            d = fit_data(sub)
+        subs = [meas] if steady else _cut(meas)
+        band = None
+        if steady:
+            if "v" not in meas:
+                raise FcompError(f"{meas.label}: steady-state points need a 'v' column")
+            subs = [meas.with_columns(a=meas["a"] if "a" in meas else np.zeros(len(meas)))]
+        else:
+            conditioned, cond = _condition(subs, cutoff_hz)
+            cond = _force_band(subs, conditioned, cond)
+            signals.append(dataclasses.replace(cond, label=meas.label))
+            subs, band = conditioned, cond.force_cutoff_hz
+        for sub in subs:
+            d = fit_data(sub, force_cutoff_hz=band)
             sources.add(d.source)
             experiments.append(Experiment(sub.label, d, start, start + d.n))
             start += d.n
@@ -305,7 +282,7 @@ def prepare(
            for e in experiments):
         raise FcompError("some records give rig.mass and others not; give it for all or none")
     data = DiagnosisData(experiments, {}, {}, _scales(experiments), steady, sources.pop(),
-                         [e.label for e in experiments])
+                         [e.label for e in experiments], signals)
     _availability(data, x_measured, p_measured)
     return data
 
@@ -329,7 +306,7 @@ def _scales(experiments: list[Experiment]) -> Scales:
         accel=float(np.percentile(np.abs(cat["a"]), 95.0)) or 1.0,
         x_min=float(np.percentile(x, 1.0)),
         x_max=float(np.percentile(x, 99.0)),
-        resolution=float(min(np.median([_resolution(e.data.sig["x"]) for e in experiments]),
+        resolution=float(min(np.median([resolution(e.data.sig["x"]) for e in experiments]),
                              1e-3)),
         p_mid=float(np.mean(psum)),
         p_span=float(np.percentile(psum, 99.0) - np.percentile(psum, 1.0)),

@@ -209,7 +209,8 @@ class Refit:
 
                 sig["s"] = side_of(sig["v"])
                 inertia = None if d.inertia is None else _block_mean(d.inertia, q)
-                d = FitData(sig, _block_mean(d.y, q), inertia, d.source, d.mass, d.label)
+                d = FitData(sig, _block_mean(d.y, q), inertia, d.source, d.mass, d.label,
+                            d.band_hz)
                 train = _block_mean(train.astype(float), q) > 0.999
             out.append((d, train))
         return out
@@ -228,8 +229,9 @@ class Refit:
     def _predict_one(self, model: FrictionModel, e: Experiment, vals: Mapping[str, float],
                      mass: float | None) -> np.ndarray:
         s = e.data.sig
-        F = friction_along_motion(model, s["t"], s["v"], a=s["a"], x=s["x"], p1=s["p1"],
-                                  p2=s["p2"], values=vals or None).F
+        F = e.data.band_limited(friction_along_motion(
+            model, s["t"], s["v"], a=s["a"], x=s["x"], p1=s["p1"], p2=s["p2"],
+            values=vals or None).F)
         if mass is not None and e.data.inertia is not None:
             F = F + mass * e.data.inertia
         return F

@@ -20,7 +20,7 @@ from fcomp.models.hysteresis import (
     hysteresis_specs,
     with_hysteresis,
 )
-from fcomp.models.lugre_family import FAMILY_SPECS
+from fcomp.models.lugre_family import FAMILY_SPECS, FEATURE_PARAMS
 from fcomp.parameters import ParamValues, make_params_class, spec
 
 if TYPE_CHECKING:
@@ -386,7 +386,7 @@ class ForceOffset(Effect):
 
 
 class NonlocalMemory(StructuralEffect):
-    """Nonlocal memory: seed 000's hysteresis function ``F(z)`` in place of the bristle ``sigma0*z``.
+    """Nonlocal memory: pre-sliding friction that remembers earlier reversal points.
 
     In pre-sliding the asperity junctions of the seal deform elastically and
     plastically: the force-displacement curve after each reversal starts
@@ -399,38 +399,70 @@ class NonlocalMemory(StructuralEffect):
     displacements that follow the displacement since the last reversal: the
     model is too soft just after a reversal and the loop shape is wrong, and
     after a minor loop an offset remains that the data erase once the earlier
-    reversal point is passed. Parameters are those of
-    :mod:`fcomp.models.hysteresis` (seed 000 Tables 2-3); the defaults, zero
-    segment widths and amplitudes, make every transition curve its
-    continuation with slope ``sigma0`` from ``sigma0*z_r``, i.e. ``sigma0*z``
-    itself: a no-op. Needs a bristle state (``presliding``).
+    reversal point is passed.
+
+    Two forms (configuration ``form``; models.md 1.8: "the hysteresis function
+    of 1.6 (or GMS elements)"):
+
+    ``"hysteresis"`` (default)
+        seed 000's hysteresis function ``F(z)`` in place of ``sigma0*z``
+        (:mod:`fcomp.models.hysteresis`, Tables 2-3; discrete turning-point
+        memory, numeric only). Its defaults -- zero segment widths and
+        amplitudes -- make every transition curve the continuation with slope
+        ``sigma0``: a no-op.
+    ``"maxwell-slip"``
+        the bristle split into parallel Maxwell-slip elements (the ``elements``
+        feature of :mod:`fcomp.models.lugre_family`: ``ms_spread``, ``ms_shape``;
+        continuous states, exact sensitivities). ``ms_spread = 1`` is the
+        bristle itself: a no-op. The diagnosis fits this form.
+
+    Needs a bristle state (``presliding``).
     """
 
     name = "nonlocal-memory"
+    FORMS: ClassVar[tuple[str, ...]] = ("hysteresis", "maxwell-slip")
     Params = make_params_class(
-        "NonlocalMemoryParams", hysteresis_specs(NONLOCAL_MEMORY_DEFAULTS),
+        "NonlocalMemoryParams",
+        [*hysteresis_specs(NONLOCAL_MEMORY_DEFAULTS),
+         *(FAMILY_SPECS[n] for n in FEATURE_PARAMS["elements"])],
         owner="effect nonlocal-memory", constraints=HYSTERESIS_CONSTRAINTS,
     )
     signature = ("small-displacement residual following travel since reversal; minor-loop "
                  "offsets erased past earlier reversal points")
     experiment = "small displacement cycles with nested minor loops (seed 000 Figs. 10, 16)"
 
+    def __init__(self, params: Any = None, **config: Any) -> None:
+        super().__init__(params, **config)
+        if self.form not in self.FORMS:
+            raise ValueError(f"effect nonlocal-memory: form must be one of "
+                             f"{', '.join(self.FORMS)}, got {self.form!r}")
+
+    @property
+    def form(self) -> str:
+        return str(self.config.get("form", "hysteresis"))
+
     def applies_to(self, model: FrictionModel) -> bool:
         from fcomp.models.lugre_family import LuGreFamily
 
         return (isinstance(model, LuGreFamily) and "presliding" in model.features
+                and "elements" not in model.features
                 and not isinstance(model, HysteresisFamily))
 
     def attach(self, model: FrictionModel) -> FrictionModel:
         fam = _family(model, self.name)
-        if isinstance(fam, HysteresisFamily):
+        if isinstance(fam, HysteresisFamily) or "elements" in fam.features:
             raise ValueError(f"model {fam.describe()!r} already has effect {self.name!r}")
         if "presliding" not in fam.features:
             raise ValueError(
                 f"effect 'nonlocal-memory' replaces the bristle force sigma0*z: add "
                 f"'presliding' to {fam.describe()!r} first"
             )
-        new = with_hysteresis(fam, self.params.flat())
+        flat = self.params.flat()
+        shape = FEATURE_PARAMS["elements"]
+        if self.form == "maxwell-slip":
+            new = fam.with_features({"elements"}, {k: flat[k] for k in shape})
+        else:
+            new = with_hysteresis(fam, {k: v for k, v in flat.items() if k not in shape})
         new.lineage = (*(fam.lineage or (fam.name,)), self.name)
         return new
 

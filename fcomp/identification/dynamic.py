@@ -9,7 +9,9 @@ velocity exactly as :func:`fcomp.trajectory.friction_along_motion` does
 (interval-mean signals, exponential Rosenbrock-Euler step, states starting
 at rest), and the ``mass`` and ``offset`` terms are present only when fitted.
 The residual is ``r = y - F_hat`` (target ``y`` from :mod:`.target`), over
-all samples or a ``mask``.
+all samples or a ``mask``. Where the target was low-passed (parallel
+filtering, :attr:`~.target.FitData.band_hz`) the model force and its
+sensitivities pass through the same filter before the extras are added.
 
 Jacobian: for symbolic models the exact forward sensitivities of
 :class:`~fcomp.identification.sensitivity.SensitivityLoop` (one compiled pass
@@ -141,7 +143,9 @@ class TrajectoryProblem:
         model_vals = {k: v for k, v in vals.items() if k not in EXTRAS}
         F, Gm = self._model_force(model_vals, jac)
         self.evaluations += 1
-        F = F.copy()
+        F = self.data.band_limited(F.copy())
+        if Gm.size and (jac or self.jacobian_is_free):
+            Gm = self.data.band_limited(Gm)
         G = np.empty((F.size, len(self.pv.names)))
         pos = [self.pv.index(n) for n in self.model_free]
         if pos == list(range(len(pos))):

@@ -54,6 +54,11 @@ class FitData:
         The known moving mass used to reconstruct ``y`` (kg), if any.
     label
         The measurement's name, for messages.
+    band_hz
+        Cut-off (Hz) of the zero-phase low-pass the target went through
+        ("parallel filtering"): a prediction must pass through the same filter
+        (:func:`fcomp.reconstruction.band_limit`) before it is compared; None:
+        the target is unfiltered.
     """
 
     sig: dict[str, np.ndarray]
@@ -62,6 +67,7 @@ class FitData:
     source: str
     mass: float | None
     label: str
+    band_hz: float | None = None
 
     @property
     def n(self) -> int:
@@ -71,7 +77,16 @@ class FitData:
         """The samples where ``mask`` is true (a contiguous slice keeps time increasing)."""
         sig = {k: v[mask] for k, v in self.sig.items()}
         inertia = None if self.inertia is None else self.inertia[mask]
-        return FitData(sig, self.y[mask], inertia, self.source, self.mass, self.label)
+        return FitData(sig, self.y[mask], inertia, self.source, self.mass, self.label,
+                       self.band_hz)
+
+    def band_limited(self, F: np.ndarray) -> np.ndarray:
+        """A prediction ``F`` (or sensitivity columns) through the target's filter, if any."""
+        if self.band_hz is None:
+            return F
+        from fcomp.reconstruction import band_limit
+
+        return band_limit(self.sig["t"], F, self.band_hz)
 
 
 def motion(meas: Measurement, cutoff_hz: float = 10.0
@@ -105,6 +120,7 @@ def fit_data(
     estimate_mass: bool | None = None,
     mass: float | None = None,
     cutoff_hz: float = 10.0,
+    force_cutoff_hz: float | None = None,
 ) -> FitData:
     """The :class:`FitData` of a measurement (see the module docstring for the cases).
 
@@ -121,6 +137,11 @@ def fit_data(
         Moving mass (kg) overriding ``rig.mass``.
     cutoff_hz
         Cut-off (Hz) of the zero-phase filter that derives ``v``, ``a`` from ``x``.
+    force_cutoff_hz
+        Band (Hz) of the parallel filtering of a driving force: the force and
+        the inertia term ``a + g*s_o`` are low-passed, and the returned
+        :attr:`FitData.band_hz` tells a fit to pass its prediction through the
+        same filter (:mod:`fcomp.conditioning`). Ignored for an ``F`` column.
     """
     from fcomp.reconstruction import driving_force, smooth
 
@@ -156,9 +177,17 @@ def fit_data(
         raise FcompError(f"{label}: no force to fit: the data need an 'F' column, or "
                          "F_ext and/or p1, p2 columns")
     inertia = sig["a"] + G * s_o
+    band = None
+    if force_cutoff_hz is not None:
+        from fcomp.reconstruction import band_limit
+
+        band = float(force_cutoff_hz)
+        D = band_limit(meas.t, D, band)
+        inertia = band_limit(meas.t, inertia, band)
     if estimate_mass:
-        return FitData(sig, D, inertia, "driving-force", None, label)
+        return FitData(sig, D, inertia, "driving-force", None, label, band)
     if known is None:
         raise FcompError(f"{label}: sidecar key rig.mass is missing (needed to reconstruct the "
                          "friction force; or let the mass be estimated)")
-    return FitData(sig, D - float(known) * inertia, None, "reconstructed", float(known), label)
+    return FitData(sig, D - float(known) * inertia, None, "reconstructed", float(known), label,
+                   band)

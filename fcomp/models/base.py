@@ -292,6 +292,22 @@ class FrictionModel(ABC):
             offset += k
         return dx
 
+    def base_project(self, be: Backend, x: list[Any], sig: Signals, P: ParamValues,
+                     L: dict) -> list:
+        """The base states after a step, mapped back onto their admissible set (default: as is).
+
+        A model whose states have hard limits (Maxwell-slip element deflections
+        within their slip band) clips them here; the sampled engine applies it
+        after every step (:func:`fcomp.trajectory.friction_step`).
+        """
+        return x
+
+    def project(self, be: Backend, x: Sequence[Any], sig: Signals, P: ParamValues) -> list:
+        """All states after a step, base states projected (:meth:`base_project`)."""
+        x = list(x)
+        nb = len(self.base_states)
+        return list(self.base_project(be, x[:nb], sig, P, self.levels(be, x, sig, P))) + x[nb:]
+
     def force_parts(
         self, be: Backend, x: Sequence[Any], sig: Signals, P: ParamValues
     ) -> tuple[Any, Any]:

@@ -15,23 +15,36 @@ feature          term
 ``film-lag``     ``h`` is a state: ``dh/dt = (h_ss - h)/tau_h`` (seed 002 Eqs. 8-9);
                  without it ``h = h_ss`` (the steady-state model, seed 002 Eq. 12)
 ``lead``         ``sigma2*(v + T*dv/dt)`` (NMLGM, seed 000 Eq. 8, seed 002 Eq. 6)
+``elements``     the bristle split into :data:`ELEMENTS` Maxwell-slip elements
+                 (nonlocal memory, models.md 1.7-1.8; below)
 ==============  ==========================================================
 
-Friction force:
+Maxwell-slip elements (``elements``, nonlocal memory). A share ``s =
+ms_share`` of the level is carried by ``N`` (:data:`ELEMENTS`) elasto-slide
+elements in parallel with the bristle (classical Maxwell-slip, Lampaert,
+Al-Bender & Swevers 2002; models.md 1.7-1.8). Element ``i`` is a spring of
+stiffness ``k_i = s*alpha_i*Fc/d_i`` whose deflection ``delta_i`` follows the
+displacement until its force reaches its slip force ``s*alpha_i*g`` (deflection
+``d_i*g/Fc``), and slides there::
 
-* static maps (no ``presliding``): ``F = sat(v/v_eps)*g(v, h) + sigma2*(v + T*a)``.
-  The sign is *regularised* over ``|v| < v_eps`` (default 1e-5 m/s) so the map
-  is a function of ``v`` alone and usable along a prescribed motion; plants
-  use a Karnopp stick state instead (:meth:`StaticMixin` in :mod:`plants`).
-* dynamic: ``F = sigma0*z + sigma1*dz/dt + sigma2*(v + T*a)`` (models.md 1.3-1.5).
+    delta_i <- clip(delta_i + dx, -d_i*g/Fc, d_i*g/Fc)          (each step: exact)
+    F = (1 - s)*(sigma0*z + sigma1*dz/dt) + sum(k_i*delta_i) + sigma2*(v + T*a)
 
-Direction-dependent parameters select the side ``s`` of :class:`~fcomp.models.base.Signals`.
-``tau_h`` selection (models.md 1.4): ``tau_h0`` if ``|v| < v_eps`` (dwell),
-else ``tau_hp`` if ``h <= h_ss`` (film building) else ``tau_hn``.
+with the bristle ``z`` as in LuGre (it carries ``(1 - s)*g``). Slip
+displacements ``d_i = ms_dmax*rho^(u_i - 1)``, ``u_i = (i - 1)/(N - 1)``,
+spread over ``rho = ms_spread`` up to ``ms_dmax``; level shares ``alpha_i``
+proportional to ``rho^(beta*u_i)`` (``beta = ms_shape``), summing to 1. After
+a reversal the stiff elements slip first and the force-displacement curve
+softens element by element; a minor loop rewrites only the elements it made
+slip, so the force returns exactly to its value at the earlier reversal
+point (return-point memory, wiping-out) -- the nonlocal memory the single
+bristle lacks. ``ms_share = 0`` (the default) is the bristle alone: a no-op.
 
-Numerical guard: fractional powers ``r**(2/3)`` and ``r**n`` are evaluated at
-``max(r, 1e-30)`` so that exact (CasADi) Jacobians stay finite at ``v = 0``;
-the change in value is below 1e-19 relative.
+The clip is the model's *projection* (:meth:`LuGreFamily.base_project`),
+applied after every step of the sampled engine, where the deflection rate
+is ``v`` inside the band, so each step is exact for a held velocity; in the
+continuous right-hand side (plants) a deflection outside the band relaxes
+onto it over ``d_i`` of travel.
 """
 
 from __future__ import annotations
@@ -72,8 +85,18 @@ FAMILY_SPECS: dict[str, ParamSpec] = {
              directional=False),
         spec("v_eps", "m/s", 1e-5, 0.0, INF, "velocity treated as zero (dwell detection, "
              "static-map regularisation)", lower_open=True, directional=False),
+        spec("ms_share", "-", 0.0, 0.0, 1.0, "Maxwell-slip elements: share of the level they "
+             "carry (0: the bristle alone)", directional=False),
+        spec("ms_dmax", "m", 1e-4, 0.0, INF, "Maxwell-slip elements: largest slip "
+             "displacement (at the Coulomb level)", lower_open=True, directional=False),
+        spec("ms_spread", "-", 10.0, 1.0, 1e4, "Maxwell-slip elements: ratio of the largest "
+             "to the smallest slip displacement", directional=False),
+        spec("ms_shape", "-", 0.0, -3.0, 3.0, "Maxwell-slip elements: exponent of the level "
+             "shares (0: equal shares)", directional=False),
     )
 }
+#: Number of Maxwell-slip elements of the ``elements`` feature.
+ELEMENTS = 5
 
 FEATURE_PARAMS: dict[str, tuple[str, ...]] = {
     "viscous": ("sigma2",),
@@ -83,8 +106,10 @@ FEATURE_PARAMS: dict[str, tuple[str, ...]] = {
     "film": ("vb",),
     "film-lag": ("tau_hp", "tau_hn", "tau_h0"),
     "lead": ("T",),
+    "elements": ("ms_share", "ms_dmax", "ms_spread", "ms_shape"),
 }
-FEATURE_ORDER = ("stribeck", "viscous", "presliding", "damping", "film", "film-lag", "lead")
+FEATURE_ORDER = ("stribeck", "viscous", "presliding", "damping", "film", "film-lag", "lead",
+                 "elements")
 
 
 def _check_features(features: frozenset[str]) -> None:
@@ -97,6 +122,8 @@ def _check_features(features: frozenset[str]) -> None:
         raise ValueError("film-lag needs the film term")
     if "damping" in features and "presliding" not in features:
         raise ValueError("bristle damping needs the bristle state (presliding)")
+    if "elements" in features and "presliding" not in features:
+        raise ValueError("Maxwell-slip elements split the bristle: they need presliding")
 
 
 def _param_names(features: frozenset[str], viscous_name: str) -> tuple[str, ...]:
@@ -136,6 +163,8 @@ class LuGreFamily(FrictionModel):
         st = []
         if "presliding" in self.features:
             st.append("z")
+        if "elements" in self.features:
+            st += [f"delta{i}" for i in range(1, ELEMENTS + 1)]
         if "film-lag" in self.features:
             st.append("h")
         return tuple(st)
@@ -193,18 +222,51 @@ class LuGreFamily(FrictionModel):
         moving = be.if_else(h <= hss, P("tau_hp"), P("tau_hn"))
         return be.if_else(be.abs(v) < P("v_eps"), P("tau_h0"), moving)
 
+    def _elements(self, be: Backend, P: ParamValues) -> list[tuple[Any, Any]]:
+        """``(alpha_i, d_i)`` of the Maxwell-slip elements (module docstring)."""
+        rho, beta, dmax = P("ms_spread"), P("ms_shape"), P("ms_dmax")
+        u = [i / (ELEMENTS - 1) for i in range(ELEMENTS)]
+        a_raw = [be.power(rho, beta * ui) for ui in u]
+        a_sum = sum(a_raw[1:], a_raw[0])
+        return [(a / a_sum, dmax * be.power(rho, ui - 1.0))
+                for a, ui in zip(a_raw, u, strict=True)]
+
+    def _split(self, x: list[Any]) -> tuple[list[Any], list[Any], list[Any]]:
+        """States ``(bristle, elements, film)`` as lists (empty where absent)."""
+        nz = 1 if "presliding" in self.features else 0
+        ne = ELEMENTS if "elements" in self.features else 0
+        return x[:nz], x[nz:nz + ne], x[nz + ne:nz + ne + (1 if "film-lag" in self.features else 0)]
+
     def base_rhs(self, be: Backend, x: list[Any], sig: Signals, P: ParamValues, L: dict) -> list:
         out = []
         v = sig.v
         h = self._h(x, be, sig, P, L)
-        if "presliding" in self.features:
-            z = x[0]
+        z, deltas, _ = self._split(x)
+        if z:
             g = self.g(be, v, h, P, L, sig.s)
-            out.append(v - P("sigma0") * be.abs(v) * z / g)
+            out.append(v - P("sigma0") * be.abs(v) * z[0] / g)
+            if deltas:
+                for d, (_, di) in zip(deltas, self._elements(be, P), strict=True):
+                    lim = di * g / L["Fc"]
+                    outside = be.abs(d) >= lim
+                    outward = d * v > 0
+                    relax = -be.abs(v) * (d - be.sign(d) * lim) / di
+                    out.append(be.if_else(outside, be.if_else(outward, relax, v), v))
         if "film-lag" in self.features:
             hss = self.h_ss(be, v, P, L, sig.s)
             out.append((hss - h) / self.tau_h(be, v, h, hss, P))
         return out
+
+    def base_project(self, be: Backend, x: list[Any], sig: Signals, P: ParamValues,
+                     L: dict) -> list:
+        """Element deflections clipped to their slip band ``|delta_i| <= d_i*g/Fc``."""
+        if "elements" not in self.features:
+            return x
+        z, deltas, rest = self._split(x)
+        g = self.g(be, sig.v, self._h(x, be, sig, P, L), P, L, sig.s)
+        clipped = [be.fmax(-di * g / L["Fc"], be.fmin(di * g / L["Fc"], d))
+                   for d, (_, di) in zip(deltas, self._elements(be, P), strict=True)]
+        return [*z, *clipped, *rest]
 
     def _viscous(self, P: ParamValues, s: Any) -> Any:
         if "viscous" not in self.features:
@@ -218,10 +280,16 @@ class LuGreFamily(FrictionModel):
         visc = self._viscous(P, sig.s)
         c_a = visc * P("T") if "lead" in self.features else 0.0
         if "presliding" in self.features:
-            F0 = P("sigma0") * x[0] + visc * v
+            F0 = P("sigma0") * x[0]
             if "damping" in self.features:
                 F0 = F0 + P("sigma1") * dx[0]
-            return F0, c_a
+            _, deltas, _ = self._split(x)
+            if deltas:
+                share = P("ms_share")
+                F0 = (1.0 - share) * F0
+                for d, (al, di) in zip(deltas, self._elements(be, P), strict=True):
+                    F0 = F0 + share * al * L["Fc"] / di * d
+            return F0 + visc * v, c_a
         h = self._h(x, be, sig, P, L)
         sat = be.fmax(-1.0, be.fmin(1.0, v / P("v_eps")))
         return sat * self.g(be, v, h, P, L, sig.s) + visc * v, c_a
@@ -231,7 +299,10 @@ class LuGreFamily(FrictionModel):
         hss = self.h_ss(be, v, P, L, sig.s)
         out = []
         if "presliding" in self.features:
-            out.append(be.sign(v) * self.g(be, v, hss, P, L, sig.s) / P("sigma0"))
+            gs = be.sign(v) * self.g(be, v, hss, P, L, sig.s)
+            out.append(gs / P("sigma0"))
+            if "elements" in self.features:
+                out += [gs * di / L["Fc"] for _, di in self._elements(be, P)]
         if "film-lag" in self.features:
             out.append(hss)
         return out

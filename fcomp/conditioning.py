@@ -1,0 +1,483 @@
+"""Signal conditioning: the velocity that drives the friction states, rest, and the force band.
+
+A friction model is simulated along the *measured* motion, so whatever is
+wrong with the motion signals goes straight into its states. Real rigs record
+the motion in several ways -- an encoder position ``x`` (quantised), a
+tachometer or a drive's differentiated encoder velocity ``v`` (noisy, with a
+bias, a gain error and a lag), sometimes no position at all -- and the force
+as a load-cell friction ``F``, or as chamber pressures from which the friction
+is reconstructed, ``p1*A1 - p2*A2 + F_ext - m*a``. The same physical record
+written in any of these styles must drive the model with the same motion.
+This module decides, per record and visibly (:class:`Conditioning`, the
+``signals`` field of ``fcomp diagnose --json``):
+
+**Which velocity.** ``dx/dt`` is the zero-phase low-pass derivative of the
+position at the cut-off :func:`default_cutoff` (set by the position noise).
+A ``v`` column is first *calibrated* against it (:func:`calibrate_velocity`):
+its bias is its median at rest (rest read off the position, where the true
+velocity is zero), its noise the robust spread there, its lag and gain the
+shift and slope that best map it onto ``dx/dt`` while moving. Then
+
+* ``"x"`` -- ``dx/dt`` alone, when there is no ``v`` column, when the column
+  disagrees with the position (gain off by more than :data:`GAIN_TOL`, or it
+  explains less than :data:`MIN_R2` of ``dx/dt``'s variance while moving), or
+  when it is noisier than ``dx/dt`` over the whole band used;
+* ``"fused"`` -- a complementary filter: ``dx/dt`` below the cross-over
+  frequency ``f* = sigma_v/(2*pi*sigma_x)`` where the two noise densities
+  are equal (white position noise ``sigma_x`` differentiated rises as ``f``;
+  the column's white noise ``sigma_v`` is flat), the calibrated
+  column (bias removed, lag and gain corrected) above it;
+* ``"v"`` -- the calibrated column, when the record has no position. Its bias
+  is then its median over quiet stretches (:func:`velocity_rest`).
+
+A measured velocity is never trusted at rest: a tachometer's noise of
+1e-4 m/s drives a bristle state through every dwell (LuGre's held force creeps
+by newtons), and a bias drives it to one side. **Rest** is read off the
+position where there is one (its span over +-4 ms within six position-noise
+standard deviations, :func:`fcomp.reconstruction.rest_mask`), else off the
+calibrated velocity (quiet for at least :data:`MIN_QUIET` s); velocity and
+acceleration are held at zero there.
+
+**The force band.** A friction reconstructed from pressures subtracts
+``m*a``, and ``a`` is a second derivative of a quantised position: its noise
+grows as ``fc^2.5``. Where the target is reconstructed (or the mass is fitted
+to the driving force) the whole driving force and the model's prediction are
+passed through the same zero-phase low-pass ("parallel filtering", Gautier &
+Janot), at the highest cut-off at which the inertia noise ``m*sigma_a`` stays
+below :data:`INERTIA_NOISE_SHARE` of the force noise in that band
+(:func:`force_cutoff`). Target and prediction then have the same bandwidth,
+so the residual is the model error in that band and the noise floor,
+estimated from the same filtered force at rest, is its noise.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from fcomp.errors import FcompError
+from fcomp.reconstruction import differentiate, rest_mask, smooth
+
+#: Width of the position band (in position-noise standard deviations) within which
+#: the piston counts as at rest (6: one step of an encoder, ``q/sqrt(12)`` each).
+REST_NOISE_BAND = 6.0
+#: Half window (s) over which the position must stay within that band.
+REST_HALF_WINDOW = 0.004
+#: Candidate cutoffs of the derivation filter, as fractions of the sample rate.
+CUTOFF_FRACTIONS = (1 / 4, 1 / 5, 1 / 6, 1 / 8, 1 / 10, 1 / 15, 1 / 20, 1 / 30, 1 / 50, 1 / 100)
+#: Largest relative gain error of a ``v`` column that is still used.
+GAIN_TOL = 0.25
+#: Smallest share of ``dx/dt``'s variance (moving) a usable ``v`` column explains.
+MIN_R2 = 0.9
+#: Fewest rest samples for a bias estimate.
+MIN_REST = 50
+#: Shortest quiet stretch (s) read as rest from a velocity alone.
+MIN_QUIET = 0.02
+#: Largest share of the force noise the inertia noise ``m*sigma_a`` may add (force band).
+INERTIA_NOISE_SHARE = 0.3
+#: Largest lag (s) searched between a ``v`` column and ``dx/dt``.
+MAX_LAG = 0.02
+VELOCITY_SOURCES = ("x", "v", "fused")
+
+
+# ------------------------------------------------------------------ position
+def resolution(x: np.ndarray) -> float:
+    """Position resolution (m): the 1st percentile of the clearly non-zero steps of ``x``."""
+    steps = np.abs(np.diff(x))
+    steps = steps[steps > 1e-12 * max(float(np.max(np.abs(x))), 1e-12)] if x.size else steps
+    if steps.size == 0:
+        return 1e-6
+    return float(np.percentile(steps, 1.0))
+
+
+def position_noise(x: np.ndarray) -> float:
+    """Standard deviation (m) of the position noise: quantisation or sensor noise.
+
+    The larger of the quantisation noise ``q/sqrt(12)`` (``q`` from
+    :func:`resolution`) and ``1.4826*median|d3x|/sqrt(20)``, the robust spread
+    of third differences (for white noise ``var(d3x) = 20*sigma^2``; smooth
+    motion contributes only ``jerk*dt^3``).
+    """
+    q = resolution(x)
+    d3 = np.diff(x, 3)
+    white = 1.4826 * float(np.median(np.abs(d3))) / math.sqrt(20.0) if d3.size else 0.0
+    return max(q / math.sqrt(12.0), white)
+
+
+def derived_velocity_noise(sigma_x: float, fc: float, fs: float) -> float:
+    """Noise (m/s, std) of ``dx/dt`` from white position noise through an ideal low-pass at ``fc``.
+
+    ``sigma_v = 2*pi*sigma_x*sqrt(2*fc^3/(3*fs))``: the position noise density
+    ``2*sigma_x^2/fs`` times ``(2*pi*f)^2`` integrated over ``[0, fc]``.
+    """
+    return 2.0 * math.pi * sigma_x * math.sqrt(2.0 * fc**3 / (3.0 * fs))
+
+
+def derived_acceleration_noise(sigma_x: float, fc: float, fs: float) -> float:
+    """Noise (m/s^2, std) of the second derivative: ``(2*pi)^2*sigma_x*sqrt(2*fc^5/(5*fs))``."""
+    return (2.0 * math.pi) ** 2 * sigma_x * math.sqrt(2.0 * fc**5 / (5.0 * fs))
+
+
+def sample_rate(t: np.ndarray) -> float:
+    """Mean sample rate (Hz)."""
+    return (t.size - 1) / float(t[-1] - t[0])
+
+
+def default_cutoff(t: np.ndarray, x: np.ndarray) -> float:
+    """Cutoff (Hz) of the zero-phase filter that derives ``v``, ``a`` from ``x``.
+
+    The highest of :data:`CUTOFF_FRACTIONS` of the sample rate ``fs`` at which
+    the position noise (:func:`position_noise`) leaves a velocity noise
+    (:func:`derived_velocity_noise`) below 0.2 % of the speed scale (95th
+    percentile of ``|v|`` at ``fs/10``). A clean encoder gets ``fs/4``, so
+    presliding transients of a few milliseconds keep their timing; a noisy
+    sensor gets a lower cutoff.
+    """
+    fs = sample_rate(t)
+    sx = position_noise(x)
+    _, v0, _ = differentiate(t, x, cutoff_hz=0.1 * fs, label="x")
+    speed = float(np.percentile(np.abs(v0), 95.0))
+    for frac in CUTOFF_FRACTIONS:
+        fc = frac * fs
+        if derived_velocity_noise(sx, fc, fs) <= 2e-3 * speed:
+            return float(fc)
+    return float(CUTOFF_FRACTIONS[-1] * fs)
+
+
+def position_rest(t: np.ndarray, x: np.ndarray, sigma_x: float) -> np.ndarray:
+    """Samples where the position shows no motion (:func:`fcomp.reconstruction.rest_mask`)."""
+    fs = sample_rate(t)
+    return rest_mask(x, max(2, int(round(REST_HALF_WINDOW * fs))), REST_NOISE_BAND * sigma_x)
+
+
+# ------------------------------------------------------------------ velocity
+@dataclass(frozen=True)
+class VelocityCalibration:
+    """How a measured ``v`` column relates to the true velocity (SI).
+
+    The column is modelled as ``v_col(t) = gain*v(t - lag) + bias + noise``.
+
+    Attributes
+    ----------
+    bias : m/s
+        Its median at rest.
+    gain : -
+        Slope of the lag-corrected column against ``dx/dt`` while moving (1 without a position).
+    lag : s
+        Delay of the column behind ``dx/dt`` (0 without a position).
+    noise : m/s
+        Robust standard deviation at rest, over the full band.
+    r2 : -
+        Share of ``dx/dt``'s variance (moving) the calibrated column explains (nan
+        without a position).
+    n_rest : int
+        Rest samples the bias and noise rest on.
+    """
+
+    bias: float
+    gain: float
+    lag: float
+    noise: float
+    r2: float
+    n_rest: int
+
+    def apply(self, t: np.ndarray, v_col: np.ndarray) -> np.ndarray:
+        """The calibrated column: bias removed, lag and gain undone."""
+        v = (v_col - self.bias) / self.gain
+        if self.lag != 0.0:
+            v = np.interp(t + self.lag, t, v)  # v_col(t + lag) ~ gain*v(t)
+        return v
+
+
+def _robust_std(r: np.ndarray) -> float:
+    return 1.4826 * float(np.median(np.abs(r - np.median(r)))) if r.size else math.nan
+
+
+def calibrate_velocity(ts: Sequence[np.ndarray], v_cols: Sequence[np.ndarray],
+                       v_xs: Sequence[np.ndarray], rests: Sequence[np.ndarray],
+                       fc: float) -> VelocityCalibration:
+    """Bias, noise, lag and gain of a ``v`` column against ``dx/dt`` (see :class:`VelocityCalibration`).
+
+    Pooled over the pieces (experiments) of one file: ``ts``, ``v_cols``,
+    ``v_xs`` (the derived velocity, band ``fc``) and ``rests`` (rest read off the
+    position) per piece. The bias and noise are the median and robust spread
+    at rest; the column is then passed through the same low-pass as ``dx/dt``
+    and the lag and gain are fitted by least squares over the moving samples
+    (integer lags up to :data:`MAX_LAG`, refined by a parabola).
+    """
+    fs = sample_rate(ts[0])
+    at_rest = np.concatenate([v[r] for v, r in zip(v_cols, rests, strict=True)])
+    n_rest = int(at_rest.size)
+    bias = float(np.median(at_rest)) if n_rest >= MIN_REST else 0.0
+    noise = _robust_std(at_rest) if n_rest >= MIN_REST else math.nan
+    max_k = max(2, int(round(MAX_LAG * fs)))
+    pieces = []
+    for t, vc, vx, rest in zip(ts, v_cols, v_xs, rests, strict=True):
+        if t.size <= 2 * max_k + 20:
+            continue
+        vf = smooth(t, vc - bias, cutoff_hz=fc, label="v")
+        scale = float(np.percentile(np.abs(vx), 95.0)) or 1.0
+        idx = np.flatnonzero(~rest & (np.abs(vx) > 0.02 * scale))
+        idx = idx[(idx >= max_k) & (idx < t.size - max_k)]
+        if idx.size:
+            pieces.append((t, vf, vx, idx))
+    if sum(p[3].size for p in pieces) < 20:
+        return VelocityCalibration(bias, 1.0, 0.0, noise, math.nan, n_rest)
+
+    def fit(shift: float) -> tuple[float, float, float]:
+        """(cost, gain, r2) of the column advanced by ``shift`` samples."""
+        num = den = 0.0
+        cols = []
+        for t, vf, vx, idx in pieces:
+            vc = np.interp(t[idx] + shift / fs, t, vf)
+            num += float(vc @ vx[idx])
+            den += float(vx[idx] @ vx[idx])
+            cols.append((vc, vx[idx]))
+        g = num / den if den > 0 else 1.0
+        cost = sum(float(np.sum((vc - g * vx) ** 2)) for vc, vx in cols)
+        vx_all = np.concatenate([vx for _, vx in cols])
+        sst = max(float(np.sum((vx_all - vx_all.mean()) ** 2)), 1e-300)
+        return cost, g, 1.0 - cost / (g * g * sst) if g else -math.inf
+
+    c = np.array([fit(float(k))[0] for k in range(-max_k, max_k + 1)])
+    j = int(np.argmin(c))
+    shift = float(j - max_k)
+    if 0 < j < c.size - 1:
+        den = c[j - 1] - 2 * c[j] + c[j + 1]
+        if den > 0:
+            shift += 0.5 * (c[j - 1] - c[j + 1]) / den
+    _, gain, r2 = fit(shift)
+    if not gain > 0:
+        gain, r2 = 1.0, -math.inf
+    return VelocityCalibration(bias, gain, float(shift / fs), noise, float(r2), n_rest)
+
+
+def velocity_rest(t: np.ndarray, v: np.ndarray, fc: float) -> tuple[np.ndarray, float, float]:
+    """Rest read off a velocity alone: ``(rest mask, bias, noise)`` (m/s).
+
+    Quiet samples are those of the low-passed velocity within four robust
+    standard deviations of its value at rest; the rest value and spread are
+    estimated from the slowest tenth of the samples and refined once on the
+    quiet ones. Rest is a quiet stretch of at least :data:`MIN_QUIET` s (and
+    10 samples); without any, the bias is taken as zero.
+    """
+    fs = sample_rate(t)
+    vf = smooth(t, v, cutoff_hz=min(fc, 0.45 * fs), label="v")
+    slow = np.abs(vf) <= np.percentile(np.abs(vf), 10.0)
+    bias, spread = float(np.median(vf[slow])), _robust_std(vf[slow])
+    rest = np.zeros(v.size, dtype=bool)
+    for _ in range(2):
+        quiet = np.abs(vf - bias) <= 4.0 * max(spread, 1e-12)
+        rest = _long_runs(quiet, max(10, int(math.ceil(MIN_QUIET * fs))))
+        if rest.sum() < MIN_REST:
+            return np.zeros(v.size, dtype=bool), 0.0, _robust_std(v[slow])
+        bias, spread = float(np.median(vf[rest])), _robust_std(vf[rest])
+    return rest, bias, _robust_std(v[rest] - bias)
+
+
+def _long_runs(mask: np.ndarray, min_len: int) -> np.ndarray:
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], mask.astype(int), [0]])))
+    out = np.zeros(mask.size, dtype=bool)
+    for a, b in zip(edges[::2], edges[1::2], strict=True):
+        if b - a >= min_len:
+            out[a:b] = True
+    return out
+
+
+@dataclass(frozen=True)
+class Conditioning:
+    """What drives the friction states of one record, and why (the JSON ``signals``).
+
+    Attributes
+    ----------
+    velocity : str
+        ``"x"`` (``dx/dt``), ``"v"`` (the calibrated column) or ``"fused"``.
+    reason : str
+        Why, in one sentence.
+    cutoff_hz : Hz
+        Band of the derived velocity and acceleration.
+    crossover_hz : Hz or None
+        Cross-over of the fusion (``"fused"`` only).
+    x_resolution, x_noise : m or None
+        Position resolution and noise (None without a position).
+    vx_noise : m/s or None
+        Noise of ``dx/dt`` in its band.
+    column : VelocityCalibration or None
+        Calibration of the ``v`` column, if there is one.
+    rest : str
+        ``"position"``, ``"velocity"`` or ``"none"``: what rest was read off.
+    rest_share : -
+        Share of samples held at rest.
+    force : str
+        ``"F"``, ``"reconstructed"`` or ``"driving-force"`` (set by the caller).
+    force_cutoff_hz : Hz or None
+        Band of the parallel filtering of force and prediction (None: unfiltered).
+    label : str
+        The record's name (set by the caller).
+    """
+
+    velocity: str
+    reason: str
+    cutoff_hz: float
+    crossover_hz: float | None
+    x_resolution: float | None
+    x_noise: float | None
+    vx_noise: float | None
+    column: VelocityCalibration | None
+    rest: str
+    rest_share: float
+    force: str = ""
+    force_cutoff_hz: float | None = None
+    label: str = ""
+
+    def to_dict(self) -> dict:
+        """Plain JSON-ready values (nan -> None)."""
+        def clean(v):
+            if isinstance(v, dict):
+                return {k: clean(x) for k, x in v.items()}
+            if isinstance(v, float) and not math.isfinite(v):
+                return None
+            return v
+
+        return clean(asdict(self))
+
+
+@dataclass(frozen=True)
+class Motion:
+    """The conditioned motion of one piece (experiment) of a record (SI)."""
+
+    v: np.ndarray
+    a: np.ndarray
+    rest: np.ndarray
+
+
+def condition_motion(pieces: Sequence[tuple[np.ndarray, np.ndarray | None, np.ndarray | None]],
+                     *, cutoff_hz: float | None = None
+                     ) -> tuple[list[Motion], Conditioning]:
+    """The conditioned motion of every piece of one record, and how it was made.
+
+    Parameters
+    ----------
+    pieces
+        ``(t, x, v_col)`` per experiment of one file (s, m, m/s); ``x`` or
+        ``v_col`` may be None (the same for every piece). One calibration of the
+        ``v`` column is pooled over the pieces.
+    cutoff_hz
+        Band of the derivation filter (default :func:`default_cutoff` of the
+        longest piece, or a tenth of the sample rate without a position).
+    """
+    t0, x0, v0 = max(pieces, key=lambda p: p[0].size)
+    fs = sample_rate(t0)
+    if x0 is None and v0 is None:
+        raise FcompError("a motion needs a position 'x' or a velocity 'v' column")
+    if x0 is None:
+        return _from_velocity(pieces, cutoff_hz if cutoff_hz is not None else 0.1 * fs)
+    fc = cutoff_hz if cutoff_hz is not None else default_cutoff(t0, x0)
+    sx = max(position_noise(x) for _, x, _ in pieces if x is not None)
+    q = min(resolution(x) for _, x, _ in pieces if x is not None)
+    derived = []
+    for t, x, _ in pieces:
+        assert x is not None
+        _, v_x, a_x = differentiate(t, x, cutoff_hz=fc, label="x")
+        derived.append((v_x, a_x, position_rest(t, x, sx)))
+    vx_noise = derived_velocity_noise(sx, fc, fs)
+    velocity, reason, cross, cal = "x", "no velocity column: dx/dt of the position", None, None
+    if v0 is not None:
+        cal = calibrate_velocity([p[0] for p in pieces], [p[2] for p in pieces],
+                                 [d[0] for d in derived], [d[2] for d in derived], fc)
+        velocity, reason, cross = _choose(cal, sx, fc)
+    out = []
+    for (t, _, v_col), (v, a, rest) in zip(pieces, derived, strict=True):
+        if velocity == "fused":
+            assert cross is not None and cal is not None and v_col is not None
+            vc = cal.apply(t, v_col)
+            low = smooth(t, v, cutoff_hz=cross, label="dx/dt")
+            high = vc - smooth(t, vc, cutoff_hz=cross, label="v")
+            v = smooth(t, low + high, cutoff_hz=fc, label="v")
+            a = np.gradient(v, t)
+        out.append(Motion(np.where(rest, 0.0, v), np.where(rest, 0.0, a), rest))
+    share = float(np.mean(np.concatenate([m.rest for m in out])))
+    return out, Conditioning(velocity, reason, fc, cross, q, sx, vx_noise, cal, "position",
+                             share)
+
+
+def _from_velocity(pieces: Sequence[tuple[np.ndarray, np.ndarray | None, np.ndarray | None]],
+                   fc: float) -> tuple[list[Motion], Conditioning]:
+    """Rest, bias and noise read off the velocity alone (no position)."""
+    found = []
+    for t, _, v_col in pieces:
+        assert v_col is not None
+        found.append(velocity_rest(t, v_col, fc))
+    at_rest = np.concatenate([p[2][r] for p, (r, _, _) in zip(pieces, found, strict=True)])
+    bias = float(np.median(at_rest)) if at_rest.size >= MIN_REST else 0.0
+    noise = _robust_std(at_rest) if at_rest.size >= MIN_REST else math.nan
+    cal = VelocityCalibration(bias, 1.0, 0.0, noise, math.nan, int(at_rest.size))
+    out = []
+    for (t, _, v_col), (rest, _, _) in zip(pieces, found, strict=True):
+        assert v_col is not None
+        v = smooth(t, cal.apply(t, v_col), cutoff_hz=fc, label="v")
+        a = np.gradient(v, t)
+        out.append(Motion(np.where(rest, 0.0, v), np.where(rest, 0.0, a), rest))
+    share = float(np.mean(np.concatenate([m.rest for m in out])))
+    reason = (f"no position column: the measured velocity, bias {bias:.2g} m/s removed "
+              "(rest read off the velocity)" if at_rest.size >= MIN_REST else
+              "no position column: the measured velocity (no rest found to estimate a bias)")
+    return out, Conditioning("v", reason, fc, None, None, None, None, cal,
+                             "velocity" if at_rest.size >= MIN_REST else "none", share)
+
+
+def _choose(cal: VelocityCalibration, sx: float, fc: float) -> tuple[str, str, float | None]:
+    if not (math.isfinite(cal.r2) and cal.r2 >= MIN_R2 and abs(cal.gain - 1.0) <= GAIN_TOL):
+        return ("x", f"the v column disagrees with dx/dt (gain {cal.gain:.3g}, explains "
+                f"{100 * max(cal.r2, 0.0) if math.isfinite(cal.r2) else 0:.0f} % of it while "
+                "moving): dx/dt of the position", None)
+    if not math.isfinite(cal.noise):
+        return "x", "the v column's noise is unknown (no rest in the record): dx/dt", None
+    # densities (one-sided, white): column noise^2/(fs/2); dx/dt (2*pi*f)^2*sx^2/(fs/2)
+    cross = cal.noise / (2.0 * math.pi * max(sx, 1e-300))
+    if cross >= fc:
+        return ("x", f"dx/dt is cleaner than the v column up to the cutoff ({fc:.3g} Hz): "
+                f"column noise {cal.noise:.2g} m/s, bias {cal.bias:.2g} m/s removed", None)
+    cross = max(cross, 0.01 * fc)
+    return ("fused", f"dx/dt below {cross:.3g} Hz, the v column (bias {cal.bias:.2g} m/s "
+            f"removed, lag {1e3 * cal.lag:.2g} ms, gain {cal.gain:.3g}) above: their noise "
+            "densities cross there", cross)
+
+
+# ------------------------------------------------------------------ force band
+def force_cutoff(fs: float, fc_motion: float, sigma_x: float | None, mass: float,
+                 force_noise: float) -> float:
+    """Cut-off (Hz) of the parallel filtering of a reconstructed force.
+
+    The highest of :data:`CUTOFF_FRACTIONS` of ``fs`` (not above ``fc_motion``)
+    at which the inertia noise ``mass*sigma_a(fc)``
+    (:func:`derived_acceleration_noise`) is at most :data:`INERTIA_NOISE_SHARE`
+    of the force noise in that band, ``force_noise*sqrt(2*fc/fs)`` (white).
+    Without a position (velocity measured), ``fc_motion``.
+    """
+    if sigma_x is None or mass <= 0:
+        return fc_motion
+    for frac in CUTOFF_FRACTIONS:
+        fc = frac * fs
+        if fc > fc_motion * (1 + 1e-9):
+            continue
+        inertia = mass * derived_acceleration_noise(sigma_x, fc, fs)
+        if inertia <= INERTIA_NOISE_SHARE * force_noise * math.sqrt(2.0 * fc / fs):
+            return float(fc)
+    return float(min(CUTOFF_FRACTIONS[-1] * fs, fc_motion))
+
+
+def rest_noise(t: np.ndarray, y: np.ndarray, rest: np.ndarray) -> float:
+    """Robust noise (std) of ``y`` over rest runs of at least 20 samples (first differences).
+
+    ``1.4826*median|dy|/sqrt(2)`` over the rest runs: white-noise exact, slow
+    drifts do not count. ``nan`` without enough rest.
+    """
+    keep = _long_runs(rest, 20)
+    d = np.diff(y)[keep[1:] & keep[:-1]]
+    if d.size < MIN_REST:
+        return math.nan
+    return 1.4826 * float(np.median(np.abs(d))) / math.sqrt(2.0)

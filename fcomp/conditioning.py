@@ -33,8 +33,8 @@ shift and slope that best map it onto ``dx/dt`` while moving. Then
 A measured velocity is never trusted at rest: a tachometer's noise of
 1e-4 m/s drives a bristle state through every dwell (LuGre's held force creeps
 by newtons), and a bias drives it to one side. **Rest** is read off the
-position where there is one (its span over +-4 ms within six position-noise
-standard deviations, :func:`fcomp.reconstruction.rest_mask`), else off the
+position where there is one (it stays within six position-noise standard
+deviations, one encoder step, for 8 ms or more: :func:`position_rest`), else off the
 calibrated velocity (quiet for at least :data:`MIN_QUIET` s); velocity and
 acceleration are held at zero there.
 
@@ -59,7 +59,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from fcomp.errors import FcompError
-from fcomp.reconstruction import differentiate, rest_mask, smooth
+from fcomp.reconstruction import differentiate, smooth
 
 #: Width of the position band (in position-noise standard deviations) within which
 #: the piston counts as at rest (6: one step of an encoder, ``q/sqrt(12)`` each).
@@ -147,10 +147,51 @@ def default_cutoff(t: np.ndarray, x: np.ndarray) -> float:
     return float(CUTOFF_FRACTIONS[-1] * fs)
 
 
+def quiet_runs(x: np.ndarray, tol: float, min_len: int, edge_tol: float) -> np.ndarray:
+    """Samples in runs where ``x`` stays within a band ``tol`` for at least ``min_len`` samples.
+
+    Runs are grown greedily from the left (the longest stretch whose range
+    ``max - min`` is at most ``tol``); a run of ``min_len`` samples or more is
+    kept, and its ends are then trimmed to the first and last sample within
+    ``edge_tol`` of the run's median, so a stop is placed at the last change of
+    the position and a start at its first change (an encoder count), not
+    ``tol`` later or earlier.
+    """
+    n = x.size
+    out = np.zeros(n, dtype=bool)
+    i = 0
+    while i < n:
+        lo = hi = float(x[i])
+        j = i + 1
+        while j < n:
+            xj = float(x[j])
+            lo, hi = min(lo, xj), max(hi, xj)
+            if hi - lo > tol:
+                break
+            j += 1
+        if j - i >= min_len:
+            run = x[i:j]
+            near = np.flatnonzero(np.abs(run - np.median(run)) <= edge_tol)
+            if near.size:
+                out[i + near[0]:i + near[-1] + 1] = True
+            i = j
+        else:
+            i += 1
+    return out
+
+
 def position_rest(t: np.ndarray, x: np.ndarray, sigma_x: float) -> np.ndarray:
-    """Samples where the position shows no motion (:func:`fcomp.reconstruction.rest_mask`)."""
+    """Samples where the position shows no motion (:func:`quiet_runs`).
+
+    Band :data:`REST_NOISE_BAND` position-noise standard deviations (one
+    encoder step) held for at least ``2*REST_HALF_WINDOW`` (and 3 samples):
+    a motion slower than one step in that time reads as rest. Ends trimmed
+    to within two standard deviations of the resting value (the resting count
+    of an encoder).
+    """
     fs = sample_rate(t)
-    return rest_mask(x, max(2, int(round(REST_HALF_WINDOW * fs))), REST_NOISE_BAND * sigma_x)
+    return quiet_runs(x, REST_NOISE_BAND * sigma_x, max(3, int(round(2 * REST_HALF_WINDOW * fs))),
+                      2.0 * sigma_x)
 
 
 # ------------------------------------------------------------------ velocity

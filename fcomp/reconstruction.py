@@ -152,43 +152,6 @@ def differentiate(t: np.ndarray, x: np.ndarray, *, cutoff_hz: float = 10.0, orde
     return np.interp(t, tu, xf), np.interp(t, tu, v), np.interp(t, tu, a)
 
 
-def rest_mask(x: np.ndarray, half_window: int, tol: float) -> np.ndarray:
-    """Samples at which the measured position does not move: ``(n,)`` bool.
-
-    Sample ``k`` is at rest when ``max(x) - min(x)`` over the centred window
-    ``k - half_window .. k + half_window`` is at most ``tol`` (m). A zero-phase
-    filter smears every start and stop over about ``1/cutoff_hz`` and rings
-    around it: the derived velocity is non-zero, even of the wrong sign,
-    while the piston stands still, and a friction state driven by it drifts
-    through a dwell. Where the position itself shows no motion the velocity
-    and acceleration are zero; :func:`hold_rest` applies this.
-    """
-    n = x.size
-    if n == 0:
-        return np.zeros(0, dtype=bool)
-    w = max(int(half_window), 0)
-    padded = np.concatenate([np.full(w, x[0]), x, np.full(w, x[-1])])
-    win = np.lib.stride_tricks.sliding_window_view(padded, 2 * w + 1)
-    return (win.max(axis=1) - win.min(axis=1)) <= tol
-
-
-def hold_rest(t: np.ndarray, x: np.ndarray, v: np.ndarray, a: np.ndarray, *, tol: float,
-              half_window_s: float = 0.004) -> tuple[np.ndarray, np.ndarray]:
-    """``(v, a)`` with both set to zero where the position is at rest (:func:`rest_mask`).
-
-    The window reaches ``half_window_s`` seconds (at least two samples) either
-    side of each sample: short, so a stop is recognised a few samples after
-    it happens and the filter's smearing of the next start is cut off a few
-    samples before it; ``tol`` (m) is the position noise band, for an encoder
-    one quantisation step. A motion slower than ``tol/(2*half_window_s)``
-    (creep) may be read as rest in places; the displacement it loses is at
-    most ``tol`` per window.
-    """
-    fs = (t.size - 1) / float(t[-1] - t[0]) if t.size > 1 else 1.0
-    rest = rest_mask(x, max(2, int(round(half_window_s * fs))), tol)
-    return np.where(rest, 0.0, v), np.where(rest, 0.0, a)
-
-
 def derivatives(meas: Measurement, *, cutoff_hz: float = 10.0,
                 order: int = 2) -> tuple[np.ndarray, np.ndarray]:
     """``(v, a)`` of a measurement's position column ``x`` (see :func:`differentiate`)."""

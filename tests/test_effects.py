@@ -226,7 +226,7 @@ def test_dwell_time_raises_break_away_with_dwell() -> None:
     dFs, tau = 0.5, 1.0
     model = make_model("lugre", params="canudas1995").with_effects(
         make_effect("dwell-time", {"dFs": dFs, "tau_dwell": tau, "L_dwell": 1e-4}))
-    w0 = 1e-4 / (1e-4 + 0.01 * tau)  # steady age while sliding at 10 mm/s
+    w0 = 0.0  # no ageing while sliding (10 mm/s = 1000 v_rest)
     dwells = (0.05, 0.5, 2.0, 8.0)
     ages, peaks = zip(*[_dwell_peak(model, d) for d in dwells], strict=True)
     for d, w in zip(dwells, ages, strict=True):

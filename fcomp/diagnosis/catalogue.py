@@ -264,8 +264,10 @@ def _dwell_time(ctx: Context) -> list[dict[str, float]]:
         if best is None or cost < best[0]:
             best = (cost, max(float(coef[1]), 0.05 * level), float(tau))
     _, dFs, tau = best  # type: ignore[misc]
-    return [{"dFs": dFs, "tau_dwell": tau, "L_dwell": 2 * seg.d_pre},
-            {"dFs": dFs, "tau_dwell": tau, "L_dwell": 8 * seg.d_pre}]
+    L = max(2 * seg.d_pre, 20 * data.scales.resolution)
+    return [{"dFs": dFs, "tau_dwell": tau, "L_dwell": L},
+            {"dFs": dFs, "tau_dwell": tau, "L_dwell": 8 * L},
+            {"dFs": 1.5 * dFs, "tau_dwell": 0.3 * tau, "L_dwell": 2 * L, "k_dwell": 1.0}]
 
 
 def _direction_asymmetry(ctx: Context) -> list[dict[str, float]]:
@@ -290,15 +292,51 @@ def _pressure(ctx: Context) -> list[dict[str, float]]:
 
 
 def _position(ctx: Context) -> list[dict[str, float]]:
+    """Legendre coefficients by least squares, and a local box where the rest peaks.
+
+    The sign-corrected training residual of the moving samples is regressed on
+    ``|F_hat|*P_k(xi)`` (the smooth part); what remains, relative to
+    ``|F_hat|``, is averaged in bins of 0.5 % of the stroke and its largest
+    excursion (three bins smoothed) gives the box: centre, half-width (where it
+    stays above half the peak), amplitude. Starts: the smooth part alone, the
+    smooth part with the box, and the box alone.
+    """
     m = _moving(ctx)
     cfg = _config("position-dependence", ctx.data)
-    xi = 2.0 * (ctx.data.signal("x") - cfg["x_min"]) / (cfg["x_max"] - cfg["x_min"]) - 1.0
+    x = ctx.data.signal("x")
+    xi = 2.0 * (x - cfg["x_min"]) / (cfg["x_max"] - cfg["x_min"]) - 1.0
     F = np.abs(ctx.current.F_hat)
     cols = np.column_stack([F * xi, F * 0.5 * (3 * xi**2 - 1), F * 0.5 * (5 * xi**3 - 3 * xi)])
-    s = np.sign(ctx.data.signal("v"))
-    coef, *_ = np.linalg.lstsq(cols[m], (s * ctx.current.residual)[m], rcond=None)
+    rs = np.sign(ctx.data.signal("v")) * ctx.current.residual
+    coef, *_ = np.linalg.lstsq(cols[m], rs[m], rcond=None)
     coef = np.clip(coef, -0.9, 0.9)
-    return [{"kx1": float(coef[0]), "kx2": float(coef[1]), "kx3": float(coef[2])}]
+    smooth_part = {"kx1": float(coef[0]), "kx2": float(coef[1]), "kx3": float(coef[2]),
+                   "kb": 0.0}
+    sc = ctx.data.scales
+    rel = (rs - cols @ coef)[m] / np.maximum(F[m], 1e-3 * sc.force)
+    width = max(0.005 * sc.stroke, 2.0 * sc.resolution)
+    edges = np.arange(sc.x_min, sc.x_max + width, width)
+    k = np.clip(np.digitize(x[m], edges) - 1, 0, max(edges.size - 2, 0))
+    count = np.bincount(k, minlength=edges.size - 1)
+    if edges.size < 4 or (count >= 5).sum() < 4:
+        return [smooth_part]
+    mean = np.where(count >= 5, np.bincount(k, rel, minlength=edges.size - 1)
+                    / np.maximum(count, 1), 0.0)
+    sm = np.convolve(mean, np.ones(3) / 3.0, mode="same")
+    j = int(np.argmax(np.abs(sm)))
+    peak = float(sm[j])
+    lo = hi = j
+    while lo > 0 and abs(sm[lo - 1]) > 0.5 * abs(peak) and np.sign(sm[lo - 1]) == np.sign(peak):
+        lo -= 1
+    while (hi < sm.size - 1 and abs(sm[hi + 1]) > 0.5 * abs(peak)
+           and np.sign(sm[hi + 1]) == np.sign(peak)):
+        hi += 1
+    box = {"kb": float(np.clip(peak, -0.9, 2.9)),
+           "xb": float(0.5 * (edges[lo] + edges[hi + 1])),
+           "wb": float(0.5 * (edges[hi + 1] - edges[lo])),
+           "eb": float(max(0.25 * width, sc.resolution))}
+    return [smooth_part, {**smooth_part, **box},
+            {"kx1": 0.0, "kx2": 0.0, "kx3": 0.0, **box}]
 
 
 def _viscous_lead(ctx: Context) -> list[dict[str, float]]:

@@ -527,14 +527,8 @@ class Diagnosis:
                 ) -> FitResult | str:
         if isinstance(payload, str):
             return payload
-        values = payload["values"]
-        model_vals = {k: v for k, v in values.items() if k != "mass"}
-        model = prop.model.with_params(**model_vals) if model_vals else prop.model
-        F_hat = payload["F_hat"]
-        r = self.data_.y - F_hat
-        tr, te = self.split_.train, self.split_.test
-        return FitResult(model, dict(values), F_hat, r, _rms(r[tr]), _rms(r[te]),
-                         payload["n_params"], payload["converged"], payload["nfev"])
+        return self._refit.result(prop.model, payload["values"], payload["n_params"],
+                                  payload["converged"], payload["nfev"], F_hat=payload["F_hat"])
 
     def _judge(self, name: str, res: FitResult) -> Candidate:
         before = self.fit_

@@ -154,6 +154,59 @@ class FitResult:
     nfev: int
 
 
+#: Largest timing tolerance (s) of :func:`timing_tolerant_residual`.
+MAX_TIMING = 0.02
+
+
+def timing_windows(v: np.ndarray, dt: float, resolution: float) -> np.ndarray:
+    """Timing uncertainty of every sample, in samples: ``w_k = ceil(q/(|v_k|*dt))``, 1 to 20 ms.
+
+    The time the piston needs to move one position resolution ``q`` at its
+    speed there: an event placed by the position -- a start, a stop, a
+    reversal -- is known only to within that time. At speed it is one sample;
+    near a turning point of a slow motion, or at rest, it reaches
+    :data:`MAX_TIMING`.
+    """
+    w_max = max(1, int(round(MAX_TIMING / dt)))
+    speed = np.abs(v)
+    with np.errstate(divide="ignore"):
+        w = np.where(speed > 0, np.ceil(resolution / (np.maximum(speed, 1e-300) * dt)), w_max)
+    return np.clip(w, 1, w_max).astype(int)
+
+
+def timing_tolerant_residual(y: np.ndarray, F_hat: np.ndarray, starts: Sequence[int],
+                             windows: np.ndarray | None = None) -> np.ndarray:
+    """``y - F_hat`` with the timing tolerance of the motion where the prediction changes fast.
+
+    The model runs along a motion reconstructed from sampled, quantised
+    positions, so an event -- a start, a stop, a velocity reversal where a
+    friction law jumps by its whole level -- is placed only to within the
+    time the piston takes to move one position resolution
+    (:func:`timing_windows`, ``w_k`` samples; one sample without ``windows``).
+    Any value between the predictions within ``w_k`` samples of sample ``k``
+    (in its experiment; ``starts`` are the first samples of the experiments)
+    is taken as right as the prediction itself: the residual is the distance
+    of ``y`` from that envelope. Where the prediction is smooth the envelope
+    is narrower than the noise and this is the plain residual; a structure
+    the model does not predict anywhere near is never hidden.
+    """
+    from scipy.ndimage import maximum_filter1d, minimum_filter1d
+
+    n = F_hat.size
+    w = np.ones(n, dtype=int) if windows is None else windows
+    bounds = [*sorted(set(starts) | {0}), n]
+    lo = F_hat.copy()
+    hi = F_hat.copy()
+    for a, b in zip(bounds[:-1], bounds[1:], strict=True):
+        seg, ws = F_hat[a:b], w[a:b]
+        for k in np.unique(ws):
+            sel = ws == k
+            size = 2 * int(k) + 1
+            lo[a:b][sel] = minimum_filter1d(seg, size, mode="nearest")[sel]
+            hi[a:b][sel] = maximum_filter1d(seg, size, mode="nearest")[sel]
+    return y - np.clip(y, lo, hi)
+
+
 def fixed_names(model: FrictionModel) -> set[str]:
     """Flat names never fitted: numerical thresholds, references, effects' ``fixed`` lists."""
     out = {n for n in model.flat_params() if base_name(n) in ALWAYS_FIXED}
@@ -192,6 +245,7 @@ class Refit:
         self.d_pre = d_pre
         self.max_nfev = max_nfev
         self.q = max(1, math.ceil(data.n / max_samples))
+        self.windows = timing_windows(data.signal("v"), data.scales.dt, data.scales.resolution)
         self._records = self._fit_records()
 
     def _fit_records(self) -> list[tuple[FitData, np.ndarray]]:
@@ -237,13 +291,20 @@ class Refit:
         return F
 
     def result(self, model: FrictionModel, values: Mapping[str, float], n_params: int,
-               converged: bool = True, nfev: int = 0) -> FitResult:
-        """The :class:`FitResult` of ``model`` with ``values`` (scored on the full record)."""
+               converged: bool = True, nfev: int = 0,
+               F_hat: np.ndarray | None = None) -> FitResult:
+        """The :class:`FitResult` of ``model`` with ``values`` (scored on the full record).
+
+        ``F_hat``: its prediction, if already computed (else simulated here).
+        The residual is the timing-tolerant one (:func:`timing_tolerant_residual`).
+        """
         model_vals = {k: v for k, v in values.items() if k != "mass"}
         fitted = model.with_params(**model_vals) if model_vals else model
         extras = {"mass": values["mass"]} if "mass" in values else {}
-        F_hat = self.predict(fitted, extras)
-        r = self.data.y - F_hat
+        if F_hat is None:
+            F_hat = self.predict(fitted, extras)
+        r = timing_tolerant_residual(self.data.y, F_hat,
+                                     [e.start for e in self.data.experiments], self.windows)
         tr, te = self.split.train, self.split.test
         return FitResult(fitted, dict(values), F_hat, r, _rms(r[tr]), _rms(r[te]), n_params,
                          converged, nfev)

@@ -273,14 +273,23 @@ class DirectionAsymmetry(Effect):
 
 
 class PositionDependence(Effect):
-    """Position dependence: levels scaled by a smooth function of the stroke position ``x``.
+    """Position dependence: levels scaled by a function of the stroke position ``x``.
 
     Bore tolerance, wear, rod bending and seal squeeze vary along the stroke,
-    so friction does too (seed 001 measured break-away at 12 positions).
-    The scale is ``1 + kx1*P1(xi) + kx2*P2(xi) + kx3*P3(xi)`` with Legendre
-    polynomials of ``xi = 2*(x - x_min)/(x_max - x_min) - 1`` (``x_min``,
-    ``x_max`` are configuration, default 0..0.3 m). A model without it leaves
-    a residual that is a smooth function of ``x``, repeated on every stroke.
+    so friction does too (seed 001 measured break-away at 12 positions); a
+    scored or worn stretch of the bore, or a tight spot, changes it over a
+    short stretch only. The scale is
+
+    ``1 + kx1*P1(xi) + kx2*P2(xi) + kx3*P3(xi) + kb*box(x)``
+
+    with Legendre polynomials of ``xi = 2*(x - x_min)/(x_max - x_min) - 1``
+    (``x_min``, ``x_max`` are configuration, default 0..0.3 m) for the smooth
+    variation along the stroke, and a soft box for a local one,
+    ``box(x) = (tanh((x - xb + wb)/eb) - tanh((x - xb - wb)/eb))/2``: centre
+    ``xb``, half-width ``wb``, edge width ``eb`` (a narrow box with soft edges
+    is a bump, a wide one reaching past the end of the stroke a step). A model
+    without it leaves a residual that is a function of ``x``, repeated on every
+    stroke, of the friction's sign.
     """
 
     name = "position-dependence"
@@ -288,9 +297,16 @@ class PositionDependence(Effect):
         spec("kx1", "-", 0.0, -1.0, 1.0, "linear Legendre coefficient", directional=False),
         spec("kx2", "-", 0.0, -1.0, 1.0, "quadratic Legendre coefficient", directional=False),
         spec("kx3", "-", 0.0, -1.0, 1.0, "cubic Legendre coefficient", directional=False),
+        spec("kb", "-", 0.0, -1.0, 3.0, "relative level change inside the local box (0: none)",
+             directional=False),
+        spec("xb", "m", 0.15, -INF, INF, "centre of the local box", directional=False),
+        spec("wb", "m", 0.01, 0.0, INF, "half-width of the local box", lower_open=True,
+             directional=False),
+        spec("eb", "m", 0.002, 0.0, INF, "edge width of the local box", lower_open=True,
+             directional=False),
     ], owner="effect position-dependence")
     needs = ("x",)
-    signature = "residual a smooth function of x, repeated stroke after stroke"
+    signature = "residual a function of x, repeated stroke after stroke (smooth or local)"
     experiment = "the same slow stroke repeated, break-away measured along the stroke"
 
     def modify_levels(self, be: Backend, L: dict, w: list[Any], sig: Signals,
@@ -300,7 +316,10 @@ class PositionDependence(Effect):
         xi = 2.0 * (sig.x - x_min) / (x_max - x_min) - 1.0
         p2 = 0.5 * (3.0 * xi * xi - 1.0)
         p3 = 0.5 * (5.0 * xi * xi * xi - 3.0 * xi)
-        return scale_levels(L, 1.0 + P("kx1") * xi + P("kx2") * p2 + P("kx3") * p3)
+        xb, wb, eb = P("xb"), P("wb"), P("eb")
+        box = 0.5 * (be.tanh((sig.x - xb + wb) / eb) - be.tanh((sig.x - xb - wb) / eb))
+        return scale_levels(L, 1.0 + P("kx1") * xi + P("kx2") * p2 + P("kx3") * p3
+                            + P("kb") * box)
 
 
 class DwellTime(Effect):
@@ -308,12 +327,21 @@ class DwellTime(Effect):
 
     At rest, seal asperities creep and the rubber settles into the surface
     texture; the longer the stop the higher the next break-away force. The
-    contact "age" ``w`` in [0, 1] follows the ageing law
-    ``dw/dt = (1 - w)/tau_dwell - w*|v|/L_dwell`` (Dieterich-Ruina form):
-    it grows towards 1 at rest and is erased over a sliding distance
-    ``L_dwell``; ``Fs -> Fs + dFs*w`` (``Fc`` for models without ``Fs``).
-    A model without it leaves positive spikes at break-away whose height
-    grows with the dwell time before the start.
+    contact "age" ``w`` in [0, 1] grows while the piston rests and is erased
+    by sliding (Rabinowicz; Kato et al.; the ageing term of Dieterich-Ruina
+    rate-and-state friction restricted to rest)::
+
+        dw/dt = r(v)*(1 - w)^(1 + k)/tau_dwell - w*|v|/L_dwell,   r(v) = exp(-|v|/v_rest)
+
+    and raises the static level, ``Fs -> Fs + dFs*w`` (``Fc`` for models
+    without ``Fs``). After a dwell ``t_d`` from ``w = 0`` the age is
+    ``1 - exp(-t_d/tau_dwell)`` for ``k = 0`` (Kato's exponential law) and
+    ``1 - (1 + k*t_d/tau_dwell)^(-1/k)`` for ``k > 0``, which grows about
+    logarithmically over the middle decades (Dieterich's log ageing); it is
+    erased over a sliding distance ``L_dwell``. ``r(v)`` limits the ageing to
+    rest (``v_rest``, fixed, far below any sliding speed), so the effect adds no
+    force while sliding. A model without it leaves positive spikes at
+    break-away whose height grows with the dwell time before the start.
     """
 
     name = "dwell-time"
@@ -325,7 +353,12 @@ class DwellTime(Effect):
              directional=False),
         spec("L_dwell", "m", 1e-4, 0.0, INF, "sliding distance that erases the age",
              lower_open=True, directional=False),
+        spec("k_dwell", "-", 0.0, 0.0, 5.0, "ageing shape: 0 exponential (Kato), > 0 "
+             "towards logarithmic (Dieterich)", directional=False),
+        spec("v_rest", "m/s", 1e-5, 0.0, INF, "speed scale of rest (fixed): ageing "
+             "weighted by exp(-|v|/v_rest)", lower_open=True, directional=False),
     ], owner="effect dwell-time")
+    fixed: ClassVar[tuple[str, ...]] = ("v_rest",)
     signature = "break-away spikes growing with the dwell time before the start"
     experiment = "starts after dwells of different lengths (0.1 s to 10 s)"
 
@@ -337,11 +370,15 @@ class DwellTime(Effect):
         return out
 
     def rhs(self, be: Backend, w: list[Any], sig: Signals, P: ParamValues) -> list:
-        return [(1.0 - w[0]) / P("tau_dwell") - w[0] * be.abs(sig.v) / P("L_dwell")]
+        rest = be.exp(-be.abs(sig.v) / P("v_rest"))
+        young = be.power(be.fmax(1.0 - w[0], 1e-30), 1.0 + P("k_dwell"))
+        return [rest * young / P("tau_dwell") - w[0] * be.abs(sig.v) / P("L_dwell")]
 
     def steady_state(self, be: Backend, sig: Signals, P: ParamValues) -> list:
+        # exact for k = 0; at any sliding speed r(v) ~ 0 and the age is ~0
         L, tau = P("L_dwell"), P("tau_dwell")
-        return [L / (L + be.abs(sig.v) * tau)]
+        rest = be.exp(-be.abs(sig.v) / P("v_rest"))
+        return [L * rest / (L * rest + be.abs(sig.v) * tau)]
 
 
 class InertiaError(Effect):

@@ -1,0 +1,152 @@
+"""The diagnosis matrix: is `fcomp diagnose` right on records it was not built on? (issue 10)
+
+Every catalogue effect hidden alone, nothing hidden, two effects at once and
+effects outside the catalogue, x every measurement style x both rig scales x
+static and dynamic baselines x seeds, on records of :mod:`fcomp.synthetic`
+(its laws written independently of :mod:`fcomp.effects`; shapes rotate with
+the case so every shape of every effect is met; nuisance parameters drawn
+per seed). Each case runs the diagnosis as a user would and is judged through
+the public JSON contract (:mod:`fcomp.synthetic.matrix`): the added set right
+(in order where it matters), the verdict right, and the held-out error at
+most 0.6 of the baseline's where something was to be found.
+
+Prints the confusion matrix (hidden effect vs added effects), the share
+right per row, style, scale and baseline kind, the rows that fall short and
+why, and the time per case.
+
+    python benchmarks/bench_diagnosis_matrix.py                 # the whole matrix
+    python benchmarks/bench_diagnosis_matrix.py --seeds 1 --rows dwell-time,nothing
+    python benchmarks/bench_diagnosis_matrix.py --json matrix.json
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import time
+from collections import Counter, defaultdict
+from concurrent.futures import ProcessPoolExecutor, as_completed
+
+import numpy as np
+
+from fcomp.synthetic.matrix import CASE_FIELDS, Case, cases, judge, record
+
+
+def run_case(case: Case) -> dict:
+    """Generate the record of ``case``, diagnose it, judge it (a worker process)."""
+    from fcomp.diagnosis import Diagnosis
+
+    t0 = time.perf_counter()
+    rec = record(case)
+    t1 = time.perf_counter()
+    out = {"case": case.as_dict()}
+    try:
+        d = Diagnosis(case.baseline, n_jobs=1).fit(rec.measurement)
+        doc = d.to_dict()
+    except Exception as exc:  # a failure is a wrong answer, with its reason
+        doc = {"error": f"{type(exc).__name__}: {exc}"}
+    t2 = time.perf_counter()
+    right, why = judge(case, doc)
+    out.update(right=right, why=why, generate_s=t1 - t0, diagnose_s=t2 - t1,
+               added=doc.get("added"), verdict=doc.get("verdict"), reason=doc.get("reason"),
+               rms_baseline=doc.get("rms_baseline"), rms_final=doc.get("rms_final"),
+               noise_floor=doc.get("noise_floor"), ties=doc.get("ties"),
+               error=doc.get("error"))
+    return out
+
+
+def _share(results: list[dict], key) -> dict[str, tuple[int, int]]:
+    acc: dict[str, list[int]] = defaultdict(lambda: [0, 0])
+    for r in results:
+        k = key(r)
+        acc[k][0] += bool(r["right"])
+        acc[k][1] += 1
+    return {k: (v[0], v[1]) for k, v in sorted(acc.items())}
+
+
+def report(results: list[dict]) -> str:
+    lines = []
+    n = len(results)
+    right = sum(bool(r["right"]) for r in results)
+    lines.append(f"overall: {right}/{n} right ({100 * right / max(n, 1):.1f} %)")
+    for title, key in (("row", lambda r: r["case"]["row"]), ("style", lambda r: r["case"]["style"]),
+                       ("scale", lambda r: r["case"]["scale"]),
+                       ("baseline kind", lambda r: r["case"]["kind"])):
+        lines.append(f"\nshare right per {title}:")
+        for k, (a, b) in _share(results, key).items():
+            flag = "   <-- below 2/3" if title == "row" and a < 2 * b / 3 else ""
+            lines.append(f"  {k:32s} {a:4d}/{b:<4d} {100 * a / b:5.1f} %{flag}")
+    # confusion: hidden row vs effects added
+    lines.append("\nconfusion (row: how often each effect was added; '-' nothing added; "
+                 "verdict counts):")
+    by_row: dict[str, Counter] = defaultdict(Counter)
+    for r in results:
+        c = by_row[r["case"]["row"]]
+        added = r["added"] or []
+        if r.get("error"):
+            c["ERROR"] += 1
+        elif not added:
+            c["-"] += 1
+        for e in added:
+            c[e] += 1
+        c[f"[{r['verdict']}]"] += 1
+    for row, c in sorted(by_row.items()):
+        lines.append(f"  {row:32s} " + ", ".join(f"{k} {v}" for k, v in c.most_common()))
+    wrong = [r for r in results if not r["right"]]
+    if wrong:
+        lines.append("\nwrong cases (row / kind / style / scale / seed: why):")
+        for r in wrong:
+            c = r["case"]
+            lines.append(f"  {c['row']} / {c['kind']} / {c['style']} / {c['scale']} / "
+                         f"{c['seed']} [{c['shape']}]: {r['why']}")
+    ts = np.array([r["diagnose_s"] for r in results])
+    gs = np.array([r["generate_s"] for r in results])
+    lines.append(f"\ntime per case: diagnose median {np.median(ts):.1f} s, max {ts.max():.1f} s; "
+                 f"generate median {np.median(gs):.2f} s")
+    return "\n".join(lines)
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--seeds", type=int, default=3)
+    ap.add_argument("--jobs", type=int, default=min(os.cpu_count() or 1, 2))
+    for f in ("rows", "styles", "scales", "kinds"):
+        ap.add_argument(f"--{f}", default=None, help=f"comma-separated subset of {f}")
+    ap.add_argument("--duration", type=float, default=40.0)
+    ap.add_argument("--rate", type=float, default=1000.0)
+    ap.add_argument("--json", default=None, help="write every case's result here")
+    ap.add_argument("--list", action="store_true", help="list the cases and stop")
+    args = ap.parse_args(argv)
+    pick = {f: (getattr(args, f).split(",") if getattr(args, f) else None)
+            for f in ("rows", "styles", "scales", "kinds")}
+    todo = cases(seeds=range(1, args.seeds + 1), duration=args.duration, rate=args.rate, **pick)
+    if args.list:
+        for c in todo:
+            print(" ".join(str(getattr(c, f)) for f in CASE_FIELDS))
+        print(f"{len(todo)} cases")
+        return 0
+    print(f"{len(todo)} cases on {args.jobs} processes", file=sys.stderr)
+    results = []
+    t0 = time.perf_counter()
+    with ProcessPoolExecutor(max_workers=args.jobs) as pool:
+        futs = [pool.submit(run_case, c) for c in todo]
+        for k, fut in enumerate(as_completed(futs), 1):
+            r = fut.result()
+            results.append(r)
+            c = r["case"]
+            print(f"[{k}/{len(todo)}] {'ok ' if r['right'] else 'BAD'} {c['row']} / {c['kind']} / "
+                  f"{c['style']} / {c['scale']} / {c['seed']}: {r['why']} "
+                  f"({r['diagnose_s']:.1f} s)", file=sys.stderr, flush=True)
+    wall = time.perf_counter() - t0
+    print(report(results))
+    print(f"wall time {wall / 60:.1f} min for {len(results)} cases")
+    if args.json:
+        with open(args.json, "w") as fh:
+            json.dump(results, fh, indent=1)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -53,7 +53,7 @@ estimated from the same filtered force at rest, is its noise.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass
 
 import numpy as np
@@ -80,6 +80,8 @@ MIN_QUIET = 0.02
 INERTIA_NOISE_SHARE = 0.3
 #: Largest lag (s) searched between a ``v`` column and ``dx/dt``.
 MAX_LAG = 0.02
+#: Margin (s), beyond the largest lag, left out at both ends of a rest for the bias.
+REST_EDGE = 0.02
 VELOCITY_SOURCES = ("x", "v", "fused")
 
 
@@ -126,25 +128,33 @@ def sample_rate(t: np.ndarray) -> float:
     return (t.size - 1) / float(t[-1] - t[0])
 
 
+def speed_scale(t: np.ndarray, x: np.ndarray) -> float:
+    """95th percentile of ``|dx/dt|`` at a tenth of the sample rate (m/s)."""
+    _, v0, _ = differentiate(t, x, cutoff_hz=0.1 * sample_rate(t), label="x")
+    return float(np.percentile(np.abs(v0), 95.0))
+
+
+def band(fs: float, speed: float, noise: Callable[[float], float]) -> float:
+    """The highest of :data:`CUTOFF_FRACTIONS` of ``fs`` whose velocity ``noise(fc)`` is at most
+    0.2 % of the speed scale (the lowest fraction if none)."""
+    for frac in CUTOFF_FRACTIONS:
+        if noise(frac * fs) <= 2e-3 * speed:
+            return float(frac * fs)
+    return float(CUTOFF_FRACTIONS[-1] * fs)
+
+
 def default_cutoff(t: np.ndarray, x: np.ndarray) -> float:
     """Cutoff (Hz) of the zero-phase filter that derives ``v``, ``a`` from ``x``.
 
-    The highest of :data:`CUTOFF_FRACTIONS` of the sample rate ``fs`` at which
-    the position noise (:func:`position_noise`) leaves a velocity noise
-    (:func:`derived_velocity_noise`) below 0.2 % of the speed scale (95th
-    percentile of ``|v|`` at ``fs/10``). A clean encoder gets ``fs/4``, so
-    presliding transients of a few milliseconds keep their timing; a noisy
-    sensor gets a lower cutoff.
+    :func:`band` with the velocity noise the position noise leaves
+    (:func:`position_noise`, :func:`derived_velocity_noise`) and the speed scale
+    of :func:`speed_scale`. A clean encoder gets ``fs/4``, so presliding
+    transients of a few milliseconds keep their timing; a noisy sensor gets a
+    lower cutoff.
     """
     fs = sample_rate(t)
     sx = position_noise(x)
-    _, v0, _ = differentiate(t, x, cutoff_hz=0.1 * fs, label="x")
-    speed = float(np.percentile(np.abs(v0), 95.0))
-    for frac in CUTOFF_FRACTIONS:
-        fc = frac * fs
-        if derived_velocity_noise(sx, fc, fs) <= 2e-3 * speed:
-            return float(fc)
-    return float(CUTOFF_FRACTIONS[-1] * fs)
+    return band(fs, speed_scale(t, x), lambda fc: derived_velocity_noise(sx, fc, fs))
 
 
 def quiet_runs(x: np.ndarray, tol: float, min_len: int, edge_tol: float) -> np.ndarray:
@@ -245,23 +255,36 @@ def calibrate_velocity(ts: Sequence[np.ndarray], v_cols: Sequence[np.ndarray],
     Pooled over the pieces (experiments) of one file: ``ts``, ``v_cols``,
     ``v_xs`` (the derived velocity, band ``fc``) and ``rests`` (rest read off the
     position) per piece. The bias and noise are the median and robust spread
-    at rest; the column is then passed through the same low-pass as ``dx/dt``
-    and the lag and gain are fitted by least squares over the moving samples
-    (integer lags up to :data:`MAX_LAG`, refined by a parabola).
+    over the inner part of each rest (``MAX_LAG + REST_EDGE`` from its ends:
+    a lagging column still moves after a stop, and the piston creeps within
+    an encoder step before a start); the noise is at least the white-noise
+    equivalent of the column's content above the band while moving (a
+    differentiated encoder is exact at rest and noisy in motion). The column
+    is then passed through the same low-pass as ``dx/dt`` and the lag and
+    gain are fitted by least squares over the moving samples (integer lags up
+    to :data:`MAX_LAG`, refined by a parabola).
     """
     fs = sample_rate(ts[0])
-    at_rest = np.concatenate([v[r] for v, r in zip(v_cols, rests, strict=True)])
+    max_k = max(2, int(round(MAX_LAG * fs)))
+    # the inner part of each rest: a lagging column still moves after a stop and the
+    # piston creeps within an encoder step before a start
+    inner = [_inner(r, max_k + int(math.ceil(REST_EDGE * fs))) for r in rests]
+    at_rest = np.concatenate([v[r] for v, r in zip(v_cols, inner, strict=True)])
     n_rest = int(at_rest.size)
     bias = float(np.median(at_rest)) if n_rest >= MIN_REST else 0.0
     noise = _robust_std(at_rest) if n_rest >= MIN_REST else math.nan
-    max_k = max(2, int(round(MAX_LAG * fs)))
     pieces = []
     for t, vc, vx, rest in zip(ts, v_cols, v_xs, rests, strict=True):
         if t.size <= 2 * max_k + 20:
             continue
         vf = smooth(t, vc - bias, cutoff_hz=fc, label="v")
         scale = float(np.percentile(np.abs(vx), 95.0)) or 1.0
-        idx = np.flatnonzero(~rest & (np.abs(vx) > 0.02 * scale))
+        moving = ~rest & (np.abs(vx) > 0.02 * scale)
+        if moving.sum() > 20:  # noise above the band while moving (quantisation shows there)
+            hf = (vc - bias - vf)[moving]
+            white = _robust_std(hf) / math.sqrt(max(1.0 - 2.0 * fc / fs, 0.05))
+            noise = white if not math.isfinite(noise) else max(noise, white)
+        idx = np.flatnonzero(moving)
         idx = idx[(idx >= max_k) & (idx < t.size - max_k)]
         if idx.size:
             pieces.append((t, vf, vx, idx))
@@ -317,6 +340,16 @@ def velocity_rest(t: np.ndarray, v: np.ndarray, fc: float) -> tuple[np.ndarray, 
             return np.zeros(v.size, dtype=bool), 0.0, _robust_std(v[slow])
         bias, spread = float(np.median(vf[rest])), _robust_std(vf[rest])
     return rest, bias, _robust_std(v[rest] - bias)
+
+
+def _inner(mask: np.ndarray, margin: int) -> np.ndarray:
+    """``mask`` without ``margin`` samples at both ends of each of its runs."""
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], mask.astype(int), [0]])))
+    out = np.zeros(mask.size, dtype=bool)
+    for a, b in zip(edges[::2], edges[1::2], strict=True):
+        if b - a > 2 * margin:
+            out[a + margin:b - margin] = True
+    return out
 
 
 def _long_runs(mask: np.ndarray, min_len: int) -> np.ndarray:
@@ -429,7 +462,8 @@ def condition_motion(pieces: Sequence[tuple[np.ndarray, np.ndarray | None, np.nd
     if v0 is not None:
         cal = calibrate_velocity([p[0] for p in pieces], [p[2] for p in pieces],
                                  [d[0] for d in derived], [d[2] for d in derived], fc)
-        velocity, reason, cross = _choose(cal, sx, fc)
+        velocity, reason, cross, fc = _choose(cal, sx, fc, fs, speed_scale(t0, x0),
+                                              cutoff_hz is not None)
     out = []
     for (t, _, v_col), (v, a, rest) in zip(pieces, derived, strict=True):
         if velocity == "fused":
@@ -470,22 +504,36 @@ def _from_velocity(pieces: Sequence[tuple[np.ndarray, np.ndarray | None, np.ndar
                              "velocity" if at_rest.size >= MIN_REST else "none", share)
 
 
-def _choose(cal: VelocityCalibration, sx: float, fc: float) -> tuple[str, str, float | None]:
+def _choose(cal: VelocityCalibration, sx: float, fc_x: float, fs: float, speed: float,
+            fixed: bool) -> tuple[str, str, float | None, float]:
+    """``(velocity, reason, crossover, band)`` for a calibrated column (module docstring).
+
+    The fused velocity's noise in a band ``fc`` is that of ``dx/dt`` up to the
+    cross-over ``f*`` plus the column's white noise from ``f*`` to ``fc``; its
+    band is chosen by the same rule as ``dx/dt``'s (:func:`band`), unless the
+    user fixed it.
+    """
     if not (math.isfinite(cal.r2) and cal.r2 >= MIN_R2 and abs(cal.gain - 1.0) <= GAIN_TOL):
         return ("x", f"the v column disagrees with dx/dt (gain {cal.gain:.3g}, explains "
                 f"{100 * max(cal.r2, 0.0) if math.isfinite(cal.r2) else 0:.0f} % of it while "
-                "moving): dx/dt of the position", None)
+                "moving): dx/dt of the position", None, fc_x)
     if not math.isfinite(cal.noise):
-        return "x", "the v column's noise is unknown (no rest in the record): dx/dt", None
+        return "x", "the v column's noise is unknown (no rest in the record): dx/dt", None, fc_x
     # densities (one-sided, white): column noise^2/(fs/2); dx/dt (2*pi*f)^2*sx^2/(fs/2)
     cross = cal.noise / (2.0 * math.pi * max(sx, 1e-300))
+
+    def fused_noise(fc: float) -> float:
+        low = derived_velocity_noise(sx, min(fc, cross), fs)
+        return math.sqrt(low**2 + cal.noise**2 * max(fc - cross, 0.0) / (0.5 * fs))
+
+    fc = fc_x if fixed else max(fc_x, band(fs, speed, fused_noise))
     if cross >= fc:
         return ("x", f"dx/dt is cleaner than the v column up to the cutoff ({fc:.3g} Hz): "
-                f"column noise {cal.noise:.2g} m/s, bias {cal.bias:.2g} m/s removed", None)
+                f"column noise {cal.noise:.2g} m/s", None, fc)
     cross = max(cross, 0.01 * fc)
     return ("fused", f"dx/dt below {cross:.3g} Hz, the v column (bias {cal.bias:.2g} m/s "
-            f"removed, lag {1e3 * cal.lag:.2g} ms, gain {cal.gain:.3g}) above: their noise "
-            "densities cross there", cross)
+            f"removed, lag {1e3 * cal.lag:.2g} ms, gain {cal.gain:.3g}) above, up to "
+            f"{fc:.3g} Hz: their noise densities cross there", cross, fc)
 
 
 # ------------------------------------------------------------------ force band

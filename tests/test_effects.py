@@ -158,6 +158,20 @@ def test_position_dependence_is_a_legendre_scale_of_the_levels(motion: dict) -> 
     np.testing.assert_allclose(_run(model, motion).F, _run(base, motion).F * scale, rtol=1e-13)
 
 
+def test_position_dependence_local_box_is_a_soft_step_pair(motion: dict) -> None:
+    """``kb*box(x)``: ``(tanh((x - xb + wb)/eb) - tanh((x - xb - wb)/eb))/2`` scales the levels."""
+    base = make_model("coulomb", params="canudas1995")
+    kb, xb, wb, eb = 0.6, 0.16, 0.01, 0.001
+    model = base.with_effects(make_effect("position-dependence",
+                                          {"kb": kb, "xb": xb, "wb": wb, "eb": eb}))
+    x = motion["x"]
+    box = 0.5 * (np.tanh((x - xb + wb) / eb) - np.tanh((x - xb - wb) / eb))
+    np.testing.assert_allclose(_run(model, motion).F, _run(base, motion).F * (1 + kb * box),
+                               rtol=1e-13)
+    inside = np.abs(x - xb) < wb - 4 * eb
+    assert inside.any() and np.all(box[inside] > 0.99)  # a plateau of height kb inside
+
+
 def test_viscous_lead_adds_sigma2_T_a(motion: dict) -> None:
     base = make_model("lugre", params="canudas1995")
     model = base.with_effects(make_effect("viscous-lead", {"T": 0.02}))
@@ -243,6 +257,82 @@ def test_dwell_time_raises_break_away_with_dwell() -> None:
     # erases the age over L_dwell while the bristles load)
     gain = peaks[-1] - peaks[0]
     assert 0.2 * dFs * (ages[-1] - ages[0]) < gain < dFs * (ages[-1] - ages[0])
+
+
+def test_dwell_time_log_ageing_follows_its_closed_form() -> None:
+    """``dw/dt = (1 - w)^(1 + k)/tau`` at rest: ``w = 1 - (1 + k*t/tau)^(-1/k)`` (Dieterich-like)."""
+    k, tau = 1.5, 0.4
+    model = make_model("lugre", params="canudas1995").with_effects(
+        make_effect("dwell-time", {"dFs": 0.5, "tau_dwell": tau, "L_dwell": 1e-4, "k_dwell": k}))
+    t = np.linspace(0.0, 6.0, 60001)
+    run = friction_along_motion(model, t, np.zeros_like(t))
+    w = run.states[:, model.state_names.index("w")]
+    closed = 1 - (1 + k * t / tau) ** (-1 / k)
+    np.testing.assert_allclose(w, closed, atol=2e-4)  # exponential-Euler steps of 0.1 ms
+    # unlike Kato's exponential (1 - exp(-15) at 15 tau) it still ages long after tau
+    assert w[30000] < 0.9 and w[-1] - w[30000] > 0.05
+
+
+def test_dwell_time_adds_nothing_while_sliding() -> None:
+    """Ageing is restricted to rest: at a steady 1 mm/s the age is nil, the force unchanged."""
+    base = make_model("lugre", params="canudas1995")
+    model = base.with_effects(make_effect("dwell-time", {"dFs": 0.5, "tau_dwell": 0.2}))
+    t = np.linspace(0.0, 2.0, 20001)
+    v = np.full_like(t, 1e-3)
+    run = friction_along_motion(model, t, v)
+    assert run.states[-1, model.state_names.index("w")] < 1e-6
+    np.testing.assert_allclose(run.F[-1], friction_along_motion(base, t, v).F[-1], rtol=1e-9)
+
+
+def _maxwell_slip_reference(x: np.ndarray, shares: np.ndarray, slips: np.ndarray,
+                            level: float) -> np.ndarray:
+    """Classical Maxwell-slip, written out: spring ``k_i = level*share_i/slip_i``, deflection
+    clipped to ``+-slip_i`` (Lampaert, Al-Bender & Swevers 2002)."""
+    delta = np.zeros(slips.size)
+    out = np.empty(x.size)
+    for i in range(x.size):
+        if i:
+            delta = np.clip(delta + (x[i] - x[i - 1]), -slips, slips)
+        out[i] = float(np.sum(level * shares / slips * delta))
+    return out
+
+
+def test_maxwell_slip_elements_are_classical_maxwell_slip() -> None:
+    """Form ``maxwell-slip`` with the whole level on the elements equals Maxwell-slip, exactly."""
+    base = make_model("dahl", params="canudas1995").with_params(sigma2=0.0)
+    Fc = base.flat_params()["Fc"]
+    dmax, rho, beta = 2e-4, 20.0, 0.7
+    model = base.with_effects(make_effect(
+        "nonlocal-memory", {"ms_share": 1.0, "ms_dmax": dmax, "ms_spread": rho,
+                            "ms_shape": beta}, form="maxwell-slip"))
+    assert model.describe() == "dahl + nonlocal-memory" and model.symbolic
+    u = np.linspace(0.0, 1.0, 5)
+    shares = rho ** (beta * u) / np.sum(rho ** (beta * u))
+    slips = dmax * rho ** (u - 1.0)
+    # nested displacement loops (seed 000 Fig. 10): out, back, a minor loop, on again
+    knots = np.array([0.0, 4e-4, -1e-4, 2e-4, 0.5e-4, 3e-4, -3e-4])
+    x = np.concatenate([np.linspace(a, b, 400, endpoint=False)
+                        for a, b in zip(knots[:-1], knots[1:], strict=True)] + [knots[-1:]])
+    t = np.arange(x.size) * 1e-3
+    v = np.gradient(x, t)
+    xs = np.concatenate([[0.0], np.cumsum(0.5 * (v[1:] + v[:-1]) * np.diff(t))])
+    F = friction_along_motion(model, t, v, x=xs).F
+    ref = _maxwell_slip_reference(xs, shares, slips, Fc)
+    np.testing.assert_allclose(F, ref, atol=1e-9 * Fc)
+    # return-point memory: after the minor loop 2e-4 -> 0.5e-4, back at 2e-4 the force is
+    # the force of the reversal there
+    i1 = 3 * 400
+    i2 = 4 * 400 + int(np.argmin(np.abs(xs[1600:2000] - xs[i1])))
+    assert abs(F[i2] - F[i1]) < 1e-2 * Fc
+    assert abs(F[i2 - 1] - F[i1]) > abs(F[i2] - F[i1])
+
+
+def test_maxwell_slip_elements_at_zero_share_are_a_no_op(motion: dict) -> None:
+    base = make_model("lugre", params="seed000-cylinder1")
+    model = base.with_effects(make_effect("nonlocal-memory", form="maxwell-slip"))
+    np.testing.assert_array_equal(_run(model, motion).F, _run(base, motion).F)
+    with pytest.raises(ValueError, match="form"):
+        make_effect("nonlocal-memory", form="spline")
 
 
 # ----------------------------------------------------------------- user effects

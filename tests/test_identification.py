@@ -17,6 +17,7 @@ import pytest
 from reference_lugre import FilmLuGreRef, LuGreRef, coulomb_viscous, stribeck_map
 from scipy.integrate import solve_ivp
 
+from fcomp.effects import make_effect
 from fcomp.errors import ConvergenceError, FcompError
 from fcomp.identification import FrictionFit, fit_data, steady_state_points
 from fcomp.identification.problem import compressed
@@ -95,6 +96,26 @@ def test_sensitivities_equal_central_differences_of_the_simulation() -> None:
         fd = (up - down) / (2 * h)
         scale = max(np.abs(fd).max(), 1e-9)
         assert np.abs(G[:, j] - fd).max() <= 1e-4 * scale, name
+
+
+def test_maxwell_slip_sensitivities_equal_central_differences() -> None:
+    """The clipped element deflections are differentiated exactly (piecewise, away from kinks)."""
+    model = make_model("lugre", params="seed000-cylinder1").with_effects(make_effect(
+        "nonlocal-memory", {"ms_share": 0.7, "ms_dmax": 3e-4, "ms_spread": 8.0,
+                            "ms_shape": 0.4}, form="maxwell-slip"))
+    t = np.arange(3001) / 1000.0
+    v = velocity(t)
+    free = ["Fc_pos", "Fs_neg", "sigma0", "ms_share", "ms_dmax", "ms_spread", "ms_shape"]
+    F, G = SensitivityLoop(model, free)(prepare_signals(t, v), {})
+    np.testing.assert_allclose(F, friction_along_motion(model, t, v).F, rtol=0, atol=1e-12)
+    flat = model.flat_params()
+    for j, name in enumerate(free):
+        h = 1e-7 * abs(flat[name])
+        up = friction_along_motion(model, t, v, values={name: flat[name] + h}).F
+        down = friction_along_motion(model, t, v, values={name: flat[name] - h}).F
+        fd = (up - down) / (2 * h)
+        scale = max(np.abs(fd).max(), 1e-9)
+        assert np.abs(G[:, j] - fd).max() <= 1e-3 * scale, name
 
 
 def test_compressed_problem_keeps_every_step_cost() -> None:

@@ -1,0 +1,183 @@
+"""Signal conditioning (fcomp.conditioning): the velocity that drives the friction states.
+
+The motion is analytic (raised-cosine moves between dwells, so ``v`` and the
+true rest are known exactly); the sensors are simulated here: a quantised
+encoder, a tachometer with noise, bias, gain error and lag, a drive's
+differentiated encoder. Checks: the calibration recovers what was put in, rest
+is held exactly where the piston rests, the conditioned velocity is closer to
+the truth than any raw column, and the noise formulas agree with a Monte Carlo.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from fcomp.conditioning import (
+    condition_motion,
+    derived_acceleration_noise,
+    derived_velocity_noise,
+    force_cutoff,
+    position_noise,
+    quiet_runs,
+    sample_rate,
+)
+from fcomp.reconstruction import differentiate
+
+FS = 1000.0
+Q = 1e-6  # encoder step, m
+
+
+def _motion(seed: int = 0) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``(t, x, v, rest)``: 20 s of moves (2-80 mm/s, 10-60 mm) between dwells of 0.1-1.5 s."""
+    rng = np.random.default_rng(seed)
+    dt = 1 / FS
+    v_parts, rest_parts = [], []
+    x = 0.1
+    while sum(p.size for p in v_parts) * dt < 20.0:
+        n_rest = int(rng.uniform(0.1, 1.5) / dt)
+        v_parts.append(np.zeros(n_rest))
+        rest_parts.append(np.ones(n_rest, bool))
+        d = rng.uniform(0.01, 0.06) * (1 if x < 0.1 else -1)
+        V = rng.uniform(0.002, 0.08)
+        T = abs(d) / V * 2
+        n = max(int(T / dt), 20)
+        s = np.sin(np.pi * (np.arange(n) + 0.5) / n) ** 2
+        v = d * s / (np.sum(s) * dt)
+        v_parts.append(v)
+        rest_parts.append(np.zeros(n, bool))
+        x += d
+    v = np.concatenate(v_parts)
+    t = np.arange(v.size) * dt
+    xs = 0.1 + np.concatenate([[0.0], np.cumsum(0.5 * (v[1:] + v[:-1])) * dt])  # trapezoid
+    return t, xs, v, np.concatenate(rest_parts)
+
+
+@pytest.fixture(scope="module")
+def motion() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    return _motion()
+
+
+def _encoder(x: np.ndarray) -> np.ndarray:
+    return np.round(x / Q) * Q
+
+
+def _tacho(t: np.ndarray, v: np.ndarray, *, bias: float, noise: float, gain: float,
+           lag: float, seed: int = 1) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    return gain * np.interp(t - lag, t, v) + bias + rng.normal(0.0, noise, t.size)
+
+
+def test_a_noisy_biased_lagged_tacho_is_calibrated_and_not_used(motion) -> None:
+    t, x, v, _ = motion
+    col = _tacho(t, v, bias=1e-4, noise=1e-4, gain=1.02, lag=0.002)
+    (m,), cond = condition_motion([(t, _encoder(x), col)])
+    cal = cond.column
+    assert cal is not None
+    assert cal.bias == pytest.approx(1e-4, abs=1e-5)
+    assert cal.noise == pytest.approx(1e-4, rel=0.1)
+    assert cal.gain == pytest.approx(1.02, abs=0.005)
+    assert cal.lag == pytest.approx(0.002, abs=3e-4)
+    # 1e-4 m/s of noise is 2 % of this record's speed scale: dx/dt is the better velocity
+    assert cond.velocity == "x" and "cleaner" in cond.reason
+    assert np.all(m.v[m.rest] == 0.0)
+
+
+def test_a_good_tacho_is_fused_with_the_position(motion) -> None:
+    t, x, v, _ = motion
+    col = _tacho(t, v, bias=-5e-5, noise=2e-5, gain=0.99, lag=0.001)
+    (m,), cond = condition_motion([(t, _encoder(x), col)])
+    assert cond.velocity == "fused" and cond.crossover_hz is not None
+    assert cond.crossover_hz == pytest.approx(2e-5 / (2 * math.pi * Q / math.sqrt(12)), rel=0.2)
+    # in the same band the fused velocity is closer to the truth than dx/dt alone and
+    # than the raw column
+    _, vx, _ = differentiate(t, _encoder(x), cutoff_hz=cond.cutoff_hz)
+    vx[m.rest] = 0.0
+    err = {k: float(np.sqrt(np.mean((u - v) ** 2))) for k, u in
+           (("fused", m.v), ("column", col), ("dx/dt", vx))}
+    assert err["fused"] < err["dx/dt"] < err["column"], err
+
+
+def test_rest_is_held_exactly_where_the_piston_rests(motion) -> None:
+    t, x, v, rest = motion
+    col = _tacho(t, v, bias=2e-4, noise=1e-4, gain=1.0, lag=0.0)
+    (m,), cond = condition_motion([(t, _encoder(x), col)])
+    assert cond.rest == "position"
+    # every sample held at rest is at rest in truth (or within a step of it) ...
+    held_moving = m.rest & ~rest
+    assert np.abs(v[held_moving]).max(initial=0.0) * (1 / FS) < 2 * Q
+    # ... and all but the edges of the true rests are held (the quiet-run edges are exact)
+    assert np.mean(m.rest[rest]) > 0.97
+    assert np.all(m.v[m.rest] == 0.0) and np.all(m.a[m.rest] == 0.0)
+
+
+def test_a_column_that_disagrees_with_the_position_is_not_used(motion) -> None:
+    t, x, v, _ = motion
+    col = _tacho(t, v, bias=0.0, noise=1e-4, gain=0.5, lag=0.0)  # wrong scale in the file
+    _, cond = condition_motion([(t, _encoder(x), col)])
+    assert cond.velocity == "x" and "disagrees" in cond.reason
+
+
+def test_a_differentiated_encoder_column_is_no_better_than_dx_dt(motion) -> None:
+    t, x, _, _ = motion
+    xe = _encoder(x)
+    col = np.concatenate([[0.0], np.diff(xe) * FS])  # backward difference, as a drive does
+    _, cond = condition_motion([(t, xe, col)])
+    assert cond.velocity == "x"
+
+
+def test_without_a_position_the_column_is_debiased_and_rest_read_off_it(motion) -> None:
+    t, _, v, rest = motion
+    col = _tacho(t, v, bias=3e-4, noise=5e-5, gain=1.0, lag=0.0)
+    (m,), cond = condition_motion([(t, None, col)])
+    assert cond.velocity == "v" and cond.rest == "velocity"
+    assert cond.column is not None and cond.column.bias == pytest.approx(3e-4, abs=2e-5)
+    assert np.mean(m.rest[rest]) > 0.8
+    # what is held while moving creeps within the velocity noise band (slow ends of moves)
+    assert np.abs(v[m.rest & ~rest]).max(initial=0.0) < 6 * 5e-5
+    assert np.all(m.v[m.rest] == 0.0)
+
+
+def test_pooled_calibration_over_experiments(motion) -> None:
+    t, x, v, _ = motion
+    half = t.size // 2
+    col = _tacho(t, v, bias=-1.5e-4, noise=1e-4, gain=1.0, lag=0.001)
+    pieces = [(t[:half], _encoder(x[:half]), col[:half]),
+              (t[half:] + 5.0, _encoder(x[half:]), col[half:])]
+    out, cond = condition_motion(pieces)
+    assert len(out) == 2 and [o.v.size for o in out] == [half, t.size - half]
+    assert cond.column is not None and cond.column.bias == pytest.approx(-1.5e-4, abs=1e-5)
+    assert cond.column.lag == pytest.approx(0.001, abs=3e-4)
+
+
+def test_quiet_runs_place_stops_and_starts_at_the_encoder_count() -> None:
+    x = np.array([0, 0, 0, 0, 0, 1, 2, 3, 4, 4, 4, 4, 4, 4, 5, 6], float) * Q
+    quiet = quiet_runs(x, 1.5 * Q, 4, 0.5 * Q)
+    assert quiet.tolist() == [True] * 5 + [False] * 3 + [True] * 6 + [False] * 2
+
+
+def test_noise_formulas_agree_with_a_monte_carlo() -> None:
+    rng = np.random.default_rng(3)
+    sigma, fc = 1e-6, 100.0
+    t = np.arange(200_000) / FS
+    _, vn, an = differentiate(t, rng.normal(0.0, sigma, t.size), cutoff_hz=fc)
+    # an ideal low-pass against a 2nd-order Butterworth run forward and backward: 20 %
+    assert np.std(vn[1000:-1000]) == pytest.approx(derived_velocity_noise(sigma, fc, FS),
+                                                   rel=0.2)
+    assert np.std(an[1000:-1000]) == pytest.approx(derived_acceleration_noise(sigma, fc, FS),
+                                                   rel=0.3)
+    # white position noise well above the encoder step: the third-difference estimate
+    assert position_noise(_encoder(rng.normal(0.0, 20 * Q, 50_000))) == pytest.approx(
+        20 * Q, rel=0.05)
+    assert sample_rate(t) == pytest.approx(FS)
+
+
+def test_force_band_narrows_with_the_moving_mass() -> None:
+    fs, sx, noise = 1000.0, Q / math.sqrt(12), 0.5
+    bands = [force_cutoff(fs, 250.0, sx, m, noise) for m in (0.5, 5.0, 50.0)]
+    assert bands[0] >= bands[1] >= bands[2]
+    for b, m in zip(bands, (0.5, 5.0, 50.0), strict=True):
+        if b > fs / 100:  # the chosen band keeps the inertia noise within its share
+            assert m * derived_acceleration_noise(sx, b, fs) <= 0.3 * noise * math.sqrt(2 * b / fs)

@@ -449,7 +449,7 @@ def test_each_style_writes_what_a_real_rig_would(tmp_path: Path, style: str, sca
     hidden = ["pressure-dependence:chamber-weighted", "inertia-error", "force-offset:tilt"]
     rec = syn.generate(hidden, duration=2.0, seed=3, scale=scale, style=style, name="run-7")
     m = rec.measurement
-    assert list(m.columns) == STYLE_COLUMNS[style]
+    assert list(m.columns) == STYLE_COLUMNS[style] == list(syn.STYLES[style].columns)
     cylinder = "hydraulic-cylinder" if scale == "hydraulic" else "pneumatic-cylinder"
     assert m.meta["kind"] == ("friction-rig" if style == "drive-force" else cylinder)
     rig = m.meta["rig"]

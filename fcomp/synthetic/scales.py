@@ -1,0 +1,201 @@
+"""Rig scales: the base friction, the rig, its sensors and the sizes of the hidden effects.
+
+Two presets (:data:`SCALES`):
+
+``pneumatic`` (the default; the original generator's numbers)
+    32/12 mm cylinder, 200 mm stroke, 1.2 kg moving mass, LuGre base with
+    ``Fc = 30 N``, ``Fs = 45 N``, ``sigma0 = 2e5 N/m`` (presliding ~0.15 mm),
+    pressure sums 1.5-5 bar gauge, load-cell noise 0.4 N (AR(1), 5 ms),
+    pressure noise 300 Pa, 1 um encoder, accelerations up to 4 m/s^2.
+``hydraulic``
+    40/22 mm cylinder, 300 mm stroke, 20 kg moving mass, ``Fc = 300 N``,
+    ``Fs = 450 N``, ``sigma0 = 4e7 N/m`` (presliding ~7.5 um), pressure sums
+    6-24 MPa (chamber pressures ~2-14 MPa gauge), load-cell noise 3 N, pressure
+    noise 5 kPa (a pressure-reconstructed force noise of ~7.7 N), 0.5 um
+    encoder, accelerations up to 10 m/s^2, presliding loops of 3-80 um.
+
+Effect sizes are carried from the pneumatic defaults by the physical
+dimension of each parameter (:data:`fcomp.synthetic.catalogue.DIMENSIONS`):
+forces scale with the friction level (x10), stiffnesses with level over
+presliding length (x200), presliding lengths x1/20, pressure coefficients
+with the inverse pressure level (x1/40), and so on (:attr:`Scale.factors`).
+Dimensionless ratios and time constants stay: they are already relative to
+the base level.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+from fcomp.errors import FcompError
+
+
+@dataclass(frozen=True)
+class TruthParams:
+    """Base friction and rig of the synthetic truth (SI).
+
+    Attributes
+    ----------
+    Fc, Fs : N
+        Coulomb and static levels (``Fs`` used by the ``stribeck`` and ``lugre`` bases).
+    vs : m/s
+        Stribeck velocity of the base curve (exponential, ``n = 2``).
+    sigma0 : N/m
+        Bristle stiffness (``lugre`` base).
+    sigma1 : Ns/m
+        Bristle damping (``lugre`` base).
+    sigma2 : Ns/m
+        Viscous coefficient (bases with a viscous term).
+    mass : kg
+        True moving mass.
+    bore, rod, stroke : m
+        Cylinder geometry (``A1 = pi/4*bore^2``, ``A2 = pi/4*(bore^2 - rod^2)``).
+    """
+
+    Fc: float = 30.0
+    Fs: float = 45.0
+    vs: float = 0.012
+    sigma0: float = 2.0e5
+    sigma1: float = 250.0
+    sigma2: float = 60.0
+    mass: float = 1.2
+    bore: float = 0.032
+    rod: float = 0.012
+    stroke: float = 0.2
+
+    @property
+    def areas(self) -> tuple[float, float]:
+        """Piston areas ``A1 = pi/4*bore^2`` and ``A2 = pi/4*(bore^2 - rod^2)`` (m^2)."""
+        return math.pi / 4 * self.bore**2, math.pi / 4 * (self.bore**2 - self.rod**2)
+
+
+@dataclass(frozen=True)
+class Sensors:
+    """Sensor characteristics of a rig (SI). Which of them a record uses depends on its style.
+
+    Attributes
+    ----------
+    noise_std, noise_tau : N, s
+        Force sensor (load cell) noise: AR(1), standard deviation and correlation time.
+    resolution : m
+        Encoder resolution (position quantum).
+    pressure_noise : Pa
+        White noise of each pressure transducer (standard deviation).
+    pressure_lag : s
+        First-order time constant of the pressure transducers (``pressures`` styles).
+    tacho_white, tacho_coloured, tacho_tau : m/s, m/s, s
+        Tachometer noise: white part, AR(1) part and the latter's correlation time.
+    tacho_bias : m/s
+        Tachometer offset (reads this at rest).
+    tacho_gain : -
+        Tachometer gain error: reads ``(1 + tacho_gain)*v``.
+    tacho_lag : s
+        First-order time constant of the tachometer.
+    encoder_window : samples
+        Encoder velocity: counts over this many sample intervals (1 = backward difference).
+    encoder_jitter : m
+        Vibration of the encoder read head (white, standard deviation) seen by the
+        ``encoder-velocity`` style: near a count edge the count flickers even at rest.
+    coarse : -
+        Resolution multiplier of the ``coarse-encoder`` style.
+    """
+
+    noise_std: float
+    noise_tau: float
+    resolution: float
+    pressure_noise: float
+    pressure_lag: float
+    tacho_white: float
+    tacho_coloured: float
+    tacho_tau: float
+    tacho_bias: float
+    tacho_gain: float
+    tacho_lag: float
+    encoder_window: int = 1
+    encoder_jitter: float = 1.5e-7
+    coarse: float = 15.0
+
+
+@dataclass(frozen=True)
+class Scale:
+    """A rig scale: base friction and rig, sensors, motion limits, effect-size factors.
+
+    Attributes
+    ----------
+    name, kind
+        Preset name and the sidecar ``kind`` of its cylinder.
+    params
+        Base friction and rig.
+    pressures : Pa
+        Pressure-sum levels ``p1 + p2`` (gauge) the experiments cycle through.
+    sensors
+        Default sensor characteristics.
+    a_max : m/s^2
+        Acceleration scale of the motion plans.
+    loop_amplitude : m
+        Range of the small displacement loops (presliding) of the motion plans.
+    factors
+        Physical dimension -> factor on the effect defaults (pneumatic = 1).
+    mass_range : kg
+        Plausible moving masses (``vary``).
+    resolutions : m
+        Plausible encoder resolutions (``vary``).
+    pressure_noise_range : Pa
+        Plausible pressure-transducer noise (``vary``).
+    """
+
+    name: str
+    kind: str
+    params: TruthParams
+    pressures: tuple[float, ...]
+    sensors: Sensors
+    a_max: float
+    loop_amplitude: tuple[float, float]
+    factors: Mapping[str, float] = field(default_factory=dict)
+    mass_range: tuple[float, float] = (0.6, 2.5)
+    resolutions: tuple[float, ...] = (5e-7, 1e-6, 2e-6, 5e-6)
+    pressure_noise_range: tuple[float, float] = (150.0, 600.0)
+
+
+PNEUMATIC = Scale(
+    name="pneumatic", kind="pneumatic-cylinder", params=TruthParams(),
+    pressures=(1.5e5, 3.0e5, 5.0e5),
+    sensors=Sensors(noise_std=0.4, noise_tau=0.005, resolution=1e-6, pressure_noise=300.0,
+                    pressure_lag=1e-3, tacho_white=1e-4, tacho_coloured=5e-5, tacho_tau=0.02,
+                    tacho_bias=8e-5, tacho_gain=0.01, tacho_lag=2e-3),
+    a_max=4.0, loop_amplitude=(2e-5, 3e-4),
+)
+
+#: Friction level ratio hydraulic/pneumatic (300 N / 30 N) and presliding-length ratio
+#: (7.5 um / 150 um): the other factors follow from them.
+_FORCE, _LENGTH, _PRESSURE = 10.0, 1.0 / 20.0, 40.0
+HYDRAULIC = Scale(
+    name="hydraulic", kind="hydraulic-cylinder",
+    params=TruthParams(Fc=300.0, Fs=450.0, vs=0.01, sigma0=4.0e7, sigma1=3.0e3, sigma2=1.0e3,
+                       mass=20.0, bore=0.04, rod=0.022, stroke=0.3),
+    pressures=(6.0e6, 1.2e7, 2.4e7),
+    sensors=Sensors(noise_std=3.0, noise_tau=0.003, resolution=5e-7, pressure_noise=5e3,
+                    pressure_lag=1e-3, tacho_white=3e-4, tacho_coloured=1.5e-4, tacho_tau=0.02,
+                    tacho_bias=1.5e-4, tacho_gain=0.01, tacho_lag=1.5e-3,
+                    encoder_jitter=7.5e-8),
+    a_max=10.0, loop_amplitude=(3e-6, 8e-5),
+    factors={"force": _FORCE, "damping": _FORCE, "stiffness": _FORCE / _LENGTH,
+             "presliding-length": _LENGTH, "slide-length": 0.4,
+             "per-pressure": 1.0 / _PRESSURE, "pressure": _PRESSURE,
+             "mass-error": 8.0, "frequency": 2.5},
+    mass_range=(10.0, 40.0), resolutions=(2.5e-7, 5e-7, 1e-6),
+    pressure_noise_range=(4e3, 1e4),
+)
+
+#: The rig scales by name.
+SCALES: dict[str, Scale] = {s.name: s for s in (PNEUMATIC, HYDRAULIC)}
+
+
+def get_scale(name: str) -> Scale:
+    """The :class:`Scale` called ``name``."""
+    try:
+        return SCALES[name]
+    except KeyError:
+        raise FcompError(f"unknown scale {name!r}; known: {', '.join(SCALES)}") from None

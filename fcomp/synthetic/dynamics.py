@@ -177,6 +177,19 @@ def play(dx: np.ndarray, d: float, state: float = 0.0) -> np.ndarray:
     return out
 
 
+def held_at_rest(g: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """``g`` held at its last moving value wherever ``v == 0`` (its first value before any motion).
+
+    The Maxwell-slip elements' slip forces ``w_i*g`` follow the Stribeck level while
+    they slide; at rest nothing slides, so a rise of ``g`` towards ``Fs`` must not
+    change the force the elements hold (their deflections and stiffnesses are
+    frozen with the motion).
+    """
+    moving = v != 0.0
+    idx = np.where(moving, np.arange(v.size), 0)
+    return g[np.maximum.accumulate(idx)]
+
+
 def maxwell_slip(law: Law, x: np.ndarray, g: np.ndarray, block: int = 65536) -> np.ndarray:
     """Maxwell-slip model: elasto-slide elements in parallel (Lampaert et al. 2002), N.
 

@@ -153,8 +153,8 @@ def _dry(P: TruthParams, base: str, laws: dict[str, Law], g: np.ndarray, x: np.n
          v: np.ndarray, vn: np.ndarray, dt: float) -> np.ndarray:
     """The dry friction: the level ``g`` through the presliding law (N)."""
     memory = laws.get("nonlocal-memory")
-    if memory is not None:
-        return dyn.maxwell_slip(memory, x, g)
+    if memory is not None:  # the slip forces follow g while sliding; at rest they hold
+        return dyn.maxwell_slip(memory, x, dyn.held_at_rest(g, vn))
     if base == "lugre":
         return dyn.bristle(v, vn, g, P.sigma0, P.sigma1, dt)
     pre = laws.get("presliding")

@@ -30,7 +30,7 @@ Methods (:data:`METHODS`, selected by name like ``solve_ivp``'s)
     known function of time (its rate ``du/dt`` through the non-autonomous
     terms), so the method is exact for the held or linear input. The
     model's ``f`` and Jacobians are generated as C by CasADi and compiled
-    with the adaptive loop over all samples (:func:`fcomp.compiled.build_library`):
+    with the adaptive loop over all samples (:func:`fcomp.compiled.load_library`):
     no Python per step. Without a C compiler the same loop runs in Python
     (same decisions, slower). The same RODAS4 step is also available as a
     CasADi expression (:func:`rosenbrock_step`), for the discrete-time model
@@ -92,7 +92,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.linalg import lu_factor, lu_solve
 
-from fcomp.compiled import build_library
+from fcomp.compiled import load_library
 from fcomp.errors import ConvergenceError, FcompError
 from fcomp.registry import Registry
 
@@ -571,10 +571,9 @@ def _rodas_library(model_key: tuple) -> Any:
     driver = _DRIVER
     for k, v in repl.items():
         driver = driver.replace(k, v)
-    lib = build_library([F, Jf], driver)
-    if lib is None:
+    dll = load_library([F, Jf], driver)
+    if dll is None:
         return None
-    dll = ctypes.CDLL(str(lib))
     c_fn = dll.fcomp_ode
     dp = ctypes.POINTER(ctypes.c_double)
     c_fn.argtypes = [ctypes.c_int] + [dp] * 10

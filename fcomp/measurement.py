@@ -375,8 +375,9 @@ def _toml_value(v: Any) -> str:
         return '"' + v.replace("\\", "\\\\").replace('"', '\\"').replace("\n", "\\n") + '"'
     if isinstance(v, list | tuple):
         return "[" + ", ".join(_toml_value(x) for x in v) + "]"
-    if isinstance(v, Mapping):
-        return "{" + ", ".join(f"{_key(k)} = {_toml_value(x)}" for k, x in v.items()) + "}"
+    if isinstance(v, Mapping):  # None (no value) has no TOML form: the key is left out
+        return "{" + ", ".join(f"{_key(k)} = {_toml_value(x)}" for k, x in v.items()
+                               if x is not None) + "}"
     raise TypeError(f"cannot write {type(v).__name__} to TOML")
 
 
@@ -389,6 +390,8 @@ def dumps_toml(doc: Mapping[str, Any], _prefix: str = "") -> str:
     lines: list[str] = []
     tables: list[tuple[str, Mapping[str, Any]]] = []
     for k, v in doc.items():
+        if v is None:
+            continue
         if isinstance(v, Mapping):
             tables.append((k, v))
         else:

@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import Any
 
 from fcomp.effects import load_effects_module
-from fcomp.errors import FcompError
+from fcomp.errors import FcompError, FcompWarning
 from fcomp.models import FrictionModel, make_model
 from fcomp.outputs import InputSet, check_distinct, check_folder_target
 
@@ -38,6 +38,8 @@ def warn(code: str, message: str, parameter: str | None = None) -> None:
 def python_warning(w: warnings.WarningMessage) -> tuple[str, str]:
     """A Python or numpy warning as ``(code, one-line message)``."""
     text = str(w.message).strip().splitlines()[0] if str(w.message).strip() else ""
+    if isinstance(w.message, FcompWarning):
+        return w.message.code, text
     if issubclass(w.category, RuntimeWarning):
         return "numerical", (f"{text} (a computation left floating-point range; check the "
                              "inputs and the results)")

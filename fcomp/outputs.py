@@ -250,7 +250,7 @@ def _fcomp_folder(path: Path, kind: str) -> bool:
 def check_folder_target(option: str, path: Path, kind: str) -> None:
     """Refuse an output folder fcomp may not replace (before any work is done)."""
     if path.exists() and not path.is_dir():
-        raise FcompError(f"{option} {path}: exists and is not a folder")
+        raise FcompError(f"{option} {path}: exists and is not a directory")
     if _within(Path.cwd(), path):
         raise FcompError(f"{option} {path}: contains the current folder; fcomp replaces its "
                          "output folder whole, choose a folder inside it")

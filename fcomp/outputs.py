@@ -107,6 +107,9 @@ class InputSet:
     def check_folder(self, option: str, path: Path) -> None:
         """Refuse replacing the folder ``path`` if it contains an input or the current folder."""
         for item in self.items:
+            if same_file(item.path, path):
+                raise FcompError(f"{option} {path}: is the input file {item.path}; fcomp never "
+                                 "writes over its input, choose another folder")
             if item.sidecar_of is None and _within(item.path, path):
                 raise FcompError(f"{option} {path}: contains the input {item.path}; fcomp "
                                  "replaces its output folder whole, choose another folder")

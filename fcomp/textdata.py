@@ -139,11 +139,11 @@ def data_rows(text: str, start: int = 0) -> list[tuple[int, str]]:
 
 
 def header_names(label: str, text: str) -> tuple[list[str], int]:
-    """The column names of the first non-blank line (comma-separated, optionally quoted)
-    and the index of the line after it."""
+    """The column names of the first line that is neither blank nor a ``#`` comment
+    (comma-separated, optionally quoted) and the index of the line after it."""
     lines = text.splitlines()
     idx = 0
-    while idx < len(lines) and not lines[idx].strip():
+    while idx < len(lines) and not _strip(lines[idx]):  # blank lines and # comments
         idx += 1
     header = lines[idx].strip() if idx < len(lines) else ""
     if not header:

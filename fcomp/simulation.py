@@ -646,10 +646,10 @@ class Rodas4(Integrator):
             why = {1: f"the step size fell below h_min = {tol.h_min:g} s",
                    2: f"more than max_steps = {tol.max_steps} steps were needed",
                    3: "the model gave a non-finite value"}[status]
+            hint = ("raise --max-steps, or loosen --rtol/--atol" if status == 2 else
+                    "check the parameters and the initial state, or loosen --rtol/--atol")
             raise ConvergenceError(
-                f"simulation of {m.name} did not converge at t = {t_fail:.6g} s: {why} "
-                "(check the parameters and the initial state, or loosen --rtol/--atol)"
-            )
+                f"simulation of {m.name} did not converge at t = {t_fail:.6g} s: {why} ({hint})")
         return X, stats, float(h_io[0])
 
     def _run_python(self, x0: np.ndarray, U: np.ndarray, dU: np.ndarray, dt: np.ndarray,

@@ -36,7 +36,8 @@ def check_path(path: str | Path, what: str = "file") -> Path:
         raise FcompError(f"no {what} name given (an empty argument)")
     p = Path(text)
     if p.is_dir():
-        raise FcompError(f"{text}: is a folder, not a {what}")
+        article = "an" if what[:1] in "aeiou" else "a"
+        raise FcompError(f"{text}: is a folder, not {article} {what}")
     if not p.exists():
         raise FcompError(f"{text}: {what} not found")
     if not p.is_file():
@@ -117,9 +118,9 @@ def parse_rows(label: str, rows: list[tuple[int, str]], delimiter: str | None,
                 float(cell)
             except ValueError:
                 col = f"column {names[j]!r}" if names is not None else f"column {j + 1}"
-                shown = cell if cell else "(empty)"
+                problem = f"{cell!r} is not a number" if cell else "the value is missing"
                 raise FcompError(f"{label}: cannot read as {what}: row {n}, {col}: "
-                                 f"{shown!r} is not a number") from None
+                                 f"{problem}") from None
     raise FcompError(f"{label}: cannot read as {what}")  # pragma: no cover - loadtxt disagreed
 
 

@@ -54,6 +54,11 @@ MAX_LENGTH = {"bore": 2.0, "rod": 2.0, "stroke": 20.0}
 #: A non-zero pressure column whose largest magnitude is below this (Pa) is bar or MPa.
 MIN_PRESSURE_SCALE = 50.0
 U_UNITS = ("A", "V")
+#: Range of a plausible sidecar ``p_atm`` (Pa): sea level down to high altitude, a
+#: pressurised lab up to 2 bar; anything else is a unit mistake (bar, kPa).
+P_ATM_RANGE = (1.0e4, 2.0e5)
+#: The keys of the ``[rig]`` table; others are kept, with a warning (a typo?).
+RIG_KEYS = ("bore", "rod", "stroke", "mass", "orientation")
 #: Largest magnitude accepted in a column of the format (SI units): anything larger is
 #: a unit mistake (nanoseconds, micrometres) or a corrupted value, and would overflow
 #: the computations (squares, exponentials) with a misleading message later.
@@ -159,6 +164,12 @@ class Measurement:
         if kind is not None and kind not in KINDS:
             raise FcompError(f"{self.label}: sidecar kind = {_plain(kind)} is not one of "
                              f"{', '.join(KINDS)}")
+        p_atm = self.meta.get("p_atm", 101325.0)
+        if (not isinstance(p_atm, int | float) or isinstance(p_atm, bool)
+                or not P_ATM_RANGE[0] <= p_atm <= P_ATM_RANGE[1]):
+            raise FcompError(f"{self.label}: sidecar p_atm = {_plain(p_atm)} is not an "
+                             f"atmospheric pressure in Pa ({P_ATM_RANGE[0]:g} to "
+                             f"{P_ATM_RANGE[1]:g}; 1 bar = 1e5 Pa)")
         pr = self.meta.get("pressure", "gauge")
         if pr not in ("gauge", "absolute"):
             raise FcompError(f"{self.label}: sidecar 'pressure' must be 'gauge' or 'absolute', "
@@ -169,7 +180,8 @@ class Measurement:
         for key in ("bore", "rod", "stroke", "mass"):
             if key in rig:
                 val = rig[key]
-                if not isinstance(val, int | float) or isinstance(val, bool) or not val >= 0:
+                if (not isinstance(val, int | float) or isinstance(val, bool) or not val >= 0
+                        or not math.isfinite(val)):
                     raise FcompError(
                         f"{self.label}: sidecar rig.{key} must be a non-negative number in SI "
                         f"units, got {_plain(val)}"
@@ -301,6 +313,15 @@ def read_sidecar(toml: Path) -> dict[str, Any]:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise FcompError(f"{toml}: not valid TOML ({exc})") from None
+
+
+def sidecar_warnings(meas: Measurement) -> list[tuple[str, str]]:
+    """``(key, one line)`` per suspicious sidecar entry: ``[rig]`` keys the format does not
+    know (a typo such as ``mas`` leaves the mass unknown)."""
+    rig = meas.meta.get("rig", {})
+    unknown = [k for k in rig if k not in RIG_KEYS] if isinstance(rig, Mapping) else []
+    return [(f"rig.{k}", f"{meas.label}: sidecar key rig.{k} is not one the format knows "
+             f"({', '.join(RIG_KEYS)}); it is kept but not used") for k in unknown]
 
 
 def check_values(columns: Mapping[str, np.ndarray], label: str,

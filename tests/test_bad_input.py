@@ -35,6 +35,7 @@ import sys
 import time
 import tomllib
 import uuid
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -159,6 +160,9 @@ def _write_lab(lab: Path) -> None:
         "badtoml.csv": good, "badtoml.toml": "[rig\nmass = 1\n",
         "bintoml.csv": good, "bintoml.toml": b"\x00\xff\x00",
         "rigtable.csv": good, "rigtable.toml": "rig = 3\n",
+        "mass_inf.csv": good, "mass_inf.toml": "[rig]\nmass = inf\n",
+        "patm_bar.csv": good, "patm_bar.toml": "p_atm = 1.013\n",
+        "typo.csv": good, "typo.toml": "[rig]\nmas = 2.0\n",
         "absneg.csv": "t,x,p1\n0,0,-1000\n1,0.01,200000\n",
         "absneg.toml": 'pressure = "absolute"\n[rig]\nbore = 0.03\n',
         # importers
@@ -213,10 +217,20 @@ def _write_lab(lab: Path) -> None:
 
 
 @pytest.fixture(scope="module")
-def lab(tmp_path_factory: pytest.TempPathFactory) -> Path:
+def lab(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Path]:
+    """The folder of inputs; the user effects its modules register are removed afterwards
+    (they are process-global, and some are broken on purpose)."""
+    from fcomp.effects import EFFECTS
+    from fcomp.usercode import USER_FILES
+
     path = tmp_path_factory.mktemp("lab")
     _write_lab(path)
-    return path
+    effects, files = set(EFFECTS.names()), set(USER_FILES)
+    yield path
+    for name in set(EFFECTS.names()) - effects:
+        del EFFECTS._items[name]
+    for f in set(USER_FILES) - files:
+        del USER_FILES[f]
 
 
 def snapshot(folder: Path) -> dict[str, str]:
@@ -501,10 +515,15 @@ CASES: dict[str, Case] = {
     "sidecar-invalid-toml": Case("fit badtoml.csv --model coulomb", match="not valid TOML"),
     "sidecar-binary": Case("fit bintoml.csv --model coulomb", match="binary"),
     "sidecar-rig-not-table": Case("fit rigtable.csv --model coulomb", match="must be a table"),
+    "sidecar-mass-inf": Case("fit mass_inf.csv --model coulomb", match="got inf"),
+    "sidecar-p-atm-in-bar": Case("fit patm_bar.csv --model coulomb",
+                                 match="p_atm = 1.013 is not an atmospheric pressure in Pa"),
+    "warn-sidecar-typo": Case("fit typo.csv --model coulomb-viscous --json typo.json", code=0,
+                              outputs=("typo.json",), warnings=("unknown-key",)),
     "sidecar-absolute-negative": Case("fit absneg.csv --model coulomb",
                                       match="negative absolute pressure"),
     # ---- valid after all ----
-    "read-bom": Case(f"fit bom.csv --model coulomb-viscous --json bom.json", code=0,
+    "read-bom": Case("fit bom.csv --model coulomb-viscous --json bom.json", code=0,
                      outputs=("bom.json",)),
     "read-quoted-header": Case("fit quoted.csv --model coulomb-viscous", code=0),
     "read-crlf": Case("fit crlf.csv --model coulomb-viscous", code=0),
@@ -915,8 +934,14 @@ def test_long_run_stopped_by_a_signal_leaves_nothing(lab: Path, sig: int, code: 
     assert snapshot(lab) == before
 
 
+def test_messages_show_plain_numbers() -> None:
+    from fcomp.cli.main import plain
+
+    assert plain("got np.float64(0.05), np.int64(3) and np.True_") == "got 0.05, 3 and True"
+
+
 def test_case_count() -> None:
     """The closing note of issue 12 gives this count: table cases plus the tests above."""
-    extra = 6 + len(SUBPROCESS) + 2
+    extra = 7 + len(SUBPROCESS) + 2
     assert len(CASES) + extra >= 150
     print(f"{len(CASES)} table cases + {extra} interrupt/process cases")

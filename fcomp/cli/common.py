@@ -198,6 +198,14 @@ def measurement_inputs(paths: list[str], option: str = "DATA") -> InputSet:
     return inputs
 
 
+def warn_sidecar(meas: Any) -> None:
+    """Warnings for suspicious sidecar entries of a measurement read (code ``unknown-key``)."""
+    from fcomp.measurement import sidecar_warnings
+
+    for key, message in sidecar_warnings(meas):
+        warn("unknown-key", message, key)
+
+
 def with_warnings(doc: dict[str, Any]) -> dict[str, Any]:
     """``doc`` with the command's warnings added to its ``"warnings"`` list."""
     items = list(doc.get("warnings") or [])

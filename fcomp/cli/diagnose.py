@@ -32,6 +32,7 @@ from fcomp.cli.common import (
     measurement_inputs,
     name_list,
     result_text,
+    warn_sidecar,
     with_warnings,
 )
 from fcomp.errors import FcompError
@@ -118,6 +119,8 @@ def run(args: argparse.Namespace) -> int:
         load_effects_module(args.effects)
     candidates = name_list(args.candidates, "--candidates")
     data = [Measurement.read(p) for p in args.data]
+    for d in data:
+        warn_sidecar(d)
     diag = Diagnosis(args.baseline, effects=candidates, add=args.add,
                      search=not args.no_search, split=args.split, cutoff_hz=args.cutoff,
                      max_steps=args.max_steps, n_jobs=args.jobs,

@@ -26,6 +26,7 @@ from fcomp.cli.common import (
     name_list,
     parse_assignments,
     result_text,
+    warn_sidecar,
     with_warnings,
 )
 from fcomp.errors import FcompError
@@ -125,6 +126,7 @@ def run(args: argparse.Namespace) -> int:
                          "choose one")
     free = name_list(args.free, "--free")
     data = Measurement.read(args.data)
+    warn_sidecar(data)
     fit = FrictionFit(model, offset=args.offset, mass=args.mass, free=free, fixed=fixed,
                       directional=args.directional, initial=initial, method=args.method,
                       v_min=args.v_min, cutoff_hz=args.cutoff, confidence=args.confidence,

@@ -18,6 +18,7 @@ from fcomp.cli.common import (
     finite_float,
     output_path,
     warn,
+    warn_sidecar,
 )
 
 
@@ -70,6 +71,7 @@ def run(args: argparse.Namespace) -> int:
     if dropped:
         warn("rows-dropped", f"{args.src}: {dropped} row(s) with a repeated time stamp dropped "
              "(the first of each kept; counts in the sidecar's [source])")
+    warn_sidecar(meas)
     ws = current_warnings()
     if ws:
         meas.meta["warnings"] = ws

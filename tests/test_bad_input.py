@@ -42,6 +42,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import scipy.io
+from test_effects import USER_MODULE
 
 from fcomp import datasets
 from fcomp.cli.main import main
@@ -72,31 +73,15 @@ def _lines(text: str, line: int, cell: int, value: str) -> str:
     return "\n".join(rows) + "\n"
 
 
-EFFECT = '''"""A user's effect module."""
-import sys
-
-from fcomp.effects import Effect, register_effect
-from fcomp.parameters import make_params_class, spec
-
-
-@register_effect
-class UserEffect(Effect):
-    """{doc}"""
-
-    name = "{name}"
-    Params = make_params_class("UserParams{cls}", [spec("load", "N", 0.0, -1e3, 1e3, "load")],
-                               owner="effect {name}")
-    signature = "constant offset"
-    experiment = "none"
-
-    def extra_force(self, be, sig, P):
-        {body}
-        return P("load"), 0.0
-'''
+#: A user's effects module (test_effects.USER_MODULE) whose ``extra_force`` runs ``{body}``.
+EFFECT = USER_MODULE.replace("def extra_force(self, be, sig, P):\n",
+                             "def extra_force(self, be, sig, P):\n        {body}\n")
+#: The line of ``{body}`` in :data:`EFFECT`, which errors raised there must name.
+BODY = EFFECT.splitlines().index("        {body}") + 1
 
 
 def _effect(name: str, body: str = "pass") -> str:
-    return EFFECT.format(name=name, doc=name, cls=name.replace("-", "_"), body=body)
+    return EFFECT.replace("{body}", body).format(name=name)
 
 
 def _write_lab(lab: Path) -> None:
@@ -191,7 +176,7 @@ def _write_lab(lab: Path) -> None:
         "eff_import.py": "import no_such_package_xyz\n",
         "eff_dup.py": _effect("viscous"),
         "eff_zdiv.py": _effect(f"zdiv-{TAG}", "1 / 0"),
-        "eff_exit.py": _effect(f"exit-{TAG}", "sys.exit(3)"),
+        "eff_exit.py": _effect(f"exit-{TAG}", "__import__('sys').exit(3)"),
         "eff_name.py": _effect(f"name-{TAG}", "undefined_name + 1"),
         "effects.txt": "print('hi')\n",
         # a folder that is not fcomp's
@@ -581,16 +566,16 @@ CASES: dict[str, Case] = {
     "effects-empty-name": Case(f"{FIT} --effects ''", match="no file name"),
     "effects-extra-force-raises": Case(
         f"{SIM} --effects eff_zdiv.py --add-effect {E['zdiv']} -o o.csv",
-        match="eff_zdiv.py line 19, in extra_force: ZeroDivisionError: division by zero "
+        match=f"eff_zdiv.py line {BODY}, in extra_force: ZeroDivisionError: division by zero "
               "(an error in your --effects module, not in fcomp)"),
     "effects-extra-force-exits": Case(
         f"{SIM} --effects eff_exit.py --add-effect {E['exit']} -o o.csv",
-        match="eff_exit.py line 19, in extra_force: it called sys.exit(3)"),
+        match=f"eff_exit.py line {BODY}, in extra_force: it called sys.exit(3)"),
     "effects-extra-force-name-error": Case(
         f"{FIT} --effects eff_name.py --add-effect {E['name']}",
-        match="eff_name.py line 19, in extra_force: NameError"),
+        match=f"eff_name.py line {BODY}, in extra_force: NameError"),
     "effects-diagnose-raises": Case(
-        f"{DIAG} --effects eff_zdiv.py --add {E['zdiv']}", match="eff_zdiv.py line 19"),
+        f"{DIAG} --effects eff_zdiv.py --add {E['zdiv']}", match=f"eff_zdiv.py line {BODY}"),
     "effects-ok": Case(f"{SIM} --effects eff_ok.py --add-effect {E['ok']} -o eo.csv", code=0,
                        outputs=("eo.csv", "eo.toml")),
     # ---- import ----

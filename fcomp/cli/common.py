@@ -206,6 +206,16 @@ def warn_sidecar(meas: Any) -> None:
         warn("unknown-key", message, key)
 
 
+def guard_outputs(data: list[str], effects: str | None, files: list[tuple[str, Path | None]],
+                  folders: list[tuple[str, Path | None, str]] | None = None) -> None:
+    """:func:`check_outputs` for a command reading the measurements ``data`` (each once)
+    and the ``--effects`` module ``effects``."""
+    inputs = measurement_inputs(data)
+    if effects is not None:
+        inputs.file(effects, "--effects")
+    check_outputs(inputs, files, folders)
+
+
 def with_warnings(doc: dict[str, Any]) -> dict[str, Any]:
     """``doc`` with the command's warnings added to its ``"warnings"`` list."""
     items = list(doc.get("warnings") or [])

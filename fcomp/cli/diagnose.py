@@ -24,17 +24,7 @@ import shlex
 from pathlib import Path
 
 from fcomp.cli import common
-from fcomp.cli.common import (
-    check_outputs,
-    emit_result,
-    finite_float,
-    json_target,
-    measurement_inputs,
-    name_list,
-    result_text,
-    warn_sidecar,
-    with_warnings,
-)
+from fcomp.cli.common import emit_result, finite_float, json_target, result_text
 from fcomp.errors import FcompError
 
 
@@ -111,22 +101,20 @@ def run(args: argparse.Namespace) -> int:
         raise FcompError(f"--jobs must be a positive integer, got {args.jobs}")
     if args.cutoff is not None and not args.cutoff > 0:
         raise FcompError(f"--cutoff must be a positive frequency in Hz, got {args.cutoff:g}")
-    inputs = measurement_inputs(args.data)
-    if args.effects is not None:
-        inputs.file(args.effects, "--effects")
-    check_outputs(inputs, [("--json", out)], [("--report", report, "report")])
+    common.guard_outputs(args.data, args.effects, [("--json", out)],
+                         [("--report", report, "report")])
     if args.effects is not None:
         load_effects_module(args.effects)
-    candidates = name_list(args.candidates, "--candidates")
+    candidates = common.name_list(args.candidates, "--candidates")
     data = [Measurement.read(p) for p in args.data]
     for d in data:
-        warn_sidecar(d)
+        common.warn_sidecar(d)
     diag = Diagnosis(args.baseline, effects=candidates, add=args.add,
                      search=not args.no_search, split=args.split, cutoff_hz=args.cutoff,
                      max_steps=args.max_steps, n_jobs=args.jobs,
                      progress=not args.no_progress)
     diag.fit(data)
-    doc = with_warnings(diag.to_dict())
+    doc = common.with_warnings(diag.to_dict())
     text = result_text(doc)
     command = "fcomp " + shlex.join(common.ARGV) if common.ARGV else None
     if report is not None:

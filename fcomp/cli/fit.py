@@ -18,11 +18,10 @@ from typing import TYPE_CHECKING
 from fcomp.cli.common import (
     add_model_options,
     build_model,
-    check_outputs,
     emit_result,
     finite_float,
+    guard_outputs,
     json_target,
-    measurement_inputs,
     name_list,
     parse_assignments,
     result_text,
@@ -113,10 +112,7 @@ def run(args: argparse.Namespace) -> int:
     if not 0 < args.confidence < 1:
         raise FcompError(f"--confidence must be a level between 0 and 1 (e.g. 0.95), "
                          f"got {args.confidence:g}")
-    inputs = measurement_inputs([args.data])
-    if args.effects is not None:
-        inputs.file(args.effects, "--effects")
-    check_outputs(inputs, [("--json", out)])
+    guard_outputs([args.data], args.effects, [("--json", out)])
     model = build_model(args.model, args.params, args)
     initial = parse_assignments(args.set)
     fixed = parse_assignments(args.fix, "--fix")

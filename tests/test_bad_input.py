@@ -383,6 +383,12 @@ CASES: dict[str, Case] = {
                                      "sine:amplitude=4.5e-3,frequency=1 --duration 0.1 "
                                      "--method radau --max-steps 5 -o o.csv",
                                      match="max_steps"),
+    "simulate-max-steps-bdf": Case("simulate hydraulic --friction coulomb --input "
+                                   "sine:amplitude=4.5e-3,frequency=1 --duration 0.1 "
+                                   "--method bdf --max-steps 5 -o o.csv", match="max_steps"),
+    "simulate-max-steps-lsoda": Case("simulate hydraulic --friction coulomb --input "
+                                     "sine:amplitude=4.5e-3,frequency=1 --duration 0.1 "
+                                     "--method lsoda --max-steps 5 -o o.csv", match="max_steps"),
     "simulate-coupling-runaway": Case("simulate hydraulic --friction nmlgm-hysteresis "
                                       "--coupling 1e-9 --input sine:amplitude=4.5e-3,frequency=1 "
                                       "--duration 0.5 --rate 100 -o o.csv",
@@ -905,17 +911,40 @@ def test_real_processes_print_one_line_and_no_traceback(lab: Path, repeat_file: 
 
 @pytest.mark.parametrize(("sig", "code", "line"), [(signal.SIGINT, 130, "fcomp: interrupted"),
                                                    (signal.SIGTERM, 143, "fcomp: terminated")])
-def test_long_run_stopped_by_a_signal_leaves_nothing(lab: Path, sig: int, code: int,
-                                                     line: str) -> None:
+def test_long_run_shows_progress_and_a_signal_leaves_nothing(lab: Path, sig: int, code: int,
+                                                             line: str) -> None:
+    """A long simulation on a terminal shows its progress (erased at the end); Ctrl-C or
+    SIGTERM stops it with one line and no output, no temporary left."""
+    import pty
+    import select
+
     before = snapshot(lab)
-    proc = _proc(["simulate", "hydraulic", "--friction", "nmlgm-hysteresis", "--input",
-                  "sine:amplitude=4.5e-3,frequency=1", "--duration", "30", "--rate", "200",
-                  "-o", "long.csv"], lab)
-    time.sleep(3.0)
-    assert proc.poll() is None, proc.communicate()
+    master, slave = pty.openpty()
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "fcomp.cli.main", "simulate", "hydraulic", "--friction",
+         "nmlgm-hysteresis", "--input", "sine:amplitude=4.5e-3,frequency=1", "--duration",
+         "200", "--rate", "200", "-o", "long.csv"],
+        cwd=lab, env=_env(), stdout=subprocess.PIPE, stderr=slave)
+    os.close(slave)
+    seen = b""
+    start = time.monotonic()
+    while b"%" not in seen and time.monotonic() - start < 60 and proc.poll() is None:
+        if select.select([master], [], [], 0.5)[0]:
+            seen += os.read(master, 4096)
+    assert b"simulate hydraulic:" in seen and b"% (t = " in seen, seen
     proc.send_signal(sig)
-    out, err = proc.communicate(timeout=60)
-    assert (proc.returncode, err.strip()) == (code, line), err
+    proc.communicate(timeout=60)
+    while select.select([master], [], [], 0.5)[0]:
+        try:
+            chunk = os.read(master, 4096)
+        except OSError:
+            break
+        if not chunk:
+            break
+        seen += chunk
+    os.close(master)
+    assert proc.returncode == code
+    assert seen.decode().rsplit("\x1b[K", 1)[-1].strip() == line, seen
     assert snapshot(lab) == before
 
 

@@ -193,6 +193,7 @@ def write_files(files: Mapping[Path, str | bytes]) -> None:
             raise FcompError(f"{path}: is a directory, cannot write a file there")
     created: list[Path] = []
     tmps: dict[Path, Path] = {}
+    done = False
     try:
         for path in files:
             created += _make_parents(path.parent)
@@ -209,14 +210,14 @@ def write_files(files: Mapping[Path, str | bytes]) -> None:
         with signals_held():
             for path, tmp in tmps.items():
                 os.replace(tmp, path)
-            tmps.clear()
+            done = True
     except OSError as exc:
         where = exc.filename or next(iter(files), "")
         raise FcompError(f"{where}: cannot write ({exc.strerror or exc})") from None
     finally:
-        for tmp in tmps.values():
-            tmp.unlink(missing_ok=True)
-        if tmps:
+        if not done:
+            for tmp in tmps.values():
+                tmp.unlink(missing_ok=True)
             _remove_empty(created)
 
 
@@ -228,24 +229,25 @@ def write_text(path: str | Path, text: str) -> Path:
 
 
 # --------------------------------------------------------------- folders
-#: Files that make up each kind of fcomp output folder (for folders written before the marker).
+#: Files that make up each kind of fcomp output folder (for folders written before the
+#: marker): a folder holding only these, and sub-folders of the same kind, is fcomp's.
 FOLDER_KINDS: dict[str, tuple[str, ...]] = {
-    "study": ("summary.json", "*.html", "fig-*.png", "*/"),
+    "study": ("summary.json", "*.html", "fig-*.png", "*.png", "*.svg"),
     "report": ("report.html", "*.png", "*.svg"),
     "demo": ("demo-*.csv", "demo-*.toml", "demo.png"),
 }
 
 
 def _fcomp_folder(path: Path, kind: str) -> bool:
+    """Whether ``path`` is empty or fcomp's (the marker, or only fcomp's files of ``kind``)."""
     entries = list(path.iterdir())
     if not entries or (path / MARKER).is_file():
         return True
-    if kind == "study" and not (path / "summary.json").is_file():
-        return False
-    patterns = FOLDER_KINDS[kind]
     for e in entries:
-        name = e.name + ("/" if e.is_dir() else "")
-        if not any(fnmatch(name, pat) for pat in patterns):
+        if e.is_dir() and not e.is_symlink():
+            if not _fcomp_folder(e, kind):
+                return False
+        elif not any(fnmatch(e.name, pat) for pat in FOLDER_KINDS[kind]):
             return False
     return True
 

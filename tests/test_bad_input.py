@@ -183,6 +183,8 @@ def _write_lab(lab: Path) -> None:
         "mine/notes.txt": "my notes\n",
         "folder.csv/keep.txt": "a folder named like a file\n",
         "old/summary.json": '{"meta": {}}\n',
+        "outer/fcomp/.fcomp-output": "Written by fcomp.\n",
+        "outer/mine/notes.txt": "my notes\n",
     }
     for name, content in files.items():
         path = lab / name
@@ -311,6 +313,7 @@ CASES: dict[str, Case] = {
     "demo-out-file": Case("demo --out good.csv", match="not a directory"),
     "demo-out-foreign": Case("demo --out mine", match="did not write"),
     "demo-out-study-folder": Case("demo --out old", match="did not write"),
+    "demo-out-holding-a-foreign-subfolder": Case("demo --out outer", match="did not write"),
     "demo-out-empty": Case("demo --out ''", match="no folder name"),
     "demo-params-unknown": Case("demo --out d --params nope", match="unknown parameter set"),
     # ---- numbers: overflow, infinity, NaN ----
@@ -814,7 +817,12 @@ def test_study_interrupted_over_a_complete_result_keeps_it_whole(
     assert _run(["study", tiny.study.name, "--out", "done"], capsys)[0] == 0
     names = {p.name for p in (lab / "done").iterdir()}
     assert "fig-b.png" in names and "fig-a.png" not in names
+    # a folder holding earlier results (docs/seed001.md: one study, then all into the parent)
+    assert _run(["study", tiny.study.name, "--out", "done2/one"], capsys)[0] == 0
+    assert _run(["study", tiny.study.name, "--out", "done2"], capsys)[0] == 0
+    assert not (lab / "done2" / "one").exists()
     shutil.rmtree(lab / "done")
+    shutil.rmtree(lab / "done2")
 
 
 def test_demo_interrupted_leaves_nothing(lab: Path, capsys: pytest.CaptureFixture[str],

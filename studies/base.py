@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import json
 import math
+import shutil
 from abc import ABC, abstractmethod
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
@@ -179,7 +180,11 @@ class Study(ABC):
         """Run the study: write ``summary.json``, figures and the report; return the results."""
         cfg = StudyConfig.coerce(config)
         if cfg.workdir is not None:  # inside the staging folder of an enclosing run
-            return self._run(cfg, cfg.workdir)
+            try:
+                return self._run(cfg, cfg.workdir)
+            except BaseException:  # a failed part leaves no half-written folder either
+                shutil.rmtree(cfg.workdir, ignore_errors=True)
+                raise
         note = cfg.command or f"study {self.name}"
         with staged_folder(cfg.out, "--out", "study", note=note) as staging:
             return self._run(cfg, staging)

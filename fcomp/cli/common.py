@@ -217,14 +217,13 @@ def guard_outputs(data: list[str], effects: str | None, files: list[tuple[str, P
 
 
 def with_warnings(doc: dict[str, Any]) -> dict[str, Any]:
-    """``doc`` with the command's warnings added to its ``"warnings"`` list."""
+    """``doc`` with the command's warnings added to its ``"warnings"`` list (the contract's
+    ``[{"code", "parameter", "message"}, ...]``, present even when empty)."""
     items = list(doc.get("warnings") or [])
     for w in current_warnings():
         if w not in items:
             items.append(w)
-    if items or "warnings" in doc:
-        doc = {**doc, "warnings": items}
-    return doc
+    return {**doc, "warnings": items}
 
 
 def current_warnings() -> list[dict[str, Any]]:

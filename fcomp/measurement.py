@@ -227,9 +227,12 @@ class Measurement:
             if isinstance(rig.get("stroke"), int | float) and rig["stroke"] > 0:
                 limit = min(limit, 2.0 * float(rig["stroke"]) + 0.01)
             if span > limit:
+                hint = ("the simulated piston left its plausible range; check the input and "
+                        "the parameters" if "simulation" in self.meta
+                        else "positions are in metres, not millimetres")
                 raise FcompError(
                     f"{self.label}: column 'x' spans {span:g} m, more than is plausible "
-                    f"({limit:g} m); positions are in metres, not millimetres"
+                    f"({limit:g} m); {hint}"
                 )
         signals = self.meta.get("signals", {})
         if not isinstance(signals, Mapping):

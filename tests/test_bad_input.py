@@ -413,6 +413,12 @@ CASES: dict[str, Case] = {
     "x0-negative-pressure-pneumatic": Case("simulate pneumatic --friction coulomb --input "
                                            "step:amplitude=0 --duration 0.01 --x0 p2=-1e5 "
                                            "-o o.csv", match="absolute"),
+    "x0-outside-stroke": Case("simulate hydraulic --friction coulomb --input step:amplitude=0 "
+                              "--duration 0.01 --x0 x=100 -o o.csv", match="within its stroke"),
+    "simulate-runaway-motion": Case("simulate motion --friction coulomb --input "
+                                    "step:amplitude=1e6 --duration 0.1 -o o.csv",
+                                    match="the simulated piston left its plausible range"),
+    "fix-comma-list": Case(f"{FIT} --fix Fc=1,B=2", match="one NAME=VALUE per --fix"),
     "x0-unknown-state": Case("simulate hydraulic --friction coulomb --input step:amplitude=0 "
                              "--duration 0.01 --x0 q=1 -o o.csv", match="unknown state"),
     "x0-inf": Case("simulate hydraulic --friction coulomb --input step:amplitude=0 "

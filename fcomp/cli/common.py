@@ -81,7 +81,8 @@ def parse_assignments(items: list[str], option: str = "--set") -> dict[str, floa
         try:
             value = float(v)
         except ValueError:
-            raise FcompError(f"{option} {item!r}: {v!r} is not a number") from None
+            hint = f"; give one NAME=VALUE per {option}" if "=" in v else ""
+            raise FcompError(f"{option} {item!r}: {v!r} is not a number{hint}") from None
         if not math.isfinite(value):
             raise FcompError(f"{option} {item!r}: the value must be a finite number")
         if abs(value) > MAX_VALUE:

@@ -8,7 +8,11 @@ friction *or* plant parameter (SI units, e.g. ``--set mass=50``); ``--x0
 NAME=VALUE`` changes one state of the documented default initial state
 (e.g. ``--x0 x=0.05``). The ODE plants run on the engine of
 ``fcomp.simulation`` (``--method``, ``--rtol``, ``--atol``, ``--max-steps``; ``--coupling`` for
-friction with discrete memory, ``nmlgm-hysteresis``).
+friction with discrete memory, ``nmlgm-hysteresis``); ``--max-steps`` bounds the whole run,
+and a long run shows its progress on a terminal. Warnings (one line each, also in the
+sidecar's ``warnings``): ``aliasing`` (input content above the Nyquist frequency of
+``--rate``), ``command-saturation`` (a command outside the plant's documented range),
+``cavitation`` (a hydraulic chamber at its ``p_min`` floor).
 """
 
 from __future__ import annotations
@@ -47,8 +51,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--rate", type=finite_float, default=1000.0, help="output sample rate, Hz")
     p.add_argument("-o", "--output", required=True, metavar="OUT.csv")
     p.add_argument("--x0", action="append", default=[], metavar="STATE=VALUE",
-                   help="initial value of one state (SI); repeatable; default: the plant's "
-                   "documented initial state")
+                   help="initial value of one state (SI: pressures absolute, x within the "
+                   "stroke); repeatable; default: the plant's documented initial state")
     p.add_argument("--method", default=None,
                    help="integration method: rodas4 (default), radau, bdf, lsoda")
     p.add_argument("--rtol", type=finite_float, default=None, help="relative tolerance (default 1e-6)")
@@ -114,8 +118,13 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _check_x0(plant: Any, x0: dict[str, float] | None) -> None:
-    """Refuse initial states no plant can start from (a negative absolute pressure)."""
+    """Refuse initial states no plant can start from (a negative absolute pressure, a piston
+    outside its stroke)."""
+    flat = plant.plant_params.flat() if hasattr(plant, "plant_params") else {}
     for name, value in (x0 or {}).items():
+        if name == "x" and "stroke" in flat and not 0.0 <= value <= flat["stroke"]:
+            raise FcompError(f"--x0 x={value:g}: the piston of plant {plant.name} moves within "
+                             f"its stroke, 0 to {flat['stroke']:g} m")
         if name in ("p1", "p2") and name in getattr(plant, "plant_states", ()) and value < 0:
             raise FcompError(f"--x0 {name}={value:g}: chamber pressures of plant {plant.name} "
                              "are absolute (Pa) and cannot be negative")

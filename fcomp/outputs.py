@@ -187,10 +187,18 @@ def write_files(files: Mapping[Path, str | bytes]) -> None:
     Nothing appears under a final name unless every file could be written;
     folders created on the way are removed again on failure. A file that
     exists keeps its permissions; a new one gets the usual ``0666 & ~umask``.
+    A symbolic link stays a link (the file it points to is replaced); a
+    device or named pipe (``/dev/stdout``) is written to directly.
     """
     for path in files:
         if path.is_dir():
             raise FcompError(f"{path}: is a directory, cannot write a file there")
+    special = {p: c for p, c in files.items() if p.exists() and not p.is_file()}
+    for path, content in special.items():  # /dev/stdout, a named pipe: written as they are
+        with open(path, "wb") as fh:
+            fh.write(content.encode("utf-8") if isinstance(content, str) else content)
+    # through a symbolic link: replace the file it points to, keep the link
+    files = {_real(p) if p.is_symlink() else p: c for p, c in files.items() if p not in special}
     created: list[Path] = []
     tmps: dict[Path, Path] = {}
     done = False

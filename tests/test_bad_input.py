@@ -198,6 +198,7 @@ def _write_lab(lab: Path) -> None:
                                         "force": np.ones(50), "gain": 2.0,
                                         "label": "text", "big": np.full(50, 1e300)})
     (lab / "link.csv").symlink_to("good.csv")
+    (lab / "lk.json").symlink_to("lk_target.json")
     os.link(lab / "good.csv", lab / "hard.csv")
     (lab / "data_dir").mkdir()
     (lab / "empty_dir").mkdir()
@@ -532,6 +533,9 @@ CASES: dict[str, Case] = {
     "read-utf16": Case("fit utf16.csv --model coulomb-viscous", code=0),
     "read-no-suffix": Case("fit good --model coulomb-viscous", code=0),
     "fit-json-replaces-old-result": Case(f"{FIT} --json old.json", code=0, outputs=("old.json",)),
+    "fit-json-to-dev-null": Case(f"{FIT} --json /dev/null", code=0),
+    "fit-json-through-a-link": Case(f"{FIT} --json lk.json", code=0,
+                                    outputs=("lk_target.json",)),
     "simulate-replaces-old-result": Case(f"{SIM} -o sim.csv", code=0,
                                          outputs=("sim.csv", "sim.toml")),
     # ---- diagnose ----

@@ -414,6 +414,9 @@ CASES: dict[str, Case] = {
     "x0-negative-pressure-pneumatic": Case("simulate pneumatic --friction coulomb --input "
                                            "step:amplitude=0 --duration 0.01 --x0 p2=-1e5 "
                                            "-o o.csv", match="absolute"),
+    "simulate-valve-gain-zero": Case("simulate hydraulic --friction coulomb --input "
+                                     "step:amplitude=1 --duration 0.01 --set kv=0 -o w.csv",
+                                     code=0, outputs=("w.csv", "w.toml")),
     "x0-outside-stroke": Case("simulate hydraulic --friction coulomb --input step:amplitude=0 "
                               "--duration 0.01 --x0 x=100 -o o.csv", match="within its stroke"),
     "simulate-runaway-motion": Case("simulate motion --friction coulomb --input "

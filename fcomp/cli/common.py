@@ -7,6 +7,7 @@ import argparse
 import json
 import math
 import sys
+import time
 import warnings
 from pathlib import Path
 from typing import Any
@@ -253,8 +254,6 @@ class Progress:
         self._cm: Any = None
 
     def __enter__(self) -> Progress:
-        import time
-
         from fcomp.simulation import progress
 
         self.start = self.last = time.monotonic()
@@ -264,8 +263,6 @@ class Progress:
         return self
 
     def update(self, fraction: float, t: float) -> None:
-        import time
-
         now = time.monotonic()
         if now - self.start < self.delay or now - self.last < 0.5 or fraction <= 0:
             return

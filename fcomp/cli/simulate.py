@@ -55,7 +55,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    "stroke); repeatable; default: the plant's documented initial state")
     p.add_argument("--method", default=None,
                    help="integration method: rodas4 (default), radau, bdf, lsoda")
-    p.add_argument("--rtol", type=finite_float, default=None, help="relative tolerance (default 1e-6)")
+    p.add_argument("--rtol", type=finite_float, default=None,
+                   help="relative tolerance (default 1e-6)")
     p.add_argument("--atol", type=finite_float, default=None,
                    help="absolute tolerance in units of each state's scale (default 1e-6)")
     p.add_argument("--max-steps", type=int, default=None, dest="max_steps",
@@ -143,7 +144,7 @@ def _command_range(plant: Any, U: np.ndarray) -> None:
         bad = np.any((U < 0.0) | (lim < U), axis=1)
         desc = f"the valve commands u1, u2 leave the range 0..{lim:g} V (u_full): the " \
                "pressure valves saturate"
-    elif plant.name == "hydraulic":
+    elif plant.name == "hydraulic" and float(p["kv"]) > 0:
         lim = SPOOL_STROKE / float(p["kv"])
         bad = np.abs(U[:, 0]) > lim
         desc = f"the valve current reaches {np.max(np.abs(U[:, 0])):g} A, a spool opening " \

@@ -4,7 +4,7 @@ A controller evaluates a few small CasADi functions every sample (a model
 step and its Jacobian, a condensed QP). Called through CasADi's Python
 interface each costs some 30 us of wrapping alone; :func:`native` compiles the
 function's generated C code with a small driver into a cached shared
-library (:func:`fcomp.compiled.build_library`) and calls it through
+library (:func:`fcomp.compiled.load_library`) and calls it through
 :mod:`ctypes` on preallocated numpy buffers (a few microseconds).
 
 Inputs and outputs are dense vectors/matrices: the function is wrapped so
@@ -23,7 +23,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from fcomp.compiled import build_library
+from fcomp.compiled import load_library
 
 _DRIVER = r"""
 int NAME_eval(const double* in, double* out) {
@@ -89,9 +89,8 @@ class NativeFunction:
                       .replace("NOUT", str(len(self.out_sizes)))
                       .replace("IN_OFF", ", ".join(map(str, self._in_off)))
                       .replace("OUT_OFF", ", ".join(map(str, self._out_off))))
-            lib = build_library(dense, driver)
-            if lib is not None:
-                dll = ctypes.CDLL(str(lib))
+            dll = load_library(dense, driver)
+            if dll is not None:
                 f = getattr(dll, f"{name}_eval")
                 dp = ctypes.POINTER(ctypes.c_double)
                 f.argtypes = [dp, dp]

@@ -13,6 +13,18 @@ in: one library serves every parameter value.
 
 Without a compiler, or with ``FCOMP_JIT=0``, the same step runs in CasADi's
 virtual machine through ``mapaccum`` (slower, identical results).
+
+The cache and trust (README, "Security")
+----------------------------------------
+Cached libraries are *loaded and run* (``ctypes``): whoever can write into
+the cache can run code in fcomp. The cache folder is therefore created
+user-only (``0700``), and a cache folder that belongs to another user or is
+writable by group or others is not used. Each library is stored with its
+SHA-256 (``NAME.so.sha256``) and checked before loading, so a truncated or
+corrupted file is rebuilt, not loaded. An unusable cache (``FCOMP_CACHE``
+naming a file, a read-only folder, an unsafe folder) never stops a command:
+fcomp warns once and runs the same equations uncompiled (slower, identical
+results), as it does without a C compiler.
 """
 
 from __future__ import annotations
@@ -21,14 +33,18 @@ import ctypes
 import hashlib
 import os
 import shutil
+import stat
 import subprocess
 import tempfile
+import warnings
 from collections.abc import Callable, Sequence
 from functools import cache
 from pathlib import Path
 
 import casadi as ca
 import numpy as np
+
+from fcomp.errors import FcompError, FcompWarning
 
 _DRIVER = r"""
 #include <string.h>
@@ -53,10 +69,55 @@ int fcomp_loop(int n, const double* x0, const double* u, const double* dt,
 Loop = Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray], np.ndarray]
 
 
-def cache_dir() -> Path:
-    d = Path(os.environ.get("FCOMP_CACHE", Path.home() / ".cache" / "fcomp"))
-    d.mkdir(parents=True, exist_ok=True)
+_WARNED: set[str] = set()
+
+
+def _warn(message: str) -> None:
+    """Warn once per process (code ``compile-cache``)."""
+    if message not in _WARNED:
+        _WARNED.add(message)
+        warnings.warn(FcompWarning("compile-cache", message), stacklevel=3)
+
+
+def cache_dir() -> Path | None:
+    """The folder of compiled kernels, created user-only; ``None`` (with a warning) when it
+    cannot be used or is not safe to load code from (module docstring)."""
+    d = Path(os.environ.get("FCOMP_CACHE") or Path.home() / ".cache" / "fcomp")
+    slower = "running without compiled kernels (slower, same results)"
+    try:
+        d.mkdir(mode=0o700, parents=True, exist_ok=True)
+        st = d.stat()
+    except OSError as exc:
+        why = "a file, not a folder" if d.exists() and not d.is_dir() else exc.strerror or exc
+        _warn(f"compile cache {d} is not usable ({why}); {slower}")
+        return None
+    if hasattr(os, "getuid") and st.st_uid != os.getuid():
+        _warn(f"compile cache {d} belongs to another user, so fcomp does not load code from "
+              f"it; {slower} (set FCOMP_CACHE to a folder of your own)")
+        return None
+    if st.st_mode & (stat.S_IWGRP | stat.S_IWOTH):
+        _warn(f"compile cache {d} is writable by group or others, who could make fcomp run "
+              f"their code; {slower} (chmod go-w {d})")
+        return None
     return d
+
+
+def _digest(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def _verified(lib: Path) -> bool:
+    """Whether ``lib`` is ours, not writable by others, and matches its stored SHA-256."""
+    try:
+        st = lib.stat()
+        if hasattr(os, "getuid") and st.st_uid != os.getuid():
+            return False
+        if st.st_mode & (stat.S_IWGRP | stat.S_IWOTH):
+            return False
+        want = Path(f"{lib}.sha256").read_text().strip()
+        return want == _digest(lib)
+    except (OSError, UnicodeDecodeError):
+        return False
 
 
 @cache
@@ -70,17 +131,19 @@ def compiler() -> str | None:
     return None
 
 
-def _build(step: ca.Function, nx: int, nu: int) -> Path | None:
+def _build(step: ca.Function, nx: int, nu: int) -> ctypes.CDLL | None:
     driver = _DRIVER.replace("STEP", step.name()).replace("NX", str(nx)).replace("NU", str(nu))
-    return build_library(step, driver)
+    return load_library(step, driver)
 
 
-def build_library(fn: ca.Function | Sequence[ca.Function], driver: str) -> Path | None:
+def build_library(fn: ca.Function | Sequence[ca.Function], driver: str, *,
+                  rebuild: bool = False) -> Path | None:
     """Compile CasADi's C code of ``fn`` (one or several functions) followed by the C
-    ``driver`` into a cached shared library.
+    ``driver`` into a cached shared library (verified, see the module docstring).
 
-    Returns the library path, or ``None`` without a working compiler (callers
-    then fall back to CasADi's virtual machine or a Python loop).
+    Returns the library path, or ``None`` without a working compiler or usable
+    cache (callers then fall back to CasADi's virtual machine or a Python
+    loop). ``rebuild`` compiles again even if the cache holds the library.
     """
     cc = compiler()
     if cc is None:
@@ -100,8 +163,11 @@ def build_library(fn: ca.Function | Sequence[ca.Function], driver: str) -> Path 
         src = Path(tmp) / f"{name}.c"
         code = src.read_text() + driver
         key = hashlib.sha1((code + cc).encode()).hexdigest()[:16]
-        lib = cache_dir() / f"{name}_{key}.so"
-        if lib.exists():
+        cache = cache_dir()
+        if cache is None:
+            return None
+        lib = cache / f"{name}_{key}.so"
+        if not rebuild and _verified(lib):
             return lib
         src.write_text(code)
         out = Path(tmp) / "lib.so"
@@ -111,10 +177,34 @@ def build_library(fn: ca.Function | Sequence[ca.Function], driver: str) -> Path 
         )
         if proc.returncode != 0:
             return None  # a broken toolchain must not break the package: use the VM
-        tmp_lib = lib.with_suffix(f".{os.getpid()}.tmp")
-        shutil.copy(out, tmp_lib)
-        os.replace(tmp_lib, lib)
+        from fcomp.outputs import write_files
+
+        try:
+            data = out.read_bytes()
+            write_files({lib: data, Path(f"{lib}.sha256"): hashlib.sha256(data).hexdigest()
+                         + "\n"})
+        except (OSError, FcompError) as exc:
+            _warn(f"compile cache {cache} is not writable ({exc}); running without compiled "
+                  "kernels (slower, same results)")
+            return None
+        os.chmod(lib, 0o700)
         return lib
+
+
+def load_library(fn: ca.Function | Sequence[ca.Function], driver: str) -> ctypes.CDLL | None:
+    """:func:`build_library`, loaded with :mod:`ctypes`; a cached library that does not load
+    (corrupted on disk) is rebuilt once. ``None``: use the virtual machine."""
+    for rebuild in (False, True):
+        lib = build_library(fn, driver, rebuild=rebuild)
+        if lib is None:
+            return None
+        try:
+            return ctypes.CDLL(str(lib))
+        except OSError:
+            continue
+    _warn("a compiled kernel does not load even after rebuilding it; running without "
+          "compiled kernels (slower, same results)")
+    return None
 
 
 def stepping_loop(step: ca.Function, *, compiled: bool = True, chunk: int = 4096) -> Loop:
@@ -125,9 +215,8 @@ def stepping_loop(step: ca.Function, *, compiled: bool = True, chunk: int = 4096
     """
     nx = step.size1_in(0)
     nu = step.size1_in(1)
-    lib = _build(step, nx, nu) if compiled else None
-    if lib is not None:
-        dll = ctypes.CDLL(str(lib))
+    dll = _build(step, nx, nu) if compiled else None
+    if dll is not None:
         fn = dll.fcomp_loop
         dp = ctypes.POINTER(ctypes.c_double)
         fn.argtypes = [ctypes.c_int, dp, dp, dp, dp, dp]

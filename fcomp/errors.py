@@ -18,3 +18,16 @@ class UnknownNameError(FcompError):
 
 class ConvergenceError(FcompError):
     """A simulation or fit that did not converge."""
+
+
+class FcompWarning(UserWarning):
+    """Something suspicious but legal, or a degraded mode (e.g. no usable compile cache).
+
+    ``code`` names the kind (``"compile-cache"``, ...); the command line prints
+    the message as one ``fcomp: warning: ...`` line and records it in the
+    result's ``warnings`` list.
+    """
+
+    def __init__(self, code: str, message: str) -> None:
+        super().__init__(message)
+        self.code = code

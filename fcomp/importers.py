@@ -31,7 +31,6 @@ Kinds
 from __future__ import annotations
 
 import hashlib
-import tomllib
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -42,8 +41,9 @@ import numpy as np
 from fcomp import __version__
 from fcomp.errors import FcompError
 from fcomp.matfile import from_variables, load_mat, parse_mapping
-from fcomp.measurement import Measurement, checked
+from fcomp.measurement import Measurement, checked, read_sidecar
 from fcomp.registry import Registry
+from fcomp.textdata import check_path, data_rows, parse_rows, read_text
 
 #: Where each known data set comes from (written into the ``[source]`` table).
 ORIGINS: dict[str, dict[str, str]] = {
@@ -133,8 +133,7 @@ def _sha256(src: Path) -> str:
 
 
 def _require_file(src: Path) -> None:
-    if not src.is_file():
-        raise FcompError(f"{src}: file not found")
+    check_path(src)
 
 
 # ---------------------------------------------------------------------- EMPS
@@ -205,25 +204,21 @@ def import_zillen(src: Path, *, bore: float | None = None) -> Measurement:
     defaults to 25.7 mm for file names containing ``257``, else 25 mm.
     """
     _require_file(src)
-    try:
-        raw = np.loadtxt(src, ndmin=2, dtype=float)
-    except (ValueError, UnicodeDecodeError) as exc:
-        raise FcompError(f"{src}: cannot read as whitespace-separated numbers "
-                         f"({str(exc).splitlines()[0]})") from None
-    except OSError as exc:
-        raise FcompError(f"{src}: cannot read ({exc.strerror or exc})") from None
+    table = parse_rows(str(src), data_rows(read_text(src, what="whitespace-separated numbers")),
+                       None, what="whitespace-separated numbers")
+    raw, lines = table.data, table.lines
     if raw.shape[1] != 7 or raw.shape[0] < 2:
         raise FcompError(f"{src}: expected 7 whitespace-separated columns and at least two rows "
                          f"(got {raw.shape[0]} rows of {raw.shape[1]})")
     bad = ~np.isfinite(raw)
     if bad.any():
         row, col = np.argwhere(bad)[0]
-        raise FcompError(f"{src}: non-finite value ({raw[row, col]}) at line {row + 1}, "
+        raise FcompError(f"{src}: non-finite value ({raw[row, col]}) at line {lines[row]}, "
                          f"column {col + 1}")
     dt = np.diff(raw[:, 0])
     if np.any(dt < 0):
         i = int(np.argmax(dt < 0))
-        raise FcompError(f"{src}: time goes backwards at line {i + 2} "
+        raise FcompError(f"{src}: time goes backwards at line {lines[i + 1]} "
                          f"({raw[i, 0]} ms -> {raw[i + 1, 0]} ms)")
     repeat = np.concatenate([[False], dt == 0])
     identical = repeat & np.concatenate([[False], np.all(raw[1:] == raw[:-1], axis=1)])
@@ -270,13 +265,9 @@ def import_mataveid(src: Path, *, position_scale: float | None = None) -> Measur
     (m/V, user calibration) also ``x`` and ``x_ref`` (m).
     """
     _require_file(src)
-    try:
-        raw = np.loadtxt(src, delimiter=",", ndmin=2, dtype=float)
-    except (ValueError, UnicodeDecodeError) as exc:
-        raise FcompError(f"{src}: cannot read as comma-separated numbers "
-                         f"({str(exc).splitlines()[0]})") from None
-    except OSError as exc:
-        raise FcompError(f"{src}: cannot read ({exc.strerror or exc})") from None
+    table = parse_rows(str(src), data_rows(read_text(src, what="comma-separated numbers")),
+                       ",", what="comma-separated numbers")
+    raw = table.data
     if raw.shape[1] != 4:
         raise FcompError(f"{src}: expected 4 columns t, r, y, u (got {raw.shape[1]})")
     cols = {"t": raw[:, 0], "u": raw[:, 3], "r_raw": raw[:, 1], "y_raw": raw[:, 2]}
@@ -309,13 +300,8 @@ def import_mat(src: Path, *, mapping: str | Mapping[str, str],
     _require_file(src)
     meta: dict[str, Any] = {}
     if sidecar is not None:
-        sp = Path(sidecar)
-        if not sp.is_file():
-            raise FcompError(f"{sp}: sidecar file not found")
-        try:
-            meta = tomllib.loads(sp.read_text())
-        except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-            raise FcompError(f"{sp}: not valid TOML ({exc})") from None
+        sp = check_path(sidecar, "sidecar file")
+        meta = read_sidecar(sp)
     cmap = parse_mapping(mapping) if isinstance(mapping, str) else dict(mapping)
     meta.setdefault("name", src.stem)
     meta["source"] = provenance(src, "mat", mapping=cmap,

@@ -16,11 +16,12 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
 from fcomp.errors import FcompError
+from fcomp.measurement import check_values
+from fcomp.textdata import check_path, data_rows, header_names, parse_rows, read_text
 
 KINDS = ("sine", "step", "csv")
 
@@ -32,6 +33,10 @@ class InputSignal:
     spec: str
     kind: str
     fn: Callable[[np.ndarray], np.ndarray]
+    #: sine: its frequency (Hz)
+    frequency: float = 0.0
+    #: csv: the smallest sampling interval of the file (s)
+    interval: float | None = None
 
     def __call__(self, t: np.ndarray | float) -> np.ndarray:
         return self.fn(np.asarray(t, dtype=float))
@@ -44,6 +49,8 @@ def _kv(body: str, spec: str, allowed: dict[str, float | None]) -> dict[str, flo
             if "=" not in part:
                 raise FcompError(f"--input {spec!r}: expected key=value, got {part!r}")
             k, val = (s.strip() for s in part.split("=", 1))
+            if k in out:
+                raise FcompError(f"--input {spec!r}: {k} is given twice")
             if k not in allowed:
                 raise FcompError(
                     f"--input {spec!r}: unknown key {k!r}; allowed: {', '.join(allowed)}"
@@ -53,7 +60,10 @@ def _kv(body: str, spec: str, allowed: dict[str, float | None]) -> dict[str, flo
             except ValueError:
                 raise FcompError(f"--input {spec!r}: {k} = {val!r} is not a number") from None
             if not math.isfinite(f):
-                raise FcompError(f"--input {spec!r}: {k} must be finite")
+                raise FcompError(f"--input {spec!r}: {k} must be a finite number")
+            if abs(f) > 1e15:
+                raise FcompError(f"--input {spec!r}: {k} = {val} is beyond any plausible "
+                                 "value in SI units")
             out[k] = f
     for k, default in allowed.items():
         if k not in out:
@@ -77,7 +87,8 @@ def parse_input(spec: str) -> InputSignal:
         if p["frequency"] < 0:
             raise FcompError(f"--input {spec!r}: frequency must be >= 0 Hz")
         A, f, o, ph = p["amplitude"], p["frequency"], p["offset"], p["phase"]
-        return InputSignal(spec, kind, lambda t: o + A * np.sin(2 * np.pi * f * t + ph))
+        return InputSignal(spec, kind, lambda t: o + A * np.sin(2 * np.pi * f * t + ph),
+                           frequency=f)
     if kind == "step":
         p = _kv(body, spec, {"amplitude": None, "time": 0.0, "initial": 0.0})
         A, t0, u0 = p["amplitude"], p["time"], p["initial"]
@@ -88,23 +99,41 @@ def parse_input(spec: str) -> InputSignal:
 
 
 def _csv_input(spec: str, body: str) -> InputSignal:
-    path = Path(body.strip())
-    if not path.is_file():
-        raise FcompError(f"--input {spec!r}: file {path} not found")
-    try:
-        with path.open() as fh:
-            header = [h.strip() for h in fh.readline().strip().split(",")]
-        data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
-    except (ValueError, UnicodeDecodeError) as exc:
-        raise FcompError(f"{path}: cannot read as CSV numbers ({str(exc).splitlines()[0]})") from None
-    if "t" not in header or "u" not in header:
-        raise FcompError(f"{path}: needs a header line with columns t,u (got {','.join(header)})")
-    if data.shape[1] != len(header) or data.shape[0] < 1:
-        raise FcompError(f"{path}: rows do not match the header")
-    t = data[:, header.index("t")]
-    u = data[:, header.index("u")]
-    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(u))):
-        raise FcompError(f"{path}: non-finite values in t or u")
-    if np.any(np.diff(t) <= 0):
-        raise FcompError(f"{path}: time column t must be strictly increasing")
-    return InputSignal(spec, "csv", lambda tq: np.interp(tq, t, u))
+    path = check_path(body.strip(), "input file")
+    label = str(path)
+    text = read_text(path, label, what="CSV numbers")
+    names, start = header_names(label, text)
+    if "t" not in names or "u" not in names:
+        raise FcompError(f"{path}: needs a header line with columns t,u (got {','.join(names)})")
+    table = parse_rows(label, data_rows(text, start), ",", names, what="CSV numbers")
+    data, lines = table.data, table.lines
+    cols = {n: data[:, names.index(n)] for n in ("t", "u")}
+    check_values(cols, label, lines)
+    t, u = cols["t"], cols["u"]
+    if t.size < 2:
+        raise FcompError(f"{path}: needs at least two samples of t,u")
+    return InputSignal(spec, "csv", lambda tq: np.interp(tq, t, u),
+                       interval=float(np.min(np.diff(t))))
+
+
+def sampling_warning(signal: InputSignal, rate: float) -> str | None:
+    """A one-line warning when ``signal`` has content the output ``rate`` (Hz) cannot
+    represent (plants see the input at the output instants): a sine above the
+    Nyquist frequency ``rate/2``, or a ``csv:`` signal sampled more finely than
+    the output."""
+    nyquist = rate / 2.0
+    if signal.kind == "sine" and signal.frequency > nyquist:
+        return (f"the input sine at {signal.frequency:g} Hz is above the Nyquist frequency "
+                f"{nyquist:g} Hz of --rate {rate:g}: the plant sees it aliased to "
+                f"{_alias(signal.frequency, rate):g} Hz; raise --rate above "
+                f"{2 * signal.frequency:g} Hz")
+    if signal.kind == "csv" and signal.interval is not None and signal.interval < 0.5 / rate:
+        return (f"the input file is sampled every {signal.interval:g} s, finer than the output "
+                f"interval {1 / rate:g} s; the plant sees it only at the output instants "
+                "(content above the Nyquist frequency aliases); raise --rate")
+    return None
+
+
+def _alias(f: float, rate: float) -> float:
+    r = math.fmod(f, rate)
+    return min(r, rate - r)

@@ -23,6 +23,7 @@ import numpy as np
 
 from fcomp.errors import FcompError
 from fcomp.measurement import Measurement, checked
+from fcomp.textdata import check_path
 
 _NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*(\.[A-Za-z_][A-Za-z0-9_]*)*$")
 _COLUMN = re.compile(r"[A-Za-z_][A-Za-z0-9_]*$")
@@ -36,11 +37,12 @@ def load_mat(path: str | Path) -> dict[str, Any]:
     FcompError
         The file is missing, is MATLAB v7.3/HDF5, or cannot be read as a ``.mat`` file.
     """
-    p = Path(path)
-    if not p.is_file():
-        raise FcompError(f"{p}: file not found")
-    with p.open("rb") as fh:
-        head = fh.read(128)
+    p = check_path(path)
+    try:
+        with p.open("rb") as fh:
+            head = fh.read(128)
+    except OSError as exc:
+        raise FcompError(f"{p}: cannot read ({exc.strerror or exc})") from None
     if b"MATLAB 7.3" in head or head[:8] == b"\x89HDF\r\n\x1a\n":
         raise FcompError(
             f"{p}: MATLAB v7.3 (HDF5) files are not supported; save it with save(..., '-v7')"
@@ -123,9 +125,16 @@ def evaluate(variables: Mapping[str, Any], expr: str, *, path: str | Path, colum
     if any(not s for s in tokens):
         raise FcompError(f"{p}: column {column!r}: cannot parse {expr!r}")
     value: np.ndarray = np.asarray(sign)
-    for token in tokens:
-        value = value * _factor(variables, token, p, column)
-    return np.asarray(value, dtype=float)
+    with np.errstate(over="ignore", invalid="ignore"):
+        for token in tokens:
+            value = value * _factor(variables, token, p, column)
+    out = np.asarray(value, dtype=float)
+    finite = [np.all(np.isfinite(np.asarray(_factor(variables, tk, p, column), dtype=float)))
+              for tk in tokens]
+    if all(finite) and not np.all(np.isfinite(out)):
+        raise FcompError(f"{p}: column {column!r}: {expr!r} overflows (the product is beyond "
+                         "floating-point range); check the factors")
+    return out
 
 
 def read_mat(path: str | Path, mapping: Mapping[str, str] | str,

@@ -29,9 +29,7 @@ Every error is one line naming the file (or measurement) and the problem.
 from __future__ import annotations
 
 import math
-import os
 import tomllib
-import warnings
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -40,6 +38,8 @@ from typing import Any
 import numpy as np
 
 from fcomp.errors import FcompError
+from fcomp.outputs import write_files
+from fcomp.textdata import data_rows, first_bad, header_names, parse_rows, read_text
 
 #: Columns of data-format.md with their SI unit.
 COLUMN_UNITS: dict[str, str] = {
@@ -54,6 +54,15 @@ MAX_LENGTH = {"bore": 2.0, "rod": 2.0, "stroke": 20.0}
 #: A non-zero pressure column whose largest magnitude is below this (Pa) is bar or MPa.
 MIN_PRESSURE_SCALE = 50.0
 U_UNITS = ("A", "V")
+#: Range of a plausible sidecar ``p_atm`` (Pa): sea level down to high altitude, a
+#: pressurised lab up to 2 bar; anything else is a unit mistake (bar, kPa).
+P_ATM_RANGE = (1.0e4, 2.0e5)
+#: The keys of the ``[rig]`` table; others are kept, with a warning (a typo?).
+RIG_KEYS = ("bore", "rod", "stroke", "mass", "orientation")
+#: Largest magnitude accepted in a column of the format (SI units): anything larger is
+#: a unit mistake (nanoseconds, micrometres) or a corrupted value, and would overflow
+#: the computations (squares, exponentials) with a misleading message later.
+MAX_MAGNITUDE = 1e12
 
 
 @dataclass
@@ -152,47 +161,49 @@ class Measurement:
         for k, v in self.columns.items():
             if v.ndim != 1 or v.size != n:
                 raise FcompError(f"{self.label}: column {k!r} has {v.size} values, t has {n}")
-            bad = ~np.isfinite(v)
-            if bad.any():
-                i = int(np.argmax(bad))
-                raise FcompError(
-                    f"{self.label}: column {k!r} has a non-finite value ({v[i]}) at row {i + 2}"
-                )
+        check_values(self.columns, self.label)
         if n < 2:
             raise FcompError(f"{self.label}: needs at least two samples")
-        dt = np.diff(self.columns["t"])
-        if np.any(dt <= 0):
-            i = int(np.argmax(dt <= 0))
-            raise FcompError(
-                f"{self.label}: time is not strictly increasing at row {i + 3} "
-                f"(t = {self.columns['t'][i + 1]!r} s)"
-            )
+        kind = self.meta.get("kind")
+        if kind is not None and kind not in KINDS:
+            raise FcompError(f"{self.label}: sidecar kind = {_plain(kind)} is not one of "
+                             f"{', '.join(KINDS)}")
+        p_atm = self.meta.get("p_atm", 101325.0)
+        if (not isinstance(p_atm, int | float) or isinstance(p_atm, bool)
+                or not P_ATM_RANGE[0] <= p_atm <= P_ATM_RANGE[1]):
+            raise FcompError(f"{self.label}: sidecar p_atm = {_plain(p_atm)} is not an "
+                             f"atmospheric pressure in Pa ({P_ATM_RANGE[0]:g} to "
+                             f"{P_ATM_RANGE[1]:g}; 1 bar = 1e5 Pa)")
         pr = self.meta.get("pressure", "gauge")
         if pr not in ("gauge", "absolute"):
-            raise FcompError(f"{self.label}: sidecar 'pressure' must be 'gauge' or 'absolute', got {pr!r}")
+            raise FcompError(f"{self.label}: sidecar 'pressure' must be 'gauge' or 'absolute', "
+                             f"got {_plain(pr)}")
         rig = self.meta.get("rig", {})
         if not isinstance(rig, Mapping):
             raise FcompError(f"{self.label}: sidecar [rig] must be a table")
         for key in ("bore", "rod", "stroke", "mass"):
             if key in rig:
                 val = rig[key]
-                if not isinstance(val, int | float) or isinstance(val, bool) or not val >= 0:
+                if (not isinstance(val, int | float) or isinstance(val, bool) or not val >= 0
+                        or not math.isfinite(val)):
                     raise FcompError(
                         f"{self.label}: sidecar rig.{key} must be a non-negative number in SI "
-                        f"units, got {val!r}"
+                        f"units, got {_plain(val)}"
                     )
         for key, limit in MAX_LENGTH.items():
             if key in rig and rig[key] > limit:
                 raise FcompError(
-                    f"{self.label}: sidecar rig.{key} = {rig[key]} m is implausible; "
+                    f"{self.label}: sidecar rig.{key} = {_plain(rig[key])} m is implausible; "
                     "lengths are in metres (SI), not millimetres"
                 )
         if "bore" in rig and "rod" in rig and rig["rod"] >= rig["bore"]:
-            raise FcompError(f"{self.label}: sidecar rig.rod ({rig['rod']}) must be smaller than rig.bore ({rig['bore']})")
+            raise FcompError(f"{self.label}: sidecar rig.rod ({_plain(rig['rod'])}) must be "
+                             f"smaller than rig.bore ({_plain(rig['bore'])})")
         orient = rig.get("orientation", "horizontal")
         if orient not in ORIENTATIONS:
             raise FcompError(
-                f"{self.label}: sidecar rig.orientation must be one of {', '.join(ORIENTATIONS)}"
+                f"{self.label}: sidecar rig.orientation must be one of {', '.join(ORIENTATIONS)}, "
+                f"got {_plain(orient)}"
             )
         self._check_units(pr, rig)
 
@@ -220,9 +231,12 @@ class Measurement:
             if isinstance(rig.get("stroke"), int | float) and rig["stroke"] > 0:
                 limit = min(limit, 2.0 * float(rig["stroke"]) + 0.01)
             if span > limit:
+                hint = ("the simulated piston left its plausible range; check the input and "
+                        "the parameters" if "simulation" in self.meta
+                        else "positions are in metres, not millimetres")
                 raise FcompError(
                     f"{self.label}: column 'x' spans {span:g} m, more than is plausible "
-                    f"({limit:g} m); positions are in metres, not millimetres"
+                    f"({limit:g} m); {hint}"
                 )
         signals = self.meta.get("signals", {})
         if not isinstance(signals, Mapping):
@@ -230,7 +244,7 @@ class Measurement:
         if "u_unit" in signals and signals["u_unit"] not in U_UNITS:
             raise FcompError(
                 f"{self.label}: sidecar signals.u_unit must be 'A' or 'V' (SI), got "
-                f"{signals['u_unit']!r}; convert the u column"
+                f"{_plain(signals['u_unit'])}; convert the u column"
             )
 
     # -------------------------------------------------------------------- I/O
@@ -243,50 +257,114 @@ class Measurement:
         lines = [",".join(names)]
         lines += [",".join(map(repr, row)) for row in data.tolist()]
         meta = {k: v for k, v in self.meta.items() if not k.startswith("_")}
-        _atomic_write_all({csv: "\n".join(lines) + "\n", toml: dumps_toml(meta)})
+        write_files({csv: "\n".join(lines) + "\n", toml: dumps_toml(meta)})
         return csv, toml
 
     @classmethod
     def read(cls, path: str | Path, *, drop_nan: bool = False) -> Measurement:
-        """Read ``NAME.csv`` and, if present, ``NAME.toml``."""
-        csv, toml = sidecar_paths(path)
-        if not csv.is_file():
-            raise FcompError(f"{csv}: file not found")
+        """Read ``NAME.csv`` and, if present, ``NAME.toml``.
+
+        Errors name the file as given and count rows as lines of the file (the
+        header is line 1), as an editor shows them. The CSV may start with a
+        UTF-8 byte-order mark and its header names may be quoted.
+        """
+        csv, toml = measurement_paths(path)
         meta: dict[str, Any] = {}
         if toml.is_file():
-            try:
-                meta = tomllib.loads(toml.read_text())
-            except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-                raise FcompError(f"{toml}: not valid TOML ({exc})") from None
-            except OSError as exc:
-                raise FcompError(f"{toml}: cannot read ({exc.strerror or exc})") from None
+            meta = read_sidecar(toml)
+        elif toml.exists():
+            raise FcompError(f"{toml}: the sidecar is not a regular file")
         meta.setdefault("name", csv.stem)
         meta["_path"] = str(csv)
-        try:
-            with csv.open() as fh:
-                header = fh.readline().strip()
-            names = [h.strip() for h in header.split(",")]
-            if not header or any(not n for n in names):
-                raise FcompError(f"{csv}: the first line must be comma-separated column names")
-            if len(set(names)) != len(names):
-                raise FcompError(f"{csv}: duplicate column names in the header")
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", UserWarning)  # "empty input": reported below
-                raw = np.loadtxt(csv, delimiter=",", skiprows=1, ndmin=2, dtype=float)
-        except FcompError:
-            raise
-        except (ValueError, UnicodeDecodeError) as exc:
-            raise FcompError(f"{csv}: cannot read as CSV numbers ({str(exc).splitlines()[0]})") from None
-        except OSError as exc:
-            raise FcompError(f"{csv}: cannot read ({exc.strerror or exc})") from None
-        if raw.size == 0:
-            raise FcompError(f"{csv}: no data rows after the header")
-        if raw.shape[1] != len(names):
-            raise FcompError(f"{csv}: {raw.shape[1]} values per row but {len(names)} column names")
+        label = str(csv)
+        text = read_text(csv, label, what="CSV numbers")
+        names, start = header_names(label, text)
+        table = parse_rows(label, data_rows(text, start), ",", names, what="CSV numbers")
+        raw, lines = table.data, table.lines
         if drop_nan:
-            raw = raw[np.all(np.isfinite(raw), axis=1)]
+            keep = np.all(np.isfinite(raw), axis=1)
+            raw, lines = raw[keep], lines[keep]
         cols = {n: raw[:, i] for i, n in enumerate(names)}
+        check_values(cols, label, lines)
         return checked(cols, meta, csv)
+
+
+def measurement_paths(path: str | Path) -> tuple[Path, Path]:
+    """The CSV a user means by ``path`` and its sidecar, checked to exist.
+
+    ``run.csv`` (any existing file) is read as it is; ``run`` with no suffix
+    reads ``run.csv`` if there is no file ``run``; a ``.toml`` is the sidecar,
+    not the data, and is refused with a hint.
+    """
+    text = str(path)
+    if not text.strip():
+        raise FcompError("no measurement file given (an empty argument)")
+    p = Path(text)
+    if p.suffix.lower() == ".toml":
+        raise FcompError(f"{text}: is a sidecar; give the measurement's .csv file")
+    if p.is_dir():
+        raise FcompError(f"{text}: is a folder, not a measurement file")
+    if not p.exists() and p.suffix == "" and p.with_suffix(".csv").is_file():
+        p = p.with_suffix(".csv")
+    if not p.exists():
+        raise FcompError(f"{text}: file not found")
+    if not p.is_file():
+        raise FcompError(f"{text}: is not a regular file")
+    return p, p.with_suffix(".toml")
+
+
+def read_sidecar(toml: Path) -> dict[str, Any]:
+    """A sidecar (or any TOML file the user gives) as a dict; one line on any problem."""
+    text = read_text(toml, str(toml), what="TOML")
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise FcompError(f"{toml}: not valid TOML ({exc})") from None
+
+
+def sidecar_warnings(meas: Measurement) -> list[tuple[str, str]]:
+    """``(key, one line)`` per suspicious sidecar entry: ``[rig]`` keys the format does not
+    know (a typo such as ``mas`` leaves the mass unknown)."""
+    rig = meas.meta.get("rig", {})
+    unknown = [k for k in rig if k not in RIG_KEYS] if isinstance(rig, Mapping) else []
+    return [(f"rig.{k}", f"{meas.label}: sidecar key rig.{k} is not one the format knows "
+             f"({', '.join(RIG_KEYS)}); it is kept but not used") for k in unknown]
+
+
+def check_values(columns: Mapping[str, np.ndarray], label: str,
+                 lines: np.ndarray | None = None) -> None:
+    """Finite values everywhere, plausible magnitudes in the columns of the format,
+    strictly increasing time; ``lines``: the file line of every row (default: the
+    row as written, header first)."""
+    def row(i: int) -> int:
+        return int(lines[i]) if lines is not None else i + 2
+
+    for k, v in columns.items():
+        i = first_bad(v, MAX_MAGNITUDE if k in COLUMN_UNITS else math.inf)
+        if i is None:
+            continue
+        if not math.isfinite(v[i]):
+            raise FcompError(f"{label}: column {k!r} has a non-finite value ({v[i]}) "
+                             f"at row {row(i)}")
+        raise FcompError(f"{label}: column {k!r} has {float(v[i]):g} at row {row(i)}, beyond "
+                         f"any plausible value in SI units ({COLUMN_UNITS[k]}); check the "
+                         "units of the column")
+    t = columns.get("t")
+    if t is not None and t.size > 1:
+        dt = np.diff(t)
+        if np.any(dt <= 0):
+            i = int(np.argmax(dt <= 0))
+            raise FcompError(f"{label}: time is not strictly increasing at row {row(i + 1)} "
+                             f"(t = {float(t[i + 1])!r} s)")
+
+
+def _plain(value: Any) -> str:
+    """A sidecar value for a message: numbers as plain numbers, text quoted."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, int | float | np.number):
+        return repr(float(value)) if isinstance(value, float | np.floating) else str(int(value))
+    return repr(value)
 
 
 def checked(columns: Mapping[str, np.ndarray], meta: Mapping[str, Any],
@@ -311,28 +389,6 @@ def sidecar_paths(path: str | Path) -> tuple[Path, Path]:
     return csv, csv.with_suffix(".toml")
 
 
-def _atomic_write_all(files: Mapping[Path, str]) -> None:
-    """Write every file to a temporary name first, then rename them all into place.
-
-    Nothing appears under a final name unless every file could be written.
-    """
-    for path in files:
-        if path.is_dir():
-            raise FcompError(f"{path}: is a directory, cannot write a file there")
-    tmps: dict[Path, Path] = {}
-    try:
-        for path, text in files.items():
-            path.parent.mkdir(parents=True, exist_ok=True)
-            tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-            tmps[path] = tmp
-            tmp.write_text(text)
-        for path, tmp in tmps.items():
-            os.replace(tmp, path)
-    finally:
-        for tmp in tmps.values():
-            tmp.unlink(missing_ok=True)
-
-
 def _toml_value(v: Any) -> str:
     if isinstance(v, bool):
         return "true" if v else "false"
@@ -347,8 +403,9 @@ def _toml_value(v: Any) -> str:
         return '"' + v.replace("\\", "\\\\").replace('"', '\\"').replace("\n", "\\n") + '"'
     if isinstance(v, list | tuple):
         return "[" + ", ".join(_toml_value(x) for x in v) + "]"
-    if isinstance(v, Mapping):
-        return "{" + ", ".join(f"{_key(k)} = {_toml_value(x)}" for k, x in v.items()) + "}"
+    if isinstance(v, Mapping):  # None (no value) has no TOML form: the key is left out
+        return "{" + ", ".join(f"{_key(k)} = {_toml_value(x)}" for k, x in v.items()
+                               if x is not None) + "}"
     raise TypeError(f"cannot write {type(v).__name__} to TOML")
 
 
@@ -361,6 +418,8 @@ def dumps_toml(doc: Mapping[str, Any], _prefix: str = "") -> str:
     lines: list[str] = []
     tables: list[tuple[str, Mapping[str, Any]]] = []
     for k, v in doc.items():
+        if v is None:
+            continue
         if isinstance(v, Mapping):
             tables.append((k, v))
         else:

@@ -27,7 +27,6 @@ import html
 import io
 import json
 import math
-import os
 import platform
 import re
 from collections.abc import Iterable, Mapping, Sequence
@@ -174,17 +173,11 @@ class Comparison:
 
 
 def atomic_write_text(path: str | Path, text: str) -> Path:
-    """Write ``text`` to ``path`` through a temporary file and a rename (no half-written file)."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")  # same folder: rename is atomic
-    try:
-        tmp.write_text(text, encoding="utf-8")
-        os.replace(tmp, path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
-    return path
+    """Write ``text`` to ``path`` through a temporary file and a rename (no half-written file;
+    :func:`fcomp.outputs.write_text`)."""
+    from fcomp.outputs import write_text
+
+    return write_text(path, text)
 
 
 def _inline(text: str) -> str:

@@ -30,7 +30,7 @@ Methods (:data:`METHODS`, selected by name like ``solve_ivp``'s)
     known function of time (its rate ``du/dt`` through the non-autonomous
     terms), so the method is exact for the held or linear input. The
     model's ``f`` and Jacobians are generated as C by CasADi and compiled
-    with the adaptive loop over all samples (:func:`fcomp.compiled.build_library`):
+    with the adaptive loop over all samples (:func:`fcomp.compiled.load_library`):
     no Python per step. Without a C compiler the same loop runs in Python
     (same decisions, slower). The same RODAS4 step is also available as a
     CasADi expression (:func:`rosenbrock_step`), for the discrete-time model
@@ -53,7 +53,19 @@ Failures
 --------
 A step size below ``h_min`` (default ``1e-13`` s), more than ``max_steps``
 steps, or a non-finite state raises :class:`~fcomp.errors.ConvergenceError`
-naming the time at which the integration stopped.
+naming the time at which the integration stopped. ``max_steps`` bounds the
+whole run of :func:`integrate`, whatever the method (for ``radau``, ``bdf``
+and ``lsoda`` it counts their accepted steps), and the whole open-loop run
+of a plant with discrete-memory friction (:mod:`plants.discrete_memory`);
+a closed loop (:class:`Stepper`) bounds each sample.
+
+Progress
+--------
+Inside ``with progress(callback):`` long runs report ``callback(fraction,
+t)`` as they go (the command line shows it on a terminal); the run is then
+integrated in pieces of whole sample intervals, which changes nothing in
+the RODAS4 result (its step size carries over, its decisions are made per
+interval).
 
 Closed loops
 ------------
@@ -69,8 +81,9 @@ import ctypes
 import math
 import re
 from abc import ABC, abstractmethod
-from collections.abc import Callable
-from dataclasses import dataclass, field
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass, field, replace
 from functools import cached_property, lru_cache
 from typing import Any, ClassVar
 
@@ -79,9 +92,39 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.linalg import lu_factor, lu_solve
 
-from fcomp.compiled import build_library
+from fcomp.compiled import load_library
 from fcomp.errors import ConvergenceError, FcompError
 from fcomp.registry import Registry
+
+#: ``callback(fraction, t)`` of the innermost :func:`progress` block, or ``None``.
+_PROGRESS: list[Callable[[float, float], None]] = []
+
+
+@contextmanager
+def progress(callback: Callable[[float, float], None]) -> Iterator[None]:
+    """Report the progress of the runs inside the block: ``callback(fraction done, t in s)``."""
+    _PROGRESS.append(callback)
+    try:
+        yield
+    finally:
+        _PROGRESS.pop()
+
+
+def report_progress(fraction: float, t: float) -> None:
+    """Tell the innermost :func:`progress` block how far the run is (no-op outside one)."""
+    if _PROGRESS:
+        _PROGRESS[-1](fraction, t)
+
+
+def step_budget(tol: Tolerances, stats: Stats, t: float, name: str) -> Tolerances:
+    """``tol`` with ``max_steps`` lowered to what is left of the run's budget after ``stats``;
+    :class:`ConvergenceError` when nothing is left."""
+    left = tol.max_steps - (stats.steps + stats.rejected)
+    if left < 1:
+        raise ConvergenceError(
+            f"simulation of {name} stopped at t = {t:.6g} s: more than max_steps = "
+            f"{tol.max_steps} steps were needed (raise --max-steps, or loosen --rtol/--atol)")
+    return tol if left == tol.max_steps else replace(tol, max_steps=left)
 
 # ------------------------------------------------------------------ RODAS4
 #: RODAS4 coefficients (Hairer & Wanner's ``rodas.f``, METH = 1) in the
@@ -528,10 +571,9 @@ def _rodas_library(model_key: tuple) -> Any:
     driver = _DRIVER
     for k, v in repl.items():
         driver = driver.replace(k, v)
-    lib = build_library([F, Jf], driver)
-    if lib is None:
+    dll = load_library([F, Jf], driver)
+    if dll is None:
         return None
-    dll = ctypes.CDLL(str(lib))
     c_fn = dll.fcomp_ode
     dp = ctypes.POINTER(ctypes.c_double)
     c_fn.argtypes = [ctypes.c_int] + [dp] * 10
@@ -604,10 +646,10 @@ class Rodas4(Integrator):
             why = {1: f"the step size fell below h_min = {tol.h_min:g} s",
                    2: f"more than max_steps = {tol.max_steps} steps were needed",
                    3: "the model gave a non-finite value"}[status]
+            hint = ("raise --max-steps, or loosen --rtol/--atol" if status == 2 else
+                    "check the parameters and the initial state, or loosen --rtol/--atol")
             raise ConvergenceError(
-                f"simulation of {m.name} did not converge at t = {t_fail:.6g} s: {why} "
-                "(check the parameters and the initial state, or loosen --rtol/--atol)"
-            )
+                f"simulation of {m.name} did not converge at t = {t_fail:.6g} s: {why} ({hint})")
         return X, stats, float(h_io[0])
 
     def _run_python(self, x0: np.ndarray, U: np.ndarray, dU: np.ndarray, dt: np.ndarray,
@@ -689,6 +731,12 @@ class Rodas4(Integrator):
         info[:] = [status, k if status else dt.size, t, h, nacc, nrej]
 
 
+class _StepLimitError(Exception):
+    def __init__(self, t: float) -> None:
+        super().__init__(t)
+        self.t = t
+
+
 class SolveIvp(Integrator):
     """:func:`scipy.integrate.solve_ivp` with the CasADi right-hand side and exact Jacobian."""
 
@@ -717,6 +765,7 @@ class SolveIvp(Integrator):
         X = np.empty((n + 1, m.nx))
         X[0] = x0
         x = np.asarray(x0, dtype=float)
+        counter = [0]
         for a, b in pieces:
             ta, tb = knots[a], knots[b]
 
@@ -730,8 +779,21 @@ class SolveIvp(Integrator):
             def jac(t: float, y: np.ndarray) -> np.ndarray:
                 return np.asarray(self.jac(y, u_at(t), p))
 
-            sol = solve_ivp(fun, (ta, tb), x, method=self.scipy_method, t_eval=knots[a + 1:b + 1],
-                            rtol=tol.rtol, atol=atol, first_step=min(h, tb - ta), jac=jac)
+            def limit(t: float, y: np.ndarray) -> float:  # called once per accepted step
+                counter[0] += 1
+                if counter[0] > tol.max_steps:
+                    raise _StepLimitError(t)
+                return 1.0
+
+            try:
+                sol = solve_ivp(fun, (ta, tb), x, method=self.scipy_method,
+                                t_eval=knots[a + 1:b + 1], rtol=tol.rtol, atol=atol,
+                                first_step=min(h, tb - ta), jac=jac, events=limit)
+            except _StepLimitError as stop:
+                raise ConvergenceError(
+                    f"simulation of {m.name} did not converge at t = {t0 + stop.t:.6g} s "
+                    f"({self.name}): more than max_steps = {tol.max_steps} steps were needed "
+                    "(raise --max-steps, or loosen --rtol/--atol)") from None
             if sol.status != 0 or not np.all(np.isfinite(sol.y)):
                 raise ConvergenceError(
                     f"simulation of {m.name} did not converge between t = {t0 + ta:.6g} s "
@@ -847,8 +909,24 @@ def integrate(
                          f"({', '.join(model.state_names)})")
     dU = input_rates(t, U, hold)
     integ = make_integrator(model, method)
-    X, stats, _h = integ.run(x0, U[:-1], dU, np.diff(t), np.asarray(p, float), tolerances,
-                             tolerances.h0)
+    dt = np.diff(t)
+    pv = np.asarray(p, float)
+    if not _PROGRESS:
+        X, stats, _h = integ.run(x0, U[:-1], dU, dt, pv, tolerances, tolerances.h0)
+    else:  # in pieces of whole intervals, reporting as it goes (same result)
+        n = dt.size
+        X = np.empty((n + 1, model.nx))
+        X[0] = x0
+        stats = Stats()
+        h = tolerances.h0
+        piece = max(1, n // 200)
+        for a in range(0, n, piece):
+            b = min(a + piece, n)
+            tol = step_budget(tolerances, stats, float(t[a]), model.name)
+            Xp, st, h = integ.run(X[a], U[a:b], dU[a:b], dt[a:b], pv, tol, h, float(t[a]))
+            X[a + 1:b + 1] = Xp[1:]
+            stats.add(st)
+            report_progress(b / n, float(t[b]))
     return Trajectory(t=t, X=X, U=U, stats=stats, method=method, tolerances=tolerances,
                       hold=hold)
 

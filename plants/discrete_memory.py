@@ -55,6 +55,8 @@ from fcomp.simulation import (
     Trajectory,
     input_rates,
     make_integrator,
+    report_progress,
+    step_budget,
 )
 
 if TYPE_CHECKING:
@@ -211,18 +213,25 @@ class MemoryCoupling:
         hf.reset(x0[self.n_plant], x0[self.n_plant + self.i_F])
         return hf
 
+    def intervals(self, T: float) -> int:
+        """Number of coupling intervals in a sample interval of ``T`` s."""
+        return max(1, math.ceil(T / self.coupling - 1e-9))
+
     def advance(self, integ: Any, hf: Any, xt: np.ndarray, u0: np.ndarray, du: np.ndarray,
                 T: float, tol: Tolerances, h: float, stats: Stats,
-                t0: float = 0.0) -> tuple[np.ndarray, float]:
+                t0: float = 0.0, budget: Tolerances | None = None) -> tuple[np.ndarray, float]:
         """Advance the twin state ``xt`` and the memory ``hf`` over ``T`` s, input ``u0 + du*t``
-        (``t0``: time at the start, for messages)."""
-        n = max(1, math.ceil(T / self.coupling - 1e-9))
+        (``t0``: time at the start, for messages). With ``budget``, its ``max_steps`` bounds
+        the steps counted in ``stats`` (the whole run), else ``tol`` bounds each interval."""
+        n = self.intervals(T)
         dt = np.array([T / n])
         p = self.p_twin.copy()
         iz = self.n_plant
         for j in range(n):
             zs = self.threshold(xt, hf.F)
             p[self.i_tan] = hf.F, self.slope(hf, float(xt[1]), zs), hf.z
+            if budget is not None:
+                tol = step_budget(budget, stats, t0 + j * dt[0], self.plant.name)
             X, st, h = integ.run(xt, (u0 + du * j * dt[0])[None, :], du[None, :], dt, p, tol, h,
                                  t0 + j * dt[0])
             xt = X[-1]
@@ -237,6 +246,14 @@ class MemoryCoupling:
         """The run over the sample instants ``t``: trajectory (plant states with the memory's
         ``Fz``) and the outputs at every sample."""
         dU = input_rates(t, U, hold)
+        dts = np.diff(t)
+        needed = int(np.sum(np.maximum(1, np.ceil(dts / self.coupling - 1e-9))))
+        if needed > tolerances.max_steps:
+            raise FcompError(
+                f"plant {self.plant.name}: a coupling interval of {self.coupling:g} s over "
+                f"{float(t[-1] - t[0]):g} s needs {needed:.3g} coupling intervals of at least "
+                f"one step each, more than max_steps = {tolerances.max_steps}; raise --coupling "
+                f"(default {COUPLING:g} s) or --max-steps")
         integ = make_integrator(self.twin.ode_model(), method)
         hf = self.start(x0)
         xt = self.to_twin(x0)
@@ -247,8 +264,9 @@ class MemoryCoupling:
         h = tolerances.h0
         for k in range(t.size - 1):
             xt, h = self.advance(integ, hf, xt, U[k], dU[k], t[k + 1] - t[k], tolerances, h,
-                                 stats, t[k])
+                                 stats, t[k], budget=tolerances)
             Xt[k + 1], Fz[k + 1] = xt, hf.F
+            report_progress((k + 1) / (t.size - 1), float(t[k + 1]))
         X = self.from_twin(Xt, Fz)
         traj = Trajectory(t=t, X=X, U=U, stats=stats, method=method, tolerances=tolerances,
                           hold=hold)

@@ -36,7 +36,8 @@ class AllStudies(Study):
         for name in bar:
             bar.set_postfix_str(name)
             study = STUDIES.get(name)
-            sub = StudyConfig(out=config.out / name, fast=config.fast,
+            sub = StudyConfig(out=config.out / name, workdir=out.directory / name,
+                              fast=config.fast,
                               command=f"(part of) {config.command}" if config.command else None)
             start = time.perf_counter()
             try:

@@ -9,10 +9,13 @@ does the rest, always the same way::
     DIR/report.html     the self-contained report (fcomp.report)
 
 Each study module exposes ``STUDY`` (its instance) and ``main(config) ->
-results``; it is selected by name through ``studies.STUDIES``. ``summary.json``
-and ``report.html`` are written only when the study has finished, each
-through a temporary file and a rename: a failed run leaves no half-written
-file. ``config.fast`` asks for the fast mode CI runs (fewer samples, shorter
+results``; it is selected by name through ``studies.STUDIES``. The whole
+folder is built in a temporary sibling folder and swapped into place only
+when the study has finished (:func:`fcomp.outputs.staged_folder`): a failed
+or interrupted run leaves the previous result whole, or nothing, never a
+mixture of two runs or an empty folder. An existing ``DIR`` is replaced only
+if it is empty or an earlier result (fcomp's marker file, or a
+``summary.json``); any other folder is refused before the study starts. ``config.fast`` asks for the fast mode CI runs (fewer samples, shorter
 runs); a study that is fast anyway says so and runs in full.
 """
 
@@ -20,9 +23,10 @@ from __future__ import annotations
 
 import json
 import math
+import shutil
 from abc import ABC, abstractmethod
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, ClassVar
 
@@ -30,7 +34,8 @@ import numpy as np
 
 from fcomp import __version__
 from fcomp.errors import FcompError
-from fcomp.report import Report, atomic_write_text, render_png
+from fcomp.outputs import staged_folder, write_files, write_text
+from fcomp.report import Report, render_png
 
 __all__ = ["Study", "StudyConfig", "StudyError", "StudyOutput", "to_jsonable"]
 
@@ -51,11 +56,16 @@ class StudyConfig:
         Fast mode (what CI runs).
     command
         The command line that asked for the run, recorded in the report.
+    workdir
+        Where the files are actually written while the study runs (set by
+        :meth:`Study.main`: a staging folder that becomes ``out`` at the end;
+        a study run inside another's staging folder writes there directly).
     """
 
     out: Path
     fast: bool = False
     command: str | None = None
+    workdir: Path | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "out", Path(self.out))
@@ -134,9 +144,7 @@ class StudyOutput:
             raise FcompError(f"figure name {name!r}: use letters, digits, '-' and '_'")
         png = render_png(fig, dpi=dpi)
         path = self.directory / f"fig-{name}.png"
-        tmp = path.with_name(f".{path.name}.tmp")
-        tmp.write_bytes(png)
-        tmp.replace(path)
+        write_files({path: png})
         self.figures.append(path)
         self.report.figure(png, caption, alt=f"{name}: {caption}")
         return path
@@ -171,18 +179,26 @@ class Study(ABC):
     def main(self, config: StudyConfig | Mapping[str, Any]) -> dict[str, Any]:
         """Run the study: write ``summary.json``, figures and the report; return the results."""
         cfg = StudyConfig.coerce(config)
-        directory = cfg.out
-        if directory.exists() and not directory.is_dir():
-            raise FcompError(f"--out {directory}: exists and is not a directory")
+        if cfg.workdir is not None:  # inside the staging folder of an enclosing run
+            try:
+                return self._run(cfg, cfg.workdir)
+            except BaseException:  # a failed part leaves no half-written folder either
+                shutil.rmtree(cfg.workdir, ignore_errors=True)
+                raise
+        note = cfg.command or f"study {self.name}"
+        with staged_folder(cfg.out, "--out", "study", note=note) as staging:
+            return self._run(cfg, staging)
+
+    def _run(self, cfg: StudyConfig, directory: Path) -> dict[str, Any]:
         try:
             directory.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
-            raise FcompError(f"--out {directory}: cannot create it ({exc.strerror})") from None
+            raise FcompError(f"--out {cfg.out}: cannot create it ({exc.strerror})") from None
         report = Report(self.title, subtitle=self.summary, command=cfg.command,
                         config={"study": self.name, **cfg.as_dict()},
                         table_label=self.table_label, figure_label=self.figure_label)
         out = StudyOutput(directory, report)
-        results = self.build(out, cfg)
+        results = self.build(out, replace(cfg, workdir=directory))
         if "meta" in results:
             raise RuntimeError(f"study {self.name}: 'meta' is reserved in summary.json")
         summary = to_jsonable({
@@ -197,9 +213,9 @@ class Study(ABC):
                 "reports": list(self.report_files),
             },
         })
-        atomic_write_text(directory / "summary.json",
-                          json.dumps(summary, indent=2, allow_nan=False) + "\n")
+        write_text(directory / "summary.json",
+                   json.dumps(summary, indent=2, allow_nan=False) + "\n")
         page = report.to_html()
         for filename in self.report_files:
-            atomic_write_text(directory / filename, page)
+            write_text(directory / filename, page)
         return summary

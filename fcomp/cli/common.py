@@ -1,42 +1,116 @@
-"""Pieces shared by the sub-commands: building models from options, output paths, JSON results."""
+"""Pieces shared by the sub-commands: building models from options, output paths, JSON
+results, warnings."""
 
 from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
+import time
+import warnings
 from pathlib import Path
+from typing import Any
 
 from fcomp.effects import load_effects_module
-from fcomp.errors import FcompError
+from fcomp.errors import FcompError, FcompWarning
 from fcomp.models import FrictionModel, make_model
+from fcomp.outputs import InputSet, check_distinct, check_folder_target
+
+#: Largest magnitude accepted for a number given on the command line (SI units).
+MAX_VALUE = 1e15
+
+#: Warnings of the running command (``{"code", "parameter", "message"}``), printed as
+#: ``fcomp: warning: ...`` after a successful run and written into its outputs.
+WARNINGS: list[dict[str, Any]] = []
+#: The running command's arguments (after ``fcomp``), for reports.
+ARGV: list[str] = []
+#: Python warnings caught while the command runs (set by :func:`fcomp.cli.main.main`).
+PYTHON_WARNINGS: list[warnings.WarningMessage] | None = None
+
+
+def warn(code: str, message: str, parameter: str | None = None) -> None:
+    """Record a warning for a suspicious but legal input (one line, no duplicates)."""
+    item = {"code": code, "parameter": parameter, "message": " ".join(message.split())}
+    if item not in WARNINGS:
+        WARNINGS.append(item)
+
+
+def python_warning(w: warnings.WarningMessage) -> tuple[str, str]:
+    """A Python or numpy warning as ``(code, one-line message)``."""
+    text = str(w.message).strip().splitlines()[0] if str(w.message).strip() else ""
+    if isinstance(w.message, FcompWarning):
+        return w.message.code, text
+    if issubclass(w.category, RuntimeWarning):
+        return "numerical", (f"{text} (a computation left floating-point range; check the "
+                             "inputs and the results)")
+    return "library", f"{w.category.__name__}: {text}"
+
+
+def finite_float(text: str) -> float:
+    """argparse ``type=``: a finite number within :data:`MAX_VALUE`."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"{text!r} is not a finite number")
+    if abs(value) > MAX_VALUE:
+        raise argparse.ArgumentTypeError(f"{text!r} is beyond any plausible value in SI units")
+    return value
 
 
 def add_model_options(p: argparse.ArgumentParser, *, flag: str = "--friction") -> None:
     p.add_argument("--add-effect", action="append", default=[], metavar="EFFECT",
                    help="add a catalogue (or registered) effect to the model; repeatable")
     p.add_argument("--effects", metavar="MODULE.py", default=None,
-                   help="a Python file that registers the user's own effects")
+                   help="a Python file that registers the user's own effects (it is executed: "
+                   "see SECURITY in the README)")
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                    help="override a friction parameter (flat name, SI units); repeatable")
 
 
 def parse_assignments(items: list[str], option: str = "--set") -> dict[str, float]:
+    """``NAME=VALUE`` items as a dict: finite numbers, each name once."""
     out: dict[str, float] = {}
     for item in items:
         if "=" not in item:
             raise FcompError(f"{option} {item!r}: expected NAME=VALUE")
         k, v = (s.strip() for s in item.split("=", 1))
+        if not k:
+            raise FcompError(f"{option} {item!r}: the name before '=' is missing")
         try:
-            out[k] = float(v)
+            value = float(v)
         except ValueError:
-            raise FcompError(f"{option} {item!r}: {v!r} is not a number") from None
+            hint = f"; give one NAME=VALUE per {option}" if "=" in v else ""
+            raise FcompError(f"{option} {item!r}: {v!r} is not a number{hint}") from None
+        if not math.isfinite(value):
+            raise FcompError(f"{option} {item!r}: the value must be a finite number")
+        if abs(value) > MAX_VALUE:
+            raise FcompError(f"{option} {item!r}: {v} is beyond any plausible value in SI units")
+        if k in out:
+            raise FcompError(f"{option} {k}: given twice ({out[k]:g} and {value:g})")
+        out[k] = value
     return out
+
+
+def name_list(text: str | None, option: str) -> list[str] | None:
+    """``A,B,C`` as a list (``None`` if the option was not given); refuses an empty list
+    and repeated names."""
+    if text is None:
+        return None
+    names = [s.strip() for s in text.split(",") if s.strip()]
+    if not names:
+        raise FcompError(f"{option}: give at least one name (got {text!r})")
+    for i, n in enumerate(names):
+        if n in names[:i]:
+            raise FcompError(f"{option}: {n} is given twice")
+    return names
 
 
 def build_model(name: str, params: str | None, args: argparse.Namespace) -> FrictionModel:
     """The friction model of the options (model, parameter set, effects, overrides)."""
-    if args.effects:
+    if args.effects is not None:
         load_effects_module(args.effects)
     model = make_model(name, params=params)
     if args.add_effect:
@@ -45,13 +119,21 @@ def build_model(name: str, params: str | None, args: argparse.Namespace) -> Fric
     return model.with_params(**overrides) if overrides else model
 
 
-def output_path(path: str, suffix: str = ".csv") -> Path:
+def output_path(path: str, suffix: str = ".csv", option: str = "-o") -> Path:
+    """The measurement file an ``-o OUT.csv`` option names (its sidecar goes next to it)."""
+    if not path.strip():
+        raise FcompError(f"{option}: no file name given (an empty argument)")
     p = Path(path)
-    if p.suffix != suffix:
-        raise FcompError(f"-o {path}: the output must end in {suffix}")
-    if p.exists() and p.is_dir():
-        raise FcompError(f"-o {path}: is a directory")
+    if p.suffix != suffix or p.stem == "":
+        raise FcompError(f"{option} {path}: the output must end in {suffix}")
+    for q in (p, p.with_suffix(".toml")):
+        if q.is_dir():
+            raise FcompError(f"{option} {path}: {q} is a directory")
     return p
+
+
+#: Suffixes a ``--json`` output may not have: they name the package's inputs and outputs.
+_NOT_JSON = (".csv", ".toml", ".py", ".mat", ".html", ".png")
 
 
 def json_target(path: str | None) -> Path | None:
@@ -60,17 +142,151 @@ def json_target(path: str | None) -> Path | None:
     Raises
     ------
     FcompError
-        If ``path`` is a directory or its folder does not exist (checked
-        before any work, so a failure never leaves a half-written result).
+        If ``path`` is empty, a directory, or its folder does not exist (checked before any work, so a failure never leaves a
+        half-written result).
     """
     if path is None or path == "-":
         return None
+    if not path.strip():
+        raise FcompError("--json: no file name given (an empty argument; '-' is standard output)")
     out = Path(path)
     if out.is_dir():
         raise FcompError(f"--json {path}: is a directory")
     if not out.parent.exists():
         raise FcompError(f"--json {path}: folder {out.parent} does not exist")
+    if not out.parent.is_dir():
+        raise FcompError(f"--json {path}: {out.parent} is not a folder")
     return out
+
+
+def check_outputs(inputs: InputSet, files: list[tuple[str, Path | None]],
+                  folders: list[tuple[str, Path | None, str]] | None = None) -> None:
+    """Refuse outputs that would overwrite an input (or its sidecar, or a folder holding
+    one), that overlap each other, or folders fcomp may not replace (before any work)."""
+    listed: list[tuple[str, Path, bool]] = []
+    for option, path in files:
+        if path is None:
+            continue
+        inputs.check_file(option, path)
+        if path.suffix == ".csv" and option != "--json":  # a measurement: and its sidecar
+            inputs.check_file(option, path.with_suffix(".toml"))
+        if option == "--json" and path.suffix.lower() in _NOT_JSON:
+            raise FcompError(f"--json {path}: a JSON result should not be written to a "
+                             f"{path.suffix} file; name it .json")
+        listed.append((option, path, False))
+    for option, folder, kind in folders or []:
+        if folder is None:
+            continue
+        inputs.check_folder(option, folder)
+        check_folder_target(option, folder, kind)
+        listed.append((option, folder, True))
+    check_distinct(listed)
+
+
+def measurement_inputs(paths: list[str], option: str = "DATA") -> InputSet:
+    """The input set of measurement files; refuses the same file given twice."""
+    from fcomp.measurement import measurement_paths
+    from fcomp.outputs import same_file
+
+    inputs = InputSet()
+    seen: list[tuple[str, Path]] = []
+    for p in paths:
+        csv, _ = measurement_paths(p)
+        for q, other in seen:
+            if same_file(csv, other):
+                raise FcompError(f"{p}: the same file is given twice (also as {q})")
+        seen.append((p, csv))
+        inputs.measurement(csv, option)
+    return inputs
+
+
+def warn_sidecar(meas: Any) -> None:
+    """Warnings for suspicious sidecar entries of a measurement read (code ``unknown-key``)."""
+    from fcomp.measurement import sidecar_warnings
+
+    for key, message in sidecar_warnings(meas):
+        warn("unknown-key", message, key)
+
+
+def guard_outputs(data: list[str], effects: str | None, files: list[tuple[str, Path | None]],
+                  folders: list[tuple[str, Path | None, str]] | None = None) -> None:
+    """:func:`check_outputs` for a command reading the measurements ``data`` (each once)
+    and the ``--effects`` module ``effects``."""
+    inputs = measurement_inputs(data)
+    if effects is not None:
+        inputs.file(effects, "--effects")
+    check_outputs(inputs, files, folders)
+
+
+def with_warnings(doc: dict[str, Any]) -> dict[str, Any]:
+    """``doc`` with the command's warnings added to its ``"warnings"`` list (the contract's
+    ``[{"code", "parameter", "message"}, ...]``, present even when empty)."""
+    items = list(doc.get("warnings") or [])
+    for w in current_warnings():
+        if w not in items:
+            items.append(w)
+    return {**doc, "warnings": items}
+
+
+def current_warnings() -> list[dict[str, Any]]:
+    """The warnings so far, Python warnings caught on the way included."""
+    for w in PYTHON_WARNINGS or []:
+        code, message = python_warning(w)
+        warn(code, message)
+    if PYTHON_WARNINGS is not None:
+        PYTHON_WARNINGS.clear()
+    return list(WARNINGS)
+
+
+class Progress:
+    """A one-line progress display of a long simulation, on a terminal only.
+
+    Shown once the run has taken ``delay`` s, updated at most twice a second,
+    erased at the end: nothing is left on the screen, nothing goes to a
+    redirected stderr.
+    """
+
+    def __init__(self, label: str, total: float, *, enabled: bool = True,
+                 delay: float = 2.0) -> None:
+        self.label, self.total, self.delay = label, total, delay
+        self.enabled = enabled and sys.stderr.isatty()
+        self.shown = False
+        self._cm: Any = None
+
+    def __enter__(self) -> Progress:
+        from fcomp.simulation import progress
+
+        self.start = self.last = time.monotonic()
+        if self.enabled:
+            self._cm = progress(self.update)
+            self._cm.__enter__()
+        return self
+
+    def update(self, fraction: float, t: float) -> None:
+        now = time.monotonic()
+        if now - self.start < self.delay or now - self.last < 0.5 or fraction <= 0:
+            return
+        self.last = now
+        spent = now - self.start
+        left = spent * (1.0 - fraction) / fraction
+        sys.stderr.write(f"\r{self.label}: {100 * fraction:.0f} % (t = {t:.4g} of "
+                         f"{self.total:g} s, {_clock(spent)} spent, about {_clock(left)} left; "
+                         "Ctrl-C stops)\x1b[K")
+        sys.stderr.flush()
+        self.shown = True
+
+    def __exit__(self, *exc: Any) -> None:
+        if self._cm is not None:
+            self._cm.__exit__(*exc)
+        if self.shown:
+            sys.stderr.write("\r\x1b[K")
+            sys.stderr.flush()
+
+
+def _clock(seconds: float) -> str:
+    m, s = divmod(int(seconds), 60)
+    h, m = divmod(m, 60)
+    return f"{h}:{m:02d}:{s:02d}" if h else f"{m}:{s:02d}"
 
 
 def result_text(doc: dict) -> str:
@@ -82,12 +298,12 @@ def emit_result(text: str, json_arg: str | None, out: Path | None, summary: str)
     """Write a command's result: the JSON ``text`` alone to standard output for
     ``--json -``; otherwise the human ``summary``, then ``text`` to ``out``
     (atomically, so no half-written file is left) when ``--json OUT`` was given."""
-    from fcomp.report import atomic_write_text
+    from fcomp.outputs import write_text
 
     if json_arg == "-":
         sys.stdout.write(text)
         return
     print(summary)
     if out is not None:
-        atomic_write_text(out, text)
+        write_text(out, text)
         print(f"wrote {out}")

@@ -13,8 +13,19 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from fcomp.demo import run_demo
+    from pathlib import Path
 
-    files = run_demo(args.out, params=args.params)
-    print(f"wrote {len(files)} files to {args.out}/ (figure: {files[-1]})")
+    from fcomp import paramsets
+    from fcomp.demo import run_demo
+    from fcomp.errors import FcompError
+    from fcomp.outputs import staged_folder
+
+    if not args.out.strip():
+        raise FcompError("--out: no folder name given (an empty argument)")
+    paramsets.get(args.params)  # an unknown set is refused before anything is written
+    out = Path(args.out)
+    with staged_folder(out, "--out", "demo", note="fcomp demo") as staging:
+        files = run_demo(staging, params=args.params)
+    print(f"wrote {len(files) - 1} measurements (CSV + TOML) and the figure "
+          f"{out / files[-1].name} to {out}/")
     return 0

@@ -21,10 +21,10 @@ from __future__ import annotations
 
 import argparse
 import shlex
-import sys
 from pathlib import Path
 
-from fcomp.cli.common import emit_result, json_target, result_text
+from fcomp.cli import common
+from fcomp.cli.common import emit_result, finite_float, json_target, result_text
 from fcomp.errors import FcompError
 
 
@@ -51,7 +51,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--split", default="auto", choices=["auto", "experiment", "segment"],
                    help="held-out split: by experiment (4+ experiments under auto) or by "
                    "contiguous segment")
-    p.add_argument("--cutoff", type=float, default=None, metavar="HZ",
+    p.add_argument("--cutoff", type=finite_float, default=None, metavar="HZ",
                    help="cutoff of the zero-phase filter deriving v, a from x (default: from "
                    "the sample rate and the position noise)")
     p.add_argument("--max-steps", type=int, default=6, metavar="N",
@@ -91,36 +91,44 @@ def run(args: argparse.Namespace) -> int:
     from fcomp.diagnosis.report import write_report
     from fcomp.effects import load_effects_module
     from fcomp.measurement import Measurement
+    from fcomp.outputs import staged_folder
 
     out = json_target(args.json)
-    if args.report is not None and Path(args.report).exists() and not Path(args.report).is_dir():
-        raise FcompError(f"--report {args.report}: exists and is not a directory")
+    report = _report_dir(args.report)
     if args.max_steps < 0:
         raise FcompError(f"--max-steps must be a non-negative integer, got {args.max_steps}")
     if args.jobs is not None and args.jobs < 1:
         raise FcompError(f"--jobs must be a positive integer, got {args.jobs}")
     if args.cutoff is not None and not args.cutoff > 0:
-        raise FcompError(f"--cutoff must be a positive frequency in Hz, got {args.cutoff}")
-    if args.effects:
+        raise FcompError(f"--cutoff must be a positive frequency in Hz, got {args.cutoff:g}")
+    common.guard_outputs(args.data, args.effects, [("--json", out)],
+                         [("--report", report, "report")])
+    if args.effects is not None:
         load_effects_module(args.effects)
-    candidates = None
-    if args.candidates is not None:
-        candidates = [c.strip() for c in args.candidates.split(",") if c.strip()]
-        if not candidates:
-            raise FcompError("--candidates: give at least one effect name")
+    candidates = common.name_list(args.candidates, "--candidates")
     data = [Measurement.read(p) for p in args.data]
+    for d in data:
+        common.warn_sidecar(d)
     diag = Diagnosis(args.baseline, effects=candidates, add=args.add,
                      search=not args.no_search, split=args.split, cutoff_hz=args.cutoff,
                      max_steps=args.max_steps, n_jobs=args.jobs,
                      progress=not args.no_progress)
     diag.fit(data)
-    doc = diag.to_dict()
+    doc = common.with_warnings(diag.to_dict())
     text = result_text(doc)
-    command = "fcomp diagnose " + " ".join(shlex.quote(a) for a in sys.argv[2:]) \
-        if len(sys.argv) > 2 else None
-    if args.report is not None:
-        path = write_report(diag, args.report, command=command)
+    command = "fcomp " + shlex.join(common.ARGV) if common.ARGV else None
+    if report is not None:
+        with staged_folder(report, "--report", "report", note=command or "fcomp diagnose") as tmp:
+            write_report(diag, tmp, command=command)
         if args.json != "-":
-            print(f"wrote {path}")
+            print(f"wrote {report / 'report.html'}")
     emit_result(text, args.json, out, summary(doc))
     return 0
+
+
+def _report_dir(path: str | None) -> Path | None:
+    if path is None:
+        return None
+    if not path.strip():
+        raise FcompError("--report: no folder name given (an empty argument)")
+    return Path(path)

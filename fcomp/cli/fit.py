@@ -19,9 +19,14 @@ from fcomp.cli.common import (
     add_model_options,
     build_model,
     emit_result,
+    finite_float,
+    guard_outputs,
     json_target,
+    name_list,
     parse_assignments,
     result_text,
+    warn_sidecar,
+    with_warnings,
 )
 from fcomp.errors import FcompError
 
@@ -49,19 +54,19 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="fit only these parameters (default: all but numerical thresholds)")
     p.add_argument("--directional", action="store_true",
                    help="fit separate values for v > 0 and v < 0 (Fc_pos, Fc_neg, ...)")
-    p.add_argument("--mass", type=float, default=None, metavar="KG",
+    p.add_argument("--mass", type=finite_float, default=None, metavar="KG",
                    help="known moving mass, overriding rig.mass (no mass estimation)")
     p.add_argument("--method", default="auto",
                    choices=["auto", "steady-state", "samples", "trajectory"],
                    help="auto (default): steady-state characteristic or samples for static "
                    "maps, steady-state start then trajectory for dynamic models")
-    p.add_argument("--v-min", type=float, default=None, metavar="M/S",
+    p.add_argument("--v-min", type=finite_float, default=None, metavar="M/S",
                    help="speed below which samples count as at rest (default 2%% of the "
                    "99th percentile of |v|)")
-    p.add_argument("--cutoff", type=float, default=10.0, metavar="HZ",
+    p.add_argument("--cutoff", type=finite_float, default=10.0, metavar="HZ",
                    help="cut-off of the zero-phase filter that derives v and a from x when the "
                    "data have no v/a columns (default 10 Hz; the force is filtered alike)")
-    p.add_argument("--confidence", type=float, default=0.95,
+    p.add_argument("--confidence", type=finite_float, default=0.95,
                    help="level of the confidence intervals (default 0.95)")
     p.add_argument("--max-nfev", type=int, default=200, metavar="N",
                    help="evaluation budget of each least-squares stage (default 200)")
@@ -99,21 +104,30 @@ def run(args: argparse.Namespace) -> int:
     if args.max_nfev < 1:
         raise FcompError(f"--max-nfev must be a positive integer, got {args.max_nfev}")
     if args.v_min is not None and not args.v_min > 0:
-        raise FcompError(f"--v-min must be a positive speed in m/s, got {args.v_min}")
+        raise FcompError(f"--v-min must be a positive speed in m/s, got {args.v_min:g}")
     if not args.cutoff > 0:
-        raise FcompError(f"--cutoff must be a positive frequency in Hz, got {args.cutoff}")
+        raise FcompError(f"--cutoff must be a positive frequency in Hz, got {args.cutoff:g}")
     if args.mass is not None and not args.mass >= 0:
-        raise FcompError(f"--mass must be a non-negative number of kg, got {args.mass}")
+        raise FcompError(f"--mass must be a non-negative number of kg, got {args.mass:g}")
+    if not 0 < args.confidence < 1:
+        raise FcompError(f"--confidence must be a level between 0 and 1 (e.g. 0.95), "
+                         f"got {args.confidence:g}")
+    guard_outputs([args.data], args.effects, [("--json", out)])
     model = build_model(args.model, args.params, args)
     initial = parse_assignments(args.set)
     fixed = parse_assignments(args.fix, "--fix")
-    free = [s.strip() for s in args.free.split(",") if s.strip()] if args.free else None
+    both = sorted(set(initial) & set(fixed))
+    if both:
+        raise FcompError(f"{both[0]}: given both --set (a start value) and --fix (held); "
+                         "choose one")
+    free = name_list(args.free, "--free")
     data = Measurement.read(args.data)
+    warn_sidecar(data)
     fit = FrictionFit(model, offset=args.offset, mass=args.mass, free=free, fixed=fixed,
                       directional=args.directional, initial=initial, method=args.method,
                       v_min=args.v_min, cutoff_hz=args.cutoff, confidence=args.confidence,
                       max_nfev=args.max_nfev)
     fit.fit(data)
-    doc = fit.to_dict()
+    doc = with_warnings(fit.to_dict())
     emit_result(result_text(doc), args.json, out, _table(fit))
     return 0

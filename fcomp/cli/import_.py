@@ -12,7 +12,14 @@ from __future__ import annotations
 
 import argparse
 
-from fcomp.cli.common import output_path
+from fcomp.cli.common import (
+    check_outputs,
+    current_warnings,
+    finite_float,
+    output_path,
+    warn,
+    warn_sidecar,
+)
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -29,24 +36,45 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    "(products of variables and numbers; a leading - flips the sign)")
     p.add_argument("--sidecar", default=None, metavar="RIG.toml",
                    help="mat: a TOML file with kind, pressure, [rig], [signals] (data-format.md)")
-    p.add_argument("--bore", type=float, default=None, metavar="M",
+    p.add_argument("--bore", type=finite_float, default=None, metavar="M",
                    help="zillen: piston bore in m (default from the file name: 0.0257 if it "
                    "contains 257, else 0.025)")
-    p.add_argument("--position-scale", type=float, default=None, metavar="M_PER_V",
+    p.add_argument("--position-scale", type=finite_float, default=None, metavar="M_PER_V",
                    help="mataveid: a calibration of the position signal in m/V, adds x and x_ref")
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
     from fcomp.errors import FcompError
-    from fcomp.importers import import_file
+    from fcomp.importers import IMPORTERS, import_file
+    from fcomp.outputs import InputSet
+    from fcomp.textdata import check_path
 
     out = output_path(args.output)
     options = {k: getattr(args, k) for k in ("mapping", "sidecar", "bore", "position_scale")
                if getattr(args, k) is not None}
+    IMPORTERS.get(args.kind)  # an unknown kind first: it decides which options apply
     if args.kind == "mat" and "mapping" not in options:
         raise FcompError("import mat: --map COLUMN=VARIABLE,... is required (t at least)")
+    if args.bore is not None and not 0 < args.bore <= 2.0:
+        raise FcompError(f"--bore {args.bore:g}: must be a positive length in metres "
+                         "(e.g. 0.025 for 25 mm)")
+    inputs = InputSet()
+    inputs.file(check_path(args.src), "SRC")
+    if args.sidecar is not None:
+        inputs.file(check_path(args.sidecar, "sidecar file"), "--sidecar")
+    check_outputs(inputs, [("-o", out)])
     meas = import_file(args.kind, args.src, **options)
+    source = meas.meta.get("source", {})
+    dropped = int(source.get("duplicate_rows_dropped", 0)) + int(
+        source.get("repeated_times_dropped", 0))
+    if dropped:
+        warn("rows-dropped", f"{args.src}: {dropped} row(s) with a repeated time stamp dropped "
+             "(the first of each kept; counts in the sidecar's [source])")
+    warn_sidecar(meas)
+    ws = current_warnings()
+    if ws:
+        meas.meta["warnings"] = ws
     csv, toml = meas.write(out)
     print(f"wrote {csv} and {toml} ({len(meas)} samples, columns {', '.join(meas.columns)})")
     return 0

@@ -2,6 +2,19 @@
 
 Each sub-command lives in its own module of :mod:`fcomp.cli` with
 ``add_parser(subparsers)`` and ``run(args) -> int``; :data:`COMMANDS` lists them.
+
+What every command shares, enforced here:
+
+* a problem with the input is one line ``fcomp: error: ...`` on stderr and
+  exit status 2, never a traceback; an error raised from inside the user's
+  ``--effects`` module names that file and line (:mod:`fcomp.usercode`);
+* warnings (``fcomp: warning: ...``, one line each) are printed after a
+  successful run; Python and numpy warnings raised on the way are collected
+  and printed the same way, never as raw multi-line warnings; a failed run
+  prints only its error line;
+* Ctrl-C and SIGTERM interrupt cleanly: outputs are staged, so an
+  interrupted run leaves the old result or nothing (exit 130, or 143 for
+  SIGTERM).
 """
 
 from __future__ import annotations
@@ -9,10 +22,17 @@ from __future__ import annotations
 import argparse
 import importlib
 import os
+import re
+import signal
 import sys
-from collections.abc import Sequence
+import threading
+import warnings
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
+from typing import Any
 
 from fcomp import __version__
+from fcomp.cli import common
 from fcomp.errors import FcompError
 
 COMMANDS = ("simulate", "fit", "diagnose", "study", "import_", "demo", "list_")
@@ -22,7 +42,7 @@ class _Parser(argparse.ArgumentParser):
     """argparse with one-line errors and exit status 2."""
 
     def error(self, message: str) -> None:  # type: ignore[override]
-        sys.stderr.write(f"{self.prog}: error: {message} (see --help)\n")
+        sys.stderr.write(f"{self.prog}: error: {plain(message)} (see --help)\n")
         raise SystemExit(2)
 
 
@@ -46,30 +66,95 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+_NUMPY_SCALAR = re.compile(r"np\.(?:float|int|uint|complex)\d*\(([^()]*)\)|np\.(True|False)_")
+
+
+def plain(message: str) -> str:
+    """``message`` as one line, numpy scalars written as plain numbers."""
+    text = " ".join(str(message).split())
+    return _NUMPY_SCALAR.sub(lambda m: m.group(1) or m.group(2), text)
+
+
+class _Terminated(KeyboardInterrupt):
+    """SIGTERM, raised like Ctrl-C so that staged outputs are cleaned up."""
+
+
+@contextmanager
+def _sigterm_interrupts() -> Iterator[None]:
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def handler(signum: int, frame: Any) -> None:
+        raise _Terminated()
+
+    old = signal.signal(signal.SIGTERM, handler)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, old)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    common.ARGV = list(sys.argv[1:] if argv is None else argv)
+    common.WARNINGS.clear()
+    with warnings.catch_warnings(record=True) as caught, _sigterm_interrupts():
+        common.PYTHON_WARNINGS = caught
+        try:
+            code = _run(args)
+        finally:
+            common.PYTHON_WARNINGS = None
+        if code == 0:
+            for w in caught:
+                common.warn(*common.python_warning(w))
+    if code == 0:
+        for item in common.WARNINGS:
+            sys.stderr.write(f"fcomp: warning: {plain(item['message'])}\n")
+    return code
+
+
+def _error(message: str) -> int:
+    sys.stderr.write(f"fcomp: error: {plain(message)}\n")
+    return 2
+
+
+def _run(args: argparse.Namespace) -> int:
+    from fcomp.usercode import blame
+
     try:
-        code = int(args.func(args) or 0)
+        return int(args.func(args) or 0)
     except FcompError as exc:
-        sys.stderr.write(f"fcomp: error: {exc}\n")
-        return 2
-    except (ValueError, KeyError, OSError) as exc:
-        msg = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-        sys.stderr.write(f"fcomp: error: {msg}\n")
-        return 2
+        return _error(str(exc))
+    except _Terminated:
+        sys.stderr.write("fcomp: terminated\n")
+        return 143
     except KeyboardInterrupt:
         sys.stderr.write("fcomp: interrupted\n")
         return 130
-    except Exception as exc:  # a bug: still one line, the traceback on request
+    except SystemExit as exc:  # only the user's code would: it must not end the command
+        return _error(blame(exc) or f"a plugin called sys.exit({exc.code!r})")
+    except RecursionError as exc:
+        return _error(blame(exc) or "the computation recursed too deeply (RecursionError)")
+    except MemoryError:
+        return _error("out of memory; lower --rate or --duration, or use smaller data")
+    except Exception as exc:
+        culprit = blame(exc)
+        if culprit is not None:
+            return _error(culprit)
+        if isinstance(exc, ValueError | KeyError | OSError):
+            if isinstance(exc, OSError) and exc.filename:
+                return _error(f"{exc.filename}: {exc.strerror or exc}")
+            text = str(exc).strip()
+            return _error(text.splitlines()[0] if text else type(exc).__name__)
         if os.environ.get("FCOMP_DEBUG"):
             raise
         sys.stderr.write(
-            f"fcomp: internal error: {type(exc).__name__}: {exc} "
+            f"fcomp: internal error: {type(exc).__name__}: {plain(str(exc))} "
             "(set FCOMP_DEBUG=1 for the traceback and please report it)\n"
         )
         return 1
-    return code
 
 
 if __name__ == "__main__":

@@ -22,11 +22,16 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from fcomp.errors import FcompError
+    from fcomp.outputs import check_folder_target
     from studies import STUDIES
     from studies.base import StudyConfig, StudyError
 
     study = STUDIES.get(args.name)
+    if args.out is not None and not args.out.strip():
+        raise FcompError("--out: no folder name given (an empty argument)")
     out = Path(args.out) if args.out else Path(f"study-{args.name}")
+    check_folder_target("--out", out, "study")
     words = ["fcomp", "study", args.name, "--out", str(out)] + (["--fast"] if args.fast else [])
     config = StudyConfig(out=out, fast=args.fast, command=shlex.join(words))
     try:

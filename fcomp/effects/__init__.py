@@ -8,8 +8,7 @@ effects (the CLI's ``--effects path/to/module.py``).
 
 from __future__ import annotations
 
-import importlib.util
-import sys
+import os
 from pathlib import Path
 from typing import Any
 
@@ -42,20 +41,27 @@ def make_effect(name: str, params: Any = None, **config: Any) -> Effect:
 
 
 def load_effects_module(path: str | Path) -> list[str]:
-    """Import a user module (a ``.py`` file) that registers effects; return the new names."""
+    """Import a user module (a ``.py`` file) that registers effects; return the new names.
+
+    The file is *executed* (README, "Security"). Any error in it, ``sys.exit``
+    included, becomes one :class:`FcompError` naming the file and the line; a
+    file already loaded in this process is not executed again.
+    """
+    from fcomp.textdata import check_path
+    from fcomp.usercode import USER_FILES, run_module
+
+    if not str(path).strip():
+        raise FcompError("--effects: no file name given (an empty argument)")
     p = Path(path)
-    if not p.is_file():
+    if not p.exists():
         raise FcompError(f"{p}: effects module not found")
+    p = check_path(p, "effects module")
+    if p.suffix != ".py":
+        raise FcompError(f"{p}: an effects module is a Python file ending in .py")
+    if os.path.realpath(p) in USER_FILES:
+        return []
     before = set(EFFECTS.names())
-    spec = importlib.util.spec_from_file_location(f"fcomp_user_effects_{p.stem}", p)
-    if spec is None or spec.loader is None:
-        raise FcompError(f"{p}: cannot import as a Python module")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module
-    try:
-        spec.loader.exec_module(module)
-    except Exception as exc:  # a user's module: report in one line
-        raise FcompError(f"{p}: importing the effects module failed: {exc}") from exc
+    run_module(p, f"fcomp_user_effects_{len(USER_FILES)}_{p.stem}", "effects module")
     return sorted(set(EFFECTS.names()) - before)
 
 

@@ -1,0 +1,181 @@
+"""Reading numeric text files (measurement CSVs, input signals, importers) with clear errors.
+
+One reader for every text table the package parses, so that all of them
+accept the same things and report problems the same way:
+
+* the path is checked first: an empty name, a folder, a missing or
+  unreadable file each give one line naming what the user typed;
+* text is UTF-8, with or without a byte-order mark (Excel's "CSV UTF-8");
+  UTF-16 with a byte-order mark (Excel's "Unicode text") is read too; a
+  binary file or another encoding is refused by name;
+* blank lines and ``#`` comments are skipped;
+* row numbers in messages are the file's line numbers as an editor shows
+  them (the first line is 1), whatever was skipped before;
+* an empty file or a header without data rows is one clean error, never
+  numpy's "input contained no data" warning.
+
+Data files are only ever parsed, never executed (README, "Security").
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from fcomp.errors import FcompError
+
+
+def check_path(path: str | Path, what: str = "file") -> Path:
+    """``path`` as a :class:`Path` if it names an existing regular file; else one clear line."""
+    text = str(path)
+    if not text.strip():
+        raise FcompError(f"no {what} name given (an empty argument)")
+    p = Path(text)
+    if p.is_dir():
+        article = "an" if what[:1] in "aeiou" else "a"
+        raise FcompError(f"{text}: is a folder, not {article} {what}")
+    if not p.exists():
+        raise FcompError(f"{text}: {what} not found")
+    if not p.is_file():
+        raise FcompError(f"{text}: is not a regular file")
+    return p
+
+
+def read_text(path: Path, label: str | None = None, what: str = "text") -> str:
+    """The text of ``path`` (UTF-8 with or without BOM, or UTF-16 with BOM); ``what``
+    the file should hold, for messages."""
+    label = label or str(path)
+    try:
+        raw = path.read_bytes()
+    except OSError as exc:
+        raise FcompError(f"{label}: cannot read ({exc.strerror or exc})") from None
+    if raw.startswith((b"\xff\xfe", b"\xfe\xff")):
+        try:
+            return raw.decode("utf-16")
+        except UnicodeDecodeError:
+            raise FcompError(f"{label}: cannot read as {what}: not valid UTF-16 text") from None
+    if b"\x00" in raw[:4096]:
+        raise FcompError(f"{label}: cannot read as {what} (a binary file, not text)")
+    try:
+        return raw.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        line = raw[: exc.start].count(b"\n") + 1
+        raise FcompError(f"{label}: cannot read as {what}: not UTF-8 text (byte "
+                         f"0x{raw[exc.start]:02x} on line {line}); save it as UTF-8") from None
+
+
+def _strip(line: str) -> str:
+    i = line.find("#")
+    return (line if i < 0 else line[:i]).strip()
+
+
+@dataclass
+class Table:
+    """Numbers read from a text table.
+
+    Attributes
+    ----------
+    data
+        ``(rows, columns)`` floats.
+    lines
+        The file line number (1-based) of every row of ``data``.
+    """
+
+    data: np.ndarray
+    lines: np.ndarray
+
+
+def parse_rows(label: str, rows: list[tuple[int, str]], delimiter: str | None,
+               names: list[str] | None = None, what: str = "numbers") -> Table:
+    """Parse ``(line_number, text)`` rows of numbers separated by ``delimiter``
+    (``None``: whitespace). Every row must have ``len(names)`` values (or as many
+    as the first row)."""
+    if not rows:
+        raise FcompError(f"{label}: no data rows" + (" after the header" if names else ""))
+    width = len(names) if names is not None else len(_split(rows[0][1], delimiter))
+    lines = np.array([n for n, _ in rows], dtype=np.int64)
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            data = np.loadtxt([r for _, r in rows], delimiter=delimiter, ndmin=2, dtype=float,
+                              comments=None)
+        if data.shape == (len(rows), width):
+            return Table(data, lines)
+    except ValueError:
+        pass
+    for n, text in rows:  # find the first bad cell, in the user's terms
+        cells = _split(text, delimiter)
+        if len(cells) != width:
+            ref = f"the header has {width}" if names is not None else f"the first row has {width}"
+            raise FcompError(f"{label}: cannot read as {what}: row {n} has {len(cells)} values, "
+                             f"{ref}")
+        for j, cell in enumerate(cells):
+            try:
+                float(cell)
+            except ValueError:
+                col = f"column {names[j]!r}" if names is not None else f"column {j + 1}"
+                problem = f"{cell!r} is not a number" if cell else "the value is missing"
+                raise FcompError(f"{label}: cannot read as {what}: row {n}, {col}: "
+                                 f"{problem}") from None
+    raise FcompError(f"{label}: cannot read as {what}")  # pragma: no cover - loadtxt disagreed
+
+
+def _split(text: str, delimiter: str | None) -> list[str]:
+    return [c.strip() for c in (text.split(delimiter) if delimiter else text.split())]
+
+
+def data_rows(text: str, start: int = 0) -> list[tuple[int, str]]:
+    """Non-blank, non-comment lines of ``text`` from line index ``start`` on, with their
+    1-based line numbers."""
+    out = []
+    for i, line in enumerate(text.splitlines()[start:], start=start + 1):
+        s = _strip(line)
+        if s:
+            out.append((i, s))
+    return out
+
+
+def header_names(label: str, text: str) -> tuple[list[str], int]:
+    """The column names of the first line that is neither blank nor a ``#`` comment
+    (comma-separated, optionally quoted) and the index of the line after it."""
+    lines = text.splitlines()
+    idx = 0
+    while idx < len(lines) and not _strip(lines[idx]):  # blank lines and # comments
+        idx += 1
+    header = lines[idx].strip() if idx < len(lines) else ""
+    if not header:
+        raise FcompError(f"{label}: the first line must be comma-separated column names "
+                         "(the file is empty)")
+    names = [_unquote(h.strip()) for h in header.split(",")]
+    if len(names) == 1:
+        for sep, word in ((";", "semicolons"), ("\t", "tabs")):
+            if sep in header:
+                raise FcompError(f"{label}: the header is separated by {word}; fcomp reads "
+                                 "comma-separated values with a '.' decimal point "
+                                 "(save the file as CSV with commas)")
+    if any(not n for n in names):
+        raise FcompError(f"{label}: the first line must be comma-separated column names "
+                         "(one is empty)")
+    seen: set[str] = set()
+    for n in names:
+        if n in seen:
+            raise FcompError(f"{label}: duplicate column names in the header ({n!r} twice)")
+        seen.add(n)
+    return names, idx + 1
+
+
+def _unquote(name: str) -> str:
+    if len(name) >= 2 and name[0] == name[-1] and name[0] in "\"'":
+        return name[1:-1].strip()
+    return name
+
+
+def first_bad(values: np.ndarray, limit: float = math.inf) -> int | None:
+    """Index of the first non-finite value (or of magnitude above ``limit``), or ``None``."""
+    with np.errstate(invalid="ignore"):
+        bad = ~np.isfinite(values) | (np.abs(values) > limit)
+    return int(np.argmax(bad)) if bad.any() else None

@@ -158,14 +158,17 @@ def default_cutoff(t: np.ndarray, x: np.ndarray) -> float:
 
 
 def quiet_runs(x: np.ndarray, tol: float, min_len: int, edge_tol: float) -> np.ndarray:
-    """Samples in runs where ``x`` stays within a band ``tol`` for at least ``min_len`` samples.
+    """Samples at rest: runs where ``x`` stays within a band ``tol`` for ``min_len`` samples or
+    more without progressing.
 
     Runs are grown greedily from the left (the longest stretch whose range
-    ``max - min`` is at most ``tol``); a run of ``min_len`` samples or more is
-    kept, and its ends are then trimmed to the first and last sample within
-    ``edge_tol`` of the run's median, so a stop is placed at the last change of
-    the position and a start at its first change (an encoder count), not
-    ``tol`` later or earlier.
+    ``max - min`` is at most ``tol``, one encoder step and its flicker). A run
+    whose second half sits ``edge_tol`` or more from its first half (means)
+    is a slow creep across an encoder step, not a rest: it is left to the
+    derived velocity, so no displacement is lost. A rest run's ends are
+    trimmed to the first and last sample within ``edge_tol`` of its median, so
+    a stop is placed at the last change of the position and a start at its
+    first change (an encoder count), not ``tol`` later or earlier.
     """
     n = x.size
     out = np.zeros(n, dtype=bool)
@@ -179,14 +182,20 @@ def quiet_runs(x: np.ndarray, tol: float, min_len: int, edge_tol: float) -> np.n
             if hi - lo > tol:
                 break
             j += 1
-        if j - i >= min_len:
-            run = x[i:j]
-            near = np.flatnonzero(np.abs(run - np.median(run)) <= edge_tol)
-            if near.size:
-                out[i + near[0]:i + near[-1] + 1] = True
-            i = j
-        else:
+        if j - i < min_len:
             i += 1
+            continue
+        run = x[i:j]
+        half = run.size // 2
+        if abs(float(np.mean(run[half:])) - float(np.mean(run[:half]))) >= edge_tol:
+            # a creep: restart where the position first left its starting value
+            moved = np.flatnonzero(np.abs(run - run[0]) > 0.0)
+            i += int(moved[0]) if moved.size else j - i
+            continue
+        near = np.flatnonzero(np.abs(run - np.median(run)) <= edge_tol)
+        if near.size:
+            out[i + near[0]:i + near[-1] + 1] = True
+        i = j
     return out
 
 

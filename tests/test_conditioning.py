@@ -181,3 +181,17 @@ def test_force_band_narrows_with_the_moving_mass() -> None:
     for b, m in zip(bands, (0.5, 5.0, 50.0), strict=True):
         if b > fs / 100:  # the chosen band keeps the inertia noise within its share
             assert m * derived_acceleration_noise(sx, b, fs) <= 0.3 * noise * math.sqrt(2 * b / fs)
+
+
+def test_a_slow_creep_across_encoder_steps_is_not_rest() -> None:
+    """One step every 20 ms (0.05 mm/s at 1 um) for 1 s: creep, kept; then a flickering rest."""
+    t = np.arange(2000) / FS
+    x_true = np.where(t < 1.0, 5e-5 * t, 5e-5) + 0.3 * Q
+    rng = np.random.default_rng(2)
+    x = _encoder(x_true + np.where(t >= 1.0, rng.normal(0.0, 0.3 * Q, t.size), 0.0))
+    (m,), _ = condition_motion([(t, x, None)])
+    assert np.mean(m.rest[(t > 0.1) & (t < 0.9)]) < 0.05
+    assert np.mean(m.rest[t > 1.1]) > 0.95
+    # the displacement of the creep is kept (the integral of v follows the position)
+    moved = np.sum(0.5 * (m.v[1:] + m.v[:-1]) * np.diff(t))
+    assert moved == pytest.approx(5e-5, abs=2 * Q)

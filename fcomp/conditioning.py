@@ -157,21 +157,22 @@ def default_cutoff(t: np.ndarray, x: np.ndarray) -> float:
     return band(fs, speed_scale(t, x), lambda fc: derived_velocity_noise(sx, fc, fs))
 
 
-def quiet_runs(x: np.ndarray, tol: float, min_len: int, edge_tol: float) -> np.ndarray:
-    """Samples at rest: runs where ``x`` stays within a band ``tol`` for ``min_len`` samples or
-    more without progressing.
+def quiet_runs(x: np.ndarray, tol: float, min_len: int, edge_tol: float
+               ) -> tuple[np.ndarray, list[tuple[int, int]]]:
+    """Rest and slow creep read off a position: ``(rest mask, creep runs)``.
 
-    Runs are grown greedily from the left (the longest stretch whose range
-    ``max - min`` is at most ``tol``, one encoder step and its flicker). A run
-    whose second half sits ``edge_tol`` or more from its first half (means)
-    is a slow creep across an encoder step, not a rest: it is left to the
-    derived velocity, so no displacement is lost. A rest run's ends are
-    trimmed to the first and last sample within ``edge_tol`` of its median, so
-    a stop is placed at the last change of the position and a start at its
-    first change (an encoder count), not ``tol`` later or earlier.
+    Runs where ``x`` stays within a band ``tol`` (one encoder step and its
+    flicker) for ``min_len`` samples or more are grown greedily from the left.
+    A run whose second half sits ``edge_tol`` or more from its first half
+    (means) is a slow *creep* across an encoder step, not a rest: it is
+    returned as ``(start, stop)`` so its displacement is kept. A *rest* run's
+    ends are trimmed to the first and last sample within ``edge_tol`` of its
+    median, so a stop is placed at the last change of the position and a start
+    at its first change (an encoder count), not ``tol`` later or earlier.
     """
     n = x.size
     out = np.zeros(n, dtype=bool)
+    creeps: list[tuple[int, int]] = []
     i = 0
     while i < n:
         lo = hi = float(x[i])
@@ -188,7 +189,8 @@ def quiet_runs(x: np.ndarray, tol: float, min_len: int, edge_tol: float) -> np.n
         run = x[i:j]
         half = run.size // 2
         if abs(float(np.mean(run[half:])) - float(np.mean(run[:half]))) >= edge_tol:
-            # a creep: restart where the position first left its starting value
+            creeps.append((i, j))
+            # go on from where the position first left its starting value
             moved = np.flatnonzero(np.abs(run - run[0]) > 0.0)
             i += int(moved[0]) if moved.size else j - i
             continue
@@ -196,21 +198,21 @@ def quiet_runs(x: np.ndarray, tol: float, min_len: int, edge_tol: float) -> np.n
         if near.size:
             out[i + near[0]:i + near[-1] + 1] = True
         i = j
-    return out
+    return out, creeps
 
 
-def position_rest(t: np.ndarray, x: np.ndarray, sigma_x: float) -> np.ndarray:
-    """Samples where the position shows no motion (:func:`quiet_runs`).
+def position_rest(t: np.ndarray, x: np.ndarray, sigma_x: float
+                  ) -> tuple[np.ndarray, list[tuple[int, int]]]:
+    """Rest and creep runs of a position (:func:`quiet_runs`).
 
     Band :data:`REST_NOISE_BAND` position-noise standard deviations (one
-    encoder step) held for at least ``2*REST_HALF_WINDOW`` (and 3 samples):
-    a motion slower than one step in that time reads as rest. Ends trimmed
-    to within two standard deviations of the resting value (the resting count
-    of an encoder).
+    encoder step) held for at least ``2*REST_HALF_WINDOW`` (and 3 samples);
+    ends trimmed to within two standard deviations of the resting value (the
+    resting count of an encoder).
     """
     fs = sample_rate(t)
-    return quiet_runs(x, REST_NOISE_BAND * sigma_x, max(3, int(round(2 * REST_HALF_WINDOW * fs))),
-                      2.0 * sigma_x)
+    return quiet_runs(x, REST_NOISE_BAND * sigma_x,
+                      max(3, int(round(2 * REST_HALF_WINDOW * fs))), 2.0 * sigma_x)
 
 
 # ------------------------------------------------------------------ velocity
@@ -465,7 +467,8 @@ def condition_motion(pieces: Sequence[tuple[np.ndarray, np.ndarray | None, np.nd
     for t, x, _ in pieces:
         assert x is not None
         _, v_x, a_x = differentiate(t, x, cutoff_hz=fc, label="x")
-        derived.append((v_x, a_x, position_rest(t, x, sx)))
+        rest, _ = position_rest(t, x, sx)
+        derived.append((v_x, a_x, rest))
     vx_noise = derived_velocity_noise(sx, fc, fs)
     velocity, reason, cross, cal = "x", "no velocity column: dx/dt of the position", None, None
     if v0 is not None:
@@ -543,6 +546,43 @@ def _choose(cal: VelocityCalibration, sx: float, fc_x: float, fs: float, speed: 
     return ("fused", f"dx/dt below {cross:.3g} Hz, the v column (bias {cal.bias:.2g} m/s "
             f"removed, lag {1e3 * cal.lag:.2g} ms, gain {cal.gain:.3g}) above, up to "
             f"{fc:.3g} Hz: their noise densities cross there", cross, fc)
+
+
+# ------------------------------------------------------------------ ensemble
+#: Alternative motions of :func:`motion_ensemble`.
+ENSEMBLE = 4
+
+
+def motion_ensemble(t: np.ndarray, x: np.ndarray, cond: Conditioning, k: int = ENSEMBLE,
+                    seed: int = 0) -> list[Motion]:
+    """``k`` motions as consistent with the measured position as the one conditioned.
+
+    The smooth position (the zero-phase filtered ``x``) is measured again by an
+    encoder whose grid is shifted by ``(j + 1/2)/k`` of a step (``j = 0..k-1``),
+    plus, for a sensor noisier than its quantisation, fresh white noise of the
+    position noise; each is conditioned as the record was (same band, rest
+    read off it). Where the record pins the motion down -- fast sliding, long
+    rests -- they agree; where it cannot -- a creep within an encoder step,
+    the turning point of a slow loop, a start placed between two counts --
+    they differ, by what the measurement leaves open. A model's predictions
+    along them bound what it could be expected to predict
+    (:func:`fcomp.diagnosis.refit.tolerant_residual`).
+    """
+    if cond.x_resolution is None or cond.x_noise is None:
+        return []
+    rng = np.random.default_rng(seed)
+    q = cond.x_resolution
+    white = math.sqrt(max(cond.x_noise**2 - q * q / 12.0, 0.0))
+    x_s = smooth(t, x, cutoff_hz=cond.cutoff_hz, label="x")
+    out = []
+    for j in range(k):
+        phi = (j + 0.5) / k * q
+        xj = np.round((x_s + phi) / q) * q - phi
+        if white > 0.2 * q:
+            xj = x_s + rng.normal(0.0, cond.x_noise, x_s.size)
+        (mo,), _ = condition_motion([(t, xj, None)], cutoff_hz=cond.cutoff_hz)
+        out.append(mo)
+    return out
 
 
 # ------------------------------------------------------------------ force band

@@ -154,7 +154,8 @@ def test_pooled_calibration_over_experiments(motion) -> None:
 
 def test_quiet_runs_place_stops_and_starts_at_the_encoder_count() -> None:
     x = np.array([0, 0, 0, 0, 0, 1, 2, 3, 4, 4, 4, 4, 4, 4, 5, 6], float) * Q
-    quiet = quiet_runs(x, 1.5 * Q, 4, 0.5 * Q)
+    quiet, creeps = quiet_runs(x, 1.5 * Q, 4, 0.5 * Q)
+    assert creeps == []
     assert quiet.tolist() == [True] * 5 + [False] * 3 + [True] * 6 + [False] * 2
 
 

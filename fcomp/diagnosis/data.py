@@ -34,8 +34,10 @@ import numpy as np
 
 from fcomp.conditioning import (
     Conditioning,
+    Motion,
     condition_motion,
     force_cutoff,
+    motion_ensemble,
     resolution,
     rest_noise,
     sample_rate,
@@ -93,12 +95,14 @@ class Scales:
 
 @dataclass(frozen=True)
 class Experiment:
-    """One experiment: its fit data and its place in the concatenated arrays."""
+    """One experiment: its fit data, its place in the concatenated arrays, and alternative
+    motions as consistent with its measured position (:func:`fcomp.conditioning.motion_ensemble`)."""
 
     label: str
     data: FitData
     start: int
     stop: int
+    alternatives: tuple[Motion, ...] = ()
 
     @property
     def n(self) -> int:
@@ -265,15 +269,18 @@ def prepare(
             if "v" not in meas:
                 raise FcompError(f"{meas.label}: steady-state points need a 'v' column")
             subs = [meas.with_columns(a=meas["a"] if "a" in meas else np.zeros(len(meas)))]
-        else:
+        alternatives: list[tuple[Motion, ...]] = [()] * len(subs)
+        if not steady:
             conditioned, cond = _condition(subs, cutoff_hz)
             cond = _force_band(subs, conditioned, cond)
             signals.append(dataclasses.replace(cond, label=meas.label))
+            if "x" in meas:
+                alternatives = [tuple(motion_ensemble(m.t, m["x"], cond)) for m in subs]
             subs, band = conditioned, cond.force_cutoff_hz
-        for sub in subs:
+        for sub, alts in zip(subs, alternatives, strict=True):
             d = fit_data(sub, force_cutoff_hz=band)
             sources.add(d.source)
-            experiments.append(Experiment(sub.label, d, start, start + d.n))
+            experiments.append(Experiment(sub.label, d, start, start + d.n, alts))
             start += d.n
     if len(sources) > 1:
         raise FcompError(f"the records give the force in different ways ({', '.join(sorted(sources))}); "

@@ -293,7 +293,8 @@ def _fit_job(i: int) -> tuple[int, dict[str, Any] | str]:
     if isinstance(res, str):
         return i, res
     return i, {"values": res.values, "n_params": res.n_params, "converged": res.converged,
-               "nfev": res.nfev, "F_hat": res.F_hat}
+               "nfev": res.nfev, "F_hat": res.F_hat, "residual": res.residual,
+               "rms_train": res.rms_train, "rms_test": res.rms_test}
 
 
 class Diagnosis:
@@ -527,8 +528,12 @@ class Diagnosis:
                 ) -> FitResult | str:
         if isinstance(payload, str):
             return payload
-        return self._refit.result(prop.model, payload["values"], payload["n_params"],
-                                  payload["converged"], payload["nfev"], F_hat=payload["F_hat"])
+        values = payload["values"]
+        model_vals = {k: v for k, v in values.items() if k != "mass"}
+        model = prop.model.with_params(**model_vals) if model_vals else prop.model
+        return FitResult(model, dict(values), payload["F_hat"], payload["residual"],
+                         payload["rms_train"], payload["rms_test"], payload["n_params"],
+                         payload["converged"], payload["nfev"])
 
     def _judge(self, name: str, res: FitResult) -> Candidate:
         before = self.fit_

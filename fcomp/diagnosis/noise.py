@@ -43,6 +43,10 @@ from fcomp.identification.uncertainty import integrated_autocorrelation
 MIN_REST_RUN = 10
 MIN_REST_TOTAL = 50
 MIN_SLIDE_RUN = 20
+#: A run is dropped from the floor when more than this share of its samples ...
+OUTLIER_SHARE = 0.01
+#: ... lie beyond this many robust standard deviations of the pooled residuals.
+OUTLIER_SPREAD = 5.0
 
 
 @dataclass(frozen=True)
@@ -84,16 +88,32 @@ def _runs(mask: np.ndarray, min_len: int) -> list[tuple[int, int]]:
 
 
 def _pooled(t: np.ndarray, y: np.ndarray, runs: list[tuple[int, int]], degree: int
-            ) -> tuple[float, int, np.ndarray]:
-    ss, dof, res = 0.0, 0, []
+            ) -> tuple[float, int, np.ndarray, list[tuple[int, int]]]:
+    """Pooled variance of ``y`` about a polynomial in time per run, robust to outlying runs.
+
+    Each run gets a least-squares polynomial of ``degree``; from the pooled
+    residuals a robust spread ``s = 1.4826*MAD`` is taken, and runs with more
+    than :data:`OUTLIER_SHARE` of their samples beyond :data:`OUTLIER_SPREAD`
+    ``s`` are dropped (a rest read off a coarse encoder may hold a creep, and a
+    static friction law jumps there). The variance of the kept runs, with
+    ``n - degree - 1`` degrees of freedom per run, is returned with the
+    samples counted, their residuals and the runs kept.
+    """
+    fits = []
     for a, b in runs:
         tt = t[a:b] - t[a]
         coef = np.polyfit(tt, y[a:b], degree)
-        r = y[a:b] - np.polyval(coef, tt)
-        ss += float(r @ r)
-        dof += (b - a) - (degree + 1)
-        res.append(r)
-    return (ss / dof if dof > 0 else math.nan), sum(b - a for a, b in runs), np.concatenate(res)
+        fits.append((a, b, y[a:b] - np.polyval(coef, tt)))
+    allr = np.concatenate([r for _, _, r in fits]) if fits else np.zeros(0)
+    spread = 1.4826 * float(np.median(np.abs(allr - np.median(allr)))) if allr.size else 0.0
+    if spread > 0:
+        fits = [f for f in fits
+                if np.mean(np.abs(f[2]) > OUTLIER_SPREAD * spread) <= OUTLIER_SHARE]
+    ss = sum(float(r @ r) for _, _, r in fits)
+    dof = sum(r.size - (degree + 1) for _, _, r in fits)
+    kept = [(a, b) for a, b, _ in fits]
+    res = np.concatenate([r for _, _, r in fits]) if fits else np.zeros(0)
+    return (ss / dof if dof > 0 else math.nan), int(res.size), res, kept
 
 
 def noise_floor(data: DiagnosisData, seg: Segmentation) -> NoiseFloor:
@@ -109,13 +129,15 @@ def noise_floor(data: DiagnosisData, seg: Segmentation) -> NoiseFloor:
         runs = [(s + trim, e - trim) for s, e in _runs(rest, MIN_REST_RUN + 2 * trim)]
         runs = [(s, e) for s, e in runs if not boundaries[s + 1:e].any()]
         if sum(e - s for s, e in runs) >= MIN_REST_TOTAL:
-            var, n, res = _pooled(t, y, runs, 1)
-            return NoiseFloor(math.sqrt(var), "rest", n, len(runs), _tau(res, runs, dt))
+            var, n, res, kept = _pooled(t, y, runs, 1)
+            if n >= MIN_REST_TOTAL:
+                return NoiseFloor(math.sqrt(var), "rest", n, len(kept), _tau(res, kept, dt))
         steady = (seg.regime == SLIDING) & (np.abs(a) < 0.1 * data.scales.accel) & seg.valid
         runs = [r for r in _runs(steady, MIN_SLIDE_RUN) if not boundaries[r[0] + 1:r[1]].any()]
         if sum(e - s for s, e in runs) >= MIN_REST_TOTAL:
-            var, n, res = _pooled(t, y, runs, 2)
-            return NoiseFloor(math.sqrt(var), "sliding", n, len(runs), _tau(res, runs, dt))
+            var, n, res, kept = _pooled(t, y, runs, 2)
+            if n >= MIN_REST_TOTAL:
+                return NoiseFloor(math.sqrt(var), "sliding", n, len(kept), _tau(res, kept, dt))
     else:
         groups = _repeat_groups(data)
         if groups:

@@ -154,7 +154,7 @@ class FitResult:
     nfev: int
 
 
-#: Largest timing tolerance (s) of :func:`timing_tolerant_residual`.
+#: Largest timing tolerance (s) of :func:`tolerant_residual`.
 MAX_TIMING = 0.02
 
 
@@ -174,37 +174,44 @@ def timing_windows(v: np.ndarray, dt: float, resolution: float) -> np.ndarray:
     return np.clip(w, 1, w_max).astype(int)
 
 
-def timing_tolerant_residual(y: np.ndarray, F_hat: np.ndarray, starts: Sequence[int],
-                             windows: np.ndarray | None = None) -> np.ndarray:
-    """``y - F_hat`` with the timing tolerance of the motion where the prediction changes fast.
+def tolerant_residual(y: np.ndarray, lo: np.ndarray, hi: np.ndarray, starts: Sequence[int],
+                      windows: np.ndarray | None = None) -> np.ndarray:
+    """The distance of ``y`` from what the model could be expected to predict there (N).
 
     The model runs along a motion reconstructed from sampled, quantised
-    positions, so an event -- a start, a stop, a velocity reversal where a
-    friction law jumps by its whole level -- is placed only to within the
-    time the piston takes to move one position resolution
-    (:func:`timing_windows`, ``w_k`` samples; one sample without ``windows``).
-    Any value between the predictions within ``w_k`` samples of sample ``k``
-    (in its experiment; ``starts`` are the first samples of the experiments)
-    is taken as right as the prediction itself: the residual is the distance
-    of ``y`` from that envelope. Where the prediction is smooth the envelope
-    is narrower than the noise and this is the plain residual; a structure
-    the model does not predict anywhere near is never hidden.
+    positions, so what it predicts at a sample is known only within
+
+    * the range ``[lo, hi]`` of its predictions along motions as consistent
+      with the measured position as the one used
+      (:func:`fcomp.conditioning.motion_ensemble`: a creep within an encoder
+      step, the turning point of a slow loop), and
+    * the time the piston takes to move one position resolution
+      (:func:`timing_windows`, ``w_k`` samples): an event -- a start, a stop, a
+      velocity reversal where a friction law jumps by its whole level -- is
+      placed only to within that time,
+
+    so the range is widened to the lowest and highest value within ``w_k``
+    samples (in the experiment; ``starts`` are its first samples). The residual
+    is ``y`` minus its projection onto that band. Where the motion is well
+    measured and the prediction smooth the band is narrower than the noise and
+    this is the plain residual; a structure the model predicts nowhere near
+    is never hidden.
     """
     from scipy.ndimage import maximum_filter1d, minimum_filter1d
 
-    n = F_hat.size
+    n = lo.size
     w = np.ones(n, dtype=int) if windows is None else windows
     bounds = [*sorted(set(starts) | {0}), n]
-    lo = F_hat.copy()
-    hi = F_hat.copy()
+    low = lo.copy()
+    high = hi.copy()
     for a, b in zip(bounds[:-1], bounds[1:], strict=True):
-        seg, ws = F_hat[a:b], w[a:b]
+        ws = w[a:b]
         for k in np.unique(ws):
             sel = ws == k
             size = 2 * int(k) + 1
-            lo[a:b][sel] = minimum_filter1d(seg, size, mode="nearest")[sel]
-            hi[a:b][sel] = maximum_filter1d(seg, size, mode="nearest")[sel]
-    return y - np.clip(y, lo, hi)
+            low[a:b][sel] = minimum_filter1d(lo[a:b], size, mode="nearest")[sel]
+            high[a:b][sel] = maximum_filter1d(hi[a:b], size, mode="nearest")[sel]
+    return y - np.clip(y, low, high)
 
 
 def fixed_names(model: FrictionModel) -> set[str]:
@@ -273,16 +280,30 @@ class Refit:
     def predict(self, model: FrictionModel, values: Mapping[str, float] | None = None
                 ) -> np.ndarray:
         """Predicted force (N) at every sample of the record (full rate)."""
+        return self._predictions(model, values, alternatives=False)[0]
+
+    def _predictions(self, model: FrictionModel, values: Mapping[str, float] | None,
+                     alternatives: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(F_hat, lo, hi)``: the prediction and its range along the alternative motions."""
         vals = dict(values or {})
         mass = vals.pop("mass", None)
-        out = []
+        out, lo, hi = [], [], []
         for e in self.data.experiments:
-            out.append(self._predict_one(model, e, vals, mass))
-        return np.concatenate(out)
+            F = self._predict_one(model, e, vals, mass, e.data.sig)
+            f_lo, f_hi = F.copy(), F.copy()
+            if alternatives:
+                for alt in e.alternatives:
+                    sig = dict(e.data.sig, v=alt.v, a=alt.a)
+                    Fa = self._predict_one(model, e, vals, mass, sig)
+                    np.minimum(f_lo, Fa, out=f_lo)
+                    np.maximum(f_hi, Fa, out=f_hi)
+            out.append(F)
+            lo.append(f_lo)
+            hi.append(f_hi)
+        return np.concatenate(out), np.concatenate(lo), np.concatenate(hi)
 
     def _predict_one(self, model: FrictionModel, e: Experiment, vals: Mapping[str, float],
-                     mass: float | None) -> np.ndarray:
-        s = e.data.sig
+                     mass: float | None, s: Mapping[str, np.ndarray]) -> np.ndarray:
         F = e.data.band_limited(friction_along_motion(
             model, s["t"], s["v"], a=s["a"], x=s["x"], p1=s["p1"], p2=s["p2"],
             values=vals or None).F)
@@ -291,20 +312,19 @@ class Refit:
         return F
 
     def result(self, model: FrictionModel, values: Mapping[str, float], n_params: int,
-               converged: bool = True, nfev: int = 0,
-               F_hat: np.ndarray | None = None) -> FitResult:
+               converged: bool = True, nfev: int = 0) -> FitResult:
         """The :class:`FitResult` of ``model`` with ``values`` (scored on the full record).
 
-        ``F_hat``: its prediction, if already computed (else simulated here).
-        The residual is the timing-tolerant one (:func:`timing_tolerant_residual`).
+        The residual is the tolerant one (:func:`tolerant_residual`): the
+        prediction's range along the record's alternative motions, widened by
+        the timing windows.
         """
         model_vals = {k: v for k, v in values.items() if k != "mass"}
         fitted = model.with_params(**model_vals) if model_vals else model
         extras = {"mass": values["mass"]} if "mass" in values else {}
-        if F_hat is None:
-            F_hat = self.predict(fitted, extras)
-        r = timing_tolerant_residual(self.data.y, F_hat,
-                                     [e.start for e in self.data.experiments], self.windows)
+        F_hat, lo, hi = self._predictions(fitted, extras, alternatives=True)
+        r = tolerant_residual(self.data.y, lo, hi, [e.start for e in self.data.experiments],
+                              self.windows)
         tr, te = self.split.train, self.split.test
         return FitResult(fitted, dict(values), F_hat, r, _rms(r[tr]), _rms(r[te]), n_params,
                          converged, nfev)

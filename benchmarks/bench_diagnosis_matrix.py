@@ -53,6 +53,12 @@ def run_case(case: Case) -> dict:
                added=doc.get("added"), verdict=doc.get("verdict"), reason=doc.get("reason"),
                rms_baseline=doc.get("rms_baseline"), rms_final=doc.get("rms_final"),
                noise_floor=doc.get("noise_floor"), ties=doc.get("ties"),
+               features=(doc.get("residual_features") or [])[:4],
+               regimes=(doc.get("regimes") or {}).get("final"),
+               candidates=[(c["effect"], c["rms_heldout"], c["reason"][:160])
+                           for c in doc.get("candidates") or []],
+               steps=[(s["effect"], s["rms_after"], s["accepted"]) for s in doc.get("steps") or []],
+               velocity=(doc.get("signals") or {}).get("velocity"),
                error=doc.get("error"))
     return out
 

@@ -81,8 +81,7 @@ def summary(doc: dict) -> str:
                 lines.append(f"    {e}: {exp}")
     lines.append(f"added: {', '.join(doc['added']) or 'nothing'}; final model {doc['model']}; "
                  f"held-out RMS {doc['rms_final']:.4g} N")
-    feats = ", ".join(f"{f['feature']} {f['strength']:.2f}" for f in doc["residual_features"][:4])
-    lines.append(f"verdict: {doc['verdict']} (residual follows: {feats})")
+    lines.append(f"verdict: {doc['verdict']} -- {doc['reason']}")
     return "\n".join(lines)
 
 

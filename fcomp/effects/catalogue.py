@@ -57,7 +57,7 @@ class StructuralEffect(Effect):
 
     def attach(self, model: FrictionModel) -> FrictionModel:
         fam = _family(model, self.name)
-        if self.adds <= fam.features:
+        if not self.applies_to(fam):
             raise ValueError(f"model {fam.describe()!r} already has effect {self.name!r}")
         missing = self.requires - fam.features
         if missing:
@@ -97,23 +97,33 @@ class Stribeck(StructuralEffect):
     hydrodynamic film carries part of the load and friction drops over a
     characteristic speed ``vs``. A model without it under-predicts the force
     at low speed and at break-away: the residual is a hump at small ``|v|``
-    decaying over a few ``vs``, with peaks right after each start.
+    decaying over a few ``vs``, with peaks right after each start. The curve's
+    exponent ``n`` and form ``kappa_s`` (exponential to rational, the
+    ``stribeck-form`` of :mod:`fcomp.models.lugre_family`) cover the shapes
+    reported for seals (Armstrong-Helouvry 1991; Hess & Soom 1990).
     """
 
     name = "stribeck"
-    adds = frozenset({"stribeck"})
+    adds = frozenset({"stribeck", "stribeck-form"})
     Params = make_params_class("StribeckEffectParams", [
         spec("Fs_excess", "N", 0.0, 0.0, INF, "Fs - Fc, break-away excess over Coulomb"),
         spec("vs", "m/s", 0.01, 0.0, INF, "Stribeck velocity", lower_open=True),
         spec("n", "-", 2.0, 0.0, 10.0, "Stribeck exponent", lower_open=True),
+        FAMILY_SPECS["kappa_s"],
     ], owner="effect stribeck")
     signature = "residual hump at low |v| decaying with speed; peaks after starts"
     experiment = "slow constant-speed runs (0.1-10 vs) in both directions"
 
+    def applies_to(self, model: FrictionModel) -> bool:
+        from fcomp.models.lugre_family import LuGreFamily
+
+        return isinstance(model, LuGreFamily) and "stribeck" not in model.features
+
     def new_values(self, model: FrictionModel) -> dict[str, float]:
         flat = model.params.flat()
         exc = self.params.Fs_excess  # type: ignore[attr-defined]
-        out: dict[str, float] = {"vs": self.params.vs, "n": self.params.n}  # type: ignore[attr-defined]
+        out: dict[str, float] = {"vs": self.params.vs, "n": self.params.n,  # type: ignore[attr-defined]
+                                 "kappa_s": self.params.kappa_s}  # type: ignore[attr-defined]
         if "Fc" in flat:
             out["Fs"] = flat["Fc"] + exc
         else:
@@ -195,17 +205,26 @@ class Presliding(StructuralEffect):
     force-displacement loop (instead of a step) at small amplitude; the
     residual follows displacement since reversal, not velocity. The default
     ``sigma0 = inf`` is the rigid limit (the static map itself: a no-op).
+    The bristle's approach to sliding is LuGre's exponential by default;
+    Dahl's exponent ``i_pre`` (``bristle-exponent`` of
+    :mod:`fcomp.models.lugre_family`) makes it softer or stiffer.
     """
 
     name = "presliding"
-    adds = frozenset({"presliding", "damping"})
+    adds = frozenset({"presliding", "damping", "bristle-exponent"})
     Params = make_params_class("PreslidingParams", [
         spec("sigma0", "N/m", INF, 0.0, INF, "bristle stiffness (inf: rigid, no-op)",
              lower_open=True, directional=False),
         spec("sigma1", "Ns/m", 0.0, 0.0, INF, "bristle damping", directional=False),
+        FAMILY_SPECS["i_pre"],
     ], owner="effect presliding")
     signature = "residual spikes at reversals that follow displacement since reversal"
     experiment = "small-amplitude displacement cycles (well below break-away)"
+
+    def applies_to(self, model: FrictionModel) -> bool:
+        from fcomp.models.lugre_family import LuGreFamily
+
+        return isinstance(model, LuGreFamily) and not {"presliding", "damping"} <= model.features
 
     def attach(self, model: FrictionModel) -> FrictionModel:
         fam = _family(model, self.name)

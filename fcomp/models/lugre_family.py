@@ -17,6 +17,14 @@ feature          term
 ``lead``         ``sigma2*(v + T*dv/dt)`` (NMLGM, seed 000 Eq. 8, seed 002 Eq. 6)
 ``elements``     the bristle split into :data:`ELEMENTS` Maxwell-slip elements
                  (nonlocal memory, models.md 1.7-1.8; below)
+``stribeck-      the curve's form: ``exp(-r^n)`` becomes the q-exponential
+form``           ``(1 + kappa_s*r^n)^(-1/kappa_s)``, ``r = |v|/vs``: ``kappa_s -> 0``
+                 the exponential, ``kappa_s = 1`` the rational ``1/(1 + r^n)``
+                 (Hess & Soom 1990's Lorentzian for ``n = 2``), a fatter tail between
+``bristle-       Dahl's exponent ``i_pre``: ``dz/dt = v*|1 - u|^i*sign(1 - u)``,
+exponent``       ``u = sigma0*sign(v)*z/g`` (Dahl 1976; ``i = 1`` is LuGre's bristle,
+                 ``i > 1`` a softer approach to sliding, ``i < 1`` stiffer until
+                 close to it, towards the elasto-plastic bristle of Dupont et al. 2002)
 ==============  ==========================================================
 
 Maxwell-slip elements (``elements``, nonlocal memory). A share ``s =
@@ -85,6 +93,11 @@ FAMILY_SPECS: dict[str, ParamSpec] = {
              directional=False),
         spec("v_eps", "m/s", 1e-5, 0.0, INF, "velocity treated as zero (dwell detection, "
              "static-map regularisation)", lower_open=True, directional=False),
+        spec("kappa_s", "-", 0.0, 0.0, 1.0, "Stribeck curve form: 0 the exponential "
+             "exp(-r^n), 1 the rational 1/(1 + r^n), between the q-exponential",
+             directional=False),
+        spec("i_pre", "-", 1.0, 0.2, 4.0, "bristle exponent: 1 LuGre, > 1 softer (Dahl i), "
+             "< 1 stiffer until near slip (elasto-plastic)", directional=False),
         spec("ms_share", "-", 0.0, 0.0, 1.0, "Maxwell-slip elements: share of the level they "
              "carry (0: the bristle alone)", directional=False),
         spec("ms_dmax", "m", 1e-4, 0.0, INF, "Maxwell-slip elements: largest slip "
@@ -107,9 +120,11 @@ FEATURE_PARAMS: dict[str, tuple[str, ...]] = {
     "film-lag": ("tau_hp", "tau_hn", "tau_h0"),
     "lead": ("T",),
     "elements": ("ms_share", "ms_dmax", "ms_spread", "ms_shape"),
+    "stribeck-form": ("kappa_s",),
+    "bristle-exponent": ("i_pre",),
 }
 FEATURE_ORDER = ("stribeck", "viscous", "presliding", "damping", "film", "film-lag", "lead",
-                 "elements")
+                 "elements", "stribeck-form", "bristle-exponent")
 
 
 def _check_features(features: frozenset[str]) -> None:
@@ -124,6 +139,10 @@ def _check_features(features: frozenset[str]) -> None:
         raise ValueError("bristle damping needs the bristle state (presliding)")
     if "elements" in features and "presliding" not in features:
         raise ValueError("Maxwell-slip elements split the bristle: they need presliding")
+    if "stribeck-form" in features and "stribeck" not in features:
+        raise ValueError("the Stribeck curve form needs the Stribeck term")
+    if "bristle-exponent" in features and "presliding" not in features:
+        raise ValueError("the bristle exponent needs the bristle (presliding)")
 
 
 def _param_names(features: frozenset[str], viscous_name: str) -> tuple[str, ...]:
@@ -194,8 +213,15 @@ class LuGreFamily(FrictionModel):
 
     # ------------------------------------------------------------- equations
     def _stribeck_decay(self, be: Backend, v: Any, P: ParamValues, s: Any) -> Any:
+        """``exp(-r^n)``, ``r = |v|/vs``; with ``stribeck-form`` the q-exponential
+        ``(1 + kappa*r^n)^(-1/kappa)`` (``kappa -> 0``: the exponential, 1: rational)."""
         vs, n = P("vs", s), P("n", s)
-        return be.exp(-be.power(be.fmax(be.abs(v) / vs, _TINY), n))
+        rn = be.power(be.fmax(be.abs(v) / vs, _TINY), n)
+        if "stribeck-form" not in self.features:
+            return be.exp(-rn)
+        kappa = P("kappa_s")
+        q = be.power(1.0 + be.fmax(kappa, 1e-6) * rn, -1.0 / be.fmax(kappa, 1e-6))
+        return be.if_else(kappa < 1e-6, be.exp(-rn), q)
 
     def g(self, be: Backend, v: Any, h: Any, P: ParamValues, L: dict, s: Any) -> Any:
         """Stribeck function ``g(v, h) = Fc + ((1 - h)*Fs - Fc)*exp(-(|v|/vs)^n)`` (N)."""
@@ -244,7 +270,11 @@ class LuGreFamily(FrictionModel):
         z, deltas, _ = self._split(x)
         if z:
             g = self.g(be, v, h, P, L, sig.s)
-            out.append(v - P("sigma0") * be.abs(v) * z[0] / g)
+            if "bristle-exponent" in self.features:  # Dahl's exponent (Dahl 1976)
+                u = 1.0 - P("sigma0") * be.sign(v) * z[0] / g
+                out.append(v * be.sign(u) * be.power(be.fmax(be.abs(u), 1e-12), P("i_pre")))
+            else:
+                out.append(v - P("sigma0") * be.abs(v) * z[0] / g)
             if deltas:
                 for d, (_, di) in zip(deltas, self._elements(be, P), strict=True):
                     lim = di * g / L["Fc"]

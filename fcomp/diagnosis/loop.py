@@ -283,7 +283,8 @@ def refit_candidate(refit: Refit, prop: catalogue.Proposal, current: FitResult
                 return ("screened out: its data-driven start does not lower the training error "
                         f"({probe.rms_train:.4g} N >= {current.rms_train:.4g} N)")
             return refit.fit(prop.model, prop.starts, prop.free, max_nfev=NONSYMBOLIC_NFEV)
-        return refit.fit(prop.model, prop.starts, prop.free)
+        return refit.fit(prop.model, prop.starts, prop.free,
+                         reference=refit.train_cost(current.model, current.values))
     except (FcompError, ValueError, ArithmeticError) as exc:
         return f"refit failed: {str(exc).splitlines()[0] if str(exc) else type(exc).__name__}"
 

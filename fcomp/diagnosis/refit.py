@@ -54,6 +54,8 @@ from fcomp.trajectory import friction_along_motion
 
 #: Evaluations of each short probe fit when there are several starts.
 PROBE_NFEV = 20
+#: Smallest share of the training cost a candidate's probes must remove to be refitted fully.
+MIN_GAIN = 0.002
 #: Softest stiffness allowed: its presliding range ``F/k`` is at most this many ``d_pre``.
 PRESLIDING_SPAN = 20.0
 #: Parameters held at their start values in the first stage of a fit.
@@ -360,14 +362,39 @@ class Refit:
             out[n] = max(v, floor) if math.isfinite(v) else 10.0 * floor
         return out
 
+    def train_cost(self, model: FrictionModel, values: Mapping[str, float]) -> float:
+        """Sum of squared residuals over the training samples of the fit records (N^2).
+
+        The measure the solver minimises (plain residuals on the possibly
+        block-averaged records), so a refit can be compared with it.
+        """
+        vals = {k: v for k, v in values.items() if k != "mass"}
+        mass = values.get("mass")
+        total = 0.0
+        for d, m in self._records:
+            s = d.sig
+            F = d.band_limited(friction_along_motion(
+                model, s["t"], s["v"], a=s["a"], x=s["x"], p1=s["p1"], p2=s["p2"],
+                values=vals or None).F)
+            if mass is not None and d.inertia is not None:
+                F = F + mass * d.inertia
+            r = (d.y - F)[m]
+            total += float(r @ r)
+        return total
+
     def fit(self, model: FrictionModel, starts: Sequence[Mapping[str, float]] = (),
-            free: Sequence[str] | None = None, *, max_nfev: int | None = None) -> FitResult:
+            free: Sequence[str] | None = None, *, max_nfev: int | None = None,
+            reference: float | None = None) -> FitResult:
         """Fit ``model`` on the training samples from the best of ``starts``.
 
         Each start maps flat names to values (missing names: the model's
         current values); ``free`` the names to fit (default :meth:`free_names`);
-        ``max_nfev`` overrides the evaluation budget. Returns the
-        :class:`FitResult`, scored on the full record.
+        ``max_nfev`` overrides the evaluation budget. With ``reference`` (the
+        training cost of the model a candidate would replace,
+        :meth:`train_cost`) a refit whose best short probe does not lower it by
+        :data:`MIN_GAIN` stops there: a candidate that cannot even improve the
+        training fit cannot qualify, and its full refit would be wasted.
+        Returns the :class:`FitResult`, scored on the full record.
         """
         max_nfev = max_nfev or self.max_nfev
         names = list(free) if free is not None else self.free_names(model)
@@ -401,8 +428,11 @@ class Refit:
         if best is None:
             raise FcompError(f"fitting {model.describe()}: the model gives non-finite forces at "
                              "every start")
-        _, sol, st = best
+        cost, sol, st = best
         st = dict(st, **dict(zip(first, map(float, sol.theta), strict=True)))
+        if reference is not None and cost > (1.0 - MIN_GAIN) * reference:
+            values = {n: float(st[n]) for n in names}
+            return self.result(model, values, len(names), False, nfev)
         if len(start_list) > 1:
             sol, k = self._solve(model, self._pv(model, first, st, specs), max_nfev)
             nfev += k

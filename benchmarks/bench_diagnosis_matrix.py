@@ -48,7 +48,7 @@ def run_case(case: Case) -> dict:
     except Exception as exc:  # a failure is a wrong answer, with its reason
         doc = {"error": f"{type(exc).__name__}: {exc}"}
     t2 = time.perf_counter()
-    right, why = judge(case, doc)
+    right, why = judge(case, doc, rec.truth.noise_std)
     out.update(right=right, why=why, generate_s=t1 - t0, diagnose_s=t2 - t1,
                added=doc.get("added"), verdict=doc.get("verdict"), reason=doc.get("reason"),
                rms_baseline=doc.get("rms_baseline"), rms_final=doc.get("rms_final"),

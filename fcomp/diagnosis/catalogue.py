@@ -111,6 +111,8 @@ def applicability(name: str, model: FrictionModel, data: DiagnosisData,
 
 
 def _config(name: str, data: DiagnosisData) -> dict[str, Any]:
+    if name == "viscous":  # the exponent's reference speed: the record's
+        return {"v_ref": data.scales.speed}
     if name == "nonlocal-memory":  # the form with continuous states and exact sensitivities
         return {"form": "maxwell-slip"}
     if name == "position-dependence":
@@ -200,7 +202,7 @@ def _viscous(ctx: Context) -> list[dict[str, float]]:
     c = _ls(ctx.current.residual[m], ctx.data.signal("v")[m])
     sc = ctx.data.scales
     c = c if c > 0 else 0.05 * sc.force / sc.speed
-    return [{"sigma2": c}]
+    return [{"sigma2": c}, {"sigma2": c, "p_visc": 0.6}]
 
 
 def _stribeck(ctx: Context) -> list[dict[str, float]]:

@@ -713,8 +713,10 @@ class Diagnosis:
         """Which velocity drove the friction states, from which force, and why (JSON ``signals``).
 
         ``velocity`` (``"x"``, ``"v"``, ``"fused"``, or ``"mixed"`` when records
-        differ), ``force`` and ``reason`` summarise; ``records`` holds the full
-        conditioning of every file (:class:`fcomp.conditioning.Conditioning`).
+        differ), ``force`` and ``reason`` summarise; ``unresolved_samples``
+        counts the samples left out because the position missed motion there
+        (:func:`fcomp.diagnosis.regimes.unresolved_rests`); ``records`` holds
+        the full conditioning of every file (:class:`fcomp.conditioning.Conditioning`).
         """
         recs = [c.to_dict() for c in self.data_.signals]
         if not recs:
@@ -723,6 +725,7 @@ class Diagnosis:
         kinds = {r["velocity"] for r in recs}
         return {"velocity": kinds.pop() if len(kinds) == 1 else "mixed",
                 "force": self.data_.source,
+                "unresolved_samples": self.segmentation_.unresolved,
                 "reason": "; ".join(dict.fromkeys(f"{r['label']}: {r['reason']}" for r in recs)),
                 "records": recs}
 

@@ -48,6 +48,10 @@ PRESLIDING, REVERSAL, SLIDING, DWELL = range(4)
 TRANSITION = 3.0
 #: Warm-up excursion at the start of each experiment, in presliding lengths.
 WARMUP = 6.0
+#: A held rest whose force swings by more than this many noise levels ...
+UNRESOLVED_NOISE = 10.0
+#: ... and this share of the friction level holds motion the position misses.
+UNRESOLVED_LEVEL = 0.3
 
 
 @dataclass(frozen=True)
@@ -69,6 +73,9 @@ class Segmentation:
         The thresholds used (m/s, m, s).
     starts : list of (index, dwell_s, reversal)
         Every run start: sample index, rest before it (s), whether it reverses.
+    unresolved : int
+        Samples left out because the position missed motion there
+        (:func:`unresolved_rests`).
     """
 
     regime: np.ndarray
@@ -80,6 +87,7 @@ class Segmentation:
     d_pre: float
     t_dwell: float
     starts: list[tuple[int, float, bool]]
+    unresolved: int = 0
 
     def mask(self, name: str) -> np.ndarray:
         """Samples of regime ``name``."""
@@ -136,7 +144,47 @@ def segment(data: DiagnosisData) -> Segmentation:
                                           WARMUP * d_pre)
         regime[sl], valid[sl], tsr[sl], dsr[sl], dwell[sl] = r, ok, a, b, c
         starts += [(e.start + k, dw, rev) for k, dw, rev in st]
-    return Segmentation(regime, valid, tsr, dsr, dwell, v_rest, d_pre, t_dwell, starts)
+    unresolved = unresolved_rests(data)
+    valid &= ~unresolved
+    return Segmentation(regime, valid, tsr, dsr, dwell, v_rest, d_pre, t_dwell, starts,
+                        int(unresolved.sum()))
+
+
+def unresolved_rests(data: DiagnosisData) -> np.ndarray:
+    """Samples held at rest while the force moves like friction: motion the position misses.
+
+    Where the position shows no motion the velocity is held at zero
+    (:mod:`fcomp.conditioning`), and a friction model holds its force. If the
+    measured force still swings there -- its range over a held rest (2nd to
+    98th percentile) exceeds both :data:`UNRESOLVED_NOISE` noise levels and
+    :data:`UNRESOLVED_LEVEL` of the friction level -- the piston moved by less
+    than the position resolution (a small loop, a creep) and friction followed
+    it: no model can predict those samples from this position signal, so they
+    are left out of every fit and score (reported as ``unresolved`` in the
+    JSON ``signals``). The noise level is the robust spread of the force about
+    each rest's median.
+    """
+    v, y = data.signal("v"), data.y
+    held = v == 0.0
+    out = np.zeros(data.n, dtype=bool)
+    if not held.any():
+        return out
+    runs = []
+    for e in data.experiments:
+        h = held[e.start:e.stop]
+        edges = np.flatnonzero(np.diff(np.concatenate([[0], h.astype(int), [0]])))
+        runs += [(e.start + a, e.start + b) for a, b in zip(edges[::2], edges[1::2], strict=True)
+                 if b - a >= 10]
+    if not runs:
+        return out
+    dev = np.concatenate([y[a:b] - np.median(y[a:b]) for a, b in runs])
+    noise = 1.4826 * float(np.median(np.abs(dev)))
+    limit = max(UNRESOLVED_NOISE * noise, UNRESOLVED_LEVEL * data.scales.force)
+    for a, b in runs:
+        lo, hi = np.percentile(y[a:b], [2.0, 98.0])
+        if hi - lo > limit:
+            out[a:b] = True
+    return out
 
 
 def _segment_one(t: np.ndarray, x: np.ndarray, v: np.ndarray, v_rest: float, zone: float,

@@ -74,20 +74,32 @@ class StructuralEffect(Effect):
 class Viscous(StructuralEffect):
     """Viscous friction ``sigma2*v``: shear of the lubricant film between seal and bore.
 
-    The force grows linearly with sliding speed. A model without it leaves a
-    residual that is a straight line through the origin against ``v``
-    (odd in ``v``, growing with speed, unrelated to position or pressure).
+    The force grows with sliding speed, linearly for a Newtonian film; a
+    shear-thinning lubricant or a film that thickens with speed makes it a
+    power of the speed, ``sigma2*v*(|v|/v_ref)^(p_visc - 1)`` (the
+    ``viscous-power`` of :mod:`fcomp.models.lugre_family`; ``v_ref`` is
+    configuration, the record's speed scale in a diagnosis). A model without
+    it leaves a residual odd in ``v`` that grows with speed, unrelated to
+    position or pressure.
     """
 
     name = "viscous"
-    adds = frozenset({"viscous"})
+    adds = frozenset({"viscous", "viscous-power"})
     Params = make_params_class("ViscousParams", [
-        spec("sigma2", "Ns/m", 0.0, 0.0, INF, "viscous coefficient")], owner="effect viscous")
+        spec("sigma2", "Ns/m", 0.0, 0.0, INF, "viscous coefficient"),
+        FAMILY_SPECS["p_visc"], FAMILY_SPECS["v_ref"]], owner="effect viscous")
     signature = "residual linear and odd in v, largest at high speed"
     experiment = "constant-speed runs at several speeds in both directions"
 
+    def applies_to(self, model: FrictionModel) -> bool:
+        from fcomp.models.lugre_family import LuGreFamily
+
+        return isinstance(model, LuGreFamily) and "viscous" not in model.features
+
     def new_values(self, model: FrictionModel) -> dict[str, float]:
-        return {model.viscous_name: self.params.sigma2}  # type: ignore[attr-defined]
+        p = self.params
+        return {model.viscous_name: p.sigma2, "p_visc": p.p_visc,  # type: ignore[attr-defined]
+                "v_ref": float(self.config.get("v_ref", p.v_ref))}  # type: ignore[attr-defined]
 
 
 class Stribeck(StructuralEffect):

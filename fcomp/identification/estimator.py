@@ -65,7 +65,7 @@ from fcomp.parameters import Directional, ParamSpec, spec
 SEGMENT_NAMES = (*EXTERNAL, *INTERNAL)
 #: Parameters never fitted by default: numerical thresholds, reference values and the
 #: hysteresis segment boundaries (seed 000 fixes them from the loop's shape, Table 2).
-ALWAYS_FIXED = ("v_eps", "p_ref", *(n for n in HYSTERESIS_NAMES if n not in SEGMENT_NAMES))
+ALWAYS_FIXED = ("v_eps", "p_ref", "v_ref", *(n for n in HYSTERESIS_NAMES if n not in SEGMENT_NAMES))
 EXTRA_SPECS: dict[str, ParamSpec] = {
     "mass": spec("mass", "kg", 0.0, 0.0, math.inf, "moving mass", directional=False),
     "offset": spec("offset", "N", 0.0, -math.inf, math.inf, "constant force offset",

@@ -21,6 +21,9 @@ feature          term
 form``           ``(1 + kappa_s*r^n)^(-1/kappa_s)``, ``r = |v|/vs``: ``kappa_s -> 0``
                  the exponential, ``kappa_s = 1`` the rational ``1/(1 + r^n)``
                  (Hess & Soom 1990's Lorentzian for ``n = 2``), a fatter tail between
+``viscous-       ``sigma2*v*(|v|/v_ref)^(p_visc - 1)``: a power law of the speed
+power``          (a shear-thinning or -thickening film), ``sigma2`` its slope at
+                 ``v_ref`` (fixed); ``p_visc = 1`` is the linear term
 ``bristle-       Dahl's exponent ``i_pre``: ``dz/dt = v*|1 - u|^i*sign(1 - u)``,
 exponent``       ``u = sigma0*sign(v)*z/g`` (Dahl 1976; ``i = 1`` is LuGre's bristle,
                  ``i > 1`` a softer approach to sliding, ``i < 1`` stiffer until
@@ -93,6 +96,11 @@ FAMILY_SPECS: dict[str, ParamSpec] = {
              directional=False),
         spec("v_eps", "m/s", 1e-5, 0.0, INF, "velocity treated as zero (dwell detection, "
              "static-map regularisation)", lower_open=True, directional=False),
+        spec("p_visc", "-", 1.0, 0.2, 2.0, "viscous exponent: the term is "
+             "visc*v*(|v|/v_ref)^(p_visc - 1) (1: linear, < 1 a shear-thinning film)",
+             directional=False),
+        spec("v_ref", "m/s", 0.05, 0.0, INF, "reference speed of the viscous exponent "
+             "(fixed: visc is the slope there)", lower_open=True, directional=False),
         spec("kappa_s", "-", 0.0, 0.0, 1.0, "Stribeck curve form: 0 the exponential "
              "exp(-r^n), 1 the rational 1/(1 + r^n), between the q-exponential",
              directional=False),
@@ -121,10 +129,11 @@ FEATURE_PARAMS: dict[str, tuple[str, ...]] = {
     "lead": ("T",),
     "elements": ("ms_share", "ms_dmax", "ms_spread", "ms_shape"),
     "stribeck-form": ("kappa_s",),
+    "viscous-power": ("p_visc", "v_ref"),
     "bristle-exponent": ("i_pre",),
 }
 FEATURE_ORDER = ("stribeck", "viscous", "presliding", "damping", "film", "film-lag", "lead",
-                 "elements", "stribeck-form", "bristle-exponent")
+                 "elements", "stribeck-form", "bristle-exponent", "viscous-power")
 
 
 def _check_features(features: frozenset[str]) -> None:
@@ -141,6 +150,8 @@ def _check_features(features: frozenset[str]) -> None:
         raise ValueError("Maxwell-slip elements split the bristle: they need presliding")
     if "stribeck-form" in features and "stribeck" not in features:
         raise ValueError("the Stribeck curve form needs the Stribeck term")
+    if "viscous-power" in features and "viscous" not in features:
+        raise ValueError("the viscous exponent needs the viscous term")
     if "bristle-exponent" in features and "presliding" not in features:
         raise ValueError("the bristle exponent needs the bristle (presliding)")
 
@@ -303,6 +314,13 @@ class LuGreFamily(FrictionModel):
             return 0.0
         return P(self.viscous_name, s)
 
+    def _viscous_force(self, be: Backend, v: Any, visc: Any, P: ParamValues) -> Any:
+        """``visc*v``; with ``viscous-power`` ``visc*v*(|v|/v_ref)^(p_visc - 1)``."""
+        if "viscous-power" not in self.features:
+            return visc * v
+        r = be.fmax(be.abs(v) / P("v_ref"), _TINY)
+        return visc * v * be.power(r, P("p_visc") - 1.0)
+
     def base_force(
         self, be: Backend, x: list[Any], dx: list[Any], sig: Signals, P: ParamValues, L: dict
     ) -> tuple[Any, Any]:
@@ -319,10 +337,10 @@ class LuGreFamily(FrictionModel):
                 F0 = (1.0 - share) * F0
                 for d, (al, di) in zip(deltas, self._elements(be, P), strict=True):
                     F0 = F0 + share * al * L["Fc"] / di * d
-            return F0 + visc * v, c_a
+            return F0 + self._viscous_force(be, v, visc, P), c_a
         h = self._h(x, be, sig, P, L)
         sat = be.fmax(-1.0, be.fmin(1.0, v / P("v_eps")))
-        return sat * self.g(be, v, h, P, L, sig.s) + visc * v, c_a
+        return sat * self.g(be, v, h, P, L, sig.s) + self._viscous_force(be, v, visc, P), c_a
 
     def base_steady_state(self, be: Backend, sig: Signals, P: ParamValues, L: dict) -> list:
         v = sig.v

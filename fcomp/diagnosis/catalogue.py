@@ -284,7 +284,9 @@ def _direction_asymmetry(ctx: Context) -> list[dict[str, float]]:
         return [{"r_neg": 1.0}]
     a, b = float(np.median(y[pos])), float(np.median(-y[neg]))
     ratio = b / a if a > 0 and b > 0 else 1.0
-    return [{"r_neg": float(np.clip(ratio, 0.2, 5.0))}]
+    c = _ls(ctx.current.residual[neg], v[neg])  # a slope of the residual while retracting
+    return [{"r_neg": float(np.clip(ratio, 0.2, 5.0))},
+            {"r_neg": 1.0, "c_neg": c}]
 
 
 def _pressure(ctx: Context) -> list[dict[str, float]]:

@@ -281,19 +281,22 @@ class PressureDependence(Effect):
 
 
 class DirectionAsymmetry(Effect):
-    """Direction asymmetry: a separate friction level for ``v < 0``.
+    """Direction asymmetry: a separate friction level, and viscous slope, for ``v < 0``.
 
     Rod and piston seals are not symmetric (lip direction, rod seal only on
-    one side, seed 002 Fig. 4): extending and retracting friction differ. A
-    symmetric model leaves a residual that is a constant of one sign while
-    extending and of the same sign (not the friction's) while retracting: an
-    even function of ``v``, a step at every reversal.
+    one side, seed 002 Fig. 4): extending and retracting friction differ. The
+    levels of ``v < 0`` are ``r_neg`` times those of ``v > 0``, and the viscous
+    slope differs by ``c_neg`` (the rod seal's film is sheared only one way). A
+    symmetric model leaves a residual even in ``v``: a step at every reversal,
+    growing with speed on one side when the slopes differ.
     """
 
     name = "direction-asymmetry"
     Params = make_params_class("DirectionAsymmetryParams", [
         spec("r_neg", "-", 1.0, 0.0, 10.0, "ratio of the v < 0 levels to the v > 0 levels",
              lower_open=True, directional=False),
+        spec("c_neg", "Ns/m", 0.0, -INF, INF, "extra viscous slope for v < 0",
+             directional=False),
     ], owner="effect direction-asymmetry")
     signature = "residual even in v: same-sign offset in both directions, step at reversals"
     experiment = "the same speed profile extending and retracting"
@@ -301,6 +304,9 @@ class DirectionAsymmetry(Effect):
     def modify_levels(self, be: Backend, L: dict, w: list[Any], sig: Signals,
                       P: ParamValues) -> dict:
         return scale_levels(L, be.if_else(sig.s > 0, 1.0, P("r_neg")))
+
+    def extra_force(self, be: Backend, sig: Signals, P: ParamValues) -> tuple[Any, Any]:
+        return P("c_neg") * be.fmin(sig.v, 0.0), 0.0
 
 
 class PositionDependence(Effect):

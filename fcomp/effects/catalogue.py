@@ -269,9 +269,9 @@ class PressureDependence(Effect):
                               "which move both chamber pressures)",
         "friction-rig": "identical motions at two or more normal-force (contact pressure) "
                         "levels",
-        "electromechanical-axis": "no chambers here: identical motions with two or more "
-                                  "payloads or screw preloads (the normal force on guides "
-                                  "and nut), if a load dependence is suspected",
+        "electromechanical-axis": "identical motions with two or more payloads or screw "
+                                  "preloads (the normal force on guides and nut; the axis "
+                                  "has no fluid pressure)",
     })
 
     def modify_levels(self, be: Backend, L: dict, w: list[Any], sig: Signals,

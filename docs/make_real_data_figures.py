@@ -11,7 +11,10 @@ from __future__ import annotations
 
 import json
 import math
+import os
+import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -25,6 +28,7 @@ from fcomp import datasets  # noqa: E402
 from fcomp.identification import FrictionFit, fit_data  # noqa: E402
 
 DOCS = Path(__file__).resolve().parent
+ROOT = DOCS.parent
 FIG = DOCS / "figures"
 
 #: IDIM-LS values of the EMPS benchmark (Janot, Gautier, Brunot 2019) as obtained with the
@@ -99,7 +103,8 @@ def emps() -> dict:
         rows.append({"label": label, "params": fit.params_, "stderr": fit.stderr_,
                      "ci": fit.ci_, "rms": fit.rms_, "rms_validation": fit.score(val),
                      "seconds": secs, "not_identifiable": fit.not_identifiable_,
-                     "tau_int": fit.tau_int_, "n": fit.n_samples_})
+                     "tau_int": fit.tau_int_, "n": fit.n_samples_,
+                     "warnings": [w.to_dict() for w in fit.warnings_]})
     return {"rows": rows}
 
 
@@ -184,6 +189,40 @@ def zillen() -> dict:
     return out
 
 
+# ------------------------------------------------------------ command transcripts
+#: The commands whose output docs/real-data.md shows, run as a user would (shipped files
+#: named by their path in the repository).
+SESSION = [
+    "fcomp import zillen fcomp/data/datasets/zillen/O-ring_3bar.csv -o oring3.csv",
+    "fcomp fit oring3.csv --model lugre",
+    "fcomp fit oring3.csv --model coulomb-viscous",
+    "fcomp import emps fcomp/data/datasets/emps/DATA_EMPS.mat -o emps.csv",
+    "fcomp fit emps.csv --model nmlgm",
+    "fcomp fit emps.csv --model nmlgm --offset",
+    "fcomp diagnose emps.csv --baseline coulomb-viscous --no-progress",
+]
+
+
+def transcripts() -> dict[str, str]:
+    """Each command of :data:`SESSION` with what it prints (standard output, then the
+    warnings on standard error, as a terminal shows them), run in a scratch folder."""
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    out = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        for cmd in SESSION:
+            args = [str(ROOT / a) if a.startswith("fcomp/data/") else a
+                    for a in cmd.split()[1:]]
+            proc = subprocess.run([sys.executable, "-m", "fcomp.cli.main", *args], cwd=tmp,
+                                  env=env, capture_output=True, text=True, check=True)
+            out[cmd] = f"$ {cmd}\n{proc.stdout}{proc.stderr}".rstrip()
+    return out
+
+
+def session_md(shown: dict[str, str], *commands: str) -> str:
+    """A fenced block with the transcripts of ``commands`` (from :func:`transcripts`)."""
+    return "```text\n" + "\n".join(shown[c] for c in commands) + "\n```"
+
+
 # -------------------------------------------------------------------- markdown
 def emps_md(res: dict) -> str:
     cv = next(r for r in res["rows"] if r["label"] == "coulomb-viscous + offset")
@@ -198,17 +237,20 @@ def emps_md(res: dict) -> str:
         ref = EMPS_REFERENCE[k]
         lines.append(f"| `{k}` ({units[k]}) | {fmt(v, se)} | [{lo:.4g}, {hi:.4g}] | {ref} | "
                      f"{(v - ref) / se:+.1f} |")
-    table2 = ["| model | parameters (± SE) | RMS estimation, N | RMS validation, N | time, s |",
-              "|---|---|---|---|---|"]
+    table2 = ["| model | parameters (± SE) | RMS estimation, N | RMS validation, N | time, s "
+              "| warnings |",
+              "|---|---|---|---|---|---|"]
     for r in res["rows"]:
         if r.get("failed"):
-            table2.append(f"| {r['label']} | did not converge | | | |")
+            table2.append(f"| {r['label']} | did not converge | | | | |")
             continue
         ps = ", ".join(f"{k} = {fmt(v, r['stderr'][k])}" for k, v in r["params"].items())
         if r["not_identifiable"]:
             ps += f" (not determined: {', '.join(r['not_identifiable'])})"
+        warned = ", ".join(f"`{w['code']}` {w['parameter'] or ''}".strip()
+                           for w in r["warnings"]) or "none"
         table2.append(f"| {r['label']} | {ps} | {r['rms']:.3f} | {r['rms_validation']:.3f} | "
-                      f"{r['seconds']:.1f} |")
+                      f"{r['seconds']:.1f} | {warned} |")
     return "\n".join(lines), "\n".join(table2), cv
 
 
@@ -285,8 +327,9 @@ Other models on the same record (all with `mass` estimated):
   directions, which the symmetric model with offset can only average.
 * LuGre and Dahl add a bristle state; LuGre improves the RMS error, but
   its `Fc`, `Fs`, `vs` trade against each other on this record (look at
-  their standard errors): the ball screw's friction has no clear Stribeck
-  hump at the speeds the trajectory visits.
+  their standard errors; `Fc` ends at its bound 0, the warnings column): the
+  ball screw's friction has no clear Stribeck hump at the speeds the
+  trajectory visits.
 * **Bias.** The data are closed loop: the motor force is computed from the
   position error, so the measurement noise of `qm` enters both the regressors
   (`a`, `v`) and the force. Ordinary least squares on such data is biased in
@@ -313,8 +356,9 @@ back and forth through a load cell over ~40 mm at two speeds (about
 +11.5 mm/s extending and -5.5 mm/s retracting) with the chamber held at 1, 3,
 5 and 7 bar. The importer gives `x`, `p1` (one chamber, the other side
 open) and `F_ext = -(load cell)`, so the friction is `p1*A1 + F_ext` (minus
-the mass term, which `fcomp fit` estimates: it comes out ~0, as it must for
-such slow motion). Per file and pressure level:
+the mass term, which `fcomp fit` estimates: such slow motion does not
+determine it, it ends at its bound 0 and `fit` warns `mass-implausible`, see
+[Warnings](#warnings-what-the-records-do-not-establish)). Per file and pressure level:
 
 ```bash
 fcomp import zillen O-ring_5bar.csv -o oring5.csv
@@ -363,6 +407,62 @@ What the fits show, and what they cannot:
   run-to-run variation of the set-up that the standard errors of one record
   do not contain. They describe the noise in one record, not the whole
   uncertainty of a friction measurement.
+
+## Warnings: what the records do not establish
+
+Every fit is checked for what a careful engineer would question
+([identification.md](identification.md#warnings-plausibility-of-the-estimates)
+has the rules): an estimate at a bound of its range (`at-bound`), a positive
+quantity whose interval reaches zero (`interval-crosses-zero`), a moving mass
+the rig cannot have (`mass-implausible`), parameters the record does not
+determine or that trade off (`not-identified`, with the experiment that would
+determine them, worded for the rig in the sidecar's `kind`), a fit that did not
+converge (`not-converged`). `fcomp fit` prints them under its table, one
+`fcomp: warning:` line each, and lists them in the JSON's `warnings`.
+
+**Zillen O-ring, 3 bar, LuGre.** The fit lowers the error, but its Coulomb
+level's interval reaches below zero (the record, at one speed per direction,
+does not establish it) and the Stribeck exponent `n` sits at its upper bound:
+
+{session_lugre}
+
+**The same record, Coulomb-viscous, mass estimated.** At about 10 mm/s the
+acceleration is too small to weigh the piston: the mass ends at its bound
+zero, below what a piston of the 25 mm bore can weigh, and the viscous
+coefficient at its bound too (without `--offset`, the difference between the
+extending and retracting friction of this record would need a negative `B`).
+Give the mass (`--mass`, or `rig.mass` in the sidecar) and fit with
+`--offset`:
+
+{session_cv}
+
+**EMPS, NMLGM.** The full fit (every NMLGM parameter free) stops at its
+evaluation budget; the parameters it barely determines where it stopped
+(standard error above their value) are then held there and the others
+refitted, which converges. The held ones are shown as such in the table, and
+each warning names the experiment that would determine it. Parameters that
+still trade off are named with their correlation. The standard errors of the
+others are conditional on the held values: `Fs` six times `Fc` is how this
+model bends its film transients to the record, not a break-away force the
+record shows.
+
+{session_nmlgm}
+
+Most of that trouble is the record's constant force offset, which no friction
+term produces and the model contorts itself to imitate. With `--offset` the
+full fit converges at once (the film parameters but `tau_hp`, which the motion
+never exercises, held), its error falls well below the fit without offset, and
+the warnings narrow to what the record really leaves open: `n` at its bound,
+the bristle stiffness and damping not established and trading off. `Fs` is
+again several times `Fc`: the same film transients.
+
+{session_nmlgm_offset}
+
+**EMPS, diagnosis.** The importer writes `kind = "electromechanical-axis"`,
+so the experiments that separate confounded effects are worded for a motor-driven
+axis (no chambers to vent):
+
+{session_diag}
 """
 
 
@@ -378,7 +478,12 @@ def main() -> None:
              for rows in z["seals"].values() for r in rows
              if r["lugre + offset"] and r["coulomb + offset"]]
     a, b = z["repeat"]
+    shown = transcripts()
     text = TEMPLATE.format(
+        session_lugre=session_md(shown, *SESSION[:2]), session_cv=session_md(shown, SESSION[2]),
+        session_nmlgm=session_md(shown, *SESSION[3:5]),
+        session_nmlgm_offset=session_md(shown, SESSION[5]),
+        session_diag=session_md(shown, SESSION[6]),
         emps_table=emps_table, emps_models=emps_models, cv_rms=cv["rms"],
         cv_val=cv["rms_validation"], cv_tau=cv["tau_int"], zillen_tables=zillen_md(z),
         mass_rel=100 * abs(cv["params"]["mass"] / EMPS_REFERENCE["mass"] - 1), max_z=max(zs),

@@ -150,7 +150,7 @@ EMPS_NOTES = (
 
 
 def import_emps(src: Path) -> Measurement:
-    """EMPS benchmark ``.mat`` -> measurement (kind ``friction-rig``, no mass).
+    """EMPS benchmark ``.mat`` -> measurement (kind ``electromechanical-axis``, no mass).
 
     Columns: ``t`` (s), ``x = qm`` (m), ``F_ext = gtau*vir`` (N), ``x_ref = qg`` (m),
     ``u = vir`` (V), ``pulses_N`` (N, validation file only, carried unchanged).
@@ -167,7 +167,7 @@ def import_emps(src: Path) -> Measurement:
     gains = {k: float(np.squeeze(variables[k])) for k in ("gtau", "kp", "kv") if k in variables}
     meta = {
         "name": src.stem,
-        "kind": "friction-rig",
+        "kind": "electromechanical-axis",  # a DC motor and ball screw: no chambers
         "rig": {"orientation": "horizontal"},
         "signals": {"u_unit": "V"},
         "source": provenance(src, "emps", EMPS_NOTES, mapping=mapping, **gains),

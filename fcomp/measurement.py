@@ -46,7 +46,9 @@ COLUMN_UNITS: dict[str, str] = {
     "t": "s", "x": "m", "v": "m/s", "a": "m/s^2", "p1": "Pa", "p2": "Pa",
     "u": "A or V", "F": "N", "F_ext": "N",
 }
-KINDS = ("pneumatic-cylinder", "hydraulic-cylinder", "friction-rig")
+#: Rig kinds of the sidecar's ``kind`` (data-format.md): they choose, e.g., which experiment
+#: the diagnosis advises (:func:`fcomp.effects.experiment_for`).
+KINDS = ("pneumatic-cylinder", "hydraulic-cylinder", "friction-rig", "electromechanical-axis")
 ORIENTATIONS = {"horizontal": 0.0, "vertical-up": 1.0, "vertical-down": -1.0}
 G = 9.80665
 #: Largest plausible value of each length in ``[rig]`` (m); larger ones are taken as mm.

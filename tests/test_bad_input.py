@@ -54,9 +54,10 @@ TAG = uuid.uuid4().hex[:8]  # effect names are process-global: one set per test 
 # ------------------------------------------------------------------ the lab
 def _good_text() -> str:
     t = np.arange(200) * 0.01
-    v = 0.05 * np.sin(2 * np.pi * t)
-    x = 0.05 / (2 * np.pi) * (1 - np.cos(2 * np.pi * t))
-    a = 0.05 * 2 * np.pi * np.cos(2 * np.pi * t)
+    amp = np.where(t < 1.0, 0.05, 0.02)  # two speeds: a clean fit, Fc and B apart (no warning)
+    v = amp * np.sin(2 * np.pi * t)
+    x = amp / (2 * np.pi) * (1 - np.cos(2 * np.pi * t))
+    a = amp * 2 * np.pi * np.cos(2 * np.pi * t)
     rng = np.random.default_rng(3)
     F = 2.0 * np.tanh(v / 1e-3) + 30.0 * v + 0.01 * rng.standard_normal(t.size)
     rows = ["t,x,v,a,F"] + [",".join(repr(float(c)) for c in r)

@@ -63,7 +63,7 @@ def test_emps_columns_units_and_provenance(name: str) -> None:
     np.testing.assert_array_equal(meas["u"], raw["vir"].ravel())
     np.testing.assert_allclose(meas["F_ext"], raw["gtau"].item() * raw["vir"].ravel(), rtol=1e-15)
     assert ("pulses_N" in meas) == ("pulses_N" in raw)
-    assert meas.meta["kind"] == "friction-rig"
+    assert meas.meta["kind"] == "electromechanical-axis"
     assert "mass" not in meas.rig  # to be estimated
     assert meas.meta["signals"]["u_unit"] == "V"
     src = meas.meta["source"]

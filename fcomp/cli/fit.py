@@ -5,7 +5,11 @@ and the RMS force error (N). Where the sidecar gives no ``rig.mass`` and the
 data hold a driving force (``F_ext``, pressures) but no ``F`` column, the
 moving mass is estimated as well (``mass``). JSON (``--json OUT``, ``-`` for
 standard output): ``{"model", "params", "stderr", "rms", "ci", "units",
-"fixed", "not_identifiable", "method", ...}``. A fit that does not converge
+"fixed", "not_identifiable", "method", ..., "warnings"}``. Parameters the record
+does not determine are held and shown as such; plausibility warnings (a value at
+a bound, an interval of a positive quantity reaching zero, an implausible mass,
+parameters not determined or trading off) are printed under the table, one
+``fcomp: warning: ...`` line each, and listed in the JSON's ``warnings``. A fit that does not converge
 says so on one line and exits with status 2 (no JSON is written).
 ``--set NAME=VALUE`` gives a start value, ``--fix NAME=VALUE`` holds a parameter.
 """
@@ -25,6 +29,7 @@ from fcomp.cli.common import (
     name_list,
     parse_assignments,
     result_text,
+    warn,
     warn_sidecar,
     with_warnings,
 )
@@ -74,6 +79,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def _table(f: FrictionFit) -> str:
+    """The printed result: estimates, the parameters held (not determined by the record)
+    and the RMS error (the plausibility warnings follow as ``fcomp: warning:`` lines)."""
     from fcomp.report import format_value
 
     lines = [f"model {f.to_dict()['model']}  ({f.method_} fit, target {f.target_}, "
@@ -85,14 +92,12 @@ def _table(f: FrictionFit) -> str:
         lo, hi = f.ci_[n]
         row = (f"{n:12s} {format_value(val):>12s} {format_value(f.stderr_[n]):>11s}   "
                f"[{format_value(lo)}, {format_value(hi)}]")
-        lines.append(row.ljust(62) + f" {f.units_[n]}")
+        lines.append(row.ljust(62) + f" {f.unit(n)}")
+    for n, val in f.held_.items():
+        row = f"{n:12s} {format_value(val):>12s} {'-':>11s}   held: not determined"
+        lines.append(row.ljust(62) + f" {f.unit(n)}")
     lines.append(f"rms force error {f.rms_:.4g} N; residual autocorrelation time "
                  f"{f.tau_int_:.3g} samples (effective sample size {f.n_eff_:.0f})")
-    if f.not_identifiable_:
-        lines.append("not determined by these data (held at their start value): "
-                     + ", ".join(f.not_identifiable_))
-    if f.at_bound_:
-        lines.append("at a bound (standard error not meaningful): " + ", ".join(f.at_bound_))
     return "\n".join(lines)
 
 
@@ -128,6 +133,8 @@ def run(args: argparse.Namespace) -> int:
                       v_min=args.v_min, cutoff_hz=args.cutoff, confidence=args.confidence,
                       max_nfev=args.max_nfev)
     fit.fit(data)
+    for w in fit.warnings_:  # printed under the table, recorded in the JSON
+        warn(w.code, w.message, w.parameter)
     doc = with_warnings(fit.to_dict())
     emit_result(result_text(doc), args.json, out, _table(fit))
     return 0

@@ -133,6 +133,9 @@ class DiagnosisData:
     signals
         Per measurement file: how its motion was conditioned
         (:class:`fcomp.conditioning.Conditioning`); empty for steady-state points.
+    kind
+        The rig kind of the (first) record's sidecar (``""`` if not given): it words
+        the experiments advised (:func:`fcomp.effects.experiment_for`).
     """
 
     experiments: list[Experiment]
@@ -143,6 +146,7 @@ class DiagnosisData:
     source: str
     labels: list[str] = field(default_factory=list)
     signals: list[Conditioning] = field(default_factory=list)
+    kind: str = ""
 
     @property
     def n(self) -> int:
@@ -289,7 +293,8 @@ def prepare(
            for e in experiments):
         raise FcompError("some records give rig.mass and others not; give it for all or none")
     data = DiagnosisData(experiments, {}, {}, _scales(experiments), steady, sources.pop(),
-                         [e.label for e in experiments], signals)
+                         [e.label for e in experiments], signals,
+                         str(meas_list[0].meta.get("kind", "")))
     _availability(data, x_measured, p_measured)
     return data
 

@@ -761,7 +761,7 @@ class Diagnosis:
             "model": self.fit_.model.describe(),
             "params": {k: num(v) for k, v in self.fit_.values.items()},
             "regimes": self.regimes_,
-            "tie_experiments": {t[0]: {e: EFFECTS.get(e).experiment for e in t}
+            "tie_experiments": {t[0]: {e: EFFECTS.get(e).experiment_for(self.data_.kind) for e in t}
                                 for t in self.ties_},
             "skipped": dict(self.skipped_),
             "split": self.split_.description,

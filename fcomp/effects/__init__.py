@@ -40,6 +40,42 @@ def make_effect(name: str, params: Any = None, **config: Any) -> Effect:
     return EFFECTS.get(name)(params, **config)
 
 
+def experiment_for(effect: str, kind: str = "") -> str:
+    """The experiment that isolates ``effect`` on a rig of ``kind`` (the sidecar's ``kind``).
+
+    Each effect words it for any rig (``experiment``) and, where a rig kind
+    needs other words (no chambers to vent on an electromechanical axis), for
+    that kind (``experiments``); see :meth:`Effect.experiment_for`.
+
+    Raises
+    ------
+    UnknownNameError
+        For an effect that is not registered.
+    """
+    return EFFECTS.get(effect).experiment_for(kind)
+
+
+#: Model parameters that are not an effect's own but belong to one (the effect's parameter
+#: is another, e.g. ``Fs_excess``; ``mass`` is measured by the inertia-error experiment).
+_PARAMETER_EFFECT = {"Fs": "stribeck", "B": "viscous", "mass": "inertia-error"}
+
+
+def effect_of_parameter(name: str) -> str | None:
+    """The effect a flat parameter name (``Fs_pos``, ``sigma0``, ``mass``, ...) belongs to.
+
+    ``None`` for the basic friction level ``Fc`` and names no effect carries.
+    The experiment that determines the parameter is then
+    :func:`experiment_for` of that effect.
+    """
+    base = name[:-4] if name.endswith(("_pos", "_neg")) else name
+    if base in _PARAMETER_EFFECT:
+        return _PARAMETER_EFFECT[base]
+    for effect in EFFECTS.names():
+        if any(s.name == base for s in EFFECTS.get(effect).Params.SPECS):
+            return effect
+    return None
+
+
 def load_effects_module(path: str | Path) -> list[str]:
     """Import a user module (a ``.py`` file) that registers effects; return the new names.
 
@@ -66,5 +102,6 @@ def load_effects_module(path: str | Path) -> list[str]:
 
 
 __all__ = [
-    "EFFECTS", "Effect", "load_effects_module", "make_effect", "register_effect", "scale_levels",
+    "EFFECTS", "Effect", "effect_of_parameter", "experiment_for", "load_effects_module",
+    "make_effect", "register_effect", "scale_levels",
 ]

@@ -14,7 +14,13 @@ An effect is a subclass of :class:`Effect` with
 ``signature``
     one line: the residual signature it explains (used by diagnosis);
 ``experiment``
-    one line: the experiment that isolates it (used for confounded ties);
+    one line: the experiment that isolates it (used for confounded ties),
+    worded for any rig;
+``experiments``
+    optional, rig kind (the sidecar's ``kind``: ``pneumatic-cylinder``,
+    ``hydraulic-cylinder``, ``friction-rig``, ``electromechanical-axis``) ->
+    that experiment worded for such a rig, where it differs (no chambers to
+    vent on a motor-driven axis); :meth:`Effect.experiment_for` picks it;
 
 and overrides whichever hooks it needs, each written once against the
 backend ``be`` (so it works numerically and symbolically):
@@ -40,6 +46,7 @@ and what it leaves in a residual when a model lacks it.
 from __future__ import annotations
 
 from collections.abc import Mapping
+from types import MappingProxyType
 from typing import TYPE_CHECKING, Any, ClassVar
 
 from fcomp.backend import Backend
@@ -65,6 +72,8 @@ class Effect:
     initial: ClassVar[tuple[float, ...]] = ()
     signature: ClassVar[str] = ""
     experiment: ClassVar[str] = ""
+    #: rig kind -> the experiment for such a rig, where it differs from ``experiment``
+    experiments: ClassVar[Mapping[str, str]] = MappingProxyType({})
     #: signals the effect reads besides v (diagnosis checks the data has them)
     needs: ClassVar[tuple[str, ...]] = ()
 
@@ -77,6 +86,12 @@ class Effect:
             raise ValueError(f"effect {self.name}: expected {self.Params.__name__}")
         self.params: ParamSet = params
         self.config: dict[str, Any] = dict(config)
+
+    @classmethod
+    def experiment_for(cls, kind: str) -> str:
+        """The experiment that isolates this effect on a rig of ``kind`` (the sidecar's
+        ``kind``; ``""`` or a kind without its own wording: the general ``experiment``)."""
+        return cls.experiments.get(kind, cls.experiment)
 
     def with_params(self, **flat: float) -> Effect:
         new = object.__new__(type(self))

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Mapping
+from types import MappingProxyType
 from typing import TYPE_CHECKING, Any, ClassVar
 
 from fcomp.backend import Backend
@@ -274,6 +276,15 @@ class PressureDependence(Effect):
     needs = ("p1", "p2")
     signature = "residual magnitude correlates with p1 + p2, sign follows friction"
     experiment = "identical motions at two or more chamber pressure levels"
+    experiments: ClassVar[Mapping[str, str]] = MappingProxyType({
+        "hydraulic-cylinder": "identical motions at two or more supply pressures (or loads, "
+                              "which move both chamber pressures)",
+        "friction-rig": "identical motions at two or more normal-force (contact pressure) "
+                        "levels",
+        "electromechanical-axis": "identical motions with two or more payloads or screw "
+                                  "preloads (the normal force on guides and nut; the axis "
+                                  "has no fluid pressure)",
+    })
 
     def modify_levels(self, be: Backend, L: dict, w: list[Any], sig: Signals,
                       P: ParamValues) -> dict:
@@ -299,7 +310,12 @@ class DirectionAsymmetry(Effect):
              directional=False),
     ], owner="effect direction-asymmetry")
     signature = "residual even in v: same-sign offset in both directions, step at reversals"
-    experiment = "the same speed profile extending and retracting"
+    experiment = "the same speed profile in both directions of travel, with the force zero " \
+        "known (see force-offset)"
+    experiments: ClassVar[Mapping[str, str]] = MappingProxyType({
+        kind: "the same speed profile extending and retracting, with the force zero known "
+              "(see force-offset)" for kind in ("pneumatic-cylinder", "hydraulic-cylinder")
+    })
 
     def modify_levels(self, be: Backend, L: dict, w: list[Any], sig: Signals,
                       P: ParamValues) -> dict:
@@ -345,6 +361,10 @@ class PositionDependence(Effect):
     needs = ("x",)
     signature = "residual a function of x, repeated stroke after stroke (smooth or local)"
     experiment = "the same slow stroke repeated, break-away measured along the stroke"
+    experiments: ClassVar[Mapping[str, str]] = MappingProxyType({
+        "electromechanical-axis": "the same slow travel over the whole axis repeated, "
+                                  "break-away measured along it (screw and guides)",
+    })
 
     def modify_levels(self, be: Backend, L: dict, w: list[Any], sig: Signals,
                       P: ParamValues) -> dict:
@@ -453,7 +473,17 @@ class ForceOffset(Effect):
         spec("offset", "N", 0.0, -INF, INF, "constant force offset", directional=False),
     ], owner="effect force-offset")
     signature = "residual with a constant non-zero mean in both directions"
-    experiment = "a zero-force reading at rest with the chambers vented"
+    experiment = "a zero reading of the force measurement at rest with nothing driving or " \
+        "loading the actuator"
+    experiments: ClassVar[Mapping[str, str]] = MappingProxyType({
+        "pneumatic-cylinder": "a zero-force reading at rest with the chambers vented",
+        "hydraulic-cylinder": "a zero-force reading at rest with the pump off and both "
+                              "chambers relieved to tank",
+        "friction-rig": "a zero reading of the load cell at rest with the drive disconnected",
+        "electromechanical-axis": "a zero reading of the motor force with the drive disabled "
+                                  "(current-sensor offset) and a level check of the axis (a "
+                                  "tilt adds a constant m*g*sin(angle))",
+    })
 
     def extra_force(self, be: Backend, sig: Signals, P: ParamValues) -> tuple[Any, Any]:
         return P("offset"), 0.0

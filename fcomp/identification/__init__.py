@@ -6,10 +6,12 @@ public too: :func:`~fcomp.identification.static.steady_state_points` and
 steady-state characteristic), :class:`~fcomp.identification.dynamic.TrajectoryProblem`
 with exact sensitivities (:class:`~fcomp.identification.sensitivity.SensitivityLoop`),
 :func:`~fcomp.identification.uncertainty.estimate` (autocorrelation-robust
-standard errors). docs/identification.md describes the procedure.
+standard errors), :func:`~fcomp.identification.plausibility.check_fit` (the plausibility
+warnings of any fit's estimates). docs/identification.md describes the procedure.
 """
 
 from fcomp.identification.estimator import FrictionFit, default_free
+from fcomp.identification.plausibility import FitWarning, RigContext, check_fit
 from fcomp.identification.static import (
     SteadyStatePoints,
     fit_steady_state,
@@ -18,6 +20,6 @@ from fcomp.identification.static import (
 from fcomp.identification.target import FitData, fit_data
 
 __all__ = [
-    "FitData", "FrictionFit", "SteadyStatePoints", "default_free", "fit_data",
-    "fit_steady_state", "steady_state_points",
+    "FitData", "FitWarning", "FrictionFit", "RigContext", "SteadyStatePoints", "check_fit",
+    "default_free", "fit_data", "fit_steady_state", "steady_state_points",
 ]

@@ -24,7 +24,12 @@ Procedure (docs/identification.md has the full account):
    not determine (zero sensitivity at the start; or, at the solution, a null
    direction, a negligible effect or a standard error above 1000 times the
    value) are held (at the start value, resp. the value reached) and listed
-   in ``not_identifiable_``.
+   in ``not_identifiable_``. A trajectory fit that stops without converging
+   holds the parameters it barely determines where it stopped (standard error
+   above :data:`HOLD_RELATIVE_ERROR` times the value) and refits the others.
+6. **Plausibility** (:mod:`.plausibility`): values at a bound, intervals of
+   positive quantities reaching zero, an implausible mass, parameters not
+   determined or trading off, non-convergence: ``warnings_``.
 """
 
 from __future__ import annotations
@@ -47,6 +52,7 @@ from fcomp.identification.guess import (
     stribeck_start,
 )
 from fcomp.identification.hysteresis_fit import EXTERNAL, INTERNAL, fit_hysteresis
+from fcomp.identification.plausibility import FitWarning, RigContext, check_fit, correlations
 from fcomp.identification.problem import ParameterVector, Solution, base_name, side_suffix, solve
 from fcomp.identification.static import (
     SteadyStateMap,
@@ -72,6 +78,10 @@ EXTRA_SPECS: dict[str, ParamSpec] = {
                    directional=False),
 }
 METHODS = ("auto", "steady-state", "samples", "trajectory")
+#: A trajectory fit that stops without converging holds the model parameters whose
+#: standard error where it stopped exceeds this many times their magnitude, and refits the
+#: others (the record does not determine the held ones: their interval spans zero).
+HOLD_RELATIVE_ERROR = 1.0
 #: Evaluation budget of the finite-difference refinement of the hysteresis segments
 #: (each evaluation costs one simulation per parameter).
 HYSTERESIS_REFINE_NFEV = 50
@@ -200,6 +210,14 @@ class FrictionFit:
         One entry per least-squares stage (name, parameters, rms, evaluations, converged).
     target_ : str
         Where the fitted force came from (``"F"``, ``"reconstructed"``, ``"driving-force"``).
+    bounds_ : dict
+        Name -> ``(lower, upper)``, the box each estimate was searched in.
+    context_ : RigContext
+        The rig the record's sidecar describes (kind, known mass, geometry).
+    warnings_ : list of FitWarning
+        Plausibility warnings of the estimates (:func:`.plausibility.check_fit`):
+        ``at-bound``, ``interval-crosses-zero``, ``mass-implausible``,
+        ``not-identified``, ``not-converged``; empty when none.
     """
 
     # results (set by fit)
@@ -225,6 +243,10 @@ class FrictionFit:
     stages_: list[dict[str, Any]]
     target_: str
     uncertainty_: Uncertainty | None
+    bounds_: dict[str, tuple[float, float]]
+    context_: RigContext
+    warnings_: list[FitWarning]
+    _failure: str
     _extras: dict[str, float]
     _target_kind: tuple[str, bool]
     _deps: list[Dependent]
@@ -408,7 +430,51 @@ class FrictionFit:
 
     # ------------------------------------------------------------------ fit
     def fit(self, data: Measurement) -> FrictionFit:
-        """Identify the model from ``data``; returns ``self`` with the ``*_`` attributes set."""
+        """Identify the model from ``data``; returns ``self`` with the ``*_`` attributes set.
+
+        Raises
+        ------
+        ConvergenceError
+            With ``strict``, when the fit does not converge (after setting the
+            attributes, ``warnings_`` included).
+        """
+        self._failure = ""
+        self._fit(data)
+        self.context_ = RigContext.from_meta(data.meta, mass=self.mass)
+        self.warnings_ = self.plausibility()
+        if not self.converged_ and self.strict:
+            raise ConvergenceError(self._failure)
+        return self
+
+    def plausibility(self, context: RigContext | None = None) -> list[FitWarning]:
+        """The plausibility warnings of the fitted values (:func:`.plausibility.check_fit`)
+        for the rig ``context`` (default: the record's, ``context_``)."""
+        held = self.held_
+        return check_fit(
+            {**self.params_, **held},
+            {**self.stderr_, **dict.fromkeys(held, math.inf)},
+            self.ci_, self.bounds_,
+            correlations(self.param_names_, self.cov_), self.converged_,
+            context or self.context_,
+            units={n: self.unit(n) for n in (*self.params_, *held)},
+            confidence=self.confidence, message=self.message_)
+
+    @property
+    def held_(self) -> dict[str, float]:
+        """The parameters the record did not determine (``not_identifiable_``) with the
+        values they were held at."""
+        self._check_fitted()
+        known = {**self._extras, **self.fixed_}
+        return {n: known[n] for n in self.not_identifiable_ if n in known}
+
+    def unit(self, name: str) -> str:
+        """The SI unit of a fitted or held parameter (``""`` for an unknown name)."""
+        if name in self.units_:
+            return self.units_[name]
+        specs = {**self.model_.param_specs(), **EXTRA_SPECS}
+        return specs[name].unit if name in specs else ""
+
+    def _fit(self, data: Measurement) -> FrictionFit:
         if self.method not in METHODS:
             raise FcompError(f"method {self.method!r}: choose one of {', '.join(METHODS)}")
         if not 0.0 < self.confidence < 1.0:
@@ -567,9 +633,9 @@ class FrictionFit:
         self.rms_ = float(np.sqrt(np.mean((f - run) ** 2)))
         self.n_samples_ = d.n
         self.at_bound_ = list(sub.at_bound_) if sub else []
-        if not self.converged_ and self.strict:
-            raise ConvergenceError(f"{d.label}: fitting {model.describe()} did not converge "
-                                   f"({self.message_})")
+        self.bounds_ = {**(sub.bounds_ if sub else {}),
+                        **{n: (specs[n].lower, specs[n].upper) for n in hyst_names}}
+        self._failure = f"{d.label}: fitting {model.describe()} did not converge ({self.message_})"
         return self
 
     def _static_stage(self, model: FrictionModel, d: FitData, free: list[str],
@@ -649,10 +715,41 @@ class FrictionFit:
         sol = solve(pv, prob, max_nfev=self.max_nfev, what=f"fit of {model.describe()}",
                     compress=prob.jacobian_is_free)
         unc = estimate(sol.jacobian, sol.residuals, sol.theta, level=self.confidence)
-        self.stages_.append({"stage": method, "parameters": list(names),
+        self._stage(method, pv, sol)
+        while not sol.converged:  # hold what the record barely determines, refit the rest
+            held = self._undetermined(pv, sol, unc)
+            if not held:
+                break
+            reached = dict(zip(pv.names, map(float, sol.theta), strict=True))
+            model = model.with_params(**{n: reached[n] for n in held})
+            keep = [n for n in pv.names if n not in held]
+            pv = ParameterVector.build(keep, reached, self._specs(model, keep, {
+                **model.flat_params(), **reached}), {n: pv.scale[pv.index(n)] for n in keep})
+            prob = TrajectoryProblem(model, d, pv, mask=mask, substeps=self.substeps,
+                                     dependent=self._deps)
+            sol = solve(pv, prob, max_nfev=self.max_nfev, what=f"fit of {model.describe()}",
+                        compress=prob.jacobian_is_free)
+            unc = estimate(sol.jacobian, sol.residuals, sol.theta, level=self.confidence)
+            self.not_identifiable_ += held
+            self._stage(f"{method}, {', '.join(held)} held", pv, sol)
+        return self._finish(model, d, mask, pv, sol, unc, method, prob)
+
+    def _stage(self, name: str, pv: ParameterVector, sol: Solution) -> None:
+        """Record a least-squares stage in ``stages_``."""
+        self.stages_.append({"stage": name, "parameters": list(pv.names),
                              "rms": float(np.sqrt(np.mean(sol.residuals**2))),
                              "evaluations": sol.nfev, "converged": sol.converged})
-        return self._finish(model, d, mask, pv, sol, unc, method, prob)
+
+    def _undetermined(self, pv: ParameterVector, sol: Solution, unc: Uncertainty) -> list[str]:
+        """Model parameters a stopped solve barely determines: standard error above
+        :data:`HOLD_RELATIVE_ERROR` times ``max(|value|, scale)`` (none of ``mass``,
+        ``offset`` or the parameters tied by an equality); empty if that would leave
+        nothing to fit."""
+        tied = {k for dep in self._deps for k in (dep.name, *dep.coef)}
+        mag = np.maximum(np.abs(sol.theta), pv.scale)
+        weak = [n for n, se, m in zip(pv.names, unc.stderr, mag, strict=True)
+                if not se <= HOLD_RELATIVE_ERROR * m and n not in EXTRAS and n not in tied]
+        return weak if len(weak) < len(pv.names) else []
 
     # --------------------------------------------------------------- results
     def _finish(self, model: FrictionModel, d: FitData, mask: np.ndarray, pv: ParameterVector,
@@ -720,10 +817,11 @@ class FrictionFit:
         self.rms_ = float(np.sqrt(np.mean(r**2)))
         self.n_samples_ = int(mask.sum())
         self.at_bound_ = [n for n, a in zip(names, sol.at_bound, strict=True) if a and n in est]
-        if not sol.converged and self.strict:
-            raise ConvergenceError(
-                f"{d.label}: fitting {model.describe()} did not converge ({sol.message}; "
-                f"{sol.nfev} evaluations); try fixing parameters (--fix) or a longer, richer record")
+        specs = self._specs(model, est, {**model.flat_params(), **values})
+        self.bounds_ = {n: (specs[n].lower, specs[n].upper) for n in est}
+        self._failure = (f"{d.label}: fitting {model.describe()} did not converge ({sol.message}; "
+                         f"{sol.nfev} evaluations); try fixing parameters (--fix) or a longer, "
+                         "richer record")
         return self
 
     def _add_dependent(self, est: list[str], unc: Uncertainty,
@@ -800,4 +898,5 @@ class FrictionFit:
             "tau_int": self.tau_int_,
             "evaluations": self.nfev_,
             "stages": self.stages_,
+            "warnings": [w.to_dict() for w in self.warnings_],
         }

@@ -472,7 +472,8 @@ def condition_motion(pieces: Sequence[tuple[np.ndarray, np.ndarray | None, np.nd
     vx_noise = derived_velocity_noise(sx, fc, fs)
     velocity, reason, cross, cal = "x", "no velocity column: dx/dt of the position", None, None
     if v0 is not None:
-        cal = calibrate_velocity([p[0] for p in pieces], [p[2] for p in pieces],
+        cols = [p[2] for p in pieces if p[2] is not None]
+        cal = calibrate_velocity([p[0] for p in pieces], cols,
                                  [d[0] for d in derived], [d[2] for d in derived], fc)
         velocity, reason, cross, fc = _choose(cal, sx, fc, fs, speed_scale(t0, x0),
                                               cutoff_hz is not None)
@@ -498,7 +499,8 @@ def _from_velocity(pieces: Sequence[tuple[np.ndarray, np.ndarray | None, np.ndar
     for t, _, v_col in pieces:
         assert v_col is not None
         found.append(velocity_rest(t, v_col, fc))
-    at_rest = np.concatenate([p[2][r] for p, (r, _, _) in zip(pieces, found, strict=True)])
+    at_rest = np.concatenate([p[2][r] for p, (r, _, _) in zip(pieces, found, strict=True)
+                              if p[2] is not None])
     bias = float(np.median(at_rest)) if at_rest.size >= MIN_REST else 0.0
     noise = _robust_std(at_rest) if at_rest.size >= MIN_REST else math.nan
     cal = VelocityCalibration(bias, 1.0, 0.0, noise, math.nan, int(at_rest.size))

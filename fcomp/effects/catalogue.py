@@ -99,9 +99,9 @@ class Viscous(StructuralEffect):
         return isinstance(model, LuGreFamily) and "viscous" not in model.features
 
     def new_values(self, model: FrictionModel) -> dict[str, float]:
-        p = self.params
-        return {model.viscous_name: p.sigma2, "p_visc": p.p_visc,  # type: ignore[attr-defined]
-                "v_ref": float(self.config.get("v_ref", p.v_ref))}  # type: ignore[attr-defined]
+        flat = self.params.flat()
+        return {model.viscous_name: flat["sigma2"], "p_visc": flat["p_visc"],  # type: ignore[attr-defined]
+                "v_ref": float(self.config.get("v_ref", flat["v_ref"]))}
 
 
 class Stribeck(StructuralEffect):

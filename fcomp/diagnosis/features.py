@@ -145,3 +145,49 @@ def residual_structure(r: np.ndarray, data: DiagnosisData, seg: Segmentation,
         st, k = strength(f, r, side, train, test, smooth=name == "t")
         out.append(FeatureStrength(name, st, k))
     return sorted(out, key=lambda fs: -fs.strength)
+
+
+#: Windows (s) after every start and reversal in which :func:`event_structure` looks.
+EVENT_WINDOWS: tuple[float, ...] = (0.05, 0.1, 0.2)
+
+
+@dataclass(frozen=True)
+class EventStructure:
+    """How strongly the held-out residual repeats in the window after starts and reversals."""
+
+    window: float
+    strength: float
+    rms: float
+    share: float
+
+
+def event_structure(r: np.ndarray, data: DiagnosisData, seg: Segmentation, train: np.ndarray,
+                    test: np.ndarray) -> EventStructure | None:
+    """The strongest structure locked to the events (starts, reversals), or None.
+
+    A structure that follows every start or reversal for a short time -- a rig
+    mode rung by the break-away, a transient no model term describes -- is a
+    small share of a whole record and escapes the record-wide strengths of
+    :func:`residual_structure`. Restricted to the samples within ``w`` of the
+    last start or reversal (``w`` in :data:`EVENT_WINDOWS`), the strength of
+    the time since the event (:func:`strength`) and the RMS it carries there,
+    ``rms_local*sqrt(strength)``, are computed; the window where that RMS is
+    largest is returned.
+    """
+    if data.steady_state:
+        return None
+    side = data.signal("s")
+    tsr = seg.time_since_reversal
+    best = None
+    for w in EVENT_WINDOWS:
+        loc = tsr < w
+        tl, el = train & loc, test & loc
+        if el.sum() < 50 or tl.sum() < 50:
+            continue
+        st, _ = strength(tsr, r, side, tl, el)
+        rms = float(np.sqrt(np.mean(r[el] ** 2)))
+        found = EventStructure(w, st, rms * float(np.sqrt(st)), float(el.sum() / test.sum()))
+        if best is None or found.rms > best.rms:
+            best = found
+    return best
+

@@ -81,7 +81,7 @@ from scipy import stats
 from fcomp.diagnosis import catalogue
 from fcomp.diagnosis.compare import regime_errors
 from fcomp.diagnosis.data import DiagnosisData, prepare
-from fcomp.diagnosis.features import FeatureStrength, residual_structure
+from fcomp.diagnosis.features import FeatureStrength, event_structure, residual_structure
 from fcomp.diagnosis.noise import NoiseFloor, effective_sample_size, noise_floor
 from fcomp.diagnosis.refit import FitResult, Refit
 from fcomp.diagnosis.regimes import Segmentation, segment
@@ -105,8 +105,9 @@ TIE_SHARE = 0.1
 AT_FLOOR = 1.05
 #: Feature strength above which the residual "still follows" a feature.
 STRUCTURE_MIN = 0.15
-#: Structure must explain at least this RMS, in noise floors, to count.
-STRUCTURE_RMS = 0.5
+#: Structure must explain at least this RMS, in noise floors, to count: a structure
+#: smaller than the noise is a law's shape not quite matched, not a missing effect.
+STRUCTURE_RMS = 1.0
 #: Residual RMS (trimmed, :func:`trimmed_rms`) above this many noise floors is
 #: unexplained structure whatever the features say.
 EXCESS_MAX = 2.0
@@ -685,10 +686,22 @@ class Diagnosis:
         top = self.residual_features_[0] if self.residual_features_ else None
         structured = (top is not None and top.strength >= STRUCTURE_MIN
                       and self.rms_final_ * math.sqrt(top.strength) >= STRUCTURE_RMS * nf)
+        ev = event_structure(self.fit_.residual, data, seg, split.train, split.test)
+        self.event_structure_ = ev
+        event = (ev is not None and ev.strength >= STRUCTURE_MIN
+                 and ev.rms >= STRUCTURE_RMS * nf)
         trimmed = trimmed_rms(self.fit_.residual[split.test])
         excess = trimmed > EXCESS_MAX * nf
-        self.verdict_ = "unexplained-structure" if structured or excess else "explained"
-        if structured:
+        self.verdict_ = ("unexplained-structure" if structured or event or excess
+                         else "explained")
+        if event and not structured:
+            assert ev is not None
+            self.reason_ = (f"structure after events: within {1e3 * ev.window:.0f} ms of every "
+                            f"start and reversal the held-out residual repeats (strength "
+                            f"{ev.strength:.2f} >= {STRUCTURE_MIN:g} of the time since the "
+                            f"event; it carries {ev.rms:.3g} N RMS >= {STRUCTURE_RMS:g} noise "
+                            "floor there)")
+        elif structured:
             assert top is not None
             self.reason_ = (f"structure: the held-out residual still follows {top.feature} "
                             f"(strength {top.strength:.2f} >= {STRUCTURE_MIN:g}; it carries "

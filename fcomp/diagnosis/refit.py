@@ -20,7 +20,11 @@ diagnosis needs:
   shorter than a sample...).
 * **Several starts, two stages.** The guesses of :mod:`.catalogue` may give
   several starting points; each gets a short fit (:data:`PROBE_NFEV`
-  evaluations) and the best continues to convergence. The Stribeck exponent
+  evaluations, on a copy block-averaged to at most :data:`PROBE_SAMPLES`
+  samples: the probes only rank the starts) and the best continues to
+  convergence on the full-rate record. A candidate whose best probe does not
+  lower the training cost of the model it would extend by :data:`MIN_GAIN`
+  stops there (it could not qualify). The Stribeck exponent
   ``n`` is held at its start value in this first stage and freed in a second
   one: with ``n`` free from the outset a record with few distinct sliding
   speeds lets the fit slide into a flat valley (``n < 1`` with a large
@@ -56,6 +60,8 @@ from fcomp.trajectory import friction_along_motion
 PROBE_NFEV = 20
 #: Smallest share of the training cost a candidate's probes must remove to be refitted fully.
 MIN_GAIN = 0.002
+#: Largest record the short probes of several starts run on (block-averaged beyond it).
+PROBE_SAMPLES = 12_000
 #: Softest stiffness allowed: its presliding range ``F/k`` is at most this many ``d_pre``.
 PRESLIDING_SPAN = 20.0
 #: Parameters held at their start values in the first stage of a fit.
@@ -255,12 +261,14 @@ class Refit:
         self.max_nfev = max_nfev
         self.q = max(1, math.ceil(data.n / max_samples))
         self.windows = timing_windows(data.signal("v"), data.scales.dt, data.scales.resolution)
-        self._records = self._fit_records()
+        self._records = self._fit_records(self.q)
+        q_probe = max(self.q, math.ceil(data.n / PROBE_SAMPLES))
+        self._probe_records = self._records if q_probe == self.q else self._fit_records(q_probe)
 
-    def _fit_records(self) -> list[tuple[FitData, np.ndarray]]:
-        """Per experiment with training samples: the (block-averaged) data and training mask."""
+    def _fit_records(self, q: int) -> list[tuple[FitData, np.ndarray]]:
+        """Per experiment with training samples: the data averaged over blocks of ``q``
+        samples, and the training mask."""
         out = []
-        q = self.q
         for e in self.data.experiments:
             train = self.split.train[e.start:e.stop]
             if not train.any():
@@ -363,15 +371,15 @@ class Refit:
         return out
 
     def train_cost(self, model: FrictionModel, values: Mapping[str, float]) -> float:
-        """Sum of squared residuals over the training samples of the fit records (N^2).
+        """Sum of squared residuals over the training samples of the probe records (N^2).
 
-        The measure the solver minimises (plain residuals on the possibly
-        block-averaged records), so a refit can be compared with it.
+        The measure the probes of :meth:`fit` minimise (plain residuals on the
+        block-averaged records), so a candidate's probes can be compared with it.
         """
         vals = {k: v for k, v in values.items() if k != "mass"}
         mass = values.get("mass")
         total = 0.0
-        for d, m in self._records:
+        for d, m in self._probe_records:
             s = d.sig
             F = d.band_limited(friction_along_motion(
                 model, s["t"], s["v"], a=s["a"], x=s["x"], p1=s["p1"], p2=s["p2"],
@@ -415,10 +423,13 @@ class Refit:
         first = [n for n in names if base_name(n) not in STAGED] or names
         best = None
         nfev = 0
-        budget = min(PROBE_NFEV, max_nfev) if len(start_list) > 1 else max_nfev
+        several = len(start_list) > 1
+        budget = min(PROBE_NFEV, max_nfev) if several else max_nfev
+        probe = self._probe_records if several else self._records
         for st in start_list:
             try:
-                sol, k = self._solve(model, self._pv(model, first, st, specs), budget)
+                sol, k = self._solve(model, self._pv(model, first, st, specs), budget,
+                                     records=probe)
             except FcompError:
                 continue
             nfev += k
@@ -430,7 +441,7 @@ class Refit:
                              "every start")
         cost, sol, st = best
         st = dict(st, **dict(zip(first, map(float, sol.theta), strict=True)))
-        if reference is not None and cost > (1.0 - MIN_GAIN) * reference:
+        if reference is not None and several and cost > (1.0 - MIN_GAIN) * reference:
             values = {n: float(st[n]) for n in names}
             return self.result(model, values, len(names), False, nfev)
         if len(start_list) > 1:
@@ -448,8 +459,10 @@ class Refit:
         return ParameterVector.build(list(names), start, {n: specs[n] for n in names},
                                      self.scales(model, names, start))
 
-    def _solve(self, model: FrictionModel, pv: ParameterVector, budget: int):
-        problems = [TrajectoryProblem(model, d, pv, mask=m) for d, m in self._records]
+    def _solve(self, model: FrictionModel, pv: ParameterVector, budget: int, *,
+               records: list[tuple[FitData, np.ndarray]] | None = None):
+        problems = [TrajectoryProblem(model, d, pv, mask=m)
+                    for d, m in (self._records if records is None else records)]
 
         def fun(theta: np.ndarray, need_jac: bool = True
                 ) -> tuple[np.ndarray, np.ndarray | None]:

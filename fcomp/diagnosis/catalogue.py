@@ -71,6 +71,7 @@ class Proposal:
     model: FrictionModel
     starts: list[dict[str, float]]
     free: list[str] | None = None
+    form: str | None = None
 
 
 def describe(name: str) -> dict[str, str]:
@@ -122,24 +123,40 @@ def _config(name: str, data: DiagnosisData) -> dict[str, Any]:
     return {}
 
 
-def attach(model: FrictionModel, name: str, data: DiagnosisData) -> FrictionModel:
-    """``model`` with the effect ``name`` at its defaults, configured for the record."""
-    return _attach(model, name, {}, data)
+def attach(model: FrictionModel, name: str, data: DiagnosisData, form: str | None = None
+           ) -> FrictionModel:
+    """``model`` with the effect ``name`` (in ``form``) at its defaults, configured for the
+    record."""
+    return _attach(model, name, {}, data, **({"form": form} if form else {}))
 
 
 def _attach(model: FrictionModel, name: str, params: dict[str, float],
-            data: DiagnosisData) -> FrictionModel:
-    effect: Effect = make_effect(name, params or None, **_config(name, data))
+            data: DiagnosisData, **config: Any) -> FrictionModel:
+    effect: Effect = make_effect(name, params or None, **{**_config(name, data), **config})
     return model.with_effects(effect)
 
 
-def propose(name: str, ctx: Context) -> Proposal:
-    """The candidate ``current model + name`` with the starts of its refit."""
+#: Effects whose forms (configuration ``form``) the diagnosis refits side by side.
+FORMS: dict[str, tuple[str, ...]] = {"frictional-lag": ("film", "speed-lag")}
+
+
+def propose_all(name: str, ctx: Context) -> list[Proposal]:
+    """One :func:`propose` per form of the effect (:data:`FORMS`; one for most)."""
+    forms = FORMS.get(name)
+    if not forms:
+        return [propose(name, ctx)]
+    return [propose(name, ctx, form=f) for f in forms]
+
+
+def propose(name: str, ctx: Context, form: str | None = None) -> Proposal:
+    """The candidate ``current model + name`` (in ``form``) with the starts of its refit."""
     model = ctx.current.model
     guess = GUESSES.get(name)
-    alternatives = guess(ctx) if guess is not None else [{}]
+    extra = {"form": form} if form is not None else {}
+    alternatives = guess(ctx, **extra) if guess is not None else [{}]
     own_names = set(EFFECTS.get(name).Params.from_flat({}).flat())
-    models = [_attach(model, name, {k: v for k, v in p.items() if k in own_names}, ctx.data)
+    models = [_attach(model, name, {k: v for k, v in p.items() if k in own_names}, ctx.data,
+                      **extra)
               for p in alternatives]
     # a guess may also move parameters of the model itself (a stiffer bristle)
     starts = [{**m.flat_params(), **{k: v for k, v in p.items()
@@ -160,7 +177,7 @@ def propose(name: str, ctx: Context) -> Proposal:
     if "mass" in ctx.current.values:
         for s in starts:
             s["mass"] = ctx.current.values["mass"]
-    return Proposal(name, models[0], starts)
+    return Proposal(name, models[0], starts, form=form)
 
 
 def _at_bound(ctx: Context, values: dict[str, float]) -> list[str]:
@@ -226,13 +243,19 @@ def _presliding(ctx: Context) -> list[dict[str, float]]:
             {"sigma0": s0, "i_pre": 0.5}, {"sigma0": s0, "i_pre": 2.0}]
 
 
-def _frictional_lag(ctx: Context) -> list[dict[str, float]]:
+def _frictional_lag(ctx: Context, form: str = "film") -> list[dict[str, float]]:
+    """A small grid of time constants: 10 and 50 ms (at least 5 and 25 samples); for the
+    film, its speed ``vb`` at one and four Stribeck speeds; for the lagged speed, the
+    whole lag and half of it."""
     flat = ctx.current.model.flat_params()
     vs = flat.get("vs", flat.get("vs_pos", 0.1 * ctx.data.scales.speed))
     dt = ctx.data.scales.dt
+    taus = (max(5 * dt, 0.01), max(25 * dt, 0.05))
+    if form == "speed-lag":
+        return [{"tau_L": tau, "w_L": w} for tau in (*taus, 0.2) for w in (1.0, 0.5)]
     out = []
     for vb in (vs, 4 * vs):
-        for tau in (max(5 * dt, 0.01), max(25 * dt, 0.05)):
+        for tau in taus:
             out.append({"vb": vb, "tau_hp": tau, "tau_hn": tau, "tau_h0": 1.0})
     return out
 
@@ -290,13 +313,27 @@ def _direction_asymmetry(ctx: Context) -> list[dict[str, float]]:
 
 
 def _pressure(ctx: Context) -> list[dict[str, float]]:
+    """The level change per pascal of ``p1 + p2`` by least squares; then with the chambers
+    weighed apart and a curvature too (the sign-corrected residual regressed on
+    ``|F_hat|*(dS, dD, dS^2)``)."""
     m = _moving(ctx)
     s = np.sign(ctx.data.signal("v"))
-    dp = ctx.data.signal("p1") + ctx.data.signal("p2") - ctx.data.scales.p_mid
-    F = ctx.current.F_hat
-    kp = _ls((s * ctx.current.residual)[m], (np.abs(F) * dp)[m])
-    bound = 0.9 / max(float(np.max(np.abs(dp))), 1.0)
-    return [{"kp": float(np.clip(kp, -bound, bound)), "p_ref": ctx.data.scales.p_mid}]
+    p1, p2 = ctx.data.signal("p1"), ctx.data.signal("p2")
+    d_ref = float(np.mean(p1 - p2))
+    dS = p1 + p2 - ctx.data.scales.p_mid
+    dD = p1 - p2 - d_ref
+    F = np.abs(ctx.current.F_hat)
+    rs = (s * ctx.current.residual)[m]
+    kp = _ls(rs, (F * dS)[m])
+    bound = 0.9 / max(float(np.max(np.abs(dS))), 1.0)
+    ref = {"p_ref": ctx.data.scales.p_mid, "d_ref": d_ref}
+    cols = np.column_stack([F * dS, F * dD, F * dS * dS])[m]
+    coef, *_ = np.linalg.lstsq(cols, rs, rcond=None)
+    bd = 0.9 / max(float(np.max(np.abs(dD))), 1.0)
+    bq = 0.9 / max(float(np.max(dS * dS)), 1.0)
+    full = {"kp": float(np.clip(coef[0], -bound, bound)), "kd": float(np.clip(coef[1], -bd, bd)),
+            "kq": float(np.clip(coef[2], -bq, bq))}
+    return [{"kp": float(np.clip(kp, -bound, bound)), **ref}, {**full, **ref}]
 
 
 def _position(ctx: Context) -> list[dict[str, float]]:

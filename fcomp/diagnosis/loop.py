@@ -66,6 +66,7 @@ records the step, so the error-fall chart shows it.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import multiprocessing
 import os
@@ -149,6 +150,7 @@ class Candidate:
     delta_bic: float = math.nan
     qualifies: bool = False
     reason: str = ""
+    form: str | None = None
 
 
 @dataclass
@@ -417,6 +419,7 @@ class Diagnosis:
             self.added_: list[str] = []
             self.skipped_: dict[str, str] = {}
             self.removed_: list[str] = []
+            self._forms: dict[str, str | None] = {}
             for name in self.add:
                 self.add_effect(name)
             if self.search:
@@ -476,6 +479,7 @@ class Diagnosis:
             raise FcompError(f"adding {effect!r}: {cand.reason}")
         before = self.fit_
         fit = self._polish(cand.fit)
+        self._forms[effect] = cand.form
         self.steps_.append(Step(effect, before.rms_test, fit.rms_test, cand.qualifies,
                                 forced=True, candidates=[cand], fit=fit))
         self.fit_ = fit
@@ -495,17 +499,27 @@ class Diagnosis:
         index = []
         for i, name in enumerate(names):
             try:
-                proposals.append(catalogue.propose(name, ctx))
-                index.append(i)
+                forms = catalogue.propose_all(name, ctx)
             except (FcompError, ValueError) as exc:
                 out[i] = Candidate(name, None, math.nan, reason=f"cannot start: {exc}")
+                continue
+            proposals += forms
+            index += [i] * len(forms)
         results = self._run(proposals)
-        for j, res in zip(index, results, strict=True):
+        best: dict[int, tuple[FitResult | str, str | None]] = {}
+        for j, prop, res in zip(index, proposals, results, strict=True):
+            # of an effect's forms, the one that fits the training samples best
+            prev = best.get(j, (None, None))[0]
+            if prev is None or (isinstance(prev, str) and not isinstance(res, str)) or (
+                    not isinstance(res, str) and not isinstance(prev, str)
+                    and res.rms_train < prev.rms_train):
+                best[j] = (res, prop.form)
+        for j, (res, form) in best.items():
             name = names[j]
             if isinstance(res, str):
-                out[j] = Candidate(name, None, math.nan, reason=res)
+                out[j] = Candidate(name, None, math.nan, reason=res, form=form)
                 continue
-            out[j] = self._judge(name, res)
+            out[j] = dataclasses.replace(self._judge(name, res), form=form)
         return [c for c in out if c is not None]
 
     def _run(self, proposals: list[catalogue.Proposal]) -> list[FitResult | str]:
@@ -601,6 +615,7 @@ class Diagnosis:
             best = good[0]
             tie = self._tie(best, good)
             fit = self._polish(best.fit)  # type: ignore[arg-type]
+            self._forms[best.effect] = best.form
             self.steps_.append(Step(best.effect, self.fit_.rms_test, fit.rms_test, True,
                                     candidates=ranked, tie=tie, fit=fit))
             if len(tie) > 1:
@@ -612,7 +627,7 @@ class Diagnosis:
         """The baseline with the effects ``names`` (in order) refitted from the current values."""
         model = self.baseline_fit_.model
         for n in names:
-            model = catalogue.attach(model, n, self.data_)
+            model = catalogue.attach(model, n, self.data_, self._forms.get(n))
         flat = model.flat_params()
         start = {k: v for k, v in self.fit_.values.items() if k in flat or k == "mass"}
         return self._polish(self._refit.fit(model, [start]))

@@ -79,6 +79,7 @@ def unit_scale(unit: str, sc: Scales, d_pre: float) -> float:
         "m": sc.stroke,
         "s": max(sc.duration, 10 * sc.dt),
         "1/Pa": 1.0 / max(sc.p_span, abs(sc.p_mid), 1.0),
+        "1/Pa^2": 1.0 / max(sc.p_span, abs(sc.p_mid), 1.0) ** 2,
         "kg": sc.force / sc.accel,
         "Pa": max(sc.p_span, abs(sc.p_mid), 1.0),
     }

@@ -167,35 +167,56 @@ class ViscousLead(StructuralEffect):
 
 
 class FrictionalLag(StructuralEffect):
-    """Frictional lag: the lubricant-film state ``h`` (modified LuGre, models.md 1.4).
+    """Frictional lag: the Stribeck curve follows the velocity late.
 
-    The film thickens while sliding and drains while decelerating or resting,
-    with different time constants, so the Stribeck curve lags the velocity:
-    friction on the accelerating branch is higher than on the decelerating
-    one, and break-away after a dwell is higher than after a short stop. A
-    model without it leaves a residual that is a loop against ``v`` (sign
-    depending on whether ``|v|`` rises or falls) and that grows with time
-    since the last reversal. Defaults ``vb = inf`` make ``h`` identically zero.
+    The lubricant film thickens while sliding and drains while decelerating
+    or resting, so friction on the accelerating branch is higher than on the
+    decelerating one, and break-away after a dwell is higher than after a
+    short stop. A model without it leaves a residual that is a loop against
+    ``v`` (sign depending on whether ``|v|`` rises or falls) and that grows with
+    time since the last reversal. Two forms (configuration ``form``):
+
+    ``"film"`` (default)
+        the lubricant-film state ``h`` of the modified LuGre model (models.md
+        1.4, seed 002 Eqs. 8-11), with different time constants for building,
+        draining and dwell; defaults ``vb = inf`` make ``h`` identically zero.
+    ``"speed-lag"``
+        Hess & Soom (1990): the curve is evaluated at a lagged speed,
+        ``dvL/dt = (|v| - vL)/tau_L``, blended by ``w_L`` (the ``speed-lag`` of
+        :mod:`fcomp.models.lugre_family`); the steady-state map is unchanged;
+        ``w_L = 0`` (the default) is no lag.
     """
 
     name = "frictional-lag"
+    FORMS: ClassVar[tuple[str, ...]] = ("film", "speed-lag")
     adds = frozenset({"film", "film-lag"})
     requires = frozenset({"stribeck"})
     Params = make_params_class("FrictionalLagParams", [
         dataclasses.replace(FAMILY_SPECS["vb"], default=INF),
-        *(FAMILY_SPECS[n] for n in ("tau_hp", "tau_hn", "tau_h0")),
+        *(FAMILY_SPECS[n] for n in ("tau_hp", "tau_hn", "tau_h0", "tau_L", "w_L")),
     ], owner="effect frictional-lag")
     signature = "residual loop against v: rising and falling |v| branches differ"
     experiment = "velocity sweeps up and down at several rates; dwell before restart"
 
+    def __init__(self, params: Any = None, **config: Any) -> None:
+        super().__init__(params, **config)
+        if self.form not in self.FORMS:
+            raise ValueError(f"effect frictional-lag: form must be one of "
+                             f"{', '.join(self.FORMS)}, got {self.form!r}")
+
+    @property
+    def form(self) -> str:
+        return str(self.config.get("form", "film"))
+
     def applies_to(self, model: FrictionModel) -> bool:
         from fcomp.models.lugre_family import LuGreFamily
 
-        return isinstance(model, LuGreFamily) and "film-lag" not in model.features
+        return (isinstance(model, LuGreFamily) and "film-lag" not in model.features
+                and "speed-lag" not in model.features)
 
     def attach(self, model: FrictionModel) -> FrictionModel:
         fam = _family(model, self.name)
-        if "film-lag" in fam.features:
+        if not self.applies_to(fam):
             raise ValueError(f"model {fam.describe()!r} already has effect {self.name!r}")
         if "stribeck" not in fam.features:
             raise ValueError(
@@ -203,9 +224,14 @@ class FrictionalLag(StructuralEffect):
                 f"{fam.describe()!r} first"
             )
         values = dict(self.params.flat())
-        if "film" in fam.features:  # static film already present: keep its vb
-            values = {k: v for k, v in values.items() if not k.startswith("vb")}
-        new = fam.with_features({"film", "film-lag"}, values)
+        lag = FEATURE_PARAMS["speed-lag"]
+        if self.form == "speed-lag":
+            new = fam.with_features({"speed-lag"}, {k: values[k] for k in lag})
+        else:
+            values = {k: v for k, v in values.items() if k not in lag}
+            if "film" in fam.features:  # static film already present: keep its vb
+                values = {k: v for k, v in values.items() if not k.startswith("vb")}
+            new = fam.with_features({"film", "film-lag"}, values)
         new.lineage = (*(fam.lineage or (fam.name,)), self.name)
         return new
 
@@ -257,22 +283,36 @@ class Presliding(StructuralEffect):
 
 # --------------------------------------------------------------------- add-ons
 class PressureDependence(Effect):
-    """Pressure dependence: ``(Fc, Fs) -> (Fc, Fs)*(1 + kp*(p1 + p2 - p_ref))`` (gauge).
+    """Pressure dependence: the levels scale with the chamber pressures (gauge).
 
     Chamber pressure energises lip seals: the normal force on the seal, and
     so the friction, grows with pressure (seed 000 Fig. 12, seed 001 Eq. 1).
-    A model without it leaves a residual whose magnitude follows ``p1 + p2``:
-    runs at high pressure sit above the fit, runs at low pressure below, with
-    the same sign as the friction. ``p_ref`` is held fixed (not fitted).
+    The piston seal sees both chambers and a rod seal only the rod side, so
+    the chambers weigh differently; an energised lip saturates. With
+    ``S = p1 + p2`` and ``D = p1 - p2``::
+
+        (Fc, Fs) -> (Fc, Fs)*(1 + kp*(S - p_ref) + kd*(D - d_ref) + kq*(S - p_ref)^2)
+
+    ``kd`` weighs the chambers apart (``kd = 0``: equally), ``kq`` bends the
+    law (a saturating seal: ``kq < 0``). A model without it leaves a residual
+    whose magnitude follows the pressures: runs at high pressure sit above the
+    fit, runs at low pressure below, with the same sign as the friction.
+    ``p_ref`` and ``d_ref`` are held fixed (not fitted).
     """
 
     name = "pressure-dependence"
     Params = make_params_class("PressureDependenceParams", [
-        spec("kp", "1/Pa", 0.0, -1e-3, 1e-3, "relative level change per pascal"),
+        spec("kp", "1/Pa", 0.0, -1e-3, 1e-3, "relative level change per pascal of p1 + p2"),
+        spec("kd", "1/Pa", 0.0, -1e-3, 1e-3, "relative level change per pascal of p1 - p2",
+             directional=False),
+        spec("kq", "1/Pa^2", 0.0, -INF, INF, "curvature of the law in p1 + p2",
+             directional=False),
         spec("p_ref", "Pa", 0.0, -INF, INF, "reference gauge pressure sum (fixed)",
              directional=False),
+        spec("d_ref", "Pa", 0.0, -INF, INF, "reference pressure difference (fixed)",
+             directional=False),
     ], owner="effect pressure-dependence")
-    fixed: ClassVar[tuple[str, ...]] = ("p_ref",)
+    fixed: ClassVar[tuple[str, ...]] = ("p_ref", "d_ref")
     needs = ("p1", "p2")
     signature = "residual magnitude correlates with p1 + p2, sign follows friction"
     experiment = "identical motions at two or more chamber pressure levels"
@@ -288,7 +328,9 @@ class PressureDependence(Effect):
 
     def modify_levels(self, be: Backend, L: dict, w: list[Any], sig: Signals,
                       P: ParamValues) -> dict:
-        return scale_levels(L, 1.0 + P("kp", sig.s) * (sig.p1 + sig.p2 - P("p_ref")))
+        dS = sig.p1 + sig.p2 - P("p_ref")
+        dD = sig.p1 - sig.p2 - P("d_ref")
+        return scale_levels(L, 1.0 + P("kp", sig.s) * dS + P("kd") * dD + P("kq") * dS * dS)
 
 
 class DirectionAsymmetry(Effect):

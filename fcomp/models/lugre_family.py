@@ -21,6 +21,10 @@ feature          term
 form``           ``(1 + kappa_s*r^n)^(-1/kappa_s)``, ``r = |v|/vs``: ``kappa_s -> 0``
                  the exponential, ``kappa_s = 1`` the rational ``1/(1 + r^n)``
                  (Hess & Soom 1990's Lorentzian for ``n = 2``), a fatter tail between
+``speed-lag``    state ``vL``: ``dvL/dt = (|v| - vL)/tau_L``; the Stribeck curve is
+                 evaluated at ``|v| + w_L*(vL - |v|)`` (Hess & Soom 1990's frictional
+                 lag: the curve follows the speed late; ``w_L = 0`` no lag, 1 the
+                 lagged speed alone). The steady-state map is unchanged.
 ``viscous-       ``sigma2*v*(|v|/v_ref)^(p_visc - 1)``: a power law of the speed
 power``          (a shear-thinning or -thickening film), ``sigma2`` its slope at
                  ``v_ref`` (fixed); ``p_visc = 1`` is the linear term
@@ -101,6 +105,10 @@ FAMILY_SPECS: dict[str, ParamSpec] = {
              directional=False),
         spec("v_ref", "m/s", 0.05, 0.0, INF, "reference speed of the viscous exponent "
              "(fixed: visc is the slope there)", lower_open=True, directional=False),
+        spec("tau_L", "s", 0.05, 0.0, INF, "time constant of the lagged speed the Stribeck "
+             "curve follows (Hess-Soom frictional lag)", lower_open=True, directional=False),
+        spec("w_L", "-", 0.0, 0.0, 1.0, "share of the lag in the speed the curve follows "
+             "(0: none, 1: the lagged speed alone)", directional=False),
         spec("kappa_s", "-", 0.0, 0.0, 1.0, "Stribeck curve form: 0 the exponential "
              "exp(-r^n), 1 the rational 1/(1 + r^n), between the q-exponential",
              directional=False),
@@ -130,10 +138,11 @@ FEATURE_PARAMS: dict[str, tuple[str, ...]] = {
     "elements": ("ms_share", "ms_dmax", "ms_spread", "ms_shape"),
     "stribeck-form": ("kappa_s",),
     "viscous-power": ("p_visc", "v_ref"),
+    "speed-lag": ("tau_L", "w_L"),
     "bristle-exponent": ("i_pre",),
 }
 FEATURE_ORDER = ("stribeck", "viscous", "presliding", "damping", "film", "film-lag", "lead",
-                 "elements", "stribeck-form", "bristle-exponent", "viscous-power")
+                 "elements", "stribeck-form", "bristle-exponent", "viscous-power", "speed-lag")
 
 
 def _check_features(features: frozenset[str]) -> None:
@@ -150,6 +159,8 @@ def _check_features(features: frozenset[str]) -> None:
         raise ValueError("Maxwell-slip elements split the bristle: they need presliding")
     if "stribeck-form" in features and "stribeck" not in features:
         raise ValueError("the Stribeck curve form needs the Stribeck term")
+    if "speed-lag" in features and "stribeck" not in features:
+        raise ValueError("the lagged speed needs the Stribeck term it acts on")
     if "viscous-power" in features and "viscous" not in features:
         raise ValueError("the viscous exponent needs the viscous term")
     if "bristle-exponent" in features and "presliding" not in features:
@@ -195,6 +206,8 @@ class LuGreFamily(FrictionModel):
             st.append("z")
         if "elements" in self.features:
             st += [f"delta{i}" for i in range(1, ELEMENTS + 1)]
+        if "speed-lag" in self.features:
+            st.append("vL")
         if "film-lag" in self.features:
             st.append("h")
         return tuple(st)
@@ -233,6 +246,14 @@ class LuGreFamily(FrictionModel):
         kappa = P("kappa_s")
         q = be.power(1.0 + be.fmax(kappa, 1e-6) * rn, -1.0 / be.fmax(kappa, 1e-6))
         return be.if_else(kappa < 1e-6, be.exp(-rn), q)
+
+    def _curve_speed(self, be: Backend, x: list[Any], v: Any, P: ParamValues) -> Any:
+        """The speed the Stribeck curve follows: ``|v|``, or with ``speed-lag`` the blend
+        ``|v| + w_L*(vL - |v|)`` of the lagged speed."""
+        if "speed-lag" not in self.features:
+            return v
+        vL = x[self.base_states.index("vL")]
+        return be.abs(v) + P("w_L") * (vL - be.abs(v))
 
     def g(self, be: Backend, v: Any, h: Any, P: ParamValues, L: dict, s: Any) -> Any:
         """Stribeck function ``g(v, h) = Fc + ((1 - h)*Fs - Fc)*exp(-(|v|/vs)^n)`` (N)."""
@@ -280,7 +301,7 @@ class LuGreFamily(FrictionModel):
         h = self._h(x, be, sig, P, L)
         z, deltas, _ = self._split(x)
         if z:
-            g = self.g(be, v, h, P, L, sig.s)
+            g = self.g(be, self._curve_speed(be, x, v, P), h, P, L, sig.s)
             if "bristle-exponent" in self.features:  # Dahl's exponent (Dahl 1976)
                 u = 1.0 - P("sigma0") * be.sign(v) * z[0] / g
                 out.append(v * be.sign(u) * be.power(be.fmax(be.abs(u), 1e-12), P("i_pre")))
@@ -296,6 +317,8 @@ class LuGreFamily(FrictionModel):
         if "film-lag" in self.features:
             hss = self.h_ss(be, v, P, L, sig.s)
             out.append((hss - h) / self.tau_h(be, v, h, hss, P))
+        if "speed-lag" in self.features:
+            out.append((be.abs(v) - x[self.base_states.index("vL")]) / P("tau_L"))
         return out
 
     def base_project(self, be: Backend, x: list[Any], sig: Signals, P: ParamValues,
@@ -304,7 +327,8 @@ class LuGreFamily(FrictionModel):
         if "elements" not in self.features:
             return x
         z, deltas, rest = self._split(x)
-        g = self.g(be, sig.v, self._h(x, be, sig, P, L), P, L, sig.s)
+        g = self.g(be, self._curve_speed(be, x, sig.v, P), self._h(x, be, sig, P, L), P, L,
+                   sig.s)
         clipped = [be.fmax(-di * g / L["Fc"], be.fmin(di * g / L["Fc"], d))
                    for d, (_, di) in zip(deltas, self._elements(be, P), strict=True)]
         return [*z, *clipped, *rest]
@@ -340,7 +364,8 @@ class LuGreFamily(FrictionModel):
             return F0 + self._viscous_force(be, v, visc, P), c_a
         h = self._h(x, be, sig, P, L)
         sat = be.fmax(-1.0, be.fmin(1.0, v / P("v_eps")))
-        return sat * self.g(be, v, h, P, L, sig.s) + self._viscous_force(be, v, visc, P), c_a
+        g = self.g(be, self._curve_speed(be, x, v, P), h, P, L, sig.s)
+        return sat * g + self._viscous_force(be, v, visc, P), c_a
 
     def base_steady_state(self, be: Backend, sig: Signals, P: ParamValues, L: dict) -> list:
         v = sig.v
@@ -353,6 +378,8 @@ class LuGreFamily(FrictionModel):
                 out += [gs * di / L["Fc"] for _, di in self._elements(be, P)]
         if "film-lag" in self.features:
             out.append(hss)
+        if "speed-lag" in self.features:
+            out.append(be.abs(v))
         return out
 
     def base_initial_state(self) -> list[float]:

@@ -58,6 +58,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="most effects the search adds (default 6)")
     p.add_argument("--jobs", type=int, default=None, metavar="N",
                    help="parallel refits (default: CPU count, at most 4)")
+    p.add_argument("--no-baseline-check", action="store_true",
+                   help="do not diagnose again from a baseline of the other kind (static <-> "
+                   "dynamic) to say whether the answer depends on the baseline")
     p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
     p.set_defaults(func=run)
 
@@ -81,7 +84,14 @@ def summary(doc: dict) -> str:
                 lines.append(f"    {e}: {exp}")
     lines.append(f"added: {', '.join(doc['added']) or 'nothing'}; final model {doc['model']}; "
                  f"held-out RMS {doc['rms_final']:.4g} N")
+    other = doc.get("other_baseline")
+    if other:
+        same = "the same effects" if not doc["baseline_dependent"] else "OTHER effects"
+        lines.append(f"baseline check: from {other['baseline']} the diagnosis finds {same} "
+                     f"({', '.join(other['added']) or 'nothing'}; {other['verdict']})")
     lines.append(f"verdict: {doc['verdict']} -- {doc['reason']}")
+    for w in doc.get("warnings", []):
+        lines.append(f"warning ({w['code']}): {w['message']}")
     return "\n".join(lines)
 
 
@@ -111,7 +121,8 @@ def run(args: argparse.Namespace) -> int:
     diag = Diagnosis(args.baseline, effects=candidates, add=args.add,
                      search=not args.no_search, split=args.split, cutoff_hz=args.cutoff,
                      max_steps=args.max_steps, n_jobs=args.jobs,
-                     progress=not args.no_progress)
+                     progress=not args.no_progress,
+                     check_baseline=not args.no_baseline_check)
     diag.fit(data)
     doc = common.with_warnings(diag.to_dict())
     text = result_text(doc)

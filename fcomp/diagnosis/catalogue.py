@@ -177,7 +177,19 @@ def propose(name: str, ctx: Context, form: str | None = None) -> Proposal:
     if "mass" in ctx.current.values:
         for s in starts:
             s["mass"] = ctx.current.values["mass"]
-    return Proposal(name, models[0], starts, form=form)
+    held = HELD[name](ctx) if name in HELD else []
+    free = None
+    if held:
+        from fcomp.diagnosis.refit import fixed_names
+        from fcomp.identification.estimator import default_free
+
+        fixed = fixed_names(models[0])
+        free = [n for n in default_free(models[0]) if n not in fixed and n not in held]
+        if "mass" in ctx.current.values:
+            free.append("mass")
+        for st in starts:  # a held term stays at its no-op value
+            st.update({n: 0.0 for n in held})
+    return Proposal(name, models[0], starts, free, form=form)
 
 
 def _at_bound(ctx: Context, values: dict[str, float]) -> list[str]:
@@ -328,12 +340,45 @@ def _pressure(ctx: Context) -> list[dict[str, float]]:
     bound = 0.9 / max(float(np.max(np.abs(dS))), 1.0)
     ref = {"p_ref": ctx.data.scales.p_mid, "d_ref": d_ref}
     cols = np.column_stack([F * dS, F * dD, F * dS * dS])[m]
-    coef, *_ = np.linalg.lstsq(cols, rs, rcond=None)
+    use = _distinct_columns(cols)
+    coef = np.zeros(3)
+    coef[use], *_ = np.linalg.lstsq(cols[:, use], rs, rcond=None)
     bd = 0.9 / max(float(np.max(np.abs(dD))), 1.0)
     bq = 0.9 / max(float(np.max(dS * dS)), 1.0)
     full = {"kp": float(np.clip(coef[0], -bound, bound)), "kd": float(np.clip(coef[1], -bd, bd)),
             "kq": float(np.clip(coef[2], -bq, bq))}
     return [{"kp": float(np.clip(kp, -bound, bound)), **ref}, {**full, **ref}]
+
+
+def _pressure_held(ctx: Context) -> list[str]:
+    """The chamber weight ``kd`` and the curvature ``kq`` where the record cannot tell them
+    from the level change ``kp`` (one chamber vented: ``p1 - p2`` is ``p1 + p2``; two
+    pressure levels: the square is a line)."""
+    m = _moving(ctx)
+    p1, p2 = ctx.data.signal("p1"), ctx.data.signal("p2")
+    dS = (p1 + p2 - ctx.data.scales.p_mid)[m]
+    dD = (p1 - p2)[m] - float(np.mean((p1 - p2)[m]))
+    use = _distinct_columns(np.column_stack([dS, dD, dS * dS - np.mean(dS * dS)]))
+    return [n for i, n in enumerate(("kp", "kd", "kq")) if i not in use]
+
+
+def _distinct_columns(cols: np.ndarray, max_corr: float = 0.98) -> list[int]:
+    """Indices of the columns kept in order, each dropped that is nearly a multiple of a
+    combination of the kept ones (its residual after projection is below
+    ``sqrt(1 - max_corr^2)`` of its norm)."""
+    kept: list[int] = []
+    for j in range(cols.shape[1]):
+        c = cols[:, j]
+        norm = float(np.linalg.norm(c))
+        if norm == 0:
+            continue
+        if kept:
+            basis = cols[:, kept]
+            coef, *_ = np.linalg.lstsq(basis, c, rcond=None)
+            if np.linalg.norm(c - basis @ coef) < np.sqrt(1 - max_corr**2) * norm:
+                continue
+        kept.append(j)
+    return kept
 
 
 def _position(ctx: Context) -> list[dict[str, float]]:
@@ -432,6 +477,10 @@ GUESSES: dict[str, Callable[[Context], list[dict[str, float]]]] = {
     "force-offset": _offset,
     "nonlocal-memory": _nonlocal_memory,
 }
+
+
+#: Per effect: the parameters a record cannot determine, held at their no-op values.
+HELD: dict[str, Callable[[Context], list[str]]] = {"pressure-dependence": _pressure_held}
 
 
 # ------------------------------------------------------------------ baseline

@@ -43,6 +43,7 @@ from fcomp.conditioning import (
     sample_rate,
 )
 from fcomp.errors import FcompError
+from fcomp.identification.plausibility import RigContext
 from fcomp.identification.target import FitData, fit_data
 from fcomp.measurement import Measurement
 from fcomp.reconstruction import driving_force
@@ -133,6 +134,9 @@ class DiagnosisData:
     signals
         Per measurement file: how its motion was conditioned
         (:class:`fcomp.conditioning.Conditioning`); empty for steady-state points.
+    rig
+        What the (first) record's sidecar says about the rig (kind, mass,
+        geometry), for the plausibility of fits.
     kind
         The rig kind of the (first) record's sidecar (``""`` if not given): it words
         the experiments advised (:func:`fcomp.effects.experiment_for`).
@@ -147,6 +151,7 @@ class DiagnosisData:
     labels: list[str] = field(default_factory=list)
     signals: list[Conditioning] = field(default_factory=list)
     kind: str = ""
+    rig: RigContext = field(default_factory=RigContext)
 
     @property
     def n(self) -> int:
@@ -294,7 +299,8 @@ def prepare(
         raise FcompError("some records give rig.mass and others not; give it for all or none")
     data = DiagnosisData(experiments, {}, {}, _scales(experiments), steady, sources.pop(),
                          [e.label for e in experiments], signals,
-                         str(meas_list[0].meta.get("kind", "")))
+                         str(meas_list[0].meta.get("kind", "")),
+                         RigContext.from_meta(meas_list[0].meta))
     _availability(data, x_measured, p_measured)
     return data
 

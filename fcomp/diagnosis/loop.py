@@ -89,6 +89,7 @@ from fcomp.diagnosis.regimes import Segmentation, segment
 from fcomp.diagnosis.split import Split, make_split
 from fcomp.effects import EFFECTS
 from fcomp.errors import FcompError
+from fcomp.identification.plausibility import FitWarning
 from fcomp.measurement import Measurement
 from fcomp.models import FrictionModel, make_model
 
@@ -166,6 +167,7 @@ class Step:
     tie: list[str] = field(default_factory=list)
     fit: FitResult | None = None
     removed: str = ""
+    warnings: list[FitWarning] = field(default_factory=list)
 
 
 def _rms(r: np.ndarray) -> float:
@@ -328,6 +330,10 @@ class Diagnosis:
         Largest record a refit runs on (longer ones are block-averaged for fitting).
     progress
         Show a progress bar on stderr.
+    check_baseline
+        After the search, diagnose the record again from a baseline of the other
+        kind (static <-> dynamic, :func:`other_baseline`) and say whether the
+        answer depends on the baseline (``baseline_dependent_``).
 
     Attributes
     ----------
@@ -352,6 +358,14 @@ class Diagnosis:
         ``"explained"`` or ``"unexplained-structure"``.
     reason_ : str
         The rule that decided the verdict, with its numbers.
+    baseline_dependent_ : bool
+        Whether a baseline of the other kind finds other effects (``check_baseline``).
+    other_ : Diagnosis or None
+        That other diagnosis.
+    warnings_ : list of FitWarning
+        What a careful engineer would question: the plausibility of the baseline's
+        and the final model's fits (:mod:`fcomp.identification.plausibility`) and
+        what the held-out data cannot judge (``heldout-coverage``).
     residual_features_ : list of FeatureStrength
         Features of the final held-out residual, strongest first.
     """
@@ -370,6 +384,7 @@ class Diagnosis:
         max_nfev: int = 60,
         max_samples: int = 40_000,
         progress: bool = False,
+        check_baseline: bool = True,
     ) -> None:
         self.baseline = baseline
         self.effects = effects
@@ -382,6 +397,7 @@ class Diagnosis:
         self.max_nfev = max_nfev
         self.max_samples = max_samples
         self.progress = progress
+        self.check_baseline = check_baseline
 
     # ------------------------------------------------------------------ fit
     def fit(self, data: Measurement | Sequence[Measurement] | DiagnosisData) -> Diagnosis:
@@ -425,10 +441,43 @@ class Diagnosis:
             if self.search:
                 self._search(names)
                 self._backward()
+            self.other_ = self._other_baseline(model, names) if self.check_baseline else None
         finally:
             self._bar.close()
         self._conclude()
         return self
+
+    def _other_baseline(self, model: FrictionModel, names: list[str]) -> Diagnosis | None:
+        """The same diagnosis from a baseline of the other kind, or None where none applies."""
+        other = other_baseline(model, self.data_, self.segmentation_)
+        if other is None:
+            return None
+        self._tick(f"baseline check: {other}")
+        d = Diagnosis(other, effects=names, add=[], search=self.search, split=self.split,
+                      cutoff_hz=self.cutoff_hz, max_steps=self.max_steps, n_jobs=self.n_jobs,
+                      max_nfev=self.max_nfev, max_samples=self.max_samples,
+                      check_baseline=False)
+        try:
+            return d.fit(self.data_)
+        except FcompError:
+            return None
+
+    def baseline_dependence(self) -> dict[str, Any] | None:
+        """Whether the effects found depend on the baseline, and the other baseline's answer.
+
+        The added effects are compared after leaving out, on each side, the
+        effects the *other* baseline already holds (``presliding`` added to a
+        static map is part of LuGre) and counting the members of a reported tie
+        as one. ``None`` without a check.
+        """
+        other = getattr(self, "other_", None)
+        if other is None:
+            return None
+        mine = _comparable(self.added_, self.ties_, other.baseline_fit_.model)
+        theirs = _comparable(other.added_, other.ties_, self.baseline_fit_.model)
+        return {"dependent": mine != theirs, "baseline": other.baseline_name_,
+                "added": list(other.added_), "verdict": other.verdict_,
+                "rms_baseline": other.rms_baseline_, "rms_final": other.rms_final_}
 
     def _tick(self, what: str) -> None:
         self._bar.set_postfix_str(what, refresh=False)
@@ -630,7 +679,8 @@ class Diagnosis:
             model = catalogue.attach(model, n, self.data_, self._forms.get(n))
         flat = model.flat_params()
         start = {k: v for k, v in self.fit_.values.items() if k in flat or k == "mass"}
-        return self._polish(self._refit.fit(model, [start]))
+        # the parameters fitted now that remain (terms held for the record stay held)
+        return self._polish(self._refit.fit(model, [start], list(start)))
 
     def _backward(self) -> None:
         """Drop searched effects that later additions made redundant (a backward check).
@@ -691,6 +741,28 @@ class Diagnosis:
                                if c.rms_heldout - best.rms_heldout <= TIE_SHARE * best.fall)]
 
     # -------------------------------------------------------------- verdict
+    def _fit_warnings(self, fit: FitResult, what: str) -> list[FitWarning]:
+        """The plausibility warnings of one fit of the diagnosis, each naming the fit."""
+        try:
+            found = self._refit.plausibility(fit, self.data_.rig)
+        except (FcompError, ValueError, ArithmeticError, np.linalg.LinAlgError):
+            return []
+        return [FitWarning(w.code, w.parameter, f"{what}: {w.message}") for w in found]
+
+    def _collect_warnings(self) -> None:
+        """Fit warnings of the baseline, of every accepted step and of the final model."""
+        out = self._fit_warnings(self.baseline_fit_, f"baseline {self.baseline_name_}")
+        for st in self.steps_:
+            if st.accepted and st.fit is not None and st.fit is not self.fit_:
+                st.warnings = self._fit_warnings(st.fit, f"after + {st.effect}")
+        if self.fit_ is not self.baseline_fit_:
+            final = self._fit_warnings(self.fit_, f"final model {self.fit_.model.describe()}")
+            for st in self.steps_:
+                if st.fit is self.fit_:
+                    st.warnings = final
+            out += final
+        self.warnings_ = out + list(self.split_.warnings)
+
     def _conclude(self) -> None:
         data, seg, split = self.data_, self.segmentation_, self.split_
         self.rms_baseline_ = self.baseline_fit_.rms_test
@@ -735,6 +807,13 @@ class Diagnosis:
             "baseline": regime_errors(self.baseline_fit_.residual, seg, split.test),
             "final": regime_errors(self.fit_.residual, seg, split.test),
         }
+        self._collect_warnings()
+        dep = self.baseline_dependence()
+        self.baseline_dependent_ = bool(dep and dep["dependent"])
+        if dep and dep["dependent"]:
+            self.reason_ += (f"; the effects found depend on the baseline: from "
+                             f"{dep['baseline']} the diagnosis adds "
+                             f"{', '.join(dep['added']) or 'nothing'} ({dep['verdict']})")
 
     # ----------------------------------------------------------------- JSON
     def signals(self) -> dict[str, Any]:
@@ -771,7 +850,8 @@ class Diagnosis:
             "added": list(self.added_),
             "steps": [{"effect": s.effect, "rms_before": s.rms_before, "rms_after":
                        num(s.rms_after), "accepted": bool(s.accepted), "forced": s.forced,
-                       "removed": bool(s.removed)}
+                       "removed": bool(s.removed),
+                       "warnings": [w.to_dict() for w in s.warnings]}
                       for s in self.steps_],
             "candidates": [{"effect": c.effect, "rms_heldout": num(c.rms_heldout),
                             "qualifies": c.qualifies, "z": num(c.z), "p": num(c.p),
@@ -784,6 +864,8 @@ class Diagnosis:
             "verdict": self.verdict_,
             "reason": self.reason_,
             "signals": self.signals(),
+            "baseline_dependent": self.baseline_dependent_,
+            "other_baseline": self.baseline_dependence(),
             "residual_features": [{"feature": f.feature, "strength": round(f.strength, 4)}
                                   for f in self.residual_features_],
             "model": self.fit_.model.describe(),
@@ -795,7 +877,41 @@ class Diagnosis:
             "split": self.split_.description,
             "noise_method": self.noise_floor_.method,
             "units": "N",
+            "warnings": [w.to_dict() for w in self.warnings_],
         }
+
+
+#: The baseline of the other kind the baseline check uses (static <-> dynamic).
+OTHER_BASELINE = {"static": "lugre", "dynamic": "stribeck"}
+
+
+def other_baseline(model: FrictionModel, data: DiagnosisData, seg: Segmentation
+                   ) -> str | None:
+    """The baseline of the other kind for the check, or None if the data cannot take it.
+
+    A static map's check is ``lugre`` (not on steady-state points or records
+    without a start); a dynamic model's is the ``stribeck`` map.
+    """
+    if model.n_states:
+        return OTHER_BASELINE["dynamic"]
+    if data.steady_state or not seg.starts:
+        return None
+    return OTHER_BASELINE["static"]
+
+
+def _comparable(added: Sequence[str], ties: Sequence[Sequence[str]],
+                other: FrictionModel) -> frozenset[frozenset[str]]:
+    """The added effects the ``other`` baseline does not already hold, each as its tie group."""
+    out = set()
+    for name in added:
+        try:
+            if not EFFECTS.get(name)().applies_to(other):
+                continue  # part of the other baseline (presliding in LuGre)
+        except (TypeError, ValueError):
+            pass
+        group = next((t for t in ties if name in t), [name])
+        out.add(frozenset(group))
+    return frozenset(out)
 
 
 class _NoBar:

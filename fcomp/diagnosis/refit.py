@@ -50,8 +50,10 @@ from fcomp.diagnosis.split import Split
 from fcomp.errors import FcompError
 from fcomp.identification.dynamic import EXTRAS, TrajectoryProblem
 from fcomp.identification.estimator import ALWAYS_FIXED, EXTRA_SPECS, default_free
+from fcomp.identification.plausibility import FitWarning, RigContext, check_fit, correlations
 from fcomp.identification.problem import ParameterVector, base_name, solve
 from fcomp.identification.target import FitData
+from fcomp.identification.uncertainty import estimate
 from fcomp.models.base import FrictionModel
 from fcomp.parameters import ParamSpec
 from fcomp.trajectory import friction_along_motion
@@ -454,6 +456,37 @@ class Refit:
             nfev += k
         values = dict(zip(names, map(float, sol.theta), strict=True))
         return self.result(model, values, len(names), sol.converged, nfev)
+
+    def plausibility(self, fit: FitResult, context: RigContext | None = None
+                     ) -> list[FitWarning]:
+        """The plausibility warnings of ``fit`` (:func:`fcomp.identification.plausibility.check_fit`).
+
+        Standard errors, intervals and correlations from the Jacobian at the
+        estimate over the training samples (batch-means HAC,
+        :func:`fcomp.identification.uncertainty.estimate`); bounds are the
+        data boxes the fit searched (:func:`data_bounds`).
+        """
+        names = list(fit.values)
+        if not names:
+            return []
+        base = fit.model
+        specs = self.specs(base, names)
+        pv = self._pv(base, names, fit.values, specs)
+        problems = [TrajectoryProblem(base, d, pv, mask=m) for d, m in self._records]
+        theta = np.array([fit.values[n] for n in names])
+        rs, Gs = [], []
+        for p in problems:
+            r, G = p(theta, True)
+            rs.append(r)
+            Gs.append(G)
+        unc = estimate(np.vstack(Gs), np.concatenate(rs), theta)
+        stderr = dict(zip(names, map(float, unc.stderr), strict=True))
+        ci = {n: (float(lo), float(hi))
+              for n, lo, hi in zip(names, unc.ci_low, unc.ci_high, strict=True)}
+        bounds = {n: (specs[n].lower, specs[n].upper) for n in names}
+        units = {n: specs[n].unit for n in names}
+        return check_fit(fit.values, stderr, ci, bounds, correlations(names, unc.cov),
+                         fit.converged, context, units=units)
 
     def _pv(self, model: FrictionModel, names: Sequence[str], start: Mapping[str, float],
             specs: Mapping[str, ParamSpec]) -> ParameterVector:

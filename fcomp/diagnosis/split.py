@@ -1,40 +1,61 @@
-"""Held-out splits: by experiment or by contiguous segment, never by shuffled samples.
+"""Held-out splits: by contiguous segment in every experiment, never by shuffled samples.
 
 Friction residuals are strongly autocorrelated and the friction state carries
 the history of the motion, so a sample-wise random split would score a model
 on samples whose neighbours it was fitted to. The diagnosis therefore holds
 out whole pieces of the record:
 
-``experiment``
-    whole experiments are held out: the 2nd, 5th, 8th, ... (every third,
-    starting with the second) -- about a third of them, at least one, never
-    all. Needs two or more experiments.
-``segment``
+``segment`` (the default, ``auto``)
     each experiment is cut into contiguous blocks of about
     ``max(1 s, duration/30)`` (at least three blocks per experiment, at least
     20 samples each); every third block is held out, the pattern shifted from
-    one experiment to the next.
-``auto``
-    ``experiment`` with four or more experiments, else ``segment``.
+    one experiment to the next. Every experiment -- every pressure level, every
+    file -- is in both sets (a split *stratified* by experiment): an effect that
+    shows between operating points can be judged. An experiment whose held-out
+    blocks fell wholly in its warm-up gets the next phase of the pattern.
+``experiment``
+    whole experiments are held out: the 2nd, 5th, 8th, ... (every third,
+    starting with the second) -- about a third of them, at least one, never
+    all. Needs two or more experiments; the strictest test of prediction, but
+    an operating point met in one experiment only cannot be judged.
 
 The model is always *simulated* over the whole record (its states depend
 only on the measured motion, never on the measured force), and only the
 force of the training samples enters a fit, so the held-out error is a true
 prediction error. Warm-up samples (:mod:`.regimes`) are in neither set.
+
+**Coverage** (:func:`coverage`): the held-out samples are counted per
+experiment and per operating point -- pressure level (terciles of
+``p1 + p2``), speed class (creep, slow, medium, fast: below 1, 10, 50 and
+above 50 % of the speed scale) and direction. An operating point with at least
+:data:`COVERED_SHARE` of the usable samples but fewer than
+``max(MIN_HELD, HELD_SHARE of them)`` held out cannot be judged: a
+``heldout-coverage`` warning names it.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import dataclasses
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from fcomp.diagnosis.data import DiagnosisData
 from fcomp.errors import FcompError
+from fcomp.identification.plausibility import FitWarning
 
 STRATEGIES = ("auto", "experiment", "segment")
 #: Fewest samples of a block in the ``segment`` split.
 MIN_BLOCK = 20
+#: An operating point with this share of the usable samples must be judged ...
+COVERED_SHARE = 0.02
+#: ... by at least this many held-out samples ...
+MIN_HELD = 30
+#: ... and this share of its own usable samples.
+HELD_SHARE = 0.05
+#: Speed classes of the coverage, as fractions of the speed scale.
+SPEED_CLASSES = ((0.0, 0.01, "creep"), (0.01, 0.1, "slow"), (0.1, 0.5, "medium"),
+                 (0.5, np.inf, "fast"))
 
 
 @dataclass(frozen=True)
@@ -49,12 +70,19 @@ class Split:
         ``"experiment"`` or ``"segment"``.
     description : str
         One line for reports.
+    coverage : dict
+        Held-out and training samples per experiment and operating point
+        (:func:`coverage`).
+    warnings : list of FitWarning
+        ``heldout-coverage``: what the held-out samples cannot judge.
     """
 
     train: np.ndarray
     test: np.ndarray
     strategy: str
     description: str
+    coverage: dict = field(default_factory=dict)
+    warnings: list[FitWarning] = field(default_factory=list)
 
 
 def make_split(data: DiagnosisData, valid: np.ndarray, strategy: str = "auto") -> Split:
@@ -63,7 +91,7 @@ def make_split(data: DiagnosisData, valid: np.ndarray, strategy: str = "auto") -
         raise FcompError(f"split {strategy!r}: choose one of {', '.join(STRATEGIES)}")
     n_exp = len(data.experiments)
     if strategy == "auto":
-        strategy = "experiment" if n_exp >= 4 else "segment"
+        strategy = "segment"
     if strategy == "experiment":
         if n_exp < 2:
             raise FcompError("a split by experiment needs two or more experiments "
@@ -74,15 +102,20 @@ def make_split(data: DiagnosisData, valid: np.ndarray, strategy: str = "auto") -
         for i in held:
             e = data.experiments[i]
             test[e.start:e.stop] = True
-        desc = (f"by experiment: {len(held)} of {n_exp} held out "
-                f"({', '.join(data.experiments[i].label for i in held)})")
+        usable = [(data.experiments[i].label, int((valid & test)[data.experiments[i].start:
+                                                                data.experiments[i].stop].sum()))
+                  for i in held]
+        desc = (f"by experiment: {len(held)} of {n_exp} held out ("
+                + ", ".join(f"{lab} ({n} usable samples)" if n else f"{lab} (warm-up only)"
+                            for lab, n in usable) + ")")
         split = Split(valid & ~test, valid & test, "experiment", desc)
     else:
         split = _segment_split(data, valid)
     if split.test.sum() < 10 or split.train.sum() < 10:
         raise FcompError(f"the record is too short for a held-out split ({int(valid.sum())} "
                          "usable samples); record longer or give more experiments")
-    return split
+    cov, warns = coverage(data, split.train, split.test)
+    return dataclasses.replace(split, coverage=cov, warnings=warns)
 
 
 def _segment_split(data: DiagnosisData, valid: np.ndarray) -> Split:
@@ -96,10 +129,53 @@ def _segment_split(data: DiagnosisData, valid: np.ndarray) -> Split:
         nb = max(3, int(round(dur / target)))
         nb = max(1, min(nb, e.n // MIN_BLOCK))
         edges = np.linspace(0, e.n, nb + 1).round().astype(int)
-        for b in range(nb):
-            if (b + k) % 3 == 1:
-                test[e.start + edges[b]:e.start + edges[b + 1]] = True
+        ok = valid[e.start:e.stop]
+        for shift in range(3):  # the next phase if the held-out blocks are all warm-up
+            held = [b for b in range(nb) if (b + k + shift) % 3 == 1]
+            if any(ok[edges[b]:edges[b + 1]].any() for b in held) or nb < 2:
+                break
+        for b in held:
+            test[e.start + edges[b]:e.start + edges[b + 1]] = True
         n_blocks_all += nb
-    desc = (f"by contiguous segment: every third of {n_blocks_all} blocks "
-            f"(about {target:.3g} s each) held out")
+    desc = (f"by contiguous segment in every experiment: every third of {n_blocks_all} "
+            f"blocks (about {target:.3g} s each) held out")
     return Split(valid & ~test, valid & test, "segment", desc)
+
+
+def coverage(data: DiagnosisData, train: np.ndarray, test: np.ndarray
+             ) -> tuple[dict, list[FitWarning]]:
+    """Training and held-out samples per experiment and operating point, and what cannot be
+    judged (see the module docstring)."""
+    usable = train | test
+    total = max(int(usable.sum()), 1)
+    groups: dict[str, dict[str, np.ndarray]] = {"experiment": {}, "direction": {},
+                                                "speed": {}}
+    idx = data.experiment_index()
+    for i, e in enumerate(data.experiments):
+        groups["experiment"][e.label] = idx == i
+    v = data.signal("v")
+    groups["direction"] = {"extending (v > 0)": v > 0, "retracting (v < 0)": v < 0}
+    speed = np.abs(v) / max(data.scales.speed, 1e-300)
+    moving = speed > 0
+    for lo, hi, name in SPEED_CLASSES:
+        groups["speed"][name] = moving & (speed > lo) & (speed <= hi)
+    if data.available.get("p1", False):
+        psum = data.signal("p1") + data.signal("p2")
+        q1, q2 = np.percentile(psum[usable], [100 / 3, 200 / 3])
+        groups["pressure"] = {f"p1+p2 below {q1:.3g} Pa": psum < q1,
+                              f"p1+p2 {q1:.3g} to {q2:.3g} Pa": (psum >= q1) & (psum < q2),
+                              f"p1+p2 above {q2:.3g} Pa": psum >= q2}
+    out: dict[str, dict[str, dict[str, int]]] = {}
+    warns = []
+    for kind, bins in groups.items():
+        out[kind] = {}
+        for name, mask in bins.items():
+            n_all = int((usable & mask).sum())
+            n_test = int((test & mask).sum())
+            out[kind][name] = {"train": int((train & mask).sum()), "heldout": n_test}
+            if n_all >= COVERED_SHARE * total and n_test < max(MIN_HELD, HELD_SHARE * n_all):
+                warns.append(FitWarning("heldout-coverage", None, (
+                    f"{kind} {name}: {n_test} held-out of {n_all} usable samples; what the "
+                    f"models do there is not judged (record more of it, or give it as an "
+                    f"experiment of its own)")))
+    return out, warns

@@ -37,9 +37,10 @@ def test_contract_json_and_report(pressure_csv: Path, tmp_path: Path, capsys) ->
     assert doc["added"] == ["pressure-dependence"]
     assert doc["verdict"] == "explained"
     assert doc["rms_final"] < 0.3 * doc["rms_baseline"]
-    assert doc["steps"][0] == {"effect": "pressure-dependence", "rms_before": doc["rms_baseline"],
-                               "rms_after": doc["rms_final"], "accepted": True, "forced": False,
-                               "removed": False}
+    want = {"effect": "pressure-dependence", "rms_before": doc["rms_baseline"],
+            "rms_after": doc["rms_final"], "accepted": True, "forced": False, "removed": False}
+    assert {k: doc["steps"][0][k] for k in want} == want
+    assert isinstance(doc["steps"][0]["warnings"], list)
     assert {"effect", "rms_heldout"} <= set(doc["candidates"][0])
     heldout = [c["rms_heldout"] for c in doc["candidates"] if c["rms_heldout"] is not None]
     assert heldout == sorted(heldout)  # best first

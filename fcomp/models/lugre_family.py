@@ -326,12 +326,12 @@ class LuGreFamily(FrictionModel):
         """Element deflections clipped to their slip band ``|delta_i| <= d_i*g/Fc``."""
         if "elements" not in self.features:
             return x
-        z, deltas, rest = self._split(x)
+        z, deltas, _ = self._split(x)
         g = self.g(be, self._curve_speed(be, x, sig.v, P), self._h(x, be, sig, P, L), P, L,
                    sig.s)
         clipped = [be.fmax(-di * g / L["Fc"], be.fmin(di * g / L["Fc"], d))
                    for d, (_, di) in zip(deltas, self._elements(be, P), strict=True)]
-        return [*z, *clipped, *rest]
+        return [*z, *clipped, *x[len(z) + len(deltas):]]  # the film and lag states as they are
 
     def _viscous(self, P: ParamValues, s: Any) -> Any:
         if "viscous" not in self.features:

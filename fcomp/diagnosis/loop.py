@@ -289,7 +289,7 @@ def refit_candidate(refit: Refit, prop: catalogue.Proposal, current: FitResult
                         f"({probe.rms_train:.4g} N >= {current.rms_train:.4g} N)")
             return refit.fit(prop.model, prop.starts, prop.free, max_nfev=NONSYMBOLIC_NFEV)
         return refit.fit(prop.model, prop.starts, prop.free,
-                         reference=refit.train_cost(current.model, current.values))
+                         reference=refit.train_cost(current.model, current.values), fast=True)
     except (FcompError, ValueError, ArithmeticError) as exc:
         return f"refit failed: {str(exc).splitlines()[0] if str(exc) else type(exc).__name__}"
 

@@ -63,7 +63,10 @@ PROBE_NFEV = 20
 #: Smallest share of the training cost a candidate's probes must remove to be refitted fully.
 MIN_GAIN = 0.002
 #: Largest record the short probes of several starts run on (block-averaged beyond it).
-PROBE_SAMPLES = 12_000
+PROBE_SAMPLES = 8_000
+#: Largest record a candidate's refit runs on (the accepted model is then polished on the
+#: full record).
+CANDIDATE_SAMPLES = 15_000
 #: Softest stiffness allowed: its presliding range ``F/k`` is at most this many ``d_pre``.
 PRESLIDING_SPAN = 20.0
 #: Parameters held at their start values in the first stage of a fit.
@@ -265,8 +268,16 @@ class Refit:
         self.q = max(1, math.ceil(data.n / max_samples))
         self.windows = timing_windows(data.signal("v"), data.scales.dt, data.scales.resolution)
         self._records = self._fit_records(self.q)
-        q_probe = max(self.q, math.ceil(data.n / PROBE_SAMPLES))
-        self._probe_records = self._records if q_probe == self.q else self._fit_records(q_probe)
+        self._by_q: dict[int, list[tuple[FitData, np.ndarray]]] = {self.q: self._records}
+        self._probe_records = self._coarse(PROBE_SAMPLES)
+        self._candidate_records = self._coarse(CANDIDATE_SAMPLES)
+
+    def _coarse(self, samples: int) -> list[tuple[FitData, np.ndarray]]:
+        """The fit records averaged over blocks so that at most ``samples`` remain (cached)."""
+        q = max(self.q, math.ceil(self.data.n / samples))
+        if q not in self._by_q:
+            self._by_q[q] = self._fit_records(q)
+        return self._by_q[q]
 
     def _fit_records(self, q: int) -> list[tuple[FitData, np.ndarray]]:
         """Per experiment with training samples: the data averaged over blocks of ``q``
@@ -395,7 +406,7 @@ class Refit:
 
     def fit(self, model: FrictionModel, starts: Sequence[Mapping[str, float]] = (),
             free: Sequence[str] | None = None, *, max_nfev: int | None = None,
-            reference: float | None = None) -> FitResult:
+            reference: float | None = None, fast: bool = False) -> FitResult:
         """Fit ``model`` on the training samples from the best of ``starts``.
 
         Each start maps flat names to values (missing names: the model's
@@ -405,6 +416,8 @@ class Refit:
         :meth:`train_cost`) a refit whose best short probe does not lower it by
         :data:`MIN_GAIN` stops there: a candidate that cannot even improve the
         training fit cannot qualify, and its full refit would be wasted.
+        ``fast`` fits on a copy block-averaged to :data:`CANDIDATE_SAMPLES` (a
+        candidate's refit; the model accepted is polished on the full record).
         Returns the :class:`FitResult`, scored on the full record.
         """
         max_nfev = max_nfev or self.max_nfev
@@ -428,7 +441,8 @@ class Refit:
         nfev = 0
         several = len(start_list) > 1
         budget = min(PROBE_NFEV, max_nfev) if several else max_nfev
-        probe = self._probe_records if several else self._records
+        main = self._candidate_records if fast else self._records
+        probe = self._probe_records if several else main
         for st in start_list:
             try:
                 sol, k = self._solve(model, self._pv(model, first, st, specs), budget,
@@ -448,11 +462,13 @@ class Refit:
             values = {n: float(st[n]) for n in names}
             return self.result(model, values, len(names), False, nfev)
         if len(start_list) > 1:
-            sol, k = self._solve(model, self._pv(model, first, st, specs), max_nfev)
+            sol, k = self._solve(model, self._pv(model, first, st, specs), max_nfev,
+                                 records=main)
             nfev += k
             st = dict(st, **dict(zip(first, map(float, sol.theta), strict=True)))
         if first != names:  # stage 2: everything free
-            sol, k = self._solve(model, self._pv(model, names, st, specs), max_nfev)
+            sol, k = self._solve(model, self._pv(model, names, st, specs), max_nfev,
+                                 records=main)
             nfev += k
         values = dict(zip(names, map(float, sol.theta), strict=True))
         return self.result(model, values, len(names), sol.converged, nfev)

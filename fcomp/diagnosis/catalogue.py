@@ -319,9 +319,13 @@ def _direction_asymmetry(ctx: Context) -> list[dict[str, float]]:
         return [{"r_neg": 1.0}]
     a, b = float(np.median(y[pos])), float(np.median(-y[neg]))
     ratio = b / a if a > 0 and b > 0 else 1.0
-    c = _ls(ctx.current.residual[neg], v[neg])  # a slope of the residual while retracting
-    return [{"r_neg": float(np.clip(ratio, 0.2, 5.0))},
-            {"r_neg": 1.0, "c_neg": c}]
+    starts = [{"r_neg": float(np.clip(ratio, 0.2, 5.0))}]
+    flat = ctx.current.model.flat_params()
+    visc = flat.get("sigma2", flat.get("B", 0.0))
+    if visc > 0:  # a slope of the residual while retracting, relative to the viscous one
+        c = _ls(ctx.current.residual[neg], v[neg])
+        starts.append({"r_neg": 1.0, "rv_neg": float(np.clip(1.0 + c / visc, 0.1, 9.0))})
+    return starts
 
 
 def _pressure(ctx: Context) -> list[dict[str, float]]:

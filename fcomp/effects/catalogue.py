@@ -339,7 +339,8 @@ class DirectionAsymmetry(Effect):
     Rod and piston seals are not symmetric (lip direction, rod seal only on
     one side, seed 002 Fig. 4): extending and retracting friction differ. The
     levels of ``v < 0`` are ``r_neg`` times those of ``v > 0``, and the viscous
-    slope differs by ``c_neg`` (the rod seal's film is sheared only one way). A
+    slope ``rv_neg`` times (the rod seal's film is sheared only one way; a
+    model with a viscous term). A
     symmetric model leaves a residual even in ``v``: a step at every reversal,
     growing with speed on one side when the slopes differ.
     """
@@ -348,8 +349,8 @@ class DirectionAsymmetry(Effect):
     Params = make_params_class("DirectionAsymmetryParams", [
         spec("r_neg", "-", 1.0, 0.0, 10.0, "ratio of the v < 0 levels to the v > 0 levels",
              lower_open=True, directional=False),
-        spec("c_neg", "Ns/m", 0.0, -INF, INF, "extra viscous slope for v < 0",
-             directional=False),
+        spec("rv_neg", "-", 1.0, 0.0, 10.0, "ratio of the viscous slope for v < 0 to that "
+             "for v > 0 (models with a viscous term)", directional=False),
     ], owner="effect direction-asymmetry")
     signature = "residual even in v: same-sign offset in both directions, step at reversals"
     experiment = "the same speed profile in both directions of travel, with the force zero " \
@@ -364,7 +365,10 @@ class DirectionAsymmetry(Effect):
         return scale_levels(L, be.if_else(sig.s > 0, 1.0, P("r_neg")))
 
     def extra_force(self, be: Backend, sig: Signals, P: ParamValues) -> tuple[Any, Any]:
-        return P("c_neg") * be.fmin(sig.v, 0.0), 0.0
+        visc = next((P(n) for n in ("sigma2", "B") if P.has(n)), None)
+        if visc is None:  # no viscous term to differ between the directions
+            return 0.0, 0.0
+        return (P("rv_neg") - 1.0) * visc * be.fmin(sig.v, 0.0), 0.0
 
 
 class PositionDependence(Effect):

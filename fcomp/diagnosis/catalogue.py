@@ -453,18 +453,23 @@ def _offset(ctx: Context) -> list[dict[str, float]]:
 
 
 def _nonlocal_memory(ctx: Context) -> list[dict[str, float]]:
-    """Maxwell-slip elements spread over one and two decades of slip displacement.
+    """Maxwell-slip elements carrying most of the level, spread over one and two decades.
 
-    The fitted LuGre bristle is a compromise between the stiff start of a
-    transition curve and its soft approach to sliding; the elements start
-    from it with their slip displacements spread ``ms_spread`` = 10 and 100
-    times (equal shares), and from twice its stiffness with the narrower
-    spread (the initial slope the one bristle under-estimates).
+    The slip displacement of the softest element starts at three presliding
+    lengths (the fitted bristle's ``Fc/sigma0``, else the record's); the
+    elements' stiffness either constant (GMS) or scaling with the slip level
+    (constant slip displacements), their shares equal. The bristle keeps its
+    fitted stiffness for the share it still carries.
     """
-    s0 = ctx.current.model.flat_params().get("sigma0", _level(ctx) / ctx.seg.d_pre)
-    return [{"ms_spread": 10.0, "ms_shape": 0.0, "sigma0": s0},
-            {"ms_spread": 100.0, "ms_shape": 0.0, "sigma0": 3.0 * s0},
-            {"ms_spread": 10.0, "ms_shape": 0.0, "sigma0": 2.0 * s0}]
+    flat = ctx.current.model.flat_params()
+    level = flat.get("Fc", flat.get("Fc_pos", _level(ctx)))
+    s0 = flat.get("sigma0", level / ctx.seg.d_pre)
+    d_pre = level / s0 if s0 > 0 else ctx.seg.d_pre
+    out = []
+    for spread, scaling in ((10.0, 0.0), (100.0, 0.0), (10.0, 1.0), (100.0, 1.0)):
+        out.append({"ms_share": 0.9, "ms_dmax": 3.0 * d_pre, "ms_spread": spread,
+                    "ms_shape": 0.0, "ms_scaling": scaling})
+    return out
 
 
 GUESSES: dict[str, Callable[[Context], list[dict[str, float]]]] = {

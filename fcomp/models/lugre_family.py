@@ -122,10 +122,13 @@ FAMILY_SPECS: dict[str, ParamSpec] = {
              "to the smallest slip displacement", directional=False),
         spec("ms_shape", "-", 0.0, -3.0, 3.0, "Maxwell-slip elements: exponent of the level "
              "shares (0: equal shares)", directional=False),
+        spec("ms_scaling", "-", 0.0, 0.0, 1.0, "Maxwell-slip elements: how the stiffness "
+             "follows the slip level (0: constant stiffness, 1: constant slip displacement)",
+             directional=False),
     )
 }
 #: Number of Maxwell-slip elements of the ``elements`` feature.
-ELEMENTS = 5
+ELEMENTS = 8
 
 FEATURE_PARAMS: dict[str, tuple[str, ...]] = {
     "viscous": ("sigma2",),
@@ -135,7 +138,7 @@ FEATURE_PARAMS: dict[str, tuple[str, ...]] = {
     "film": ("vb",),
     "film-lag": ("tau_hp", "tau_hn", "tau_h0"),
     "lead": ("T",),
-    "elements": ("ms_share", "ms_dmax", "ms_spread", "ms_shape"),
+    "elements": ("ms_share", "ms_dmax", "ms_spread", "ms_shape", "ms_scaling"),
     "stribeck-form": ("kappa_s",),
     "viscous-power": ("p_visc", "v_ref"),
     "speed-lag": ("tau_L", "w_L"),
@@ -206,10 +209,12 @@ class LuGreFamily(FrictionModel):
             st.append("z")
         if "elements" in self.features:
             st += [f"delta{i}" for i in range(1, ELEMENTS + 1)]
-        if "speed-lag" in self.features:
-            st.append("vL")
         if "film-lag" in self.features:
             st.append("h")
+        if "elements" in self.features:
+            st.append("eps_g")
+        if "speed-lag" in self.features:
+            st.append("vL")
         return tuple(st)
 
     def with_features(self, add: set[str], values: dict[str, float]) -> LuGreFamily:
@@ -280,6 +285,22 @@ class LuGreFamily(FrictionModel):
         moving = be.if_else(h <= hss, P("tau_hp"), P("tau_hn"))
         return be.if_else(be.abs(v) < P("v_eps"), P("tau_h0"), moving)
 
+    def _slip_level(self, x: list[Any], L: dict) -> Any:
+        """The held slip level ``g_h = Fc*(1 + eps_g)`` of the elements (N)."""
+        return L["Fc"] * (1.0 + x[self.base_states.index("eps_g")])
+
+    def _element_law(self, be: Backend, x: list[Any], P: ParamValues, L: dict
+                     ) -> list[tuple[Any, Any]]:
+        """``(k_i, limit_i)``: stiffness (N/m) and slip deflection (m) of each element.
+
+        ``k_i = s*alpha_i*Fc*(g_h/Fc)^lambda/d_i`` and ``limit_i = d_i*(g_h/Fc)^(1-lambda)``,
+        ``lambda = ms_scaling``: the slip force ``k_i*limit_i = s*alpha_i*g_h`` either way.
+        """
+        ratio = be.fmax(self._slip_level(x, L) / L["Fc"], 1e-9)
+        lam, share = P("ms_scaling"), P("ms_share")
+        return [(share * al * L["Fc"] * be.power(ratio, lam) / di, di * be.power(ratio, 1.0 - lam))
+                for al, di in self._elements(be, P)]
+
     def _elements(self, be: Backend, P: ParamValues) -> list[tuple[Any, Any]]:
         """``(alpha_i, d_i)`` of the Maxwell-slip elements (module docstring)."""
         rho, beta, dmax = P("ms_spread"), P("ms_shape"), P("ms_dmax")
@@ -308,8 +329,8 @@ class LuGreFamily(FrictionModel):
             else:
                 out.append(v - P("sigma0") * be.abs(v) * z[0] / g)
             if deltas:
-                for d, (_, di) in zip(deltas, self._elements(be, P), strict=True):
-                    lim = di * g / L["Fc"]
+                law = self._element_law(be, x, P, L)
+                for d, (_, lim), (_, di) in zip(deltas, law, self._elements(be, P), strict=True):
                     outside = be.abs(d) >= lim
                     outward = d * v > 0
                     relax = -be.abs(v) * (d - be.sign(d) * lim) / di
@@ -317,20 +338,22 @@ class LuGreFamily(FrictionModel):
         if "film-lag" in self.features:
             hss = self.h_ss(be, v, P, L, sig.s)
             out.append((hss - h) / self.tau_h(be, v, h, hss, P))
+        if "elements" in self.features:  # the slip level follows g over the shortest slip
+            eps = x[self.base_states.index("eps_g")]
+            d_min = P("ms_dmax") / P("ms_spread")
+            out.append((g / L["Fc"] - 1.0 - eps) * be.abs(v) / d_min)
         if "speed-lag" in self.features:
             out.append((be.abs(v) - x[self.base_states.index("vL")]) / P("tau_L"))
         return out
 
     def base_project(self, be: Backend, x: list[Any], sig: Signals, P: ParamValues,
                      L: dict) -> list:
-        """Element deflections clipped to their slip band ``|delta_i| <= d_i*g/Fc``."""
+        """Element deflections clipped to their slip band (:meth:`_element_law`)."""
         if "elements" not in self.features:
             return x
         z, deltas, _ = self._split(x)
-        g = self.g(be, self._curve_speed(be, x, sig.v, P), self._h(x, be, sig, P, L), P, L,
-                   sig.s)
-        clipped = [be.fmax(-di * g / L["Fc"], be.fmin(di * g / L["Fc"], d))
-                   for d, (_, di) in zip(deltas, self._elements(be, P), strict=True)]
+        clipped = [be.fmax(-lim, be.fmin(lim, d))
+                   for d, (_, lim) in zip(deltas, self._element_law(be, x, P, L), strict=True)]
         return [*z, *clipped, *x[len(z) + len(deltas):]]  # the film and lag states as they are
 
     def _viscous(self, P: ParamValues, s: Any) -> Any:
@@ -357,10 +380,9 @@ class LuGreFamily(FrictionModel):
                 F0 = F0 + P("sigma1") * dx[0]
             _, deltas, _ = self._split(x)
             if deltas:
-                share = P("ms_share")
-                F0 = (1.0 - share) * F0
-                for d, (al, di) in zip(deltas, self._elements(be, P), strict=True):
-                    F0 = F0 + share * al * L["Fc"] / di * d
+                F0 = (1.0 - P("ms_share")) * F0
+                for d, (k, _) in zip(deltas, self._element_law(be, x, P, L), strict=True):
+                    F0 = F0 + k * d
             return F0 + self._viscous_force(be, v, visc, P), c_a
         h = self._h(x, be, sig, P, L)
         sat = be.fmax(-1.0, be.fmin(1.0, v / P("v_eps")))
@@ -371,13 +393,18 @@ class LuGreFamily(FrictionModel):
         v = sig.v
         hss = self.h_ss(be, v, P, L, sig.s)
         out = []
+        g_ss = self.g(be, v, hss, P, L, sig.s) if "presliding" in self.features else 0.0
         if "presliding" in self.features:
-            gs = be.sign(v) * self.g(be, v, hss, P, L, sig.s)
-            out.append(gs / P("sigma0"))
+            out.append(be.sign(v) * g_ss / P("sigma0"))
             if "elements" in self.features:
-                out += [gs * di / L["Fc"] for _, di in self._elements(be, P)]
+                ratio = g_ss / L["Fc"]
+                lam = P("ms_scaling")
+                out += [be.sign(v) * di * be.power(ratio, 1.0 - lam)
+                        for _, di in self._elements(be, P)]
         if "film-lag" in self.features:
             out.append(hss)
+        if "elements" in self.features:
+            out.append(g_ss / L["Fc"] - 1.0)
         if "speed-lag" in self.features:
             out.append(be.abs(v))
         return out

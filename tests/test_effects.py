@@ -307,7 +307,9 @@ def test_maxwell_slip_elements_are_classical_maxwell_slip() -> None:
         "nonlocal-memory", {"ms_share": 1.0, "ms_dmax": dmax, "ms_spread": rho,
                             "ms_shape": beta}, form="maxwell-slip"))
     assert model.describe() == "dahl + nonlocal-memory" and model.symbolic
-    u = np.linspace(0.0, 1.0, 5)
+    from fcomp.models.lugre_family import ELEMENTS
+
+    u = np.linspace(0.0, 1.0, ELEMENTS)
     shares = rho ** (beta * u) / np.sum(rho ** (beta * u))
     slips = dmax * rho ** (u - 1.0)
     # nested displacement loops (seed 000 Fig. 10): out, back, a minor loop, on again

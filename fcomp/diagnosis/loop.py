@@ -110,6 +110,8 @@ STRUCTURE_MIN = 0.15
 #: Structure must explain at least this RMS, in noise floors, to count: a structure
 #: smaller than the noise is a law's shape not quite matched, not a missing effect.
 STRUCTURE_RMS = 1.0
+#: ... and this share of the friction level (the record's force scale).
+STRUCTURE_LEVEL = 0.015
 #: Residual RMS (trimmed, :func:`trimmed_rms`) above this many noise floors is
 #: unexplained structure whatever the features say.
 EXCESS_MAX = 2.0
@@ -770,15 +772,17 @@ class Diagnosis:
         self.residual_features_ = residual_structure(self.fit_.residual, data, seg,
                                                      split.train, split.test)
         nf = self.noise_floor_.value
+        # what counts: a structure as large as the noise and as a small share of the
+        # friction level (a filtered, reconstructed force has a floor far below that)
+        least = max(STRUCTURE_RMS * nf, STRUCTURE_LEVEL * data.scales.force)
         top = self.residual_features_[0] if self.residual_features_ else None
         structured = (top is not None and top.strength >= STRUCTURE_MIN
-                      and self.rms_final_ * math.sqrt(top.strength) >= STRUCTURE_RMS * nf)
+                      and self.rms_final_ * math.sqrt(top.strength) >= least)
         ev = event_structure(self.fit_.residual, data, seg, split.train, split.test)
         self.event_structure_ = ev
-        event = (ev is not None and ev.strength >= STRUCTURE_MIN
-                 and ev.rms >= STRUCTURE_RMS * nf)
+        event = ev is not None and ev.strength >= STRUCTURE_MIN and ev.rms >= least
         trimmed = trimmed_rms(self.fit_.residual[split.test])
-        excess = trimmed > EXCESS_MAX * nf
+        excess = trimmed > max(EXCESS_MAX * nf, nf + STRUCTURE_LEVEL * data.scales.force)
         self.verdict_ = ("unexplained-structure" if structured or event or excess
                          else "explained")
         if event and not structured:
@@ -786,23 +790,25 @@ class Diagnosis:
             self.reason_ = (f"structure after events: within {1e3 * ev.window:.0f} ms of every "
                             f"start and reversal the held-out residual repeats (strength "
                             f"{ev.strength:.2f} >= {STRUCTURE_MIN:g} of the time since the "
-                            f"event; it carries {ev.rms:.3g} N RMS >= {STRUCTURE_RMS:g} noise "
-                            "floor there)")
+                            f"event; it carries {ev.rms:.3g} N RMS >= {least:.3g} N there)")
         elif structured:
             assert top is not None
             self.reason_ = (f"structure: the held-out residual still follows {top.feature} "
                             f"(strength {top.strength:.2f} >= {STRUCTURE_MIN:g}; it carries "
                             f"{self.rms_final_ * math.sqrt(top.strength):.3g} N RMS >= "
-                            f"{STRUCTURE_RMS:g} noise floor)")
-        elif excess:
+                            f"{least:.3g} N, a noise floor and {100 * STRUCTURE_LEVEL:g} % of "
+                            "the friction level)")
+        limit = max(EXCESS_MAX * nf, nf + STRUCTURE_LEVEL * data.scales.force)
+        if excess and not (structured or event):
             self.reason_ = (f"excess: the held-out RMS without its largest {100 * TRIM:g} % "
-                            f"({trimmed:.3g} N) is more than {EXCESS_MAX:g} noise floors "
-                            f"({EXCESS_MAX * nf:.3g} N), though no single feature explains it")
-        else:
+                            f"({trimmed:.3g} N) is above {limit:.3g} N ({EXCESS_MAX:g} noise "
+                            f"floors of {nf:.3g} N, and the floor plus "
+                            f"{100 * STRUCTURE_LEVEL:g} % of the friction level), though no "
+                            "single feature explains it")
+        elif not structured and not event:
             self.reason_ = (f"at the noise: held-out RMS without its largest {100 * TRIM:g} % "
-                            f"{trimmed:.3g} N within {EXCESS_MAX:g} noise floors "
-                            f"({nf:.3g} N each), and no feature explains "
-                            f"{100 * STRUCTURE_MIN:g} % of it")
+                            f"{trimmed:.3g} N within {limit:.3g} N (noise floor {nf:.3g} N), "
+                            f"and no structure carries {least:.3g} N")
         self.regimes_ = {
             "baseline": regime_errors(self.baseline_fit_.residual, seg, split.test),
             "final": regime_errors(self.fit_.residual, seg, split.test),

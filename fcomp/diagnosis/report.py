@@ -259,17 +259,33 @@ def build_report(diag: Diagnosis, *, command: str | None = None) -> Report:
                       f"Final model: `{d['model']}`.")
     else:
         rep.paragraph("No effect qualified: the baseline is kept.")
-    kind = "ok" if d["verdict"] == "explained" else "warn"
+    kind = "ok" if d["verdict"] == "explained" and not d["baseline_dependent"] else "warn"
     if d["verdict"] == "explained":
-        rep.note("Verdict `explained`: what remains of the held-out residual follows none of "
-                 "the features clearly beyond the noise floor.", kind=kind)
+        rep.note(f"Verdict `explained` -- {d['reason']}.", kind=kind)
     else:
-        top = ", ".join(f"`{f['feature']}` ({f['strength']:.2f})"
-                        for f in d["residual_features"][:3])
-        rep.note("Verdict `unexplained-structure`: the residual still follows " + top +
-                 "; no catalogue entry qualified to explain it. It is reported rather than "
-                 "papered over with the least-bad wrong effect.", kind=kind)
+        rep.note(f"Verdict `unexplained-structure` -- {d['reason']}. No catalogue entry "
+                 "qualified to explain it: it is reported rather than papered over with the "
+                 "least-bad wrong effect.", kind=kind)
+    other = d.get("other_baseline")
+    if other:
+        same = ("finds the same effects" if not d["baseline_dependent"] else
+                "finds OTHER effects: the answer depends on the baseline")
+        rep.paragraph(f"Baseline check: the same records diagnosed from `{other['baseline']}` "
+                      f"(the other kind of baseline) {same} -- "
+                      f"{', '.join('`' + e + '`' for e in other['added']) or 'nothing'} added, "
+                      f"verdict `{other['verdict']}`, held-out RMS {other['rms_baseline']:.4g} "
+                      f"-> {other['rms_final']:.4g} N.")
+    if d["warnings"]:
+        rep.section("What a careful engineer would question", level=3)
+        rep.table(["warning", "parameter", "what it means"],
+                  [[w["code"], w["parameter"] or "", w["message"]] for w in d["warnings"]],
+                  caption="Plausibility of the fits (baseline, each accepted step, final model) "
+                  "and what the held-out samples cannot judge.")
+    sig = d["signals"]
     rep.table(["quantity", "value", "unit"], [
+        ["velocity driving the friction states", f"{sig['velocity']} -- {sig['reason']}", ""],
+        ["samples left out (motion the position misses)", sig.get("unresolved_samples", 0),
+         ""],
         ["held-out RMS, baseline", d["rms_baseline"], "N"],
         ["held-out RMS, final", d["rms_final"], "N"],
         ["noise floor (" + nf.method + f", {nf.n_samples} samples)", nf.value, "N"],
@@ -289,6 +305,14 @@ def build_report(diag: Diagnosis, *, command: str | None = None) -> Report:
              diag.regimes_["final"][r]["n"]] for r in [*REGIMES, "all"]]
     rep.table(["regime", "baseline RMS (N)", "final RMS (N)", "held-out samples"], rows,
               digits=[None, 4, 4, 0])
+    cov = diag.split_.coverage
+    if cov:
+        rows = [[kind_, name, n["train"], n["heldout"]]
+                for kind_, bins in cov.items() for name, n in bins.items()]
+        rep.table(["operating point", "", "training samples", "held-out samples"], rows,
+                  caption="Where the held-out samples are: per experiment, direction, speed "
+                  "class and pressure level (a point without held-out samples is not judged).",
+                  digits=[None, None, 0, 0])
     rep.section("2. Where the model fails")
     rep.figure(figs["residuals"], "Held-out residual (measured minus model) against time, "
                "velocity, acceleration, position, pressure sum, time and displacement since the "
@@ -318,13 +342,16 @@ def build_report(diag: Diagnosis, *, command: str | None = None) -> Report:
             rep.paragraph("These explain the data equally well: " +
                           ", ".join(f"`{e}`" for e in group) + f"; `{group[0]}` was added. "
                           "The experiments that tell them apart:")
-            rep.bullets([f"`{e}`: {EFFECTS.get(e).experiment}" for e in group])
+            rep.bullets([f"`{e}`: {d['tie_experiments'][group[0]][e]}" for e in group])
     rep.section("4. Add it and watch the error fall")
     rep.figure(figs["error_fall"], "Held-out RMS error after each accepted step; dashed: the "
                "noise floor.")
-    rep.table(["step", "effect", "RMS before (N)", "RMS after (N)", "accepted", "forced"],
-              [[i + 1, s["effect"], s["rms_before"], s["rms_after"], s["accepted"], s["forced"]]
-               for i, s in enumerate(d["steps"])], digits=[0, None, 4, 4, None, None])
+    rep.table(["step", "effect", "RMS before (N)", "RMS after (N)", "accepted", "forced",
+               "fit flags"],
+              [[i + 1, s["effect"], s["rms_before"], s["rms_after"], s["accepted"], s["forced"],
+                ", ".join(sorted({f"{w['code']} ({w['parameter']})" for w in s["warnings"]}))
+                or "-"]
+               for i, s in enumerate(d["steps"])], digits=[0, None, 4, 4, None, None, None])
     rep.figure(figs["before_after"], "Before and after: measured force, baseline and final "
                "model over a held-out stretch.")
     if d["added"]:

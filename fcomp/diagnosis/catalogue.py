@@ -136,8 +136,10 @@ def _attach(model: FrictionModel, name: str, params: dict[str, float],
     return model.with_effects(effect)
 
 
-#: Effects whose forms (configuration ``form``) the diagnosis refits side by side.
-FORMS: dict[str, tuple[str, ...]] = {"frictional-lag": ("film", "speed-lag")}
+#: Effects whose forms the diagnosis refits side by side (the effect's configuration
+#: ``form`` where it has one; else a set of parameters held, :data:`HELD`).
+FORMS: dict[str, tuple[str, ...]] = {"frictional-lag": ("film", "speed-lag"),
+                                     "direction-asymmetry": ("levels", "levels-viscous")}
 
 
 def propose_all(name: str, ctx: Context) -> list[Proposal]:
@@ -154,6 +156,8 @@ def propose(name: str, ctx: Context, form: str | None = None) -> Proposal:
     guess = GUESSES.get(name)
     extra = {"form": form} if form is not None else {}
     alternatives = guess(ctx, **extra) if guess is not None else [{}]
+    if name in HELD_BY_FORM:  # forms that only hold parameters are no configuration
+        extra = {}
     own_names = set(EFFECTS.get(name).Params.from_flat({}).flat())
     models = [_attach(model, name, {k: v for k, v in p.items() if k in own_names}, ctx.data,
                       **extra)
@@ -178,6 +182,7 @@ def propose(name: str, ctx: Context, form: str | None = None) -> Proposal:
         for s in starts:
             s["mass"] = ctx.current.values["mass"]
     held = HELD[name](ctx) if name in HELD else []
+    held += list(HELD_BY_FORM.get(name, {}).get(form or "", ()))
     free = None
     if held:
         from fcomp.diagnosis.refit import fixed_names
@@ -187,8 +192,9 @@ def propose(name: str, ctx: Context, form: str | None = None) -> Proposal:
         free = [n for n in default_free(models[0]) if n not in fixed and n not in held]
         if "mass" in ctx.current.values:
             free.append("mass")
+        noop = models[0].effects[-1].Params().flat() if models[0].effects else {}
         for st in starts:  # a held term stays at its no-op value
-            st.update({n: 0.0 for n in held})
+            st.update({n: noop.get(n, 0.0) for n in held})
     return Proposal(name, models[0], starts, free, form=form)
 
 
@@ -311,7 +317,8 @@ def _dwell_time(ctx: Context) -> list[dict[str, float]]:
             {"dFs": 1.5 * dFs, "tau_dwell": 0.3 * tau, "L_dwell": 2 * L, "k_dwell": 1.0}]
 
 
-def _direction_asymmetry(ctx: Context) -> list[dict[str, float]]:
+def _direction_asymmetry(ctx: Context, form: str = "levels-viscous"
+                         ) -> list[dict[str, float]]:
     m = _moving(ctx)
     v, y = ctx.data.signal("v"), ctx.data.y
     pos, neg = m & (v > 0), m & (v < 0)
@@ -322,7 +329,7 @@ def _direction_asymmetry(ctx: Context) -> list[dict[str, float]]:
     starts = [{"r_neg": float(np.clip(ratio, 0.2, 5.0))}]
     flat = ctx.current.model.flat_params()
     visc = flat.get("sigma2", flat.get("B", 0.0))
-    if visc > 0:  # a slope of the residual while retracting, relative to the viscous one
+    if visc > 0 and form != "levels":  # a slope of the residual while retracting, relative to the viscous one
         c = _ls(ctx.current.residual[neg], v[neg])
         starts.append({"r_neg": 1.0, "rv_neg": float(np.clip(1.0 + c / visc, 0.1, 9.0))})
     return starts
@@ -490,6 +497,9 @@ GUESSES: dict[str, Callable[[Context], list[dict[str, float]]]] = {
 
 #: Per effect: the parameters a record cannot determine, held at their no-op values.
 HELD: dict[str, Callable[[Context], list[str]]] = {"pressure-dependence": _pressure_held}
+#: Per effect and form: the parameters that form holds at their no-op values.
+HELD_BY_FORM: dict[str, dict[str, tuple[str, ...]]] = {
+    "direction-asymmetry": {"levels": ("rv_neg",)}}
 
 
 # ------------------------------------------------------------------ baseline

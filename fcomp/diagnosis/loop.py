@@ -302,7 +302,7 @@ def _fit_job(i: int) -> tuple[int, dict[str, Any] | str]:
         return i, res
     return i, {"values": res.values, "n_params": res.n_params, "converged": res.converged,
                "nfev": res.nfev, "F_hat": res.F_hat, "residual": res.residual,
-               "rms_train": res.rms_train, "rms_test": res.rms_test}
+               "rms_train": res.rms_train, "rms_test": res.rms_test, "spread": res.spread}
 
 
 class Diagnosis:
@@ -428,7 +428,10 @@ class Diagnosis:
         try:
             starts = catalogue.baseline_starts(model, self.data_, self.segmentation_,
                                                self.split_.train)
-            self.baseline_fit_ = self._polish(self._refit.fit(model, starts))
+            first = self._refit.fit(model, starts)
+            # the fits from here on weigh samples by how well the motion fixes the prediction
+            self._refit.set_weights(first.spread, self.noise_floor_.value)
+            self.baseline_fit_ = self._polish(self._refit.fit(model, [first.values, *starts]))
             self._tick(f"baseline {model.describe()}")
             self.fit_ = self.baseline_fit_
             self.steps_: list[Step] = []
@@ -558,12 +561,14 @@ class Diagnosis:
             index += [i] * len(forms)
         results = self._run(proposals)
         best: dict[int, tuple[FitResult | str, str | None]] = {}
+        train = self.split_.train
         for j, prop, res in zip(index, proposals, results, strict=True):
-            # of an effect's forms, the one that fits the training samples best
+            # of an effect's forms, the one the information criterion prefers on the
+            # training samples (a richer form must earn its parameters)
             prev = best.get(j, (None, None))[0]
             if prev is None or (isinstance(prev, str) and not isinstance(res, str)) or (
                     not isinstance(res, str) and not isinstance(prev, str)
-                    and res.rms_train < prev.rms_train):
+                    and delta_bic(self.fit_, res, train) < delta_bic(self.fit_, prev, train)):
                 best[j] = (res, prop.form)
         for j, (res, form) in best.items():
             name = names[j]
@@ -602,7 +607,7 @@ class Diagnosis:
         model = prop.model.with_params(**model_vals) if model_vals else prop.model
         return FitResult(model, dict(values), payload["F_hat"], payload["residual"],
                          payload["rms_train"], payload["rms_test"], payload["n_params"],
-                         payload["converged"], payload["nfev"])
+                         payload["converged"], payload["nfev"], payload["spread"])
 
     def _judge(self, name: str, res: FitResult) -> Candidate:
         before = self.fit_
@@ -655,9 +660,14 @@ class Diagnosis:
                 break
             cands = self._evaluate(todo)
             ranked = sorted(cands, key=lambda c: (math.isnan(c.rms_heldout), c.rms_heldout))
+            good = [c for c in ranked if c.qualifies]
+            if good and self._control(good[0]):  # the gain was the optimiser's: judge again
+                cands = self._evaluate(todo)
+                ranked = sorted(cands, key=lambda c: (math.isnan(c.rms_heldout),
+                                                      c.rms_heldout))
+                good = [c for c in ranked if c.qualifies]
             if step_no == 0 and not self.added_:
                 self.candidates_ = ranked
-            good = [c for c in ranked if c.qualifies]
             if not good:
                 best = ranked[0]
                 self.steps_.append(Step(best.effect, self.fit_.rms_test,
@@ -665,7 +675,7 @@ class Diagnosis:
                 break
             best = good[0]
             tie = self._tie(best, good)
-            fit = self._polish(best.fit)  # type: ignore[arg-type]
+            fit = self._reweighted(self._polish(best.fit))  # type: ignore[arg-type]
             self._forms[best.effect] = best.form
             self.steps_.append(Step(best.effect, self.fit_.rms_test, fit.rms_test, True,
                                     candidates=ranked, tie=tie, fit=fit))
@@ -673,6 +683,37 @@ class Diagnosis:
                 self.ties_.append(tie)
             self.fit_ = fit
             self.added_.append(best.effect)
+
+    def _control(self, best: Candidate) -> bool:
+        """Refit the current model from the best candidate's values; True if that alone helps.
+
+        A candidate refitted from fresh starts may land in a better optimum of
+        the parameters it shares with the current model -- a gain of the
+        optimiser, not of the effect. The current model, started from the
+        candidate's values of its own parameters, is refitted; if its held-out
+        error then falls clearly (by a tenth of the noise floor) it replaces
+        the current fit and the candidates are judged again against it.
+        """
+        assert best.fit is not None
+        own = {k: v for k, v in best.fit.values.items()
+               if k in self.fit_.values}
+        if set(own) != set(self.fit_.values):
+            return False
+        try:
+            control = self._polish(self._refit.fit(self.fit_.model, [own, self.fit_.values],
+                                                   list(self.fit_.values)))
+        except FcompError:
+            return False
+        if not control.rms_test < self.fit_.rms_test - FALL_NOISE * self.noise_floor_.value:
+            return False
+        self._tick("control refit")
+        self.fit_ = self._reweighted(control)
+        if self.steps_:
+            self.steps_[-1].fit = self.fit_
+            self.steps_[-1].rms_after = self.fit_.rms_test
+        else:
+            self.baseline_fit_ = self.fit_
+        return True
 
     def _rebuilt(self, names: Sequence[str]) -> FitResult:
         """The baseline with the effects ``names`` (in order) refitted from the current values."""
@@ -720,19 +761,46 @@ class Diagnosis:
                     st.accepted = False
                     st.removed = verdict.reason
 
-    def _polish(self, fit: FitResult) -> FitResult:
+    def _reweighted(self, fit: FitResult) -> FitResult:
+        """``fit`` polished again after the sample weights follow its own prediction.
+
+        The weights (:meth:`Refit.set_weights`) come from the uncertainty of the
+        current model's prediction; a model accepted with another structure (a
+        bristle where a static map jumped) changes where that is, so it is
+        refitted with its own weights before the next step starts from it.
+        """
+        if fit.spread is None:
+            return fit
+        self._refit.set_weights(fit.spread, self.noise_floor_.value)
+        return self._polish(fit, fresh=True)
+
+    def _polish(self, fit: FitResult, fresh: bool = False) -> FitResult:
         """``fit`` continued to convergence (:data:`POLISH_NFEV` times the budget), if that helps.
 
         Every candidate is refitted from the current model with the normal
         budget; were the current model itself short of its optimum, any
         candidate would gain from the extra iterations alone and look like a
         found effect. So the baseline and every accepted model are polished
-        first; the better of the two fits (training error) is kept.
+        first; the better of the two fits (training error) is kept. With
+        ``fresh`` the model's base parameters also start afresh from the data
+        (:func:`catalogue.baseline_starts`, the effects' parameters kept): an
+        accepted model may carry a local optimum the candidate's refit landed in,
+        which the next candidate's fresh start would otherwise escape and be
+        credited for.
         """
         if not fit.model.symbolic or not fit.values:
             return fit
+        starts = [fit.values]
+        if fresh:
+            try:
+                base = catalogue.baseline_starts(fit.model, self.data_, self.segmentation_,
+                                                 self.split_.train)
+            except (FcompError, ValueError, ArithmeticError):
+                base = []
+            starts += [{**fit.values, **{k: v for k, v in b.items() if k in fit.values}}
+                       for b in base[:2]]
         try:
-            more = self._refit.fit(fit.model, [fit.values], list(fit.values),
+            more = self._refit.fit(fit.model, starts, list(fit.values),
                                    max_nfev=POLISH_NFEV * self.max_nfev)
         except FcompError:
             return fit

@@ -70,7 +70,7 @@ CANDIDATE_SAMPLES = 15_000
 #: Softest stiffness allowed: its presliding range ``F/k`` is at most this many ``d_pre``.
 PRESLIDING_SPAN = 20.0
 #: Parameters held at their start values in the first stage of a fit.
-STAGED = ("n",)
+STAGED = ("n", "p_visc", "kappa_s", "i_pre")
 
 
 def unit_scale(unit: str, sc: Scales, d_pre: float) -> float:
@@ -155,6 +155,10 @@ class FitResult:
     converged : bool
     nfev : int
         Model evaluations.
+    spread : (N,) N or None
+        Width of the band the model could be expected to predict at each sample
+        (:func:`tolerant_residual`): the uncertainty of its prediction that the
+        measured motion leaves.
     """
 
     model: FrictionModel
@@ -166,6 +170,7 @@ class FitResult:
     n_params: int
     converged: bool
     nfev: int
+    spread: np.ndarray | None = None
 
 
 #: Largest timing tolerance (s) of :func:`tolerant_residual`.
@@ -189,7 +194,7 @@ def timing_windows(v: np.ndarray, dt: float, resolution: float) -> np.ndarray:
 
 
 def tolerant_residual(y: np.ndarray, lo: np.ndarray, hi: np.ndarray, starts: Sequence[int],
-                      windows: np.ndarray | None = None) -> np.ndarray:
+                      windows: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """The distance of ``y`` from what the model could be expected to predict there (N).
 
     The model runs along a motion reconstructed from sampled, quantised
@@ -209,7 +214,7 @@ def tolerant_residual(y: np.ndarray, lo: np.ndarray, hi: np.ndarray, starts: Seq
     is ``y`` minus its projection onto that band. Where the motion is well
     measured and the prediction smooth the band is narrower than the noise and
     this is the plain residual; a structure the model predicts nowhere near
-    is never hidden.
+    is never hidden. Returns the residual and the band's width (N).
     """
     from scipy.ndimage import maximum_filter1d, minimum_filter1d
 
@@ -225,7 +230,7 @@ def tolerant_residual(y: np.ndarray, lo: np.ndarray, hi: np.ndarray, starts: Seq
             size = 2 * int(k) + 1
             low[a:b][sel] = minimum_filter1d(lo[a:b], size, mode="nearest")[sel]
             high[a:b][sel] = maximum_filter1d(hi[a:b], size, mode="nearest")[sel]
-    return y - np.clip(y, low, high)
+    return y - np.clip(y, low, high), high - low
 
 
 def fixed_names(model: FrictionModel) -> set[str]:
@@ -278,6 +283,41 @@ class Refit:
         if q not in self._by_q:
             self._by_q[q] = self._fit_records(q)
         return self._by_q[q]
+
+    def set_weights(self, spread: np.ndarray, noise: float) -> None:
+        """Weigh each sample by how well the measured motion fixes the prediction there.
+
+        ``w = 1/(1 + (spread/(2*noise))^2)`` with ``spread`` the width of the band
+        the current model could be expected to predict (:attr:`FitResult.spread`):
+        where a friction law jumps by its whole level within the timing
+        uncertainty of an event, or differs along motions as consistent with
+        the position, a sample says little about the parameters and would
+        otherwise dominate the squares (a static law's 500 N step one sample
+        early). Fits after this weigh their residuals by ``sqrt(w)``.
+        """
+        self._weights = 1.0 / (1.0 + (np.asarray(spread) / (2.0 * max(noise, 1e-300))) ** 2)
+        self._record_weights: dict[int, list[np.ndarray]] = {}
+
+    def _weights_of(self, records: list[tuple[FitData, np.ndarray]]) -> list[np.ndarray] | None:
+        """The square roots of the weights of ``records``' training samples (None: unweighted)."""
+        w = getattr(self, "_weights", None)
+        if w is None:
+            return None
+        key = id(records)
+        if key not in self._record_weights:
+            q = next(k for k, v in self._by_q.items() if v is records)
+            out = []
+            for e in self.data.experiments:
+                train = self.split.train[e.start:e.stop]
+                if not train.any():
+                    continue
+                we = w[e.start:e.stop]
+                if q > 1:
+                    we = _block_mean(we, q)
+                    train = _block_mean(train.astype(float), q) > 0.999
+                out.append(np.sqrt(we[train]))
+            self._record_weights[key] = out
+        return self._record_weights[key]
 
     def _fit_records(self, q: int) -> list[tuple[FitData, np.ndarray]]:
         """Per experiment with training samples: the data averaged over blocks of ``q``
@@ -347,11 +387,11 @@ class Refit:
         fitted = model.with_params(**model_vals) if model_vals else model
         extras = {"mass": values["mass"]} if "mass" in values else {}
         F_hat, lo, hi = self._predictions(fitted, extras, alternatives=True)
-        r = tolerant_residual(self.data.y, lo, hi, [e.start for e in self.data.experiments],
-                              self.windows)
+        r, spread = tolerant_residual(self.data.y, lo, hi,
+                                      [e.start for e in self.data.experiments], self.windows)
         tr, te = self.split.train, self.split.test
         return FitResult(fitted, dict(values), F_hat, r, _rms(r[tr]), _rms(r[te]), n_params,
-                         converged, nfev)
+                         converged, nfev, spread)
 
     # ---------------------------------------------------------------- fit
     def free_names(self, model: FrictionModel) -> list[str]:
@@ -393,7 +433,9 @@ class Refit:
         vals = {k: v for k, v in values.items() if k != "mass"}
         mass = values.get("mass")
         total = 0.0
-        for d, m in self._probe_records:
+        recs = self._probe_records
+        weights = self._weights_of(recs) or [None] * len(recs)
+        for (d, m), w in zip(recs, weights, strict=True):
             s = d.sig
             F = d.band_limited(friction_along_motion(
                 model, s["t"], s["v"], a=s["a"], x=s["x"], p1=s["p1"], p2=s["p2"],
@@ -401,6 +443,8 @@ class Refit:
             if mass is not None and d.inertia is not None:
                 F = F + mass * d.inertia
             r = (d.y - F)[m]
+            if w is not None:
+                r = r * w
             total += float(r @ r)
         return total
 
@@ -489,10 +533,13 @@ class Refit:
         specs = self.specs(base, names)
         pv = self._pv(base, names, fit.values, specs)
         problems = [TrajectoryProblem(base, d, pv, mask=m) for d, m in self._records]
+        weights = self._weights_of(self._records) or [None] * len(problems)
         theta = np.array([fit.values[n] for n in names])
         rs, Gs = [], []
-        for p in problems:
+        for p, w in zip(problems, weights, strict=True):
             r, G = p(theta, True)
+            if w is not None:  # as the fit weighed them
+                r, G = r * w, G * w[:, None]
             rs.append(r)
             Gs.append(G)
         unc = estimate(np.vstack(Gs), np.concatenate(rs), theta)
@@ -511,15 +558,19 @@ class Refit:
 
     def _solve(self, model: FrictionModel, pv: ParameterVector, budget: int, *,
                records: list[tuple[FitData, np.ndarray]] | None = None):
-        problems = [TrajectoryProblem(model, d, pv, mask=m)
-                    for d, m in (self._records if records is None else records)]
+        recs = self._records if records is None else records
+        problems = [TrajectoryProblem(model, d, pv, mask=m) for d, m in recs]
+        weights = self._weights_of(recs) or [None] * len(problems)
 
         def fun(theta: np.ndarray, need_jac: bool = True
                 ) -> tuple[np.ndarray, np.ndarray | None]:
             rs: list[np.ndarray] = []
             Gs: list[np.ndarray] = []
-            for p in problems:
+            for p, w in zip(problems, weights, strict=True):
                 r, G = p(theta, need_jac)
+                if w is not None:
+                    r = r * w
+                    G = None if G is None else G * w[:, None]
                 rs.append(r)
                 if G is not None:
                     Gs.append(G)

@@ -14,7 +14,7 @@ from types import MappingProxyType
 from typing import TYPE_CHECKING, Any, ClassVar
 
 from fcomp.backend import Backend
-from fcomp.effects.base import Effect, scale_levels
+from fcomp.effects.base import EFFECTS, Effect, scale_levels
 from fcomp.models.hysteresis import (
     HYSTERESIS_CONSTRAINTS,
     NONLOCAL_MEMORY_DEFAULTS,
@@ -576,3 +576,5 @@ CATALOGUE: tuple[type[Effect], ...] = (
     PressureDependence, PositionDependence, ViscousLead, InertiaError, ForceOffset,
     NonlocalMemory,
 )
+for _cls in CATALOGUE:
+    EFFECTS.register(_cls.name, _cls)

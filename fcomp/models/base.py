@@ -147,11 +147,12 @@ class FrictionModel(ABC):
                 f"{self.name}: expected {self.Params.__name__}, got {type(params).__name__}"
             )
         self.params: ParamSet = params
-        from fcomp.effects import make_effect
+        # effect names are resolved in fcomp.effects.base (a module that imports no model);
+        # imported here, not at the top, because importing it registers the catalogue,
+        # which is built on the model modules and so cannot load before this one
+        from fcomp.effects.base import as_effect
 
-        self.effects: tuple[Effect, ...] = tuple(
-            make_effect(e) if isinstance(e, str) else e for e in effects
-        )
+        self.effects: tuple[Effect, ...] = tuple(as_effect(e) for e in effects)
         names = list(self.params.flat())
         for e in self.effects:
             for n in e.params.flat():
@@ -211,12 +212,11 @@ class FrictionModel(ABC):
         ``presliding``, ``frictional-lag``, ``nonlocal-memory``) turn the
         model into the richer model of the family; the others are added on.
         """
-        from fcomp.effects import make_effect
+        from fcomp.effects.base import as_effect
 
         model: FrictionModel = self
         for e in effects:
-            eff = make_effect(e) if isinstance(e, str) else e
-            model = eff.attach(model)
+            model = as_effect(e).attach(model)
         return model
 
     def with_params(self, **flat: float) -> FrictionModel:

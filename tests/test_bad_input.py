@@ -914,6 +914,7 @@ def _proc(args: list[str], cwd: Path, **kw: object) -> subprocess.Popen:
                             text=True, **kw)  # type: ignore[call-overload]
 
 
+@pytest.mark.slow
 def test_real_processes_print_one_line_and_no_traceback(lab: Path, repeat_file: None) -> None:
     before = snapshot(lab)
     procs = {n: _proc(shlex.split(CASES[n].args), lab) for n in SUBPROCESS}
@@ -933,6 +934,7 @@ def test_real_processes_print_one_line_and_no_traceback(lab: Path, repeat_file: 
 
 @pytest.mark.parametrize(("sig", "code", "line"), [(signal.SIGINT, 130, "fcomp: interrupted"),
                                                    (signal.SIGTERM, 143, "fcomp: terminated")])
+@pytest.mark.slow
 def test_long_run_shows_progress_and_a_signal_leaves_nothing(lab: Path, sig: int, code: int,
                                                              line: str) -> None:
     """A long simulation on a terminal shows its progress (erased at the end); Ctrl-C or

@@ -1,7 +1,7 @@
 """Identification (fcomp.identification): exact sensitivities, honest standard errors, and
 recovery of known parameters from data simulated *independently* of the package.
 
-The records are generated with the plain equations of ``tests/reference_lugre.py``
+The records are generated with the plain equations of ``tests/helpers/reference_lugre.py``
 (written from models.md, importing nothing from fcomp) integrated by SciPy's LSODA
 at rtol 1e-8 along a smooth velocity; the package then fits its own models to them.
 Recovery is checked against the stated uncertainty (|estimate - true| < 3 stderr)
@@ -14,7 +14,7 @@ import math
 
 import numpy as np
 import pytest
-from reference_lugre import FilmLuGreRef, LuGreRef, coulomb_viscous, stribeck_map
+from helpers.reference_lugre import FilmLuGreRef, LuGreRef, coulomb_viscous, stribeck_map
 from scipy.integrate import solve_ivp
 
 from fcomp.effects import make_effect

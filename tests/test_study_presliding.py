@@ -11,10 +11,12 @@ import math
 
 import numpy as np
 import pytest
-from browser import study_summary
+from helpers.browser import study_summary
 
 from fcomp.models import make_model
 from studies import presliding as ps
+
+pytestmark = pytest.mark.slow  # builds the study site or runs long diagnoses
 
 
 @pytest.fixture(scope="module")

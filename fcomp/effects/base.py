@@ -55,15 +55,17 @@ from types import MappingProxyType
 from typing import TYPE_CHECKING, Any, ClassVar
 
 from fcomp.backend import Backend
-from fcomp.parameters import ParamSet, ParamValues
+from fcomp.parameters import ParamSet, ParamValues, PlainValue, adopt_params
 from fcomp.registry import Registry
 
 if TYPE_CHECKING:
     from fcomp.models.base import FrictionModel, Signals
 
 
-class Effect:
+class Effect(PlainValue):
     """Base class of effects (see the module docstring for the contract).
+
+    Effects are plain values: they pickle with their parameters and configuration.
 
     Parameters
     ----------
@@ -82,6 +84,10 @@ class Effect:
     experiments: ClassVar[Mapping[str, str]] = MappingProxyType({})
     #: signals the effect reads besides v (diagnosis checks the data has them)
     needs: ClassVar[tuple[str, ...]] = ()
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        adopt_params(cls)
 
     def __init__(self, params: ParamSet | Mapping[str, Any] | None = None, **config: Any) -> None:
         if params is None:

@@ -73,6 +73,11 @@ class StructuralEffect(Effect):
 
 
 # ----------------------------------------------------------------- structural
+ViscousParams = make_params_class("ViscousParams", [
+    spec("sigma2", "Ns/m", 0.0, 0.0, INF, "viscous coefficient"),
+    FAMILY_SPECS["p_visc"], FAMILY_SPECS["v_ref"]], owner="effect viscous")
+
+
 class Viscous(StructuralEffect):
     """Viscous friction ``sigma2*v``: shear of the lubricant film between seal and bore.
 
@@ -87,9 +92,7 @@ class Viscous(StructuralEffect):
 
     name = "viscous"
     adds = frozenset({"viscous", "viscous-power"})
-    Params = make_params_class("ViscousParams", [
-        spec("sigma2", "Ns/m", 0.0, 0.0, INF, "viscous coefficient"),
-        FAMILY_SPECS["p_visc"], FAMILY_SPECS["v_ref"]], owner="effect viscous")
+    Params = ViscousParams
     signature = "residual linear and odd in v, largest at high speed"
     experiment = "constant-speed runs at several speeds in both directions"
 
@@ -100,8 +103,16 @@ class Viscous(StructuralEffect):
 
     def new_values(self, model: FrictionModel) -> dict[str, float]:
         flat = self.params.flat()
-        return {model.viscous_name: flat["sigma2"], "p_visc": flat["p_visc"],  # type: ignore[attr-defined]
+        return {_family(model, self.name).viscous_name: flat["sigma2"], "p_visc": flat["p_visc"],
                 "v_ref": float(self.config.get("v_ref", flat["v_ref"]))}
+
+
+StribeckEffectParams = make_params_class("StribeckEffectParams", [
+    spec("Fs_excess", "N", 0.0, 0.0, INF, "Fs - Fc, break-away excess over Coulomb"),
+    spec("vs", "m/s", 0.01, 0.0, INF, "Stribeck velocity", lower_open=True),
+    spec("n", "-", 2.0, 0.0, 10.0, "Stribeck exponent", lower_open=True),
+    FAMILY_SPECS["kappa_s"],
+], owner="effect stribeck")
 
 
 class Stribeck(StructuralEffect):
@@ -119,12 +130,7 @@ class Stribeck(StructuralEffect):
 
     name = "stribeck"
     adds = frozenset({"stribeck", "stribeck-form"})
-    Params = make_params_class("StribeckEffectParams", [
-        spec("Fs_excess", "N", 0.0, 0.0, INF, "Fs - Fc, break-away excess over Coulomb"),
-        spec("vs", "m/s", 0.01, 0.0, INF, "Stribeck velocity", lower_open=True),
-        spec("n", "-", 2.0, 0.0, 10.0, "Stribeck exponent", lower_open=True),
-        FAMILY_SPECS["kappa_s"],
-    ], owner="effect stribeck")
+    Params = StribeckEffectParams
     signature = "residual hump at low |v| decaying with speed; peaks after starts"
     experiment = "slow constant-speed runs (0.1-10 vs) in both directions"
 
@@ -135,15 +141,21 @@ class Stribeck(StructuralEffect):
 
     def new_values(self, model: FrictionModel) -> dict[str, float]:
         flat = model.params.flat()
-        exc = self.params.Fs_excess  # type: ignore[attr-defined]
-        out: dict[str, float] = {"vs": self.params.vs, "n": self.params.n,  # type: ignore[attr-defined]
-                                 "kappa_s": self.params.kappa_s}  # type: ignore[attr-defined]
+        p = self.params
+        exc = p.scalar("Fs_excess")
+        out: dict[str, float] = {"vs": p.scalar("vs"), "n": p.scalar("n"),
+                                 "kappa_s": p.scalar("kappa_s")}
         if "Fc" in flat:
             out["Fs"] = flat["Fc"] + exc
         else:
             out["Fs_pos"] = flat["Fc_pos"] + exc
             out["Fs_neg"] = flat["Fc_neg"] + exc
         return out
+
+
+ViscousLeadParams = make_params_class("ViscousLeadParams", [
+    spec("T", "s", 0.0, 0.0, INF, "time constant of the fluid-friction lead",
+         directional=False)], owner="effect viscous-lead")
 
 
 class ViscousLead(StructuralEffect):
@@ -159,11 +171,15 @@ class ViscousLead(StructuralEffect):
     name = "viscous-lead"
     adds = frozenset({"lead"})
     requires = frozenset({"viscous"})
-    Params = make_params_class("ViscousLeadParams", [
-        spec("T", "s", 0.0, 0.0, INF, "time constant of the fluid-friction lead",
-             directional=False)], owner="effect viscous-lead")
+    Params = ViscousLeadParams
     signature = "residual proportional to acceleration while sliding fast"
     experiment = "sinusoidal velocity at two or more frequencies, same amplitude"
+
+
+FrictionalLagParams = make_params_class("FrictionalLagParams", [
+    dataclasses.replace(FAMILY_SPECS["vb"], default=INF),
+    *(FAMILY_SPECS[n] for n in ("tau_hp", "tau_hn", "tau_h0")),
+], owner="effect frictional-lag")
 
 
 class FrictionalLag(StructuralEffect):
@@ -181,10 +197,7 @@ class FrictionalLag(StructuralEffect):
     name = "frictional-lag"
     adds = frozenset({"film", "film-lag"})
     requires = frozenset({"stribeck"})
-    Params = make_params_class("FrictionalLagParams", [
-        dataclasses.replace(FAMILY_SPECS["vb"], default=INF),
-        *(FAMILY_SPECS[n] for n in ("tau_hp", "tau_hn", "tau_h0")),
-    ], owner="effect frictional-lag")
+    Params = FrictionalLagParams
     signature = "residual loop against v: rising and falling |v| branches differ"
     experiment = "velocity sweeps up and down at several rates; dwell before restart"
 
@@ -210,6 +223,14 @@ class FrictionalLag(StructuralEffect):
         return new
 
 
+PreslidingParams = make_params_class("PreslidingParams", [
+    spec("sigma0", "N/m", INF, 0.0, INF, "bristle stiffness (inf: rigid, no-op)",
+         lower_open=True, directional=False),
+    spec("sigma1", "Ns/m", 0.0, 0.0, INF, "bristle damping", directional=False),
+    FAMILY_SPECS["i_pre"],
+], owner="effect presliding")
+
+
 class Presliding(StructuralEffect):
     """Pre-sliding: bristle compliance ``sigma0`` (the step from a static map to LuGre).
 
@@ -226,12 +247,7 @@ class Presliding(StructuralEffect):
 
     name = "presliding"
     adds = frozenset({"presliding", "damping", "bristle-exponent"})
-    Params = make_params_class("PreslidingParams", [
-        spec("sigma0", "N/m", INF, 0.0, INF, "bristle stiffness (inf: rigid, no-op)",
-             lower_open=True, directional=False),
-        spec("sigma1", "Ns/m", 0.0, 0.0, INF, "bristle damping", directional=False),
-        FAMILY_SPECS["i_pre"],
-    ], owner="effect presliding")
+    Params = PreslidingParams
     signature = "residual spikes at reversals that follow displacement since reversal"
     experiment = "small-amplitude displacement cycles (well below break-away)"
 
@@ -245,10 +261,10 @@ class Presliding(StructuralEffect):
         if "presliding" in fam.features and "damping" not in fam.features:
             # Dahl: compliant bristles already, only the damping is missing; the model's
             # own sigma0 is kept and sigma1 = 0 (the default) is a no-op.
-            new = fam.with_features({"damping"}, {"sigma1": self.params.sigma1})  # type: ignore[attr-defined]
+            new = fam.with_features({"damping"}, {"sigma1": self.params.scalar("sigma1")})
             new.lineage = (*(fam.lineage or (fam.name,)), self.name)
             return new
-        if math.isinf(self.params.sigma0):  # type: ignore[attr-defined]
+        if math.isinf(self.params.scalar("sigma0")):
             if "presliding" in fam.features:
                 raise ValueError(f"model {fam.describe()!r} already has effect {self.name!r}")
             return Effect.attach(self, model)  # rigid bristles: the static map, unchanged
@@ -256,6 +272,13 @@ class Presliding(StructuralEffect):
 
 
 # --------------------------------------------------------------------- add-ons
+PressureDependenceParams = make_params_class("PressureDependenceParams", [
+    spec("kp", "1/Pa", 0.0, -1e-3, 1e-3, "relative level change per pascal"),
+    spec("p_ref", "Pa", 0.0, -INF, INF, "reference gauge pressure sum (fixed)",
+         directional=False),
+], owner="effect pressure-dependence")
+
+
 class PressureDependence(Effect):
     """Pressure dependence: ``(Fc, Fs) -> (Fc, Fs)*(1 + kp*(p1 + p2 - p_ref))`` (gauge).
 
@@ -267,11 +290,7 @@ class PressureDependence(Effect):
     """
 
     name = "pressure-dependence"
-    Params = make_params_class("PressureDependenceParams", [
-        spec("kp", "1/Pa", 0.0, -1e-3, 1e-3, "relative level change per pascal"),
-        spec("p_ref", "Pa", 0.0, -INF, INF, "reference gauge pressure sum (fixed)",
-             directional=False),
-    ], owner="effect pressure-dependence")
+    Params = PressureDependenceParams
     fixed: ClassVar[tuple[str, ...]] = ("p_ref",)
     needs = ("p1", "p2")
     signature = "residual magnitude correlates with p1 + p2, sign follows friction"
@@ -291,6 +310,14 @@ class PressureDependence(Effect):
         return scale_levels(L, 1.0 + P("kp", sig.s) * (sig.p1 + sig.p2 - P("p_ref")))
 
 
+DirectionAsymmetryParams = make_params_class("DirectionAsymmetryParams", [
+    spec("r_neg", "-", 1.0, 0.0, 10.0, "ratio of the v < 0 levels to the v > 0 levels",
+         lower_open=True, directional=False),
+    spec("c_neg", "Ns/m", 0.0, -INF, INF, "extra viscous slope for v < 0",
+         directional=False),
+], owner="effect direction-asymmetry")
+
+
 class DirectionAsymmetry(Effect):
     """Direction asymmetry: a separate friction level, and viscous slope, for ``v < 0``.
 
@@ -303,12 +330,7 @@ class DirectionAsymmetry(Effect):
     """
 
     name = "direction-asymmetry"
-    Params = make_params_class("DirectionAsymmetryParams", [
-        spec("r_neg", "-", 1.0, 0.0, 10.0, "ratio of the v < 0 levels to the v > 0 levels",
-             lower_open=True, directional=False),
-        spec("c_neg", "Ns/m", 0.0, -INF, INF, "extra viscous slope for v < 0",
-             directional=False),
-    ], owner="effect direction-asymmetry")
+    Params = DirectionAsymmetryParams
     signature = "residual even in v: same-sign offset in both directions, step at reversals"
     experiment = "the same speed profile in both directions of travel, with the force zero " \
         "known (see force-offset)"
@@ -323,6 +345,20 @@ class DirectionAsymmetry(Effect):
 
     def extra_force(self, be: Backend, sig: Signals, P: ParamValues) -> tuple[Any, Any]:
         return P("c_neg") * be.fmin(sig.v, 0.0), 0.0
+
+
+PositionDependenceParams = make_params_class("PositionDependenceParams", [
+    spec("kx1", "-", 0.0, -1.0, 1.0, "linear Legendre coefficient", directional=False),
+    spec("kx2", "-", 0.0, -1.0, 1.0, "quadratic Legendre coefficient", directional=False),
+    spec("kx3", "-", 0.0, -1.0, 1.0, "cubic Legendre coefficient", directional=False),
+    spec("kb", "-", 0.0, -1.0, 3.0, "relative level change inside the local box (0: none)",
+         directional=False),
+    spec("xb", "m", 0.15, -INF, INF, "centre of the local box", directional=False),
+    spec("wb", "m", 0.01, 0.0, INF, "half-width of the local box", lower_open=True,
+         directional=False),
+    spec("eb", "m", 0.002, 0.0, INF, "edge width of the local box", lower_open=True,
+         directional=False),
+], owner="effect position-dependence")
 
 
 class PositionDependence(Effect):
@@ -346,18 +382,7 @@ class PositionDependence(Effect):
     """
 
     name = "position-dependence"
-    Params = make_params_class("PositionDependenceParams", [
-        spec("kx1", "-", 0.0, -1.0, 1.0, "linear Legendre coefficient", directional=False),
-        spec("kx2", "-", 0.0, -1.0, 1.0, "quadratic Legendre coefficient", directional=False),
-        spec("kx3", "-", 0.0, -1.0, 1.0, "cubic Legendre coefficient", directional=False),
-        spec("kb", "-", 0.0, -1.0, 3.0, "relative level change inside the local box (0: none)",
-             directional=False),
-        spec("xb", "m", 0.15, -INF, INF, "centre of the local box", directional=False),
-        spec("wb", "m", 0.01, 0.0, INF, "half-width of the local box", lower_open=True,
-             directional=False),
-        spec("eb", "m", 0.002, 0.0, INF, "edge width of the local box", lower_open=True,
-             directional=False),
-    ], owner="effect position-dependence")
+    Params = PositionDependenceParams
     needs = ("x",)
     signature = "residual a function of x, repeated stroke after stroke (smooth or local)"
     experiment = "the same slow stroke repeated, break-away measured along the stroke"
@@ -377,6 +402,19 @@ class PositionDependence(Effect):
         box = 0.5 * (be.tanh((sig.x - xb + wb) / eb) - be.tanh((sig.x - xb - wb) / eb))
         return scale_levels(L, 1.0 + P("kx1") * xi + P("kx2") * p2 + P("kx3") * p3
                             + P("kb") * box)
+
+
+DwellTimeParams = make_params_class("DwellTimeParams", [
+    spec("dFs", "N", 0.0, 0.0, INF, "break-away increase after a long dwell"),
+    spec("tau_dwell", "s", 1.0, 0.0, INF, "ageing time constant", lower_open=True,
+         directional=False),
+    spec("L_dwell", "m", 1e-4, 0.0, INF, "sliding distance that erases the age",
+         lower_open=True, directional=False),
+    spec("k_dwell", "-", 0.0, 0.0, 5.0, "ageing shape: 0 exponential (Kato), > 0 "
+         "towards logarithmic (Dieterich)", directional=False),
+    spec("v_rest", "m/s", 1e-5, 0.0, INF, "speed scale of rest (fixed): ageing "
+         "weighted by exp(-|v|/v_rest)", lower_open=True, directional=False),
+], owner="effect dwell-time")
 
 
 class DwellTime(Effect):
@@ -404,17 +442,7 @@ class DwellTime(Effect):
     name = "dwell-time"
     states = ("w",)
     initial = (0.0,)
-    Params = make_params_class("DwellTimeParams", [
-        spec("dFs", "N", 0.0, 0.0, INF, "break-away increase after a long dwell"),
-        spec("tau_dwell", "s", 1.0, 0.0, INF, "ageing time constant", lower_open=True,
-             directional=False),
-        spec("L_dwell", "m", 1e-4, 0.0, INF, "sliding distance that erases the age",
-             lower_open=True, directional=False),
-        spec("k_dwell", "-", 0.0, 0.0, 5.0, "ageing shape: 0 exponential (Kato), > 0 "
-             "towards logarithmic (Dieterich)", directional=False),
-        spec("v_rest", "m/s", 1e-5, 0.0, INF, "speed scale of rest (fixed): ageing "
-             "weighted by exp(-|v|/v_rest)", lower_open=True, directional=False),
-    ], owner="effect dwell-time")
+    Params = DwellTimeParams
     fixed: ClassVar[tuple[str, ...]] = ("v_rest",)
     signature = "break-away spikes growing with the dwell time before the start"
     experiment = "starts after dwells of different lengths (0.1 s to 10 s)"
@@ -438,6 +466,11 @@ class DwellTime(Effect):
         return [L * rest / (L * rest + be.abs(sig.v) * tau)]
 
 
+InertiaErrorParams = make_params_class("InertiaErrorParams", [
+    spec("dm", "kg", 0.0, -INF, INF, "mass error (true minus assumed)", directional=False),
+], owner="effect inertia-error")
+
+
 class InertiaError(Effect):
     """Inertia error: a mass correction ``dm*a`` in the reconstructed force.
 
@@ -449,14 +482,17 @@ class InertiaError(Effect):
     """
 
     name = "inertia-error"
-    Params = make_params_class("InertiaErrorParams", [
-        spec("dm", "kg", 0.0, -INF, INF, "mass error (true minus assumed)", directional=False),
-    ], owner="effect inertia-error")
+    Params = InertiaErrorParams
     signature = "residual proportional to acceleration at all speeds"
     experiment = "the same motion with a known added mass"
 
     def extra_force(self, be: Backend, sig: Signals, P: ParamValues) -> tuple[Any, Any]:
         return 0.0, P("dm")
+
+
+ForceOffsetParams = make_params_class("ForceOffsetParams", [
+    spec("offset", "N", 0.0, -INF, INF, "constant force offset", directional=False),
+], owner="effect force-offset")
 
 
 class ForceOffset(Effect):
@@ -469,9 +505,7 @@ class ForceOffset(Effect):
     """
 
     name = "force-offset"
-    Params = make_params_class("ForceOffsetParams", [
-        spec("offset", "N", 0.0, -INF, INF, "constant force offset", directional=False),
-    ], owner="effect force-offset")
+    Params = ForceOffsetParams
     signature = "residual with a constant non-zero mean in both directions"
     experiment = "a zero reading of the force measurement at rest with nothing driving or " \
         "loading the actuator"
@@ -487,6 +521,14 @@ class ForceOffset(Effect):
 
     def extra_force(self, be: Backend, sig: Signals, P: ParamValues) -> tuple[Any, Any]:
         return P("offset"), 0.0
+
+
+NonlocalMemoryParams = make_params_class(
+    "NonlocalMemoryParams",
+    [*hysteresis_specs(NONLOCAL_MEMORY_DEFAULTS),
+     *(FAMILY_SPECS[n] for n in FEATURE_PARAMS["elements"])],
+    owner="effect nonlocal-memory", constraints=HYSTERESIS_CONSTRAINTS,
+)
 
 
 class NonlocalMemory(StructuralEffect):
@@ -525,12 +567,7 @@ class NonlocalMemory(StructuralEffect):
 
     name = "nonlocal-memory"
     FORMS: ClassVar[tuple[str, ...]] = ("hysteresis", "maxwell-slip")
-    Params = make_params_class(
-        "NonlocalMemoryParams",
-        [*hysteresis_specs(NONLOCAL_MEMORY_DEFAULTS),
-         *(FAMILY_SPECS[n] for n in FEATURE_PARAMS["elements"])],
-        owner="effect nonlocal-memory", constraints=HYSTERESIS_CONSTRAINTS,
-    )
+    Params = NonlocalMemoryParams
     signature = ("small-displacement residual following travel since reversal; minor-loop "
                  "offsets erased past earlier reversal points")
     experiment = "small displacement cycles with nested minor loops (seed 000 Figs. 10, 16)"

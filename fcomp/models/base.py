@@ -52,7 +52,7 @@ import numpy as np
 
 from fcomp.backend import CASADI, NUMPY, Backend
 from fcomp.errors import FcompError
-from fcomp.parameters import ParamSet, ParamValues
+from fcomp.parameters import ParamSet, ParamValues, PlainValue, adopt_params
 
 if TYPE_CHECKING:
     from fcomp.effects.base import Effect
@@ -114,8 +114,12 @@ def side_of(v: np.ndarray, initial: float = 1.0) -> np.ndarray:
     return s[idx]
 
 
-class FrictionModel(ABC):
+class FrictionModel(PlainValue, ABC):
     """Base class of every friction model (see the module docstring for the contract).
+
+    Models are plain values: they pickle (:class:`~fcomp.parameters.PlainValue`),
+    with their parameters and effects, also when their class was made for a
+    feature combination (it pickles by its recipe).
 
     Parameters
     ----------
@@ -132,6 +136,10 @@ class FrictionModel(ABC):
     symbolic: ClassVar[bool] = True
     #: level parameters that effects may scale (present ones only)
     level_names: ClassVar[tuple[str, ...]] = ("Fc", "Fs")
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        adopt_params(cls)
 
     def __init__(
         self,

@@ -174,7 +174,14 @@ from fcomp.backend import NUMPY, Backend
 from fcomp.errors import ConvergenceError, FcompError
 from fcomp.models.base import NotSymbolicError, Signals
 from fcomp.models.lugre_family import PRESETS, LuGreFamily, family_class, params_class
-from fcomp.parameters import ParamSet, ParamSpec, ParamValues, make_params_class, spec
+from fcomp.parameters import (
+    ParamSet,
+    ParamSpec,
+    ParamValues,
+    make_params_class,
+    spec,
+    with_recipe,
+)
 
 INF = math.inf
 
@@ -606,13 +613,24 @@ class HysteresisFunction:
 
 
 # ---------------------------------------------------------------------- model
-def _params_class(features: frozenset[str], viscous_name: str, cls_name: str,
-                  owner: str) -> type[ParamSet]:
+def hysteresis_params_class(features: frozenset[str], viscous_name: str = "sigma2",
+                            cls_name: str = "HysteresisParams",
+                            owner: str = "") -> type[ParamSet]:
+    """The family's parameters of ``features`` and those of the hysteresis function (cached;
+    pickles by its recipe)."""
+    return _hysteresis_params_class(frozenset(features), viscous_name, cls_name, owner)
+
+
+@cache
+def _hysteresis_params_class(features: frozenset[str], viscous_name: str, cls_name: str,
+                             owner: str) -> type[ParamSet]:
     base = params_class(features, viscous_name)
-    return make_params_class(
-        cls_name, [*base.SPECS, *hysteresis_specs(SEED_DEFAULTS)], owner=owner,
-        constraints=[("Fc", "Fs"), *HYSTERESIS_CONSTRAINTS],
+    cls = make_params_class(
+        cls_name, [*base.SPECS, *hysteresis_specs(SEED_DEFAULTS)],
+        owner=owner or "model " + "+".join(sorted(features)) + "+nonlocal-memory",
+        constraints=[("Fc", "Fs"), *HYSTERESIS_CONSTRAINTS], module=__name__,
     )
+    return with_recipe(cls, _hysteresis_params_class, features, viscous_name, cls_name, owner)
 
 
 class HysteresisFamily(LuGreFamily):
@@ -796,22 +814,33 @@ class NMLGMHysteresis(HysteresisFamily):
     name = "nmlgm-hysteresis"
     features = PRESETS["nmlgm"].features
     viscous_name = "sigma2"
-    Params = _params_class(features, "sigma2", "NMLGMHysteresisParams", "nmlgm-hysteresis")
+    Params = hysteresis_params_class(features, "sigma2", "NMLGMHysteresisParams",
+                                     "nmlgm-hysteresis")
+
+
+NMLGMHysteresisParams = NMLGMHysteresis.Params
+
+
+def hysteresis_class(features: frozenset[str], viscous_name: str = "sigma2") -> type[HysteresisFamily]:
+    """The hysteresis model class of a family feature set (``nmlgm-hysteresis`` if it matches;
+    other classes are made here, cached, and pickle by their recipe)."""
+    return _hysteresis_class(frozenset(features), viscous_name)
 
 
 @cache
-def hysteresis_class(features: frozenset[str], viscous_name: str = "sigma2") -> type[HysteresisFamily]:
-    """The hysteresis model class of a family feature set (``nmlgm-hysteresis`` if it matches)."""
+def _hysteresis_class(features: frozenset[str], viscous_name: str) -> type[HysteresisFamily]:
     if "presliding" not in features:
         raise ValueError("the hysteresis function needs the bristle state (presliding)")
     if features == NMLGMHysteresis.features and viscous_name == NMLGMHysteresis.viscous_name:
         return NMLGMHysteresis
     label = "+".join(sorted(features)) + "+nonlocal-memory"
-    params = _params_class(features, viscous_name, "HysteresisParams", "model " + label)
-    return type("HysteresisModel", (HysteresisFamily,), {
-        "name": "custom", "features": features, "viscous_name": viscous_name, "Params": params,
+    made = type("HysteresisModel", (HysteresisFamily,), {
+        "name": "custom", "features": features, "viscous_name": viscous_name,
+        "Params": hysteresis_params_class(features, viscous_name),
         "__doc__": f"LuGre-family model ({label}) with the hysteresis function.",
+        "__module__": __name__,
     })
+    return with_recipe(made, _hysteresis_class, features, viscous_name)
 
 
 # -------------------------------------------------------------------- stepper

@@ -89,7 +89,7 @@ from fcomp import __version__
 from fcomp.backend import CASADI, NUMPY, Backend
 from fcomp.errors import FcompError
 from fcomp.measurement import Measurement
-from fcomp.models.base import FrictionModel, NotSymbolicError, Signals
+from fcomp.models.base import FrictionModel, Signals
 from fcomp.parameters import ParamSet, ParamValues
 from fcomp.paramsets import ParameterSet
 from fcomp.paramsets import get as get_paramset
@@ -214,13 +214,6 @@ class OdePlant(Plant):
         overrides: Mapping[str, float] | None = None,
     ) -> None:
         super().__init__(friction, params)
-        from plants.discrete_memory import has_discrete_memory
-
-        if not friction.symbolic and not has_discrete_memory(friction):
-            raise NotSymbolicError(
-                f"plant {self.name}: friction model {friction.describe()!r} has no symbolic "
-                "form and no discrete-memory coupling; plants need one of the two"
-            )
         values = self.params_from_set(self.paramset)
         known = set(self.Params.names())
         for k, v in (overrides or {}).items():
@@ -458,7 +451,7 @@ class OdePlant(Plant):
         U = self.input_samples(u, t)
         tol = Tolerances(rtol=rtol, atol=atol, max_steps=max_steps)
         start = self._x0(x0)
-        if self.friction.symbolic:
+        if self.friction.discrete_memory() is None:
             if coupling is not None:
                 raise FcompError(f"plant {self.name}: --coupling applies to friction with "
                                  "discrete memory (nmlgm-hysteresis) only")
@@ -482,7 +475,7 @@ class OdePlant(Plant):
         """A :class:`~fcomp.simulation.Stepper` advancing the plant ``dt`` s per ``step(u)``
         (:class:`plants.discrete_memory.MemoryStepper` for friction with discrete memory)."""
         tol = Tolerances(rtol=rtol, atol=atol)
-        if self.friction.symbolic:
+        if self.friction.discrete_memory() is None:
             return Stepper(self.ode_model(), dt, self.param_vector(), self._x0(x0),
                            method=method, tolerances=tol)
         from plants.discrete_memory import MemoryStepper
@@ -494,7 +487,7 @@ class OdePlant(Plant):
                          values: Mapping[str, Any] | None = None) -> dict[str, np.ndarray]:
         """Every output at the samples ``X (n, nx)``, ``U (n, nu)`` (numpy; ``values``:
         flat parameters, scalars or one value per sample)."""
-        if not self.friction.symbolic:
+        if self.friction.discrete_memory() is not None:
             return self._memory(None).outputs(X, U)
         P = self.param_values(NUMPY, values)
         _, y = self._evaluate(NUMPY, [X[:, i] for i in range(self.nx)],

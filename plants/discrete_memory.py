@@ -70,12 +70,6 @@ COUPLING = 1e-4
 _PROBE = 1e-9
 
 
-def has_discrete_memory(model: FrictionModel) -> bool:
-    """Whether ``model`` is a hysteresis-function model this module can couple."""
-    return not model.symbolic and hasattr(model, "hysteresis_function") and hasattr(
-        model, "carrier")
-
-
 class LocalBristle(FrictionModel):
     """The carrier of a hysteresis model with the tangent bristle law (module docstring).
 
@@ -86,7 +80,6 @@ class LocalBristle(FrictionModel):
     """
 
     name = "local-bristle"
-    symbolic = True
     static_map = False
 
     def __init__(self, carrier: FrictionModel) -> None:  # no super().__init__: a view
@@ -150,26 +143,29 @@ class MemoryCoupling:
             raise FcompError(f"coupling interval must be a positive number of seconds, "
                              f"got {coupling}")
         self.plant = plant
-        model: Any = plant.friction
-        self.model = model
+        memory = plant.friction.discrete_memory()
+        if memory is None:
+            raise FcompError(f"plant {plant.name}: friction {plant.friction.describe()!r} has "
+                             "no discrete memory to couple")
+        self.model = memory
         self.coupling = float(coupling)
-        self.local = LocalBristle(model.carrier())
+        self.local = LocalBristle(memory.carrier())
         self.twin = type(plant)(self.local, plant.paramset,
                                 overrides=plant.plant_params.flat())
         names = list(self.twin.flat_params())
         self.i_tan = [names.index(n) for n in TANGENT]
         self.p_twin = self.twin.param_vector()
         self.n_plant = len(plant.plant_states)
-        self.i_F = len(self.model.base_states) - 1  # "Fz" among the friction states
-        self.P = self.model.param_values(NUMPY)
+        self.i_F = plant.friction.state_names.index(memory.memory_state)  # "Fz"
+        self.P = plant.friction.param_values(NUMPY)
         self.p_atm = plant.plant_params.flat().get("p_atm", 101325.0)
         states = plant.plant_states
         self._ip = [states.index(n) if n in states else None for n in ("p1", "p2")]
         # without effects the levels are the parameters: zs = Fs/sigma0 of the side
-        flat = self.model.flat_params()
+        flat = plant.friction.flat_params()
         steep = [abs(flat.get(f"c{i}", 0.0) * flat.get(f"k{i}", 0.0)) for i in (1, 2, 3, 8)]
         self.k_max = 10.0 * max(flat["sigma0"], *steep)
-        if not self.model.effects:
+        if not plant.friction.effects:
             zs = [self.P("Fs" if self.P.has("Fs") else "Fc", s) / flat["sigma0"]
                   for s in (1.0, -1.0)]
             self._zs: tuple[float, float] | None = (abs(float(zs[0])), abs(float(zs[1])))

@@ -146,17 +146,10 @@ def end_stop_force(be: Backend, x: Any, v: Any, P: ParamValues) -> Any:
 
 
 def is_static_map(model: FrictionModel) -> bool:
-    """Whether ``model`` is a memoryless map needing the Karnopp band in a plant.
-
-    A model class may say so with a ``static_map`` attribute; in the LuGre
-    family it is every model without the bristle state (``presliding``).
-    """
-    flag = getattr(model, "static_map", None)
-    if flag is not None:
-        return bool(flag)
-    from fcomp.models.lugre_family import LuGreFamily
-
-    return isinstance(model, LuGreFamily) and "presliding" not in model.features
+    """Whether ``model`` is a memoryless map needing the Karnopp band in a plant (the model's
+    :attr:`~fcomp.models.base.FrictionModel.static_map`: in the LuGre family every model
+    without the bristle state ``presliding``)."""
+    return model.static_map
 
 
 @dataclass

@@ -18,7 +18,6 @@ from fcomp.effects.base import EFFECTS, Effect, scale_levels
 from fcomp.models.hysteresis import (
     HYSTERESIS_CONSTRAINTS,
     NONLOCAL_MEMORY_DEFAULTS,
-    HysteresisFamily,
     hysteresis_specs,
     with_hysteresis,
 )
@@ -31,15 +30,21 @@ if TYPE_CHECKING:
 INF = math.inf
 
 
-def _family(model: FrictionModel, effect: str):  # -> LuGreFamily
-    from fcomp.models.lugre_family import LuGreFamily
-
-    if not isinstance(model, LuGreFamily):
+def _family(model: FrictionModel, effect: str) -> Any:
+    """The model as a member of the LuGre family (its :meth:`feature_family`), else an error."""
+    fam = model.feature_family()
+    if fam is None:
         raise ValueError(
             f"effect {effect!r} is a term of the LuGre family and does not apply to "
             f"model {model.describe()!r}"
         )
-    return model
+    return fam
+
+
+def _features(model: FrictionModel) -> frozenset[str] | None:
+    """The feature set of a family model, ``None`` for models outside a feature family."""
+    fam = model.feature_family()
+    return None if fam is None else fam.features
 
 
 class StructuralEffect(Effect):
@@ -49,9 +54,8 @@ class StructuralEffect(Effect):
     requires: ClassVar[frozenset[str]] = frozenset()
 
     def applies_to(self, model: FrictionModel) -> bool:
-        from fcomp.models.lugre_family import LuGreFamily
-
-        return isinstance(model, LuGreFamily) and not self.adds <= model.features
+        features = _features(model)
+        return features is not None and not self.adds <= features
 
     def new_values(self, model: FrictionModel) -> dict[str, float]:
         """Parameter values of the added terms (from this effect's parameters)."""
@@ -97,9 +101,8 @@ class Viscous(StructuralEffect):
     experiment = "constant-speed runs at several speeds in both directions"
 
     def applies_to(self, model: FrictionModel) -> bool:
-        from fcomp.models.lugre_family import LuGreFamily
-
-        return isinstance(model, LuGreFamily) and "viscous" not in model.features
+        features = _features(model)
+        return features is not None and "viscous" not in features
 
     def new_values(self, model: FrictionModel) -> dict[str, float]:
         flat = self.params.flat()
@@ -135,9 +138,8 @@ class Stribeck(StructuralEffect):
     experiment = "slow constant-speed runs (0.1-10 vs) in both directions"
 
     def applies_to(self, model: FrictionModel) -> bool:
-        from fcomp.models.lugre_family import LuGreFamily
-
-        return isinstance(model, LuGreFamily) and "stribeck" not in model.features
+        features = _features(model)
+        return features is not None and "stribeck" not in features
 
     def new_values(self, model: FrictionModel) -> dict[str, float]:
         flat = model.params.flat()
@@ -202,9 +204,8 @@ class FrictionalLag(StructuralEffect):
     experiment = "velocity sweeps up and down at several rates; dwell before restart"
 
     def applies_to(self, model: FrictionModel) -> bool:
-        from fcomp.models.lugre_family import LuGreFamily
-
-        return isinstance(model, LuGreFamily) and "film-lag" not in model.features
+        features = _features(model)
+        return features is not None and "film-lag" not in features
 
     def attach(self, model: FrictionModel) -> FrictionModel:
         fam = _family(model, self.name)
@@ -252,9 +253,8 @@ class Presliding(StructuralEffect):
     experiment = "small-amplitude displacement cycles (well below break-away)"
 
     def applies_to(self, model: FrictionModel) -> bool:
-        from fcomp.models.lugre_family import LuGreFamily
-
-        return isinstance(model, LuGreFamily) and not {"presliding", "damping"} <= model.features
+        features = _features(model)
+        return features is not None and not {"presliding", "damping"} <= features
 
     def attach(self, model: FrictionModel) -> FrictionModel:
         fam = _family(model, self.name)
@@ -583,15 +583,13 @@ class NonlocalMemory(StructuralEffect):
         return str(self.config.get("form", "hysteresis"))
 
     def applies_to(self, model: FrictionModel) -> bool:
-        from fcomp.models.lugre_family import LuGreFamily
-
-        return (isinstance(model, LuGreFamily) and "presliding" in model.features
-                and "elements" not in model.features
-                and not isinstance(model, HysteresisFamily))
+        features = _features(model)
+        return (features is not None and "presliding" in features
+                and "elements" not in features and model.discrete_memory() is None)
 
     def attach(self, model: FrictionModel) -> FrictionModel:
         fam = _family(model, self.name)
-        if isinstance(fam, HysteresisFamily) or "elements" in fam.features:
+        if model.discrete_memory() is not None or "elements" in fam.features:
             raise ValueError(f"model {fam.describe()!r} already has effect {self.name!r}")
         if "presliding" not in fam.features:
             raise ValueError(

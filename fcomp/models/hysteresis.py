@@ -152,12 +152,15 @@ film state ``h`` and effect states do not depend on ``z``; they are
 integrated by the compiled family model (the *carrier*). Pure Python per
 sample (~10 us).
 
-The memory is discrete, so the model has no symbolic (CasADi) form:
-``symbolic = False``; :meth:`casadi_functions` and :meth:`rhs` raise
-:class:`~fcomp.models.base.NotSymbolicError`. Use
-:func:`fcomp.trajectory.friction_along_motion` (which calls
-:meth:`HysteresisFamily.integrate_motion`) or the stateful
-:class:`HysteresisStepper` (``model.stepper()``) for plant simulation.
+The memory is discrete, so the model has no symbolic (CasADi) form: it
+answers :meth:`~fcomp.models.base.FrictionModel.discrete_memory` with itself
+(``symbolic`` is false); :meth:`casadi_functions` and :meth:`rhs` raise
+:class:`~fcomp.models.base.NotSymbolicError`. Callers ask for that capability:
+:func:`fcomp.trajectory.friction_along_motion` then calls
+:meth:`HysteresisFamily.integrate_motion`, the plants couple the memory to
+their engine (:mod:`plants.discrete_memory`), identification differentiates
+by finite differences; the stateful :class:`HysteresisStepper`
+(``model.stepper()``) steps it one interval at a time.
 """
 
 from __future__ import annotations
@@ -166,14 +169,16 @@ import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from functools import cache
-from typing import Any, ClassVar
+from typing import Any
 
 import numpy as np
 
 from fcomp.backend import NUMPY, Backend
+from fcomp.compiled import Loop
 from fcomp.errors import ConvergenceError, FcompError
 from fcomp.models.base import NotSymbolicError, Signals
 from fcomp.models.lugre_family import PRESETS, LuGreFamily, family_class, params_class
+from fcomp.models.stepping import midpoint_signals, step_loop
 from fcomp.parameters import (
     ParamSet,
     ParamSpec,
@@ -642,11 +647,16 @@ class HysteresisFamily(LuGreFamily):
     bristle deflection ``Fz/sigma0`` in place of ``z`` (module docstring).
     """
 
-    symbolic: ClassVar[bool] = False
+    #: the state the memory sets: the value of ``F(z)`` (N)
+    memory_state = "Fz"
+
+    def discrete_memory(self) -> HysteresisFamily:
+        """The model itself: it is its own :class:`~fcomp.models.base.DiscreteMemory`."""
+        return self
 
     @property
     def base_states(self) -> tuple[str, ...]:  # type: ignore[override]
-        return (*super().base_states, "Fz")
+        return (*super().base_states, self.memory_state)
 
     def _family_states(self, x: list[Any], P: ParamValues) -> list[Any]:
         """The family's state list with the deflection carrying ``F(z)``: ``[Fz/sigma0, h]``."""
@@ -724,19 +734,13 @@ class HysteresisFamily(LuGreFamily):
         velocity and ``g`` at the interval start. ``substeps > 1`` refines the
         sample grid (signals linearly interpolated).
         """
-        from fcomp.trajectory import friction_along_motion, midpoint_signals
-
         fine = _refine(sig, substeps)
         iF = len(self.base_states) - 1
         x0 = np.asarray(x0, dtype=float)
         carrier = self.carrier()
-        run = friction_along_motion(
-            carrier, fine["t"], fine["v"], a=fine["a"], x=fine["x"], p1=fine["p1"],
-            p2=fine["p2"], state0=np.delete(x0, iF),
-            values={k: flat[k] for k in carrier.flat_params()},
-        )
-        X = np.insert(run.states, iF, 0.0, axis=1)
         M, dt = midpoint_signals(fine)
+        pc = np.array([flat[k] for k in carrier.flat_params()], dtype=float)
+        X = np.insert(step_loop(carrier)(np.delete(x0, iF), M.T, dt, pc), iF, 0.0, axis=1)
         P = ParamValues(flat, NUMPY)
         mid = Signals(v=M[0], a=M[1], x=M[2], p1=M[3], p2=M[4], s=M[5])
         g, zs = self.bristle_inputs([X[:-1, i] for i in range(X.shape[1])], mid, P)
@@ -861,7 +865,7 @@ class HysteresisStepper:
     """
 
     def __init__(self, model: HysteresisFamily, values: Mapping[str, float] | None = None) -> None:
-        if not isinstance(model, HysteresisFamily):
+        if model.discrete_memory() is None:
             raise ValueError(f"HysteresisStepper needs a hysteresis model, got {model.describe()!r}")
         self.model = model
         self.flat = {**model.flat_params(), **(values or {})}
@@ -870,12 +874,9 @@ class HysteresisStepper:
         self.carrier = model.carrier()
         self._iF = len(model.base_states) - 1
         self._cidx = np.delete(np.arange(model.n_states), self._iF)  # carrier's states
-        self._cstep = None
+        self._cstep: Loop | None = None
         if self.carrier.n_states > 1:  # film or effect states besides z: the family's step
-            from fcomp.compiled import stepping_loop
-            from fcomp.trajectory import friction_step
-
-            self._cstep = stepping_loop(friction_step(self.carrier))
+            self._cstep = step_loop(self.carrier)
             self._cp = np.array([self.flat[k] for k in self.carrier.flat_params()], dtype=float)
         self.reset()
 

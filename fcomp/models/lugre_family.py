@@ -231,6 +231,15 @@ class LuGreFamily(FrictionModel):
 
     lineage: tuple[str, ...] = ()
 
+    def feature_family(self) -> LuGreFamily:
+        """The model itself: structural effects extend its feature set (:meth:`with_features`)."""
+        return self
+
+    @property
+    def static_map(self) -> bool:
+        """Without the bristle state (``presliding``) the model is a memoryless map."""
+        return "presliding" not in self.features
+
     def describe(self) -> str:
         base = self.name if not self.lineage else self.lineage[0]
         parts = [base, *self.lineage[1:]] if self.lineage else [self.name]

@@ -12,34 +12,8 @@ from __future__ import annotations
 
 from typing import Any
 
+import studies.coulomb_viscous_analysis as cva
 from studies.base import Study, StudyConfig, StudyOutput
-from studies.coulomb_viscous_analysis import (
-    ALPHA,
-    B_CONSISTENCY_TOL,
-    CYLINDERS,
-    DIRECTIONS,
-    FIELDS,
-    LEVEL,
-    PAPER_MEANS,
-    PAPER_TABLE8,
-    PARAMETERS,
-    T_TABLE_DECIMALS,
-    c2_reconstruction,
-    direction_difference,
-    findings,
-    independence,
-    load_seed001,
-    normality,
-    position_dependence,
-    printed_speeds,
-    reproduction,
-    sliding_force,
-    summary_fields,
-    table8,
-    transcription_checks,
-    two_step_B,
-    uncertainty_of_B,
-)
 from studies.coulomb_viscous_report import write_report
 
 
@@ -60,14 +34,14 @@ class CoulombViscousStudy(Study):
 
     def build(self, out: StudyOutput, config: StudyConfig) -> dict[str, Any]:
         # the study is small: the fast mode runs it in full
-        data = load_seed001()
-        t8 = table8(data)
-        B = {d: two_step_B(data.F_ext[d], data.v[d], data.fc[d].mean(), data.B_printed[d])[0]
-             for d in DIRECTIONS}
+        data = cva.load_seed001()
+        t8 = cva.table8(data)
+        B = {d: cva.two_step_B(data.F_ext[d], data.v[d], data.fc[d].mean(), data.B_printed[d])[0]
+             for d in cva.DIRECTIONS}
         variants = []
-        for dec in (T_TABLE_DECIMALS, None):
+        for dec in (cva.T_TABLE_DECIMALS, None):
             for bv in ("reconstructed", "printed", "recomputed"):
-                rows = reproduction(table8(data, decimals=dec, b_values=bv))
+                rows = cva.reproduction(cva.table8(data, decimals=dec, b_values=bv))
                 c1 = [r for r in rows if r["cylinder"] == "C1"]
                 variants.append({
                     "t": "3-decimal table" if dec is not None else "exact",
@@ -77,38 +51,38 @@ class CoulombViscousStudy(Study):
                     "C1_differing": [f"{r['parameter']} {r['field']}: {r['computed']:.4f} "
                                      f"(paper {r['paper']:.3f})" for r in c1 if not r["match"]],
                 })
-        comparisons = reproduction(t8)
+        comparisons = cva.reproduction(t8)
         results: dict[str, Any] = {
-            "table8": {cyl: {p: summary_fields(t8[cyl][p]) for p in PARAMETERS} for cyl in CYLINDERS},
+            "table8": {cyl: {p: cva.summary_fields(t8[cyl][p]) for p in cva.PARAMETERS} for cyl in cva.CYLINDERS},
             "paper": {
-                "table8": {cyl: {p: dict(zip(FIELDS, PAPER_TABLE8[cyl][p], strict=True))
-                                 for p in PARAMETERS} for cyl in CYLINDERS},
-                "means": PAPER_MEANS,
+                "table8": {cyl: {p: dict(zip(cva.FIELDS, cva.PAPER_TABLE8[cyl][p], strict=True))
+                                 for p in cva.PARAMETERS} for cyl in cva.CYLINDERS},
+                "means": cva.PAPER_MEANS,
             },
             "table8_details": {cyl: {p: {k: v for k, v in t8[cyl][p].items()}
-                                     for p in PARAMETERS} for cyl in CYLINDERS},
+                                     for p in cva.PARAMETERS} for cyl in cva.CYLINDERS},
             "reproduction": {
                 "C1_matches_printed_digits": all(r["match"] for r in comparisons
                                                  if r["cylinder"] == "C1"),
                 "comparisons": comparisons,
                 "variants": variants,
-                "transcription": transcription_checks(data),
+                "transcription": cva.transcription_checks(data),
             },
-            "two_step_B": printed_speeds(data),
-            "c2_reconstruction": c2_reconstruction(data),
+            "two_step_B": cva.printed_speeds(data),
+            "c2_reconstruction": cva.c2_reconstruction(data),
             "assumptions": {
-                "position_dependence": {d: position_dependence(data.fc[d]) for d in DIRECTIONS},
-                "independence": {d: independence(data.fc[d]) for d in DIRECTIONS},
-                "normality": normality(data, B),
-                "sliding_force": sliding_force(data, B),
-                "direction": direction_difference(data, B),
-                "uncertainty_of_B": uncertainty_of_B(data, B),
+                "position_dependence": {d: cva.position_dependence(data.fc[d]) for d in cva.DIRECTIONS},
+                "independence": {d: cva.independence(data.fc[d]) for d in cva.DIRECTIONS},
+                "normality": cva.normality(data, B),
+                "sliding_force": cva.sliding_force(data, B),
+                "direction": cva.direction_difference(data, B),
+                "uncertainty_of_B": cva.uncertainty_of_B(data, B),
             },
-            "settings": {"level": LEVEL, "alpha": ALPHA, "t_table_decimals": T_TABLE_DECIMALS,
-                         "B_consistency_tol": B_CONSISTENCY_TOL, "units": {
+            "settings": {"level": cva.LEVEL, "alpha": cva.ALPHA, "t_table_decimals": cva.T_TABLE_DECIMALS,
+                         "B_consistency_tol": cva.B_CONSISTENCY_TOL, "units": {
                              "Fc": "N", "B": "Ns/m", "F_ext": "N", "v": "m/s"}},
         }
-        results["findings"] = findings(results)
+        results["findings"] = cva.findings(results)
         write_report(out, data, results, B)
         return results
 

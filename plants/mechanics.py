@@ -67,6 +67,7 @@ from fcomp.measurement import ORIENTATIONS, G
 from fcomp.models.base import FrictionModel, Signals
 from fcomp.parameters import ParamSpec, ParamValues, spec
 from fcomp.paramsets import ParameterSet
+from fcomp.piston import chamber_volumes, piston_areas
 from plants.base import OdePlant
 
 INF = math.inf
@@ -130,9 +131,14 @@ def require_section(pset: ParameterSet | None, plant: str, *keys: str) -> dict[s
 
 
 def areas(be: Backend, P: ParamValues) -> tuple[Any, Any]:
-    """Piston areas ``A1 = pi/4*D^2`` (cap side), ``A2 = pi/4*(D^2 - d^2)`` (rod side), m^2."""
-    D, d = P("bore"), P("rod")
-    return math.pi / 4 * D * D, math.pi / 4 * (D * D - d * d)
+    """Piston areas ``A1``, ``A2`` (m^2) of the plant's ``bore`` and ``rod``
+    (:func:`fcomp.piston.piston_areas`)."""
+    return piston_areas(P("bore"), P("rod"))
+
+
+def volumes(pos: Any, P: ParamValues, A1: Any, A2: Any) -> tuple[Any, Any]:
+    """Chamber volumes ``V1``, ``V2`` (m^3) at position ``pos`` (:func:`fcomp.piston.chamber_volumes`)."""
+    return chamber_volumes(pos, P("stroke"), P("V10"), P("V20"), A1, A2)
 
 
 def end_stop_force(be: Backend, x: Any, v: Any, P: ParamValues) -> Any:

@@ -201,6 +201,7 @@ class ControlModel:
             state_names=tuple(names),
             measured=tuple(names.index(n) for n in MEASURED),
             scales=np.asarray(self.plant.ode_model().scales, dtype=float),
+            discrete=self.plant.discrete_step,
         )
 
     def valve_states(self) -> tuple[str, ...]:

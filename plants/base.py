@@ -50,9 +50,12 @@ Numeric and symbolic forms of the same equations:
 * ``plant.casadi_functions(symbolic_params=False)`` -- CasADi functions
   ``rhs(x, u[, p]) -> dx``, ``outputs(x, u[, p]) -> y`` and
   ``jacobians(x, u[, p]) -> (A, B, C, D)`` (exact, for the EKF);
-* ``plant.discrete_step(dt, substeps=1)`` -- CasADi ``step(x, u, p) ->
-  x_next`` over one sample with the input held (fixed-step RODAS4; the
-  prediction model of MPC, differentiable);
+* ``plant.discrete_step(dt, substeps=1, scheme=...)`` -- CasADi ``step(x, u,
+  p) -> x_next`` over one sample with the input held, differentiable: fixed
+  RODAS4 steps (``scheme="rodas4"``, default) or the linearly implicit Euler
+  (``"linearly-implicit-euler"``, with ``sensitivities=True`` also its step
+  Jacobians), the prediction model of the EKF and the MPC
+  (:class:`controllers.plant_model.ControlModel` takes it from here);
 * ``plant.ode_model()`` -- the :class:`~fcomp.simulation.OdeModel` the engine runs;
 * ``plant.param_vector(**changes)`` -- the numeric ``p``;
 * ``plant.initial_state(overrides)`` -- the documented default initial state.
@@ -371,9 +374,13 @@ class OdePlant(Plant):
         """The :class:`~fcomp.simulation.OdeModel` of this plant (``p`` symbolic)."""
         return self._ode
 
-    def discrete_step(self, dt: float, substeps: int = 1) -> ca.Function:
-        """CasADi ``step(x, u, p) -> x_next``: one sample of ``dt`` s with the input held."""
-        return self.ode_model().discrete_step(dt, substeps)
+    def discrete_step(self, dt: float, substeps: int = 1, *, scheme: str = "rodas4",
+                      sensitivities: bool = False) -> ca.Function:
+        """CasADi ``step(x, u, p) -> x_next``: one sample of ``dt`` s with the input held
+        (:meth:`fcomp.simulation.OdeModel.discrete_step`: ``scheme`` ``"rodas4"`` or
+        ``"linearly-implicit-euler"``, the controllers' prediction model)."""
+        return self.ode_model().discrete_step(dt, substeps, scheme=scheme,
+                                              sensitivities=sensitivities)
 
     def _scale_vector(self) -> np.ndarray:
         own = self.state_scales()

@@ -24,19 +24,16 @@ fraction of its break-away force (assumed: the seed shows only Fig. 11 for
 them).
 
 **The rig.** Plant ``presliding-rig`` (models.md 3.4) with the cylinder's
-parameter set. Its pressures follow the valves and do not depend on the
-piston motion, so one plant run gives them for every friction model. With
-the NMLGM the plant engine (RODAS4) runs the whole rig. The new model has
-discrete memory and no symbolic form, which the engine needs; it runs in a
-*co-simulation* (:class:`RigCosim`): the plant's pressures, the piston's
-equation of motion ``m*dv/dt = p1*A1 - p2*A2 - F`` (models.md 3.1,
-horizontal, far from the end stops) advanced by backward Euler in ``v``
-(``dt`` = the seed's 1.1 ms sampling), the friction by the model's own
-exact bristle step (:meth:`fcomp.models.hysteresis.HysteresisFunction.step`,
-``v`` held over the step) and the film state ``h`` by its ODE. The
-co-simulation is checked against the plant engine: with the no-op
-hysteresis function the new model *is* the NMLGM, and both engines must
-give the same displacement.
+parameter set, the same plant for both models (:func:`rig_run`). With the
+NMLGM the plant engine (RODAS4) runs the whole rig. The new model has
+discrete memory; the plant couples that memory to its engine
+(:mod:`plants.discrete_memory`: the piston's equation of motion ``m*dv/dt =
+p1*A1 - p2*A2 - F``, models.md 3.1, and the film state integrated by the
+engine with the tangent of ``F(z)``, the memory driven exactly along the
+deflection) in coupling intervals of :data:`DT` = the seed's 1.1 ms
+sampling. The coupling is checked against the plant engine: with the no-op
+hysteresis function the new model *is* the NMLGM, and both runs must give
+the same displacement.
 
 **The new model is the reference.** Seed 000's measurements are not
 available as data. The paper shows that the new model reproduces its
@@ -80,13 +77,14 @@ from typing import Any
 import numpy as np
 
 from fcomp.backend import NUMPY
-from fcomp.errors import ConvergenceError, FcompError
+from fcomp.errors import FcompError
 from fcomp.models import FrictionModel, make_model
 from fcomp.models.base import Signals
-from fcomp.models.hysteresis import NONLOCAL_MEMORY_DEFAULTS, HysteresisFamily
-from fcomp.parameters import ParamValues
+from fcomp.models.hysteresis import NONLOCAL_MEMORY_DEFAULTS
+from fcomp.piston import piston_areas
 from fcomp.trajectory import friction_along_motion
 from plants.mechanics import end_stop_force
+from plants.presliding_rig import PreslidingRig
 from studies.base import Study, StudyConfig, StudyOutput
 
 CYLINDERS = (1, 2, 3)
@@ -110,7 +108,8 @@ FIG12B_P1 = 0.014e6
 #: Ramp and hold durations of the pressure programmes (s, assumed).
 RAMP = 1.0
 HOLD = 0.3
-#: Co-simulation step (s): the seed's sampling interval; fast mode doubles it.
+#: Output interval and memory coupling interval (s): the seed's sampling interval; fast mode
+#: doubles it.
 DT = 1.1e-3
 #: Memory tolerance: fraction of the external loop's force range.
 MEMORY_TOL = 0.01
@@ -132,34 +131,32 @@ def paramset(cyl: int) -> str:
     return f"seed000-cylinder{cyl}"
 
 
-def rig_plant(cyl: int) -> Any:
-    """The ``presliding-rig`` of cylinder ``cyl`` with its NMLGM friction (seed 000 Table 4)."""
-    from plants import PLANTS
-
+def rig_plant(cyl: int, friction: FrictionModel | None = None) -> PreslidingRig:
+    """The ``presliding-rig`` of cylinder ``cyl`` with ``friction`` (default its NMLGM, seed 000
+    Table 4)."""
     pset = paramset(cyl)
-    return PLANTS.get("presliding-rig")(make_model("nmlgm", params=pset), pset)
+    return PreslidingRig(friction or make_model("nmlgm", params=pset), pset)
 
 
-def new_model(cyl: int, **changes: float) -> HysteresisFamily:
+def new_model(cyl: int, **changes: float) -> FrictionModel:
     """Seed 000's new model for cylinder ``cyl`` (Table 4 + Tables 2-3 of cylinder 1).
 
     ``changes``: flat parameters to change (e.g. the no-op hysteresis values).
     """
     model = make_model("nmlgm-hysteresis", params=paramset(cyl))
-    if changes:
-        model = model.with_params(**changes)
-    if not isinstance(model, HysteresisFamily):  # pragma: no cover - registry guarantees it
-        raise FcompError("nmlgm-hysteresis is not a hysteresis model")
-    return model
+    return model.with_params(**changes) if changes else model
+
+
+def cap_area(cyl: int) -> float:
+    """Cap-side piston area ``A1`` (m^2) of cylinder ``cyl`` (:func:`fcomp.piston.piston_areas`)."""
+    return piston_areas(rig_plant(cyl).plant_params.flat()["bore"])[0]
 
 
 def pressure_scale(cyl: int) -> float:
     """``(Fs_i/A1_i)/(Fs_1/A1_1)``: cylinder-1 pressures scaled to cylinder ``cyl``."""
 
     def ratio(c: int) -> float:
-        rig = rig_plant(c)
-        fs = rig.friction.flat_params()["Fs_pos"]
-        return fs / (math.pi / 4 * rig.plant_params.flat()["bore"] ** 2)
+        return rig_plant(c).friction.flat_params()["Fs_pos"] / cap_area(c)
 
     return ratio(cyl) / ratio(1)
 
@@ -229,11 +226,10 @@ def programme(kind: str, p1: float, p2: float = 0.0, *, repeats: int = 1) -> Pro
 @dataclass
 class RigRun:
     """One run of the rig (SI): ``t, x`` (displacement from the start), ``v, a, p1, p2``
-    (gauge), ``F`` (the friction force) and the model's states in ``extra``.
-
-    Co-simulated runs also hold ``F_eq1``, the friction as seed 000 computes it
-    from the measured quantities (Eq. 1, ``p1*A1 - p2*A2 - m*a``): equal to ``F``
-    to rounding away from the instant of an end-stop impact.
+    (gauge), ``F`` (the friction force) and, in ``extra``, the model's states and
+    ``F_eq1``, the friction as seed 000 computes it from the measured quantities (Eq. 1,
+    ``p1*A1 - p2*A2 - m*a``, plus the end-stop force in contact): equal to ``F`` to
+    rounding (the plant solves the acceleration from exactly that balance).
     """
 
     model: str
@@ -258,118 +254,22 @@ class RigRun:
         return float(self.x.max() - self.x.min())
 
 
-def plant_run(rig: Any, prog: Programme, dt: float) -> RigRun:
-    """The rig with its own (symbolic) friction in the plant engine, from ambient chambers."""
+def rig_run(rig: PreslidingRig, prog: Programme, dt: float) -> RigRun:
+    """The rig under programme ``prog`` from ambient chambers, output every ``dt`` s; friction
+    with discrete memory coupled to the engine every ``dt`` (module docstring)."""
     p = rig.plant_params.flat()
     t = np.arange(int(round(prog.duration / dt)) + 1) * dt
     U = prog.pressures(t) * (p["u_full"] / p["p_rated"])
-    m = rig.simulate(U, float(t[-1]), 1.0 / dt, x0={"p1": p["p_atm"], "p2": p["p_atm"]})
+    coupling = dt if rig.friction.discrete_memory() is not None else None
+    m = rig.simulate(U, float(t[-1]), 1.0 / dt, x0={"p1": p["p_atm"], "p2": p["p_atm"]},
+                     coupling=coupling)
     c = m.columns
+    A1, A2 = piston_areas(p["bore"], p["rod"])
+    stop = end_stop_force(NUMPY, c["x"], c["v"], rig.param_values(NUMPY))
+    extra = {n: c[n] for n in rig.friction.state_names}
+    extra["F_eq1"] = c["p1"] * A1 - c["p2"] * A2 + stop - p["mass"] * c["a"]
     return RigRun(rig.friction.name, prog, c["t"], c["x"] - c["x"][0], c["v"], c["a"], c["p1"],
-                  c["p2"], c["F"], {"z": c["z"], "h": c["h"]})
-
-
-class RigCosim:
-    """The pre-sliding rig with a hysteresis model (module docstring: co-simulation).
-
-    Parameters
-    ----------
-    model
-        ``nmlgm-hysteresis`` (or any :class:`~fcomp.models.hysteresis.HysteresisFamily`).
-    rig
-        The ``presliding-rig`` plant (its mass, areas and pressure valves).
-
-    Per step ``k -> k+1`` (``dt``), with ``Fp = p1*A1 - p2*A2`` (gauge) at ``k+1``:
-    solve ``m*(v - v_k)/dt + F(v) = Fp`` for ``v`` (Brent; ``F`` increases with
-    ``v``), where ``F(v) = F(z) + sigma1*dz/dt + sigma2*(v + T*(v - v_k)/dt)``
-    (seed 000 Eq. 11) with ``z`` advanced exactly over ``dt`` at ``v`` and
-    ``g(v_k, h_k)`` (Eq. 10), and the end stops of :mod:`plants.mechanics` (the run
-    starts at mid-stroke); then ``x += v*dt`` and the film state ``h`` by
-    its ODE (explicit Euler: ``dt`` is below a tenth of the film time constants).
-    """
-
-    def __init__(self, model: HysteresisFamily, rig: Any) -> None:
-        self.model = model
-        self.rig = rig
-        p = rig.plant_params.flat()
-        self.mass = p["mass"]
-        self.A1 = math.pi / 4 * p["bore"] ** 2
-        self.A2 = math.pi / 4 * (p["bore"] ** 2 - p["rod"] ** 2)
-        self.flat = model.flat_params()
-        self.P = ParamValues(self.flat, NUMPY)
-        self.carrier = model.carrier()
-        self.Prig = rig.param_values(NUMPY, p)
-        self.fmax = 2.0 * max(v for k, v in self.flat.items() if k.startswith("Fs")) + 1.0
-
-    def run(self, prog: Programme, dt: float, pressures: RigRun | None = None) -> RigRun:
-        """Simulate ``prog`` from the virgin state (pressures from ``pressures`` or a plant run)."""
-        from scipy.optimize import brentq
-
-        src = pressures if pressures is not None else plant_run(self.rig, prog, dt)
-        t, p1, p2 = src.t, src.p1, src.p2
-        if np.any(np.abs(np.diff(t) - dt) > 1e-9):
-            raise FcompError("co-simulation: the pressure run must be sampled at the step dt")
-        Fp = p1 * self.A1 - p2 * self.A2
-        n = t.size
-        x, v, F = np.zeros(n), np.zeros(n), np.zeros(n)
-        z, h, Fz = np.zeros(n), np.zeros(n), np.zeros(n)
-        hf = self.model.hysteresis_function(self.flat)
-        hf.reset(0.0, 0.0)
-        P, m = self.P, self.mass
-        x_start = 0.5 * self.Prig("stroke")  # x is measured from mid-stroke
-        stops = np.zeros(n)
-        s1 = self.flat.get("sigma1", 0.0)
-        T = self.flat.get("T", 0.0)
-        s2p, s2n = float(P("sigma2", 1.0)), float(P("sigma2", -1.0))
-        s0 = self.flat["sigma0"]
-        side = 1.0
-        hk = 0.0
-        for k in range(n - 1):
-            vk = v[k]
-            sig = Signals(v=vk, a=0.0, x=x[k], p1=p1[k], p2=p2[k], s=side)
-            g, zs = self.model.bristle_inputs([hf.z, hk, hf.F], sig, P)
-            g, zs = float(g), float(zs)
-            snap, zk = hf.snapshot(), hf.z
-            coef = (g, zs, zk, vk, s2p if side > 0 else s2n)
-
-            def force(vn: float, snap: tuple = snap, c: tuple = coef) -> float:
-                gk, zsk, z0, v0, s2_rest = c
-                hf.restore(snap)
-                hf.step(dt, vn, gk, zsk)
-                s2 = s2p if vn > 0 else (s2n if vn < 0 else s2_rest)
-                return hf.F + s1 * (hf.z - z0) / dt + s2 * (vn + T * (vn - v0) / dt)
-
-            def resid(vn: float, target: float = Fp[k + 1], v0: float = vk,
-                      x0: float = x[k]) -> float:
-                stop = float(end_stop_force(NUMPY, x_start + x0 + vn * dt, vn, self.Prig))
-                return m * (vn - v0) / dt + force(vn) - target - stop
-
-            width = (abs(Fp[k + 1]) + abs(F[k]) + self.fmax) * dt / m
-            lo, hi = vk - width, vk + width
-            for _ in range(60):
-                if resid(lo) <= 0.0 <= resid(hi):
-                    break
-                lo, hi = vk - 2 * (vk - lo), vk + 2 * (hi - vk)
-            else:  # pragma: no cover - F is bounded, the bracket always closes
-                raise ConvergenceError(f"co-simulation: no velocity balances the force at "
-                                       f"t = {t[k + 1]:.4g} s")
-            vn = float(brentq(resid, lo, hi, xtol=1e-15, rtol=1e-12, maxiter=200))
-            F[k + 1] = force(vn)  # leaves the memory at the solution
-            v[k + 1] = vn
-            x[k + 1] = x[k] + vn * dt
-            stops[k + 1] = float(end_stop_force(NUMPY, x_start + x[k + 1], vn, self.Prig))
-            if vn != 0.0:
-                side = 1.0 if vn > 0 else -1.0
-            sig_n = Signals(v=vn, a=0.0, x=x[k + 1], p1=p1[k + 1], p2=p2[k + 1], s=side)
-            dh = self.carrier.rhs(NUMPY, [hf.F / s0, hk], sig_n, P)[1]
-            hk = hk + dt * float(dh)
-            z[k + 1], h[k + 1], Fz[k + 1] = hf.z, hk, hf.F
-        a = np.concatenate([[0.0], np.diff(v) / dt])
-        # seed 000 Eq. 1 (+ the stop force in contact) equals the model's force wherever the
-        # step's equation has a root: everywhere but the instant of an end-stop impact
-        eq1 = Fp + stops - m * a
-        return RigRun(self.model.name, prog, t, x, v, a, p1, p2, F,
-                      {"z": z, "h": h, "Fz": Fz, "F_eq1": eq1})
+                  c["p2"], c["F"], extra)
 
 
 def replay(model: FrictionModel, ref: RigRun, substeps: int = 4) -> np.ndarray:
@@ -487,10 +387,13 @@ def table3_loop_area(values: dict[str, float]) -> float:
     return (up_area) - (rise * width - down_area)
 
 
-def model_loop_area(model: HysteresisFamily, cycles: int = 3) -> float:
+def model_loop_area(model: FrictionModel, cycles: int = 3) -> float:
     """Area (J) of the model's ``F(z)`` loop cycled between ``-z1`` and ``z5`` (rate-independent)."""
+    memory = model.discrete_memory()
+    if memory is None:
+        raise FcompError(f"{model.describe()} has no hysteresis function")
     vals = model.flat_params()
-    hf = model.hysteresis_function()
+    hf = memory.hysteresis_function()
     lo, hi = -vals["z1"], vals["z5"]
     zs = np.concatenate([np.linspace(0, hi, 200)] + [np.concatenate(
         [np.linspace(hi, lo, 400), np.linspace(lo, hi, 400)]) for _ in range(cycles)])
@@ -536,31 +439,29 @@ def run_cases(fast: bool) -> list[Case]:
                 plan.append((cyl, "fig12b", programme("fig12", FIG12B_P1, p).scaled(k)))
     bar = _progress(len(plan))
     cases = []
-    rigs = {c: rig_plant(c) for c in {p[0] for p in plan}}
-    sims = {c: RigCosim(new_model(c), rigs[c]) for c in rigs}
+    cyls = sorted({p[0] for p in plan})
+    rigs = {c: (rig_plant(c), rig_plant(c, new_model(c))) for c in cyls}
     for cyl, fig, prog in plan:
         bar.set_postfix_str(f"cylinder {cyl} {fig}")
-        nml = plant_run(rigs[cyl], prog, dt)
-        new = sims[cyl].run(prog, dt, pressures=nml)
-        cases.append(Case(cyl, fig, prog, nml, new))
+        nmlgm_rig, new_rig = rigs[cyl]
+        cases.append(Case(cyl, fig, prog, rig_run(nmlgm_rig, prog, dt),
+                          rig_run(new_rig, prog, dt)))
         bar.update()
     bar.close()
     return cases
 
 
 def engine_check(dt: float) -> dict[str, float]:
-    """Co-simulation against the plant engine: the no-op new model (= NMLGM) on Fig. 4a."""
-    rig = rig_plant(1)
-    noop = new_model(1, **NONLOCAL_MEMORY_DEFAULTS)
+    """The coupled memory against the plant engine: the no-op new model (= NMLGM) on Fig. 4a."""
     prog = programme("fig4", FIG4_P1MAX[1][0])
-    ref = plant_run(rig, prog, dt)
-    co = RigCosim(noop, rig).run(prog, dt, pressures=ref)
+    ref = rig_run(rig_plant(1), prog, dt)
+    co = rig_run(rig_plant(1, new_model(1, **NONLOCAL_MEMORY_DEFAULTS)), prog, dt)
     return {"max_abs_x_difference": float(np.max(np.abs(co.x - ref.x))),
             "x_span": ref.span,
             "relative": float(np.max(np.abs(co.x - ref.x)) / ref.span)}
 
 
-def bristle_saturation(run: RigRun, model: HysteresisFamily) -> np.ndarray:
+def bristle_saturation(run: RigRun, model: FrictionModel) -> np.ndarray:
     """``|F_b|/g`` along a run: bristle force over the sliding level ``g(v, h)``.
 
     ``F_b`` is ``F(z)`` (new model) or ``sigma0*z`` (NMLGM runs, whose states
@@ -570,7 +471,10 @@ def bristle_saturation(run: RigRun, model: HysteresisFamily) -> np.ndarray:
     Fb = run.extra["Fz"] if "Fz" in run.extra else model.flat_params()["sigma0"] * z
     side = np.where(run.v < 0, -1.0, 1.0)
     sig = Signals(v=run.v, a=run.a, x=run.x, p1=run.p1, p2=run.p2, s=side)
-    g, _ = model.bristle_inputs([z, h, Fb], sig, model.param_values(NUMPY))
+    memory = model.discrete_memory()
+    if memory is None:
+        raise FcompError(f"{model.describe()}: the bristle saturation reads the hysteresis model")
+    g, _ = memory.bristle_inputs([z, h, Fb], sig, model.param_values(NUMPY))
     return np.abs(Fb) / np.asarray(g)
 
 
@@ -592,7 +496,7 @@ def fig4_summary(case: Case, idx: int) -> dict[str, Any]:
                     "h_at_slip": float(run.extra["h"][slip[0]]) if slip.size else None,
                     "speed_before_slip": float(np.max(np.abs(run.v[:slip[0]])))
                     if slip.size > 0 and slip[0] > 0 else None}
-    out["force_over_Fs"] = out["p1_max"] * _area(case.cylinder) / model.flat_params()["Fs_pos"]
+    out["force_over_Fs"] = out["p1_max"] * cap_area(case.cylinder) / model.flat_params()["Fs_pos"]
     if case.cylinder == 1:
         out["paper"] = FIG4_PAPER[idx]
     return out
@@ -632,7 +536,8 @@ def analyse(cases: list[Case], fast: bool) -> dict[str, Any]:
         "table3_loop_area": a_tab, "model_loop_area": a_mod,
         "relative_error": (a_mod - a_tab) / a_tab}
     res["reference"] = {"friction_work": W_ref, "figure": "fig10", "cylinder": 1,
-                        "what": "the new model on the rig (co-simulation) under the Fig. 10 "
+                        "what": "the new model on the rig (memory coupled to the plant engine) "
+                        "under the Fig. 10 "
                         "programme; loop_area_error = relative error of the friction work "
                         "integral F dx of each model driven by its velocity"}
 
@@ -714,7 +619,7 @@ def findings(res: dict[str, Any]) -> list[str]:
         + " with the NMLGM"
         + ("" if f4[2]["nmlgm"]["slides"] and f4[2]["nmlgm-hysteresis"]["slides"] else
            f": the Table 4 break-away level Fs = {res['parameters']['nmlgm']['Fs_pos']:g} N "
-           f"(identified at 0.3 MPa) exceeds the {f4[2]['p1_max'] * _area(1):.1f} N that "
+           f"(identified at 0.3 MPa) exceeds the {f4[2]['p1_max'] * cap_area(1):.1f} N that "
            f"{f4[2]['p1_max'] / 1e6:.3f} MPa puts on the piston; the pressure dependence of "
            "the seal friction, which the seed neglects, would be needed") + ".",
         "Nonlocal memory, measured on a prescribed displacement with two internal loops "
@@ -772,15 +677,10 @@ def findings(res: dict[str, Any]) -> list[str]:
                                                      for p, s in ls)
                + (" (the paper: the loop grows with the pressure)." if grows else "."))
     ec = res["engine_check"]
-    out.append(f"Co-simulation checked against the plant engine (no-op hysteresis = NMLGM, Fig. "
-               f"4a): displacements agree within {ec['max_abs_x_difference'] * 1e6:.3f} um "
+    out.append(f"The coupled memory checked against the plant engine (no-op hysteresis = NMLGM, "
+               f"Fig. 4a): displacements agree within {ec['max_abs_x_difference'] * 1e6:.3f} um "
                f"({100 * ec['relative']:.2f} % of the {ec['x_span'] * 1e3:.3f} mm span).")
     return out
-
-
-def _area(cyl: int) -> float:
-    """Cap-side piston area ``A1 = pi/4*D^2`` (m^2) of cylinder ``cyl``."""
-    return math.pi / 4 * rig_plant(cyl).plant_params.flat()["bore"] ** 2
 
 
 def _pct(values: Sequence[float]) -> str:
@@ -918,12 +818,12 @@ def write_report(out: StudyOutput, cases: list[Case], res: dict[str, Any], fast:
         "(cylinder 1; the seed gives no other, so cylinders 2 and 3 use it too). Chambers start "
         "at ambient pressure, the seal in its virgin state.")
     rep.paragraph(
-        "The NMLGM runs in the plant engine. The new model has discrete memory and no symbolic "
-        "form, so it runs in a co-simulation: the plant's pressures (they do not depend on the "
-        "motion), the piston's equation of motion by backward Euler in the velocity at the "
-        "seed's 1.1 ms sampling, the friction by the model's exact bristle step. The "
-        "co-simulation reproduces the plant engine when the hysteresis function is switched "
-        "off (last finding).")
+        "Both models run in the same plant. The NMLGM runs in the plant engine whole; the new "
+        "model has discrete memory, which the plant couples to its engine at the seed's 1.1 ms "
+        "sampling: the engine integrates the piston, the chambers and the film with the "
+        "tangent of the hysteresis function, the memory follows the deflection exactly. The "
+        "coupling reproduces the plant engine when the hysteresis function is switched off "
+        "(last finding).")
     rep.paragraph(
         "Seed 000's measurements are not available as data. The new model on the rig is the "
         "reference (the paper shows it matches its measurements, Figs. 19-20); each model is "

@@ -2,7 +2,7 @@
 
 Independent references: the Dahl model's minor-loop drift in closed form,
 the area of seed 000's Table 3 loop by brute-force quadrature of Eq. 13,
-and (in the summary) the co-simulation of the rig against the plant engine.
+and (in the summary) the rig with the memory coupled to its engine against the plant engine.
 """
 
 from __future__ import annotations
@@ -99,7 +99,7 @@ def test_summary_contract(summary: dict) -> None:
 
 
 def test_cosimulation_reproduces_the_plant_engine(summary: dict) -> None:
-    """No-op hysteresis function = NMLGM: co-simulation and RODAS4 plant run agree."""
+    """No-op hysteresis function = NMLGM: the coupled memory and the RODAS4 plant run agree."""
     assert summary["engine_check"]["relative"] < 1e-3
 
 

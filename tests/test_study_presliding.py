@@ -14,7 +14,8 @@ import pytest
 from helpers.browser import study_summary
 
 from fcomp.models import make_model
-from studies import presliding as ps
+from studies import presliding_analysis as analysis
+from studies import presliding_runs as runs
 
 pytestmark = pytest.mark.slow  # builds the study site or runs long diagnoses
 
@@ -25,7 +26,7 @@ def summary() -> dict:
 
 
 def test_programme_reaches_its_waypoints() -> None:
-    prog = ps.programme("fig9", 0.02e6, 0.016e6)
+    prog = runs.programme("fig9", 0.02e6, 0.016e6)
     t = np.concatenate([[0.0], np.cumsum([w[0] for w in prog.waypoints])])
     P = prog.pressures(t)
     assert np.allclose(P[1:], [[w[1], w[2]] for w in prog.waypoints])
@@ -33,7 +34,7 @@ def test_programme_reaches_its_waypoints() -> None:
     assert fine.min() >= 0 and fine[:, 0].max() == pytest.approx(0.02e6)
     assert np.max(np.abs(np.diff(fine, axis=0))) < 0.02e6 * 0.01  # continuous ramps
     with pytest.raises(Exception, match="programme"):
-        ps.programme("fig99", 1.0)
+        runs.programme("fig99", 1.0)
 
 
 def _dahl_gaps(Fc: float, s0: float) -> list[float]:
@@ -42,7 +43,7 @@ def _dahl_gaps(Fc: float, s0: float) -> list[float]:
     On a monotone move in direction s, dz/dx = 1 - s*sigma0*z/Fc, so
     z(x) = s*Fc/sigma0 + (z0 - s*Fc/sigma0)*exp(-sigma0*|x - x0|/Fc).
     """
-    pts, _ = ps.memory_paths()
+    pts, _ = analysis.memory_paths()
     z, zs = 0.0, [0.0]
     for a, b in zip(pts[:-1], pts[1:], strict=True):
         s = math.copysign(1.0, b - a)
@@ -55,7 +56,7 @@ def _dahl_gaps(Fc: float, s0: float) -> list[float]:
 def test_memory_measure_against_closed_form_dahl() -> None:
     Fc, s0 = 5.0, 1.5e4
     dahl = make_model("dahl", params={"Fc": Fc, "sigma0": s0, "sigma2": 0.0})
-    got = ps.memory_properties(dahl)
+    got = analysis.memory_properties(dahl)
     want = _dahl_gaps(Fc, s0)
     assert got["closing_gaps"] == pytest.approx(want, rel=2e-3, abs=1e-5)
     assert min(want) > 0.01  # Dahl's minor loops do not close ...
@@ -63,7 +64,7 @@ def test_memory_measure_against_closed_form_dahl() -> None:
 
 
 def test_table3_area_against_quadrature() -> None:
-    v = ps.new_model(1).flat_params()
+    v = runs.new_model(1).flat_params()
     c = [v["c1"], v["c2"], v["c3"]]
     k = [v["k1"], v["k2"], v["k3"]]
     z1, z2, z3, z4, z5 = (v[f"z{i}"] for i in range(1, 6))
@@ -83,7 +84,7 @@ def test_table3_area_against_quadrature() -> None:
     top = up[-1]
     down = top - chain(z5 - z, [0.0, z5 - z4, z5 - z2, z5 + z1])       # from (z5, top)
     area = np.trapezoid(up - down, z)
-    assert ps.table3_loop_area(v) == pytest.approx(area, rel=1e-6)
+    assert analysis.table3_loop_area(v) == pytest.approx(area, rel=1e-6)
     assert area > 0
 
 

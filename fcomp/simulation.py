@@ -93,7 +93,7 @@ from scipy.integrate import solve_ivp
 from scipy.linalg import lu_factor, lu_solve
 
 from fcomp.compiled import load_library
-from fcomp.errors import ConvergenceError, FcompError
+from fcomp.errors import ConvergenceError, FcompError, term
 from fcomp.registry import Registry
 from fcomp.rosenbrock import (
     RODAS4,
@@ -102,6 +102,9 @@ from fcomp.rosenbrock import (
     rosenbrock_stages,
     rosenbrock_step,
 )
+
+#: The advice when a run needs more steps than allowed.
+_RAISE_OR_LOOSEN = f"raise {term('max_steps')}, or loosen {term('rtol')}/{term('atol')}"
 
 #: Schemes of :meth:`OdeModel.discrete_step` (fixed steps, input held).
 SCHEMES = ("rodas4", "linearly-implicit-euler")
@@ -132,8 +135,8 @@ def step_budget(tol: Tolerances, stats: Stats, t: float, name: str) -> Tolerance
     left = tol.max_steps - (stats.steps + stats.rejected)
     if left < 1:
         raise ConvergenceError(
-            f"simulation of {name} stopped at t = {t:.6g} s: more than max_steps = "
-            f"{tol.max_steps} steps were needed (raise --max-steps, or loosen --rtol/--atol)")
+            f"simulation of {name} stopped at t = {t:.6g} s: more than {term('max_steps')} = "
+            f"{tol.max_steps} steps were needed ({_RAISE_OR_LOOSEN})")
     return tol if left == tol.max_steps else replace(tol, max_steps=left)
 
 # ------------------------------------------------------------------ RODAS4
@@ -255,11 +258,13 @@ class Tolerances:
         for name in ("rtol", "atol"):
             val = getattr(self, name)
             if not (isinstance(val, int | float) and math.isfinite(val) and 1e-14 <= val <= 0.1):
-                raise FcompError(f"--{name} must be a number between 1e-14 and 0.1, got {val!r}")
+                raise FcompError(f"{term(name)} must be a number between 1e-14 and 0.1, "
+                                 f"got {val!r}")
         if not (math.isfinite(self.h_min) and self.h_min > 0):
             raise FcompError(f"h_min must be a positive number of seconds, got {self.h_min!r}")
         if not (isinstance(self.max_steps, int) and self.max_steps >= 1):
-            raise FcompError(f"--max-steps must be a positive integer, got {self.max_steps!r}")
+            raise FcompError(f"{term('max_steps')} must be a positive integer, "
+                             f"got {self.max_steps!r}")
         if not (math.isfinite(self.h0) and self.h0 > 0):
             raise FcompError(f"h0 must be a positive number of seconds, got {self.h0!r}")
 
@@ -600,10 +605,11 @@ class Rodas4(Integrator):
             k = int(info[1])
             t_fail = t0 + float(np.sum(dt[:k]) + info[2])
             why = {1: f"the step size fell below h_min = {tol.h_min:g} s",
-                   2: f"more than max_steps = {tol.max_steps} steps were needed",
+                   2: f"more than {term('max_steps')} = {tol.max_steps} steps were needed",
                    3: "the model gave a non-finite value"}[status]
-            hint = ("raise --max-steps, or loosen --rtol/--atol" if status == 2 else
-                    "check the parameters and the initial state, or loosen --rtol/--atol")
+            hint = (_RAISE_OR_LOOSEN if status == 2 else
+                    f"check the parameters and the initial state, or loosen {term('rtol')}/"
+                    f"{term('atol')}")
             raise ConvergenceError(
                 f"simulation of {m.name} did not converge at t = {t_fail:.6g} s: {why} ({hint})")
         return X, stats, float(h_io[0])
@@ -753,8 +759,8 @@ class SolveIvp(Integrator):
             except _StepLimitError as stop:
                 raise ConvergenceError(
                     f"simulation of {m.name} did not converge at t = {t0 + stop.t:.6g} s "
-                    f"({self.name}): more than max_steps = {tol.max_steps} steps were needed "
-                    "(raise --max-steps, or loosen --rtol/--atol)") from None
+                    f"({self.name}): more than {term('max_steps')} = {tol.max_steps} steps "
+                    f"were needed ({_RAISE_OR_LOOSEN})") from None
             if sol.status != 0 or not np.all(np.isfinite(sol.y)):
                 raise ConvergenceError(
                     f"simulation of {m.name} did not converge between t = {t0 + ta:.6g} s "

@@ -90,7 +90,7 @@ import numpy as np
 
 from fcomp import __version__
 from fcomp.backend import CASADI, NUMPY, Backend
-from fcomp.errors import FcompError
+from fcomp.errors import FcompError, term
 from fcomp.measurement import Measurement
 from fcomp.models.base import FrictionModel, Signals
 from fcomp.parameters import ParamSet, ParamValues
@@ -110,15 +110,16 @@ InputFn = Callable[[np.ndarray], np.ndarray]
 
 def output_times(duration: float, rate: float) -> np.ndarray:
     """Sample times ``0, 1/rate, ..., duration`` (s); validates both."""
+    d_, r_ = term("duration"), term("rate")
     if not (np.isfinite(duration) and duration > 0):
-        raise FcompError(f"--duration must be a positive number of seconds, got {duration}")
+        raise FcompError(f"{d_} must be a positive number of seconds, got {duration}")
     if not (np.isfinite(rate) and rate > 0):
-        raise FcompError(f"--rate must be a positive number of hertz, got {rate}")
+        raise FcompError(f"{r_} must be a positive number of hertz, got {rate}")
     n = int(round(duration * rate))
     if n < 1:
-        raise FcompError(f"--duration {duration} s at --rate {rate} Hz gives no samples")
+        raise FcompError(f"{d_} {duration} s at {r_} {rate} Hz gives no samples")
     if n > 50_000_000:
-        raise FcompError(f"{n} samples requested; lower --rate or --duration")
+        raise FcompError(f"{n} samples requested; lower {r_} or {d_}")
     return np.arange(n + 1) / rate
 
 
@@ -460,8 +461,8 @@ class OdePlant(Plant):
         start = self._x0(x0)
         if self.friction.discrete_memory() is None:
             if coupling is not None:
-                raise FcompError(f"plant {self.name}: --coupling applies to friction with "
-                                 "discrete memory (nmlgm-hysteresis) only")
+                raise FcompError(f"plant {self.name}: {term('coupling')} applies to friction "
+                                 "with discrete memory (nmlgm-hysteresis) only")
             traj = integrate(self.ode_model(), start, t, U, self.param_vector(), hold=hold,
                              method=method, tolerances=tol)
             return self.to_measurement(traj)

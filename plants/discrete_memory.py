@@ -44,7 +44,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from fcomp.backend import NUMPY, Backend
-from fcomp.errors import FcompError
+from fcomp.errors import FcompError, term
 from fcomp.models.base import FrictionModel, Signals
 from fcomp.parameters import ParamValues
 from fcomp.simulation import (
@@ -140,8 +140,8 @@ class MemoryCoupling:
 
     def __init__(self, plant: OdePlant, coupling: float = COUPLING) -> None:
         if not (math.isfinite(coupling) and coupling > 0):
-            raise FcompError(f"coupling interval must be a positive number of seconds, "
-                             f"got {coupling}")
+            raise FcompError(f"{term('coupling')} interval must be a positive number of "
+                             f"seconds, got {coupling}")
         self.plant = plant
         memory = plant.friction.discrete_memory()
         if memory is None:
@@ -248,8 +248,8 @@ class MemoryCoupling:
             raise FcompError(
                 f"plant {self.plant.name}: a coupling interval of {self.coupling:g} s over "
                 f"{float(t[-1] - t[0]):g} s needs {needed:.3g} coupling intervals of at least "
-                f"one step each, more than max_steps = {tolerances.max_steps}; raise --coupling "
-                f"(default {COUPLING:g} s) or --max-steps")
+                f"one step each, more than {term('max_steps')} = {tolerances.max_steps}; raise "
+                f"{term('coupling')} (default {COUPLING:g} s) or {term('max_steps')}")
         integ = make_integrator(self.twin.ode_model(), method)
         hf = self.start(x0)
         xt = self.to_twin(x0)

@@ -62,7 +62,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from fcomp.backend import NUMPY, Backend
-from fcomp.errors import FcompError
+from fcomp.errors import FcompError, term
 from fcomp.measurement import ORIENTATIONS, G
 from fcomp.models.base import FrictionModel, Signals
 from fcomp.parameters import ParamSpec, ParamValues, spec
@@ -119,7 +119,7 @@ def orient_value(orientation: Any, where: str) -> float:
 def require_section(pset: ParameterSet | None, plant: str, *keys: str) -> dict[str, Any]:
     """The nested section ``keys`` of the set's TOML, or a one-line error naming it."""
     if pset is None:
-        raise FcompError(f"plant {plant} needs a parameter set (--params)")
+        raise FcompError(f"plant {plant} needs a parameter set ({term('params')})")
     node: Any = pset.raw
     for i, k in enumerate(keys):
         if not isinstance(node, dict) or k not in node:

@@ -380,20 +380,20 @@ CASES: dict[str, Case] = {
                                     match="max-steps"),
     "simulate-max-steps-tiny": Case("simulate hydraulic --friction coulomb --input "
                                     "sine:amplitude=4.5e-3,frequency=1 --duration 0.1 "
-                                    "--max-steps 3 -o o.csv", match="max_steps"),
+                                    "--max-steps 3 -o o.csv", match="--max-steps = "),
     "simulate-method-unknown": Case("simulate hydraulic --friction coulomb --input "
                                     "step:amplitude=0 --duration 0.01 --method euler -o o.csv",
                                     match="unknown integration method"),
     "simulate-max-steps-radau": Case("simulate hydraulic --friction coulomb --input "
                                      "sine:amplitude=4.5e-3,frequency=1 --duration 0.1 "
                                      "--method radau --max-steps 5 -o o.csv",
-                                     match="max_steps"),
+                                     match="--max-steps = "),
     "simulate-max-steps-bdf": Case("simulate hydraulic --friction coulomb --input "
                                    "sine:amplitude=4.5e-3,frequency=1 --duration 0.1 "
-                                   "--method bdf --max-steps 5 -o o.csv", match="max_steps"),
+                                   "--method bdf --max-steps 5 -o o.csv", match="--max-steps = "),
     "simulate-max-steps-lsoda": Case("simulate hydraulic --friction coulomb --input "
                                      "sine:amplitude=4.5e-3,frequency=1 --duration 0.1 "
-                                     "--method lsoda --max-steps 5 -o o.csv", match="max_steps"),
+                                     "--method lsoda --max-steps 5 -o o.csv", match="--max-steps = "),
     "simulate-coupling-runaway": Case("simulate hydraulic --friction nmlgm-hysteresis "
                                       "--coupling 1e-9 --input sine:amplitude=4.5e-3,frequency=1 "
                                       "--duration 0.5 --rate 100 -o o.csv",
@@ -401,7 +401,7 @@ CASES: dict[str, Case] = {
     "simulate-coupling-steps": Case("simulate hydraulic --friction nmlgm-hysteresis --coupling "
                                     "1e-4 --max-steps 50 --input "
                                     "sine:amplitude=4.5e-3,frequency=1 --duration 0.5 --rate 100 "
-                                    "-o o.csv", match="max_steps"),
+                                    "-o o.csv", match="--max-steps = "),
     "simulate-coupling-zero": Case("simulate hydraulic --friction nmlgm-hysteresis --coupling 0 "
                                    "--input step:amplitude=0 --duration 0.01 -o o.csv",
                                    match="coupling"),

@@ -13,7 +13,7 @@ from pathlib import Path
 
 from fcomp.effects.base import EFFECTS, Effect, make_effect, register_effect, scale_levels
 from fcomp.effects.catalogue import CATALOGUE
-from fcomp.errors import FcompError
+from fcomp.errors import FcompError, term
 
 
 def experiment_for(effect: str, kind: str = "") -> str:
@@ -63,7 +63,7 @@ def load_effects_module(path: str | Path) -> list[str]:
     from fcomp.usercode import USER_FILES, run_module
 
     if not str(path).strip():
-        raise FcompError("--effects: no file name given (an empty argument)")
+        raise FcompError(f"{term('effects_module')}: no file name given (an empty argument)")
     p = Path(path)
     if not p.exists():
         raise FcompError(f"{p}: effects module not found")

@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 from scipy.special import stdtrit
 
-from fcomp.errors import ConvergenceError, FcompError
+from fcomp.errors import ConvergenceError, FcompError, term
 from fcomp.identification.dynamic import EXTRAS, Dependent
 from fcomp.identification.guess import (
     bristle_stiffness,
@@ -505,7 +505,7 @@ class FitJob:
             bounds={n: (specs[n].lower, specs[n].upper) for n in est},
             extras={k: values[k] for k in EXTRAS if k in values},
             failure=(f"{d.label}: fitting {model.describe()} did not converge ({sol.message}; "
-                     f"{sol.nfev} evaluations); try fixing parameters (--fix) or a longer, "
+                     f"{sol.nfev} evaluations); try holding parameters ({term('fixed')}) or a longer, "
                      "richer record"))
         self._add_dependent(out, est, unc, model_values)
         out.fixed = {k: float(v) for k, v in fitted.flat_params().items()

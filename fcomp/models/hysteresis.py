@@ -794,7 +794,7 @@ def with_hysteresis(model: LuGreFamily, values: Mapping[str, float]) -> Hysteres
 
     ``values`` are the hysteresis-function parameters (others keep their defaults).
     """
-    if not isinstance(model, LuGreFamily) or "presliding" not in model.features:
+    if model.feature_family() is None or "presliding" not in model.features:
         raise ValueError(
             f"the hysteresis function replaces sigma0*z: model {model.describe()!r} has no "
             "bristle state (add 'presliding' first)"

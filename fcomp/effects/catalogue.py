@@ -48,14 +48,20 @@ def _features(model: FrictionModel) -> frozenset[str] | None:
 
 
 class StructuralEffect(Effect):
-    """An effect that is a term of the LuGre family: attaching it changes the model class."""
+    """An effect that is a term of the LuGre family: attaching it changes the model class.
+
+    ``adds`` are the features attaching it switches on; a model that already has
+    every feature of ``marks`` (default: ``adds``) already has the effect.
+    """
 
     adds: ClassVar[frozenset[str]] = frozenset()
+    marks: ClassVar[frozenset[str] | None] = None
     requires: ClassVar[frozenset[str]] = frozenset()
 
     def applies_to(self, model: FrictionModel) -> bool:
         features = _features(model)
-        return features is not None and not self.adds <= features
+        marks = self.adds if self.marks is None else self.marks
+        return features is not None and not marks <= features
 
     def new_values(self, model: FrictionModel) -> dict[str, float]:
         """Parameter values of the added terms (from this effect's parameters)."""
@@ -96,13 +102,11 @@ class Viscous(StructuralEffect):
 
     name = "viscous"
     adds = frozenset({"viscous", "viscous-power"})
+    marks = frozenset({"viscous"})
     Params = ViscousParams
     signature = "residual linear and odd in v, largest at high speed"
     experiment = "constant-speed runs at several speeds in both directions"
 
-    def applies_to(self, model: FrictionModel) -> bool:
-        features = _features(model)
-        return features is not None and "viscous" not in features
 
     def new_values(self, model: FrictionModel) -> dict[str, float]:
         flat = self.params.flat()
@@ -133,13 +137,11 @@ class Stribeck(StructuralEffect):
 
     name = "stribeck"
     adds = frozenset({"stribeck", "stribeck-form"})
+    marks = frozenset({"stribeck"})
     Params = StribeckEffectParams
     signature = "residual hump at low |v| decaying with speed; peaks after starts"
     experiment = "slow constant-speed runs (0.1-10 vs) in both directions"
 
-    def applies_to(self, model: FrictionModel) -> bool:
-        features = _features(model)
-        return features is not None and "stribeck" not in features
 
     def new_values(self, model: FrictionModel) -> dict[str, float]:
         flat = model.params.flat()
@@ -198,14 +200,12 @@ class FrictionalLag(StructuralEffect):
 
     name = "frictional-lag"
     adds = frozenset({"film", "film-lag"})
+    marks = frozenset({"film-lag"})
     requires = frozenset({"stribeck"})
     Params = FrictionalLagParams
     signature = "residual loop against v: rising and falling |v| branches differ"
     experiment = "velocity sweeps up and down at several rates; dwell before restart"
 
-    def applies_to(self, model: FrictionModel) -> bool:
-        features = _features(model)
-        return features is not None and "film-lag" not in features
 
     def attach(self, model: FrictionModel) -> FrictionModel:
         fam = _family(model, self.name)
@@ -248,13 +248,11 @@ class Presliding(StructuralEffect):
 
     name = "presliding"
     adds = frozenset({"presliding", "damping", "bristle-exponent"})
+    marks = frozenset({"presliding", "damping"})
     Params = PreslidingParams
     signature = "residual spikes at reversals that follow displacement since reversal"
     experiment = "small-amplitude displacement cycles (well below break-away)"
 
-    def applies_to(self, model: FrictionModel) -> bool:
-        features = _features(model)
-        return features is not None and not {"presliding", "damping"} <= features
 
     def attach(self, model: FrictionModel) -> FrictionModel:
         fam = _family(model, self.name)

@@ -179,14 +179,7 @@ from fcomp.errors import ConvergenceError, FcompError
 from fcomp.models.base import NotSymbolicError, Signals
 from fcomp.models.lugre_family import PRESETS, LuGreFamily, family_class, params_class
 from fcomp.models.stepping import midpoint_signals, step_loop
-from fcomp.parameters import (
-    ParamSet,
-    ParamSpec,
-    ParamValues,
-    make_params_class,
-    spec,
-    with_recipe,
-)
+from fcomp.parameters import ParamSet, ParamSpec, ParamValues, make_params_class, spec, with_recipe
 
 INF = math.inf
 

@@ -66,14 +66,7 @@ from typing import Any, ClassVar
 
 from fcomp.backend import Backend
 from fcomp.models.base import FrictionModel, Signals
-from fcomp.parameters import (
-    ParamSet,
-    ParamSpec,
-    ParamValues,
-    make_params_class,
-    spec,
-    with_recipe,
-)
+from fcomp.parameters import ParamSet, ParamSpec, ParamValues, make_params_class, spec, with_recipe
 
 INF = math.inf
 _TINY = 1e-30

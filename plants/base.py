@@ -104,6 +104,7 @@ from fcomp.simulation import (
     Trajectory,
     integrate,
 )
+from plants.discrete_memory import COUPLING, MemoryCoupling, MemoryStepper
 
 InputFn = Callable[[np.ndarray], np.ndarray]
 
@@ -473,8 +474,6 @@ class OdePlant(Plant):
         return out
 
     def _memory(self, coupling: float | None) -> Any:
-        from plants.discrete_memory import COUPLING, MemoryCoupling
-
         return MemoryCoupling(self, COUPLING if coupling is None else coupling)
 
     def stepper(self, dt: float, *, x0: Any = None, method: str = "rodas4",
@@ -486,8 +485,6 @@ class OdePlant(Plant):
         if self.friction.discrete_memory() is None:
             return Stepper(self.ode_model(), dt, self.param_vector(), self._x0(x0),
                            method=method, tolerances=tol)
-        from plants.discrete_memory import MemoryStepper
-
         return MemoryStepper(self._memory(coupling), dt, self._x0(x0), method=method,
                              tolerances=tol)
 

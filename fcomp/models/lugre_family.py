@@ -136,24 +136,25 @@ FEATURE_ORDER = ("stribeck", "viscous", "presliding", "damping", "film", "film-l
                  "elements", "stribeck-form", "bristle-exponent", "viscous-power")
 
 
+#: Feature -> (the feature it builds on, the message when that is missing).
+FEATURE_NEEDS: dict[str, tuple[str, str]] = {
+    "film": ("stribeck", "the film term needs the Stribeck term (Fs) to act on"),
+    "film-lag": ("film", "film-lag needs the film term"),
+    "damping": ("presliding", "bristle damping needs the bristle state (presliding)"),
+    "elements": ("presliding", "Maxwell-slip elements split the bristle: they need presliding"),
+    "stribeck-form": ("stribeck", "the Stribeck curve form needs the Stribeck term"),
+    "viscous-power": ("viscous", "the viscous exponent needs the viscous term"),
+    "bristle-exponent": ("presliding", "the bristle exponent needs the bristle (presliding)"),
+}
+
+
 def _check_features(features: frozenset[str]) -> None:
     unknown = features - set(FEATURE_PARAMS)
     if unknown:
         raise ValueError(f"unknown model feature(s): {sorted(unknown)}")
-    if "film" in features and "stribeck" not in features:
-        raise ValueError("the film term needs the Stribeck term (Fs) to act on")
-    if "film-lag" in features and "film" not in features:
-        raise ValueError("film-lag needs the film term")
-    if "damping" in features and "presliding" not in features:
-        raise ValueError("bristle damping needs the bristle state (presliding)")
-    if "elements" in features and "presliding" not in features:
-        raise ValueError("Maxwell-slip elements split the bristle: they need presliding")
-    if "stribeck-form" in features and "stribeck" not in features:
-        raise ValueError("the Stribeck curve form needs the Stribeck term")
-    if "viscous-power" in features and "viscous" not in features:
-        raise ValueError("the viscous exponent needs the viscous term")
-    if "bristle-exponent" in features and "presliding" not in features:
-        raise ValueError("the bristle exponent needs the bristle (presliding)")
+    for feature, (needed, why) in FEATURE_NEEDS.items():
+        if feature in features and needed not in features:
+            raise ValueError(why)
 
 
 def _param_names(features: frozenset[str], viscous_name: str) -> tuple[str, ...]:

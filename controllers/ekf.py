@@ -40,7 +40,7 @@ from filterpy.kalman import ExtendedKalmanFilter
 from controllers.base import Reference
 from controllers.native import native
 from controllers.pid import PIDController
-from controllers.prediction import ContinuousModel, rosenbrock_euler
+from controllers.prediction import ContinuousModel
 from fcomp.errors import FcompError
 
 
@@ -84,7 +84,7 @@ class FrictionEKF:
         sc = np.asarray(model.scales, dtype=float)
         self.scale = sc
         self.r = np.asarray(r, dtype=float)
-        step = rosenbrock_euler(model.f, dt, sc, substeps)
+        step = model.step(dt, substeps)
         xi = ca.SX.sym("xi", nx)
         u = ca.SX.sym("u")
         p = ca.SX.sym("p", model.p.size)

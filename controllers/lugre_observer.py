@@ -24,7 +24,7 @@ same way, open loop. The equations are the controller model's own
 correction of ``dz/dt`` is added here.
 
 Discretisation: the exponential Rosenbrock-Euler step of
-:mod:`fcomp.trajectory` (exact for the bristle equation, linear in ``z`` at
+:mod:`fcomp.models.stepping` (exact for the bristle equation, linear in ``z`` at
 the held velocity, and unconditionally stable however stiff), with the
 correction held over the sample.
 
@@ -44,7 +44,7 @@ from controllers.pid import PIDController
 from fcomp.backend import CASADI
 from fcomp.errors import FcompError
 from fcomp.models.base import FrictionModel, Signals
-from fcomp.trajectory import _phi1
+from fcomp.models.stepping import exponential_euler
 
 
 def observer_step(model: FrictionModel) -> ca.Function:
@@ -70,8 +70,7 @@ def observer_step(model: FrictionModel) -> ca.Function:
     xl = [x[i] for i in range(nx)]
     f = ca.vertcat(*model.rhs(CASADI, xl, sig, P))
     f[iz] = f[iz] + c
-    J = ca.diag(ca.jacobian(f, x))
-    x_next = x + dt * _phi1(dt * J) * f
+    x_next = exponential_euler(f, x, dt)
     sigma1 = float(model.flat_params().get("sigma1", 0.0))
     F = model.force(CASADI, xl, sig, P) + sigma1 * c
     return ca.Function("lugre_observer_step", [x, sigv, c, dt], [x_next, F],

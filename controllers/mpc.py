@@ -5,9 +5,9 @@ Prediction model
 The controller's plant model with its friction model (``nmlgm`` by
 default): the symbolic right-hand side of :mod:`plants` (valve, chambers,
 piston, friction states ``z`` and ``h``), discretised at the MPC sample
-time ``dt`` by the linearly implicit Euler step of
-:mod:`controllers.prediction` (L-stable: the stiff bristle and oil
-dynamics are stable at ``dt = 2`` ms). The initial state is the EKF's
+time ``dt`` by the linearly implicit Euler step the plant gives
+(:meth:`plants.base.OdePlant.discrete_step`, :mod:`controllers.prediction`;
+L-stable: the stiff bristle and oil dynamics are stable at ``dt = 2`` ms). The initial state is the EKF's
 estimate (:mod:`controllers.ekf`), so the friction states the prediction
 starts from are estimated, not assumed.
 
@@ -31,7 +31,8 @@ predicted trajectory and its sensitivity to the inputs are computed by one
 CasADi function, compiled to C, that chains the model step and its step
 Jacobians ``A_k = (I - h J_k)^{-1}``, ``B_k = h A_k df/du`` (the
 linearly-implicit step's own sensitivities, the change of ``J_k`` along
-the step neglected -- an inexact-Jacobian SQP); it returns the
+the step neglected -- an inexact-Jacobian SQP; the same step, with
+``sensitivities=True``); it returns the
 Gauss-Newton Hessian ``H = J'J`` and gradient ``g = J'r`` of the
 least-squares cost. The resulting dense QP in the ``N`` input increments
 (box constraints for the valve limits, a banded set for the rate limits)
@@ -85,37 +86,6 @@ DEFAULTS: dict[str, float] = {
 }
 
 
-def step_with_sensitivities(model: ContinuousModel, dt: float, substeps: int = 1) -> ca.Function:
-    """``(x, u, p) -> (x_next, A, B)``: linearly implicit Euler steps and their step Jacobians.
-
-    Each of the ``substeps`` steps of ``h = dt/substeps`` is ``x+ = x + h*S*M^-1*S^-1*f``,
-    ``M = I - h*S^-1 J S`` (scaled, see :func:`controllers.prediction.rosenbrock_euler`),
-    with Jacobians ``A = S M^-1 S^-1``, ``B = h*A*df/du``, chained over the substeps.
-    """
-    nx = model.nx
-    sc = np.asarray(model.scales, dtype=float)
-    h = dt / substeps
-    xs = ca.SX.sym("x", nx)
-    us = ca.SX.sym("u")
-    ps = ca.SX.sym("p", model.p.size)
-    f = model.f(xs, us, ps)
-    J = ca.jacobian(f, xs)
-    fu = ca.jacobian(f, us)
-    S, Si = ca.DM(sc), ca.DM(1.0 / sc)
-    M = ca.SX.eye(nx) - h * J * (Si @ S.T)
-    Minv = ca.solve(M, ca.SX.eye(nx))
-    A1 = ca.mtimes(ca.diag(S), ca.mtimes(Minv, ca.diag(Si)))
-    one = ca.Function("mpc_substep", [xs, us, ps],
-                      [ca.cse(xs + h * S * ca.mtimes(Minv, Si * f)), ca.cse(A1),
-                       ca.cse(h * ca.mtimes(A1, fu))])
-    x_next, A, B = one(xs, us, ps)
-    for _ in range(substeps - 1):
-        x_next, A2, B2 = one(x_next, us, ps)
-        A, B = ca.mtimes(A2, A), ca.mtimes(A2, B) + B2
-    return ca.Function("mpc_step", [xs, us, ps], [ca.cse(x_next), ca.cse(A), ca.cse(B)],
-                       ["x", "u", "p"], ["x_next", "A", "B"])
-
-
 @dataclass(frozen=True)
 class MPCProblem:
     """Sizes, weights and limits of the optimal control problem (SI; module docstring)."""
@@ -151,7 +121,7 @@ class RTISolver:
         self.problem = problem
         N, nx = problem.horizon, model.nx
         ix, iv = model.index("x"), model.index("v")
-        step = step_with_sensitivities(model, problem.dt, problem.substeps)
+        step = model.step(problem.dt, problem.substeps, sensitivities=True)
         x0 = ca.MX.sym("x0", nx)
         U = ca.MX.sym("U", N)
         u_prev = ca.MX.sym("u_prev")

@@ -55,6 +55,7 @@ from controllers.prediction import ContinuousModel
 from fcomp.errors import ConvergenceError, FcompError
 from fcomp.measurement import G
 from fcomp.models.base import FrictionModel
+from fcomp.piston import piston_areas
 
 
 @dataclass(frozen=True)
@@ -152,9 +153,7 @@ class ControlModel:
         flat = self.plant.flat_params()
         self.params = flat
         self.mass = float(flat["mass"])
-        D, d = float(flat["bore"]), float(flat["rod"])
-        self.A1 = math.pi / 4 * D * D
-        self.A2 = math.pi / 4 * (D * D - d * d)
+        self.A1, self.A2 = piston_areas(float(flat["bore"]), float(flat["rod"]))
         self.p_atm = float(flat["p_atm"])
         self.weight = self.mass * G * float(flat["orient"])
         ps = float(flat["ps"])
@@ -202,6 +201,7 @@ class ControlModel:
             state_names=tuple(names),
             measured=tuple(names.index(n) for n in MEASURED),
             scales=np.asarray(self.plant.ode_model().scales, dtype=float),
+            discrete=self.plant.discrete_step,
         )
 
     def valve_states(self) -> tuple[str, ...]:

@@ -1,13 +1,15 @@
 """The controller's prediction model: plant + friction equations, symbolic, discretised.
 
-The EKF and the MPC do not carry their own copy of any equation: they take
-the continuous-time right-hand side ``dx/dt = f(x, u)`` that the plant
-builds symbolically from its equations and the controller's own friction
-model (:mod:`plants`, one source of truth), and discretise it here at the
-controller's sample time.
+The EKF and the MPC do not carry their own copy of any equation or scheme:
+they take the continuous-time right-hand side ``dx/dt = f(x, u)`` that the
+plant builds symbolically from its equations and the controller's own
+friction model (:mod:`plants`, one source of truth), and its discrete-time
+step from the plant's documented route,
+:meth:`plants.base.OdePlant.discrete_step` with the scheme
+:data:`PREDICTION_SCHEME`.
 
 Discretisation: the *linearly implicit (Rosenbrock) Euler* step with the
-exact CasADi Jacobian ``J = df/dx``::
+exact CasADi Jacobian ``J = df/dx`` (:func:`fcomp.rosenbrock.linearly_implicit_euler`)::
 
     x_{k+1} = x_k + h * (I - h*J(x_k, u))^{-1} * f(x_k, u)
 
@@ -24,10 +26,14 @@ the same equations.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
+
+#: The scheme of the prediction model (:meth:`plants.base.OdePlant.discrete_step`).
+PREDICTION_SCHEME = "linearly-implicit-euler"
 
 
 @dataclass(frozen=True)
@@ -53,6 +59,8 @@ class ContinuousModel:
     scales
         Nominal magnitude of every state (its unit): the discretisation
         works in the scaled states ``x_i/scale_i``.
+    discrete
+        The plant's :meth:`~plants.base.OdePlant.discrete_step`.
     """
 
     f: ca.Function
@@ -61,6 +69,7 @@ class ContinuousModel:
     state_names: tuple[str, ...]
     measured: tuple[int, ...]
     scales: np.ndarray
+    discrete: Callable[..., ca.Function]
 
     @property
     def nx(self) -> int:
@@ -69,35 +78,7 @@ class ContinuousModel:
     def index(self, name: str) -> int:
         return self.state_names.index(name)
 
-
-def rosenbrock_euler(f: ca.Function, dt: float, scales: np.ndarray,
-                     substeps: int = 1) -> ca.Function:
-    """``(x, u, p) -> x_next``: ``substeps`` linearly implicit Euler steps over ``dt`` (s).
-
-    The linear system is solved in the scaled states ``xi = x/scales``:
-    ``x_next = x + h*S*(I - h*S^-1 J S)^-1 * S^-1 f`` with ``S = diag(scales)``.
-    Unscaled, ``I - h*J`` of the hydraulic servo spans 1e-6 .. 1e12 (condition
-    number ~1e13) and the symbolic solve loses the valve state to rounding;
-    scaled it is close to the identity.
-    """
-    if substeps < 1:
-        raise ValueError("substeps must be >= 1")
-    nx = f.size1_in(0)
-    sc = np.asarray(scales, dtype=float).ravel()
-    if sc.size != nx or not np.all(sc > 0):
-        raise ValueError("scales must be one positive number per state")
-    x = ca.SX.sym("x", nx)
-    u = ca.SX.sym("u", f.size1_in(1))
-    p = ca.SX.sym("p", f.size1_in(2))
-    h = dt / substeps
-    S = ca.DM(sc)
-    Sinv = ca.DM(1.0 / sc)
-    fx = f(x, u, p)
-    Js = ca.jacobian(fx, x) * (Sinv @ S.T)
-    one = ca.Function("rosenbrock_euler_substep", [x, u, p],
-                      [ca.cse(x + h * S * ca.solve(ca.SX.eye(nx) - h * Js, Sinv * fx))])
-    xk = x
-    for _ in range(substeps):
-        xk = one(xk, u, p)
-    return ca.Function("rosenbrock_euler", [x, u, p], [ca.cse(xk)], ["x", "u", "p"],
-                       ["x_next"])
+    def step(self, dt: float, substeps: int = 1, *, sensitivities: bool = False) -> ca.Function:
+        """The prediction step ``(x, u, p) -> x_next`` over ``dt`` (s) (module docstring);
+        with ``sensitivities`` ``-> (x_next, A, B)``, its step Jacobians."""
+        return self.discrete(dt, substeps, scheme=PREDICTION_SCHEME, sensitivities=sensitivities)

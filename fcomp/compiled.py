@@ -38,6 +38,7 @@ import subprocess
 import tempfile
 import warnings
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
 
@@ -66,7 +67,24 @@ int fcomp_loop(int n, const double* x0, const double* u, const double* dt,
 }
 """
 
-Loop = Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray], np.ndarray]
+@dataclass(frozen=True)
+class Loop:
+    """``loop(x0, U, dt, p) -> X``: a step applied sample by sample (:func:`stepping_loop`).
+
+    Attributes
+    ----------
+    run
+        The loop itself.
+    compiled
+        Whether it runs native code (else CasADi's virtual machine).
+    """
+
+    run: Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray], np.ndarray]
+    compiled: bool
+
+    def __call__(self, x0: np.ndarray, U: np.ndarray, dt: np.ndarray,
+                 p: np.ndarray) -> np.ndarray:
+        return self.run(x0, U, dt, p)
 
 
 _WARNED: set[str] = set()
@@ -234,8 +252,7 @@ def stepping_loop(step: ca.Function, *, compiled: bool = True, chunk: int = 4096
                 raise RuntimeError(f"compiled step failed at sample {err}")
             return X
 
-        run.compiled = True  # type: ignore[attr-defined]
-        return run
+        return Loop(run, True)
 
     roll = step.mapaccum(step.name() + "_roll", chunk, [0], [0])
 
@@ -257,5 +274,4 @@ def stepping_loop(step: ca.Function, *, compiled: bool = True, chunk: int = 4096
             xk = Xc[:, k - 1]
         return X
 
-    run_vm.compiled = False  # type: ignore[attr-defined]
-    return run_vm
+    return Loop(run_vm, False)

@@ -45,7 +45,7 @@ def run_demo(out_dir: str | Path, params: str = "seed000-cylinder1") -> list[Pat
 
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
-        raise FcompError(f"--out {out}: exists and is not a directory")
+        raise FcompError(f"{out}: exists and is not a directory")
     out.mkdir(parents=True, exist_ok=True)
     t, v = demo_motion()
     names = MODELS.names()

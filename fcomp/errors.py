@@ -3,13 +3,57 @@
 Every error a user can cause is a :class:`FcompError` (a ``ValueError``), whose
 message is one line naming the problem and, where possible, what to do. The
 command line prints that line and exits with status 2.
+
+Library messages speak the library's terms: they name a setting by the
+Python parameter that sets it (``max_steps``, ``duration``, ``coupling``),
+marked with :func:`term`; ``str(error)`` shows the plain name, and the
+command line shows the option that sets it there (``--max-steps``;
+:meth:`FcompError.render` with :data:`fcomp.cli.common.OPTIONS`).
 """
 
 from __future__ import annotations
 
+import re
+from collections.abc import Callable, Mapping
+
+#: Delimits a parameter name marked by :func:`term` inside a message.
+_MARK = "\x1f"
+_TERM = re.compile(f"{_MARK}([^{_MARK}]*){_MARK}")
+
+
+def term(name: str) -> str:
+    """``name`` (a library parameter, e.g. ``max_steps``) marked in a message, so that the
+    command line can write it as its option."""
+    return f"{_MARK}{name}{_MARK}"
+
+
+def render_terms(message: str, names: Mapping[str, str] | Callable[[str], str] | None = None
+                 ) -> str:
+    """``message`` with every :func:`term` written as ``names[term]`` (default: the term)."""
+    def name(m: re.Match[str]) -> str:
+        if callable(names):
+            return names(m[1])
+        return (names or {}).get(m[1], m[1])
+
+    return _TERM.sub(name, message)
+
 
 class FcompError(ValueError):
-    """A problem with user input: names, parameters, files, options."""
+    """A problem with user input: names, parameters, files, options.
+
+    Parameters
+    ----------
+    message
+        One line; library parameters in it marked with :func:`term`.
+    """
+
+    def __init__(self, message: str = "") -> None:
+        super().__init__(render_terms(message))
+        self.template = message
+
+    def render(self, names: Mapping[str, str]) -> str:
+        """The message with the marked parameters written as ``names`` gives them."""
+        return render_terms(self.template, names)
 
 
 class UnknownNameError(FcompError):
@@ -29,5 +73,6 @@ class FcompWarning(UserWarning):
     """
 
     def __init__(self, code: str, message: str) -> None:
-        super().__init__(message)
+        super().__init__(render_terms(message))
         self.code = code
+        self.template = message

@@ -39,7 +39,7 @@ from typing import Any
 import numpy as np
 
 from fcomp import __version__
-from fcomp.errors import FcompError
+from fcomp.errors import FcompError, term
 from fcomp.matfile import from_variables, load_mat, parse_mapping
 from fcomp.measurement import Measurement, checked, read_sidecar
 from fcomp.registry import Registry
@@ -275,7 +275,8 @@ def import_mataveid(src: Path, *, position_scale: float | None = None) -> Measur
     if position_scale is not None:
         k = float(position_scale)
         if not np.isfinite(k) or k == 0.0:
-            raise FcompError(f"--position-scale {position_scale}: must be a non-zero number (m/V)")
+            raise FcompError(f"{term('position_scale')} {position_scale}: must be a non-zero "
+                             "number (m/V)")
         cols["x"] = k * raw[:, 2]
         cols["x_ref"] = k * raw[:, 1]
         extra["position_scale_m_per_V"] = k

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fcomp.errors import FcompError
+from fcomp.errors import FcompError, FcompWarning, term
 from fcomp.measurement import check_values
 from fcomp.textdata import check_path, data_rows, header_names, parse_rows, read_text
 
@@ -42,33 +42,35 @@ class InputSignal:
         return self.fn(np.asarray(t, dtype=float))
 
 
+def _bad(spec: str, what: str) -> FcompError:
+    """The error of a malformed input SPEC (the CLI's ``--input``)."""
+    return FcompError(f"{term('input')} {spec!r}: {what}")
+
+
 def _kv(body: str, spec: str, allowed: dict[str, float | None]) -> dict[str, float]:
     out: dict[str, float] = {}
     if body.strip():
         for part in body.split(","):
             if "=" not in part:
-                raise FcompError(f"--input {spec!r}: expected key=value, got {part!r}")
+                raise _bad(spec, f"expected key=value, got {part!r}")
             k, val = (s.strip() for s in part.split("=", 1))
             if k in out:
-                raise FcompError(f"--input {spec!r}: {k} is given twice")
+                raise _bad(spec, f"{k} is given twice")
             if k not in allowed:
-                raise FcompError(
-                    f"--input {spec!r}: unknown key {k!r}; allowed: {', '.join(allowed)}"
-                )
+                raise _bad(spec, f"unknown key {k!r}; allowed: {', '.join(allowed)}")
             try:
                 f = float(val)
             except ValueError:
-                raise FcompError(f"--input {spec!r}: {k} = {val!r} is not a number") from None
+                raise _bad(spec, f"{k} = {val!r} is not a number") from None
             if not math.isfinite(f):
-                raise FcompError(f"--input {spec!r}: {k} must be a finite number")
+                raise _bad(spec, f"{k} must be a finite number")
             if abs(f) > 1e15:
-                raise FcompError(f"--input {spec!r}: {k} = {val} is beyond any plausible "
-                                 "value in SI units")
+                raise _bad(spec, f"{k} = {val} is beyond any plausible value in SI units")
             out[k] = f
     for k, default in allowed.items():
         if k not in out:
             if default is None:
-                raise FcompError(f"--input {spec!r}: missing {k}=...")
+                raise _bad(spec, f"missing {k}=...")
             out[k] = default
     return out
 
@@ -76,16 +78,14 @@ def _kv(body: str, spec: str, allowed: dict[str, float | None]) -> dict[str, flo
 def parse_input(spec: str) -> InputSignal:
     """Parse an input SPEC (see the module docstring); :class:`FcompError` if malformed."""
     if ":" not in spec:
-        raise FcompError(
-            f"--input {spec!r}: expected KIND:..., KIND one of {', '.join(KINDS)} "
-            "(e.g. sine:amplitude=0.01,frequency=1)"
-        )
+        raise _bad(spec, f"expected KIND:..., KIND one of {', '.join(KINDS)} "
+                   "(e.g. sine:amplitude=0.01,frequency=1)")
     kind, body = spec.split(":", 1)
     kind = kind.strip()
     if kind == "sine":
         p = _kv(body, spec, {"amplitude": None, "frequency": None, "offset": 0.0, "phase": 0.0})
         if p["frequency"] < 0:
-            raise FcompError(f"--input {spec!r}: frequency must be >= 0 Hz")
+            raise _bad(spec, "frequency must be >= 0 Hz")
         A, f, o, ph = p["amplitude"], p["frequency"], p["offset"], p["phase"]
         return InputSignal(spec, kind, lambda t: o + A * np.sin(2 * np.pi * f * t + ph),
                            frequency=f)
@@ -95,7 +95,7 @@ def parse_input(spec: str) -> InputSignal:
         return InputSignal(spec, kind, lambda t: np.where(t >= t0, A, u0) + 0.0 * t)
     if kind == "csv":
         return _csv_input(spec, body)
-    raise FcompError(f"--input {spec!r}: unknown input kind {kind!r}; known: {', '.join(KINDS)}")
+    raise _bad(spec, f"unknown input kind {kind!r}; known: {', '.join(KINDS)}")
 
 
 def _csv_input(spec: str, body: str) -> InputSignal:
@@ -116,21 +116,26 @@ def _csv_input(spec: str, body: str) -> InputSignal:
                        interval=float(np.min(np.diff(t))))
 
 
-def sampling_warning(signal: InputSignal, rate: float) -> str | None:
-    """A one-line warning when ``signal`` has content the output ``rate`` (Hz) cannot
+def sampling_warning(signal: InputSignal, rate: float) -> FcompWarning | None:
+    """An ``aliasing`` warning when ``signal`` has content the output ``rate`` (Hz) cannot
     represent (plants see the input at the output instants): a sine above the
     Nyquist frequency ``rate/2``, or a ``csv:`` signal sampled more finely than
-    the output."""
+    the output; ``None`` when it has none."""
+    text = _aliasing(signal, rate)
+    return None if text is None else FcompWarning("aliasing", text)
+
+
+def _aliasing(signal: InputSignal, rate: float) -> str | None:
     nyquist = rate / 2.0
     if signal.kind == "sine" and signal.frequency > nyquist:
         return (f"the input sine at {signal.frequency:g} Hz is above the Nyquist frequency "
-                f"{nyquist:g} Hz of --rate {rate:g}: the plant sees it aliased to "
-                f"{_alias(signal.frequency, rate):g} Hz; raise --rate above "
+                f"{nyquist:g} Hz of {term('rate')} {rate:g}: the plant sees it aliased to "
+                f"{_alias(signal.frequency, rate):g} Hz; raise {term('rate')} above "
                 f"{2 * signal.frequency:g} Hz")
     if signal.kind == "csv" and signal.interval is not None and signal.interval < 0.5 / rate:
         return (f"the input file is sampled every {signal.interval:g} s, finer than the output "
                 f"interval {1 / rate:g} s; the plant sees it only at the output instants "
-                "(content above the Nyquist frequency aliases); raise --rate")
+                f"(content above the Nyquist frequency aliases); raise {term('rate')}")
     return None
 
 

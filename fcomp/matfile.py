@@ -21,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from fcomp.errors import FcompError
+from fcomp.errors import FcompError, term
 from fcomp.measurement import Measurement, checked
 from fcomp.textdata import check_path
 
@@ -57,6 +57,11 @@ def load_mat(path: str | Path) -> dict[str, Any]:
     return {k: v for k, v in raw.items() if not k.startswith("__")}
 
 
+def _bad(message: str) -> FcompError:
+    """The error of a malformed column mapping (the CLI's ``--map``)."""
+    return FcompError(message.replace("mapping", term("mapping"), 1))
+
+
 def parse_mapping(spec: str) -> dict[str, str]:
     """``"t=time,x=qm,F_ext=gtau*vir"`` -> ``{"t": "time", "x": "qm", "F_ext": "gtau*vir"}``."""
     out: dict[str, str] = {}
@@ -64,17 +69,17 @@ def parse_mapping(spec: str) -> dict[str, str]:
         if not item:
             continue
         if "=" not in item:
-            raise FcompError(f"--map {item!r}: expected COLUMN=VARIABLE")
+            raise _bad(f"mapping {item!r}: expected COLUMN=VARIABLE")
         col, expr = (s.strip() for s in item.split("=", 1))
         if not _COLUMN.match(col):
-            raise FcompError(f"--map {item!r}: {col!r} is not a valid column name")
+            raise _bad(f"mapping {item!r}: {col!r} is not a valid column name")
         if col in out:
-            raise FcompError(f"--map: column {col!r} is mapped twice")
+            raise _bad(f"mapping: column {col!r} is mapped twice")
         if not expr:
-            raise FcompError(f"--map {item!r}: no variable given for column {col!r}")
+            raise _bad(f"mapping {item!r}: no variable given for column {col!r}")
         out[col] = expr
     if "t" not in out:
-        raise FcompError("--map: the time column 't' must be mapped (e.g. t=time)")
+        raise _bad("mapping: the time column 't' must be mapped (e.g. t=time)")
     return out
 
 

@@ -39,6 +39,7 @@ import numpy as np
 
 from fcomp.errors import FcompError
 from fcomp.outputs import write_files
+from fcomp.piston import piston_areas
 from fcomp.textdata import data_rows, first_bad, header_names, parse_rows, read_text
 
 #: Columns of data-format.md with their SI unit.
@@ -126,10 +127,11 @@ class Measurement:
         return rig[key]
 
     def areas(self) -> tuple[float, float]:
-        """Piston areas ``A1 = pi/4*bore^2``, ``A2 = pi/4*(bore^2 - rod^2)`` (m^2)."""
+        """Piston areas ``A1``, ``A2`` (m^2) of ``rig.bore`` and ``rig.rod`` (0 if absent;
+        :func:`fcomp.piston.piston_areas`)."""
         bore = float(self.rig_value("bore"))
         rod = float(self.meta.get("rig", {}).get("rod", 0.0))
-        return math.pi / 4 * bore**2, math.pi / 4 * (bore**2 - rod**2)
+        return piston_areas(bore, rod)
 
     def gauge_pressure(self, name: str) -> np.ndarray:
         """Column ``name`` (``p1`` or ``p2``) as gauge pressure (Pa).

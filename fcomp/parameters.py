@@ -16,15 +16,27 @@ For fitting and for symbolic evaluation a parameter set is *flattened* into a
 mapping of scalar names: a scalar ``Fc`` stays ``Fc``, a directional ``Fc``
 becomes ``Fc_pos`` and ``Fc_neg``. :class:`ParamValues` is the view the model
 equations read: ``P("Fc", s)`` returns the value for the side ``s`` (+1/-1).
+
+Values that travel
+------------------
+Parameter sets, models and effects are plain values: they pickle, so they can
+be cached, sent to worker processes (``spawn`` start method, Dask) and saved.
+A class defined in a module pickles by reference, as any class. A class a
+*factory* makes on demand (the parameter class of a feature set, the model
+class of a feature combination) carries a :class:`ClassRecipe` -- the
+factory and its arguments -- and its instances pickle by that recipe
+(:class:`PlainValue`); the factories are cached, so the recipe gives back the
+very same class in the same process and an equal one in another.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Iterable, Mapping
+import sys
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
-from typing import Any, ClassVar, TypeVar
+from typing import Any, ClassVar, NamedTuple, TypeVar
 
 from fcomp.backend import Backend
 
@@ -111,19 +123,86 @@ def spec(
 
 
 P = TypeVar("P", bound="ParamSet")
+C = TypeVar("C", bound=type)
 
 
-class ParamSet:
+class ClassRecipe(NamedTuple):
+    """How a class made by a factory is made again: ``factory(*args)`` (see the module docstring)."""
+
+    factory: Callable[..., type]
+    args: tuple[Any, ...]
+
+    def make(self) -> type:
+        return self.factory(*self.args)
+
+
+#: Class attribute holding a factory-made class's :class:`ClassRecipe`.
+RECIPE = "__recipe__"
+
+
+def with_recipe(cls: C, factory: Callable[..., type], *args: Any) -> C:
+    """Mark ``cls`` as made by ``factory(*args)`` (an importable, cached factory); returns ``cls``."""
+    setattr(cls, RECIPE, ClassRecipe(factory, tuple(args)))
+    return cls
+
+
+def class_reference(cls: type) -> type | ClassRecipe:
+    """What a pickle stores for ``cls``: its recipe if a factory made it, else the class."""
+    recipe = cls.__dict__.get(RECIPE)
+    return recipe if isinstance(recipe, ClassRecipe) else cls
+
+
+def restore(ref: type | ClassRecipe, state: Mapping[str, Any]) -> Any:
+    """An instance of the class ``ref`` names (class or recipe) with attributes ``state``."""
+    cls = ref.make() if isinstance(ref, ClassRecipe) else ref
+    obj: Any = object.__new__(cls)
+    obj.__dict__.update(state)
+    return obj
+
+
+class PlainValue:
+    """Mixin: instances pickle as their class reference (:func:`class_reference`) and
+    their attributes; nothing else is needed to rebuild them."""
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        return restore, (class_reference(type(self)), dict(self.__dict__))
+
+
+def adopt_params(owner: type) -> None:
+    """Home the ``Params`` class made in the body of ``owner`` as ``owner.Params``.
+
+    :func:`make_params_class` names a class after its ``cls_name`` in the
+    module that made it, which is right for a module-level
+    ``FooParams = make_params_class("FooParams", ...)``; made inside a class
+    body (effects, user models) it is importable as ``Owner.Params`` instead,
+    and this gives it that qualified name. Model, effect and plant classes call
+    it when they are created (``__init_subclass__``).
+    """
+    params = owner.__dict__.get("Params")
+    if not isinstance(params, type) or RECIPE in params.__dict__:
+        return
+    module = sys.modules.get(params.__module__)
+    if module is not None and getattr(module, params.__qualname__, None) is params:
+        return
+    if params.__module__ == owner.__module__:
+        params.__qualname__ = f"{owner.__qualname__}.Params"
+
+
+class ParamSet(PlainValue):
     """Base of every parameter dataclass (made by :func:`make_params_class`).
 
     Subclasses are frozen dataclasses whose fields are the parameters; the
     class attribute ``SPECS`` holds their :class:`ParamSpec`. Construction
-    validates bounds and the cross-constraints in ``CONSTRAINTS``
-    (pairs ``(small, large)`` meaning ``small <= large`` on each side).
+    validates bounds, the cross-constraints in ``CONSTRAINTS`` (pairs
+    ``(small, large)`` meaning ``small <= large`` on each side) and the
+    equalities in ``UNIT_SUMS`` (groups whose values sum to 1, within
+    :data:`UNIT_SUM_TOL`).
     """
 
     SPECS: ClassVar[tuple[ParamSpec, ...]] = ()
     CONSTRAINTS: ClassVar[tuple[tuple[str, str], ...]] = ()
+    #: groups of parameters that must sum to 1 (e.g. the slip fractions of GMS), and why
+    UNIT_SUMS: ClassVar[tuple[tuple[tuple[str, ...], str], ...]] = ()
     OWNER: ClassVar[str] = "parameters"
 
     def __post_init__(self) -> None:
@@ -155,6 +234,13 @@ class ParamSet:
                         f"{self.OWNER}: parameter {small} = {va:g} must not exceed "
                         f"{large} = {vb:g} ({side})"
                     )
+        for group, why in self.UNIT_SUMS:
+            total = sum(float(getattr(self, n)) for n in group)
+            if abs(total - 1.0) > UNIT_SUM_TOL:
+                raise ValueError(
+                    f"{self.OWNER}: parameters {group[0]}..{group[-1]} must sum to 1 (they sum "
+                    f"to {total:.12g})" + (f"; {why}" if why else "")
+                )
 
     # ------------------------------------------------------------------ access
     @classmethod
@@ -167,6 +253,14 @@ class ParamSet:
             if s.name == name:
                 return s
         raise ValueError(f"{cls.OWNER}: no parameter {name!r}; known: {', '.join(cls.names())}")
+
+    def scalar(self, name: str) -> float:
+        """The value of parameter ``name``, which must not be direction-dependent."""
+        raw = getattr(self, name)
+        if isinstance(raw, Directional):
+            raise ValueError(f"{self.OWNER}: parameter {name} must be one value for both "
+                             f"directions here, got {raw}")
+        return float(raw)
 
     def side_values(self, name: str) -> tuple[float, float]:
         """``(value for v > 0, value for v < 0)`` of parameter ``name``."""
@@ -222,33 +316,50 @@ class ParamSet:
         return [(s.name, str(getattr(self, s.name)), s.unit, s.doc) for s in self.SPECS]
 
 
+#: Tolerance of the ``UNIT_SUMS`` check.
+UNIT_SUM_TOL = 1e-9
+
+
 def make_params_class(
     cls_name: str,
     specs: Iterable[ParamSpec],
     *,
     owner: str,
     constraints: Iterable[tuple[str, str]] = (),
+    unit_sums: Iterable[tuple[tuple[str, ...], str]] = (),
     doc: str = "",
+    module: str | None = None,
 ) -> type[ParamSet]:
     """Build a frozen dataclass (subclass of :class:`ParamSet`) from ``specs``.
 
-    Fields default to each spec's default. Constraints name pairs
-    ``(small, large)`` that must satisfy ``small <= large`` (e.g. ``("Fc", "Fs")``);
-    pairs naming a parameter the class does not have are ignored.
+    Fields default to each spec's default and are typed ``float``, or
+    ``float | Directional`` where the spec allows direction-dependent values.
+    Constraints name pairs ``(small, large)`` that must satisfy ``small <=
+    large`` (e.g. ``("Fc", "Fs")``); pairs naming a parameter the class does not
+    have are ignored. ``unit_sums``: groups of names whose values must sum to
+    1, each with the reason (``ParamSet.UNIT_SUMS``).
+
+    The class belongs to ``module`` (default: the calling module) under the
+    name ``cls_name``: bind it to that name there (or make it in a class body,
+    :func:`adopt_params`), or give it a recipe (:func:`with_recipe`) when a
+    factory makes it.
     """
     specs = tuple(specs)
     names = {s.name for s in specs}
-    fields = [(s.name, Any, dataclasses.field(default=s.default)) for s in specs]
+    fields = [(s.name, float | Directional if s.directional else float,
+               dataclasses.field(default=s.default)) for s in specs]
     ns = {
         "SPECS": specs,
         "CONSTRAINTS": tuple((a, b) for a, b in constraints if a in names and b in names),
+        "UNIT_SUMS": tuple((tuple(g), why) for g, why in unit_sums),
         "OWNER": owner,
         "__doc__": doc
         or f"Parameters of {owner} (SI units).\n\n"
         + "\n".join(f"{s.name} [{s.unit}]: {s.doc} (default {s.default:g})" for s in specs),
     }
     cls = dataclasses.make_dataclass(cls_name, fields, bases=(ParamSet,), frozen=True, namespace=ns)
-    cls.__module__ = "fcomp.parameters"
+    cls.__module__ = module or sys._getframe(1).f_globals.get("__name__", __name__)
+    cls.__qualname__ = cls_name
     return cls
 
 

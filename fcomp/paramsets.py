@@ -39,7 +39,7 @@ from importlib import resources
 from typing import Any
 
 from fcomp.errors import UnknownNameError
-from fcomp.parameters import Directional, ParamSet
+from fcomp.parameters import Directional
 
 _FILES = {
     "canudas1995": "lugre-canudas1995.toml",
@@ -162,20 +162,17 @@ def get(name: str) -> ParameterSet:
     return ParameterSet(name, SOURCES[name], fr, rig=rig, raw=doc)
 
 
-def model_params(set_name: str, model_name: str) -> ParamSet:
-    """The ``Params`` of model ``model_name`` filled from parameter set ``set_name``.
+def friction_values(set_name: str, model_name: str) -> dict[str, Any]:
+    """The friction values set ``set_name`` gives model ``model_name`` (flat names, SI).
 
-    Parameters the set does not give keep the model's defaults; parameters
-    the model does not have are ignored.
+    The model's friction section (:meth:`ParameterSet.friction_section`) with
+    the hysteresis-function values of the set; ``B`` of ``coulomb-viscous``
+    is the set's ``sigma2`` where the set gives no ``B``. Which of them a
+    model takes is the model's business (:func:`fcomp.models.model_params`).
     """
-    from fcomp.models import MODELS
-
-    cls = MODELS.get(model_name)
     pset = get(set_name)
     values = dict(pset.friction_section(model_name))
     values.update(pset.hysteresis)
     if model_name == "coulomb-viscous" and "B" not in values and "sigma2" in values:
         values["B"] = values["sigma2"]
-    accepted = set(cls.Params.names())
-    kwargs = {k: v for k, v in values.items() if k in accepted}
-    return cls.Params(**kwargs)
+    return values

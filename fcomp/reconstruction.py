@@ -52,6 +52,7 @@ from scipy.signal import butter, sosfiltfilt
 
 from fcomp.errors import FcompError
 from fcomp.measurement import ORIENTATIONS, G, Measurement
+from fcomp.piston import piston_areas
 
 #: Largest relative deviation of a sample interval from the mean for "uniform" sampling.
 UNIFORM_TOL = 0.01
@@ -175,12 +176,12 @@ def driving_force(meas: Measurement) -> np.ndarray:
     total = np.zeros(len(meas))
     if "p1" in meas or "p2" in meas:
         bore = float(meas.rig_value("bore"))
-        A1 = math.pi / 4 * bore**2
+        rod = float(meas.rig_value("rod")) if "p2" in meas else 0.0
+        A1, A2 = piston_areas(bore, rod)
         if "p1" in meas:
             total += meas.gauge_pressure("p1") * A1
         if "p2" in meas:
-            rod = float(meas.rig_value("rod"))
-            total -= meas.gauge_pressure("p2") * (math.pi / 4 * (bore**2 - rod**2))
+            total -= meas.gauge_pressure("p2") * A2
     if "F_ext" in meas:
         total += meas["F_ext"]
     return total

@@ -93,8 +93,21 @@ from scipy.integrate import solve_ivp
 from scipy.linalg import lu_factor, lu_solve
 
 from fcomp.compiled import load_library
-from fcomp.errors import ConvergenceError, FcompError
+from fcomp.errors import ConvergenceError, FcompError, term
 from fcomp.registry import Registry
+from fcomp.rosenbrock import (
+    RODAS4,
+    STEP_CONTROL,
+    linearly_implicit_euler,
+    rosenbrock_stages,
+    rosenbrock_step,
+)
+
+#: The advice when a run needs more steps than allowed.
+_RAISE_OR_LOOSEN = f"raise {term('max_steps')}, or loosen {term('rtol')}/{term('atol')}"
+
+#: Schemes of :meth:`OdeModel.discrete_step` (fixed steps, input held).
+SCHEMES = ("rodas4", "linearly-implicit-euler")
 
 #: ``callback(fraction, t)`` of the innermost :func:`progress` block, or ``None``.
 _PROGRESS: list[Callable[[float, float], None]] = []
@@ -122,86 +135,14 @@ def step_budget(tol: Tolerances, stats: Stats, t: float, name: str) -> Tolerance
     left = tol.max_steps - (stats.steps + stats.rejected)
     if left < 1:
         raise ConvergenceError(
-            f"simulation of {name} stopped at t = {t:.6g} s: more than max_steps = "
-            f"{tol.max_steps} steps were needed (raise --max-steps, or loosen --rtol/--atol)")
+            f"simulation of {name} stopped at t = {t:.6g} s: more than {term('max_steps')} = "
+            f"{tol.max_steps} steps were needed ({_RAISE_OR_LOOSEN})")
     return tol if left == tol.max_steps else replace(tol, max_steps=left)
 
 # ------------------------------------------------------------------ RODAS4
-#: RODAS4 coefficients (Hairer & Wanner's ``rodas.f``, METH = 1) in the
-#: form ``(I/(h*gamma) - J) K_i = f(x + sum_j A_ij K_j) + sum_j C_ij/h K_j``,
-#: ``x_new = x + sum_i M_i K_i``, error estimate ``sum_i E_i K_i = K_6``.
-RODAS4_GAMMA = 0.25
-RODAS4_A: tuple[tuple[float, ...], ...] = (
-    (),
-    (1.544,),
-    (0.9466785280815826, 0.2557011698983284),
-    (3.314825187068521, 2.896124015972201, 0.9986419139977817),
-    (1.221224509226641, 6.019134481288629, 12.53708332932087, -0.6878860361058950),
-    (1.221224509226641, 6.019134481288629, 12.53708332932087, -0.6878860361058950, 1.0),
-)
-RODAS4_C: tuple[tuple[float, ...], ...] = (
-    (),
-    (-5.6688,),
-    (-2.430093356833875, -0.2063599157091915),
-    (-0.1073529058151375, -9.594562251023355, -20.47028614809616),
-    (7.496443313967647, -10.24680431464352, -33.99990352819905, 11.70890893206160),
-    (8.083246795921522, -7.981132988064893, -31.52159432874371, 16.31930543123136,
-     -6.058818238834054),
-)
-RODAS4_M = (1.221224509226641, 6.019134481288629, 12.53708332932087, -0.6878860361058950,
-            1.0, 1.0)
-RODAS4_ORDER = 4  # exponent of the step-size controller: min(order, embedded order) + 1
-
-
-def rosenbrock_step(
-    f: Callable[[Any, Any], Any], x: Any, u: Any, du: Any, h: Any, scale: Any = None
-) -> tuple[Any, Any]:
-    """One RODAS4 step of ``dx/dt = f(x, u)``, ``du/dt = du``, as CasADi SX expressions.
-
-    Parameters
-    ----------
-    f
-        ``f(x, u) -> dx/dt`` on CasADi SX column vectors.
-    x, u, du, h
-        State, input at the start of the step, input rate (0 for a held
-        input) and step size (SX).
-    scale
-        Nominal magnitude of each state. The step is computed for ``x/scale``
-        (mathematically the same step: Rosenbrock methods are invariant under
-        a constant scaling of the state) so that the linear solves see a
-        well-scaled matrix -- a hydraulic Jacobian spans 1e-6 m to 1e7 Pa.
-
-    Returns
-    -------
-    x_new, err
-        The state after the step and the embedded error estimate (SX).
-    """
-    if scale is not None:
-        xn, err = rosenbrock_step(lambda a, b: f(a * scale, b) / scale, x / scale, u, du, h)
-        return xn * scale, err * scale
-    nx, nu = x.size1(), u.size1()
-    xa = ca.SX.sym("xa", nx + nu)
-
-    def fa(y: Any) -> Any:
-        return ca.vertcat(f(y[:nx], y[nx:]), du)
-
-    y0 = ca.vertcat(x, u)
-    J = ca.substitute(ca.jacobian(fa(xa), xa), xa, y0)
-    M = ca.SX.eye(nx + nu) / (h * RODAS4_GAMMA) - J
-    K: list[Any] = []
-    for i in range(6):
-        y = y0
-        for j, a in enumerate(RODAS4_A[i]):
-            y = y + a * K[j]
-        rhs = fa(y)
-        for j, c in enumerate(RODAS4_C[i]):
-            rhs = rhs + (c / h) * K[j]
-        K.append(ca.solve(M, rhs))
-    xn = y0
-    for m, k in zip(RODAS4_M, K, strict=True):
-        xn = xn + m * k
-    return xn[:nx], K[5][:nx]
-
+#: The engine's method (:data:`fcomp.rosenbrock.RODAS4`) and its step-size control.
+TABLEAU = RODAS4
+CONTROL = STEP_CONTROL
 
 # ------------------------------------------------------------------- model
 @dataclass(frozen=True)
@@ -251,17 +192,33 @@ class OdeModel:
         """Fresh SX symbols ``(x, u, p)``."""
         return ca.SX.sym("x", self.nx), ca.SX.sym("u", self.nu), ca.SX.sym("p", self.n_params)
 
-    def discrete_step(self, dt: float, substeps: int = 1) -> ca.Function:
-        """``step(x, u, p) -> x(t + dt)``: ``substeps`` fixed RODAS4 steps, input held.
+    def discrete_step(self, dt: float, substeps: int = 1, *, scheme: str = "rodas4",
+                      sensitivities: bool = False) -> ca.Function:
+        """``step(x, u, p) -> x(t + dt)``: ``substeps`` fixed steps of ``scheme``, input held.
 
-        The discrete-time model of the plant for predictions (MPC) and
-        filters (EKF): differentiable in CasADi, exact Jacobians with
-        :func:`casadi.jacobian`.
+        The discrete-time model of the plant for predictions and filters:
+        differentiable in CasADi (exact Jacobians with :func:`casadi.jacobian`).
+        ``scheme`` is ``"rodas4"`` (4th order, :data:`fcomp.rosenbrock.RODAS4`)
+        or ``"linearly-implicit-euler"`` (first order, L-stable and smooth: the
+        prediction model of the EKF and the MPC,
+        :func:`fcomp.rosenbrock.linearly_implicit_euler`); with
+        ``sensitivities`` the latter also returns its step Jacobians ``A``, ``B``.
         """
         if not (math.isfinite(dt) and dt > 0):
             raise FcompError(f"discrete step: dt must be a positive number of seconds, got {dt}")
         if substeps < 1:
             raise FcompError(f"discrete step: substeps must be >= 1, got {substeps}")
+        if scheme not in SCHEMES:
+            raise FcompError(f"discrete step: scheme must be one of {', '.join(SCHEMES)}, "
+                             f"got {scheme!r}")
+        if scheme == "linearly-implicit-euler":
+            x, u, p = self.symbols()
+            f = ca.Function("f", [x, u, p], [self.rhs(x, u, p)])
+            return linearly_implicit_euler(f, dt, self.scales, substeps,
+                                           sensitivities=sensitivities)
+        if sensitivities:
+            raise FcompError("discrete step: step Jacobians are given for the "
+                             "linearly-implicit-euler scheme")
         x, u, p = self.symbols()
         h = dt / substeps
         xk = x
@@ -301,11 +258,13 @@ class Tolerances:
         for name in ("rtol", "atol"):
             val = getattr(self, name)
             if not (isinstance(val, int | float) and math.isfinite(val) and 1e-14 <= val <= 0.1):
-                raise FcompError(f"--{name} must be a number between 1e-14 and 0.1, got {val!r}")
+                raise FcompError(f"{term(name)} must be a number between 1e-14 and 0.1, "
+                                 f"got {val!r}")
         if not (math.isfinite(self.h_min) and self.h_min > 0):
             raise FcompError(f"h_min must be a positive number of seconds, got {self.h_min!r}")
         if not (isinstance(self.max_steps, int) and self.max_steps >= 1):
-            raise FcompError(f"--max-steps must be a positive integer, got {self.max_steps!r}")
+            raise FcompError(f"{term('max_steps')} must be a positive integer, "
+                             f"got {self.max_steps!r}")
         if not (math.isfinite(self.h0) and self.h0 > 0):
             raise FcompError(f"h0 must be a positive number of seconds, got {self.h0!r}")
 
@@ -360,19 +319,23 @@ class Integrator(ABC):
 _DRIVER = r"""
 #include <math.h>
 #include <string.h>
-/* Adaptive RODAS4 over sample intervals (fcomp/simulation.py).
+/* Adaptive Rosenbrock method over sample intervals (fcomp/simulation.py), its coefficients
+   from the tableau of fcomp/rosenbrock.py (RODAS4), the stage loop that of rosenbrock_stages.
    The model: @F@(x, u, p) -> dx/dt and @J@(x, u, p) -> (df/dx, df/du), dense, column-major.
    opts = {rtol, atol, h_min, max_steps}; info = {status, interval, t, h, accepted, rejected}
    status: 0 ok, 1 step size below h_min, 2 too many steps, 3 non-finite model output. */
 #define NX @NX@
 #define NU @NU@
 #define NUB (NU > 0 ? NU : 1)
+#define NS @NS@
+#define NS1 (NS > 1 ? NS - 1 : 1)
 static const double GAM = @GAMMA@;
-static const double RA[6][5] = @RA@;
-static const double RC[6][5] = @RC@;
-static const double RM[6] = @RM@;
-static const double ALPHA[6] = @ALPHA@;
-static const double GAMS[6] = @GAMS@;
+static const double RA[NS][NS1] = @RA@;
+static const double RC[NS][NS1] = @RC@;
+static const double RM[NS] = @RM@;
+static const double RE[NS] = @RE@;
+static const double ALPHA[NS] = @ALPHA@;
+static const double GAMS[NS] = @GAMS@;
 
 static int lu_factor(double* A, int* piv) {
   for (int k = 0; k < NX; ++k) {
@@ -422,7 +385,7 @@ int fcomp_ode(int n, const double* x0, const double* U, const double* dU, const 
   casadi_int iw[sz_iw + 1];
   casadi_real w[sz_w + 1];
   double x[NX], xn[NX], f0[NX], J[NX * NX], Ju[NX * NUB], ft[NX], M[NX * NX];
-  double K[6][NX], Y[NX], fy[NX], uu[NUB];
+  double K[NS][NX], Y[NX], fy[NX], uu[NUB];
   int piv[NX];
   const double rtol = opts[0], atol = opts[1], hmin = opts[2], max_steps = opts[3];
   double h = *h_io, nacc = info[4], nrej = info[5], t = 0.0;
@@ -460,7 +423,7 @@ int fcomp_ode(int n, const double* x0, const double* U, const double* dU, const 
         for (int j = 0; j < NX; ++j)
           M[i * NX + j] = (i == j ? 1.0 / (hs * GAM) : 0.0) - J[i + j * NX] * sc[j] / sc[i];
       if (lu_factor(M, piv)) bad = 1;
-      for (int st = 0; st < 6 && !bad; ++st) {
+      for (int st = 0; st < NS && !bad; ++st) {
         if (st == 0) {
           memcpy(fy, f0, NX * sizeof(double));
         } else {
@@ -485,19 +448,19 @@ int fcomp_ode(int n, const double* x0, const double* U, const double* dU, const 
       if (!bad) {
         double s = 0.0;
         for (int i = 0; i < NX; ++i) {
-          double v = x[i];
-          for (int j = 0; j < 6; ++j) v += RM[j] * K[j][i];
+          double v = x[i], ek = 0.0;
+          for (int j = 0; j < NS; ++j) { v += RM[j] * K[j][i]; ek += RE[j] * K[j][i]; }
           xn[i] = v;
-          const double e = K[5][i] / (atol * sc[i] + rtol * fmax(fabs(x[i]), fabs(v)));
+          const double e = ek / (atol * sc[i] + rtol * fmax(fabs(x[i]), fabs(v)));
           s += e * e;
           if (!isfinite(v)) bad = 1;
         }
         en = sqrt(s / NX);
         if (bad || !isfinite(en)) en = 1e10;
       }
-      double fac = 0.9 * pow(en, -1.0 / @ORDER@);
-      if (!(fac <= 6.0)) fac = 6.0;
-      if (fac < 0.2) fac = 0.2;
+      double fac = @SAFETY@ * pow(en, -1.0 / @ORDER@);
+      if (!(fac <= @FACMAX@)) fac = @FACMAX@;
+      if (fac < @FACMIN@) fac = @FACMIN@;
       if (en <= 1.0) {
         memcpy(x, xn, NX * sizeof(double));
         t += hs;
@@ -531,11 +494,6 @@ def _c_array(rows: Any, width: int | None = None) -> str:
     return "{" + ", ".join(_c_array(list(r) + [0.0] * (width - len(r))) for r in rows) + "}"
 
 
-#: RODAS4 stage times ``alpha_i`` and ``gamma_i = sum_j gamma_ij`` (non-autonomous terms,
-#: used by the C driver, which treats the input as a function of time).
-RODAS4_ALPHA = (0.0, 0.386, 0.21, 0.63, 1.0, 1.0)
-RODAS4_GAMMAS = (0.25, -0.1043, 0.1035, -0.03620000000000023, 0.0, 0.0)
-
 _MODELS: dict[tuple, OdeModel] = {}
 
 
@@ -561,12 +519,15 @@ def _model_functions(model_key: tuple) -> tuple[ca.Function, ca.Function]:
 def _rodas_library(model_key: tuple) -> Any:
     F, Jf = _model_functions(model_key)
     model = _MODELS[model_key]
+    tab, ctl = TABLEAU, CONTROL
+    width = max(tab.stages - 1, 1)
     repl = {
         "@F@": F.name(), "@J@": Jf.name(), "@NX@": str(model.nx), "@NU@": str(model.nu),
-        "@ORDER@": str(RODAS4_ORDER), "@GAMMA@": repr(RODAS4_GAMMA),
-        "@RA@": _c_array(RODAS4_A, 5), "@RC@": _c_array(RODAS4_C, 5),
-        "@RM@": _c_array(RODAS4_M), "@ALPHA@": _c_array(RODAS4_ALPHA),
-        "@GAMS@": _c_array(RODAS4_GAMMAS),
+        "@NS@": str(tab.stages), "@ORDER@": str(tab.order), "@GAMMA@": repr(tab.gamma),
+        "@RA@": _c_array(tab.a, width), "@RC@": _c_array(tab.c, width),
+        "@RM@": _c_array(tab.m), "@RE@": _c_array(tab.e), "@ALPHA@": _c_array(tab.alpha),
+        "@GAMS@": _c_array(tab.gammas), "@SAFETY@": repr(ctl.safety),
+        "@FACMIN@": repr(ctl.fac_min), "@FACMAX@": repr(ctl.fac_max),
     }
     driver = _DRIVER
     for k, v in repl.items():
@@ -644,13 +605,31 @@ class Rodas4(Integrator):
             k = int(info[1])
             t_fail = t0 + float(np.sum(dt[:k]) + info[2])
             why = {1: f"the step size fell below h_min = {tol.h_min:g} s",
-                   2: f"more than max_steps = {tol.max_steps} steps were needed",
+                   2: f"more than {term('max_steps')} = {tol.max_steps} steps were needed",
                    3: "the model gave a non-finite value"}[status]
-            hint = ("raise --max-steps, or loosen --rtol/--atol" if status == 2 else
-                    "check the parameters and the initial state, or loosen --rtol/--atol")
+            hint = (_RAISE_OR_LOOSEN if status == 2 else
+                    f"check the parameters and the initial state, or loosen {term('rtol')}/"
+                    f"{term('atol')}")
             raise ConvergenceError(
                 f"simulation of {m.name} did not converge at t = {t_fail:.6g} s: {why} ({hint})")
         return X, stats, float(h_io[0])
+
+    def _attempt(self, lu: Any, x: np.ndarray, f0: np.ndarray, ft: np.ndarray, u0: np.ndarray,
+                 du: np.ndarray, t: float, hs: float, p: np.ndarray,
+                 sc: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """One step of the tableau from ``x`` at ``t`` (the stage matrix LU-factorised in the
+        scaled states): :func:`fcomp.rosenbrock.rosenbrock_stages` with numpy."""
+        tab = TABLEAU
+
+        def rhs(st: int, Y: np.ndarray) -> np.ndarray:
+            if st == 0:
+                fy = f0
+            else:
+                fy = np.asarray(self.F(Y, u0 + du * (t + tab.alpha[st] * hs), p),
+                                dtype=float).ravel()
+            return fy + hs * tab.gammas[st] * ft
+
+        return rosenbrock_stages(tab, x, hs, rhs, lambda r: sc * lu_solve(lu, r / sc))
 
     def _run_python(self, x0: np.ndarray, U: np.ndarray, dU: np.ndarray, dt: np.ndarray,
                     p: np.ndarray, sc: np.ndarray, opts: np.ndarray, h_io: np.ndarray,
@@ -663,6 +642,7 @@ class Rodas4(Integrator):
         X[0] = x
         status, k, t = 0, 0, 0.0
         Dinv = 1.0 / sc
+        tab = TABLEAU
         for k in range(dt.size):  # noqa: B007 - k reported on failure
             T = dt[k]
             rejected, fresh = False, False
@@ -681,32 +661,19 @@ class Rodas4(Integrator):
                         status = 3
                         break
                     fresh = True
-                Mt = np.eye(x.size) / (hs * RODAS4_GAMMA) - Dinv[:, None] * Jx * sc[None, :]
+                Mt = np.eye(x.size) / (hs * tab.gamma) - Dinv[:, None] * Jx * sc[None, :]
                 en = 1e10
                 with np.errstate(all="ignore"):
                     try:
-                        lu = lu_factor(Mt, check_finite=True)
-                        K: list[np.ndarray] = []
-                        for st in range(6):
-                            if st == 0:
-                                fy = f0
-                            else:
-                                Y = x + sum(a * K[j] for j, a in enumerate(RODAS4_A[st]))
-                                uu = U[k] + dU[k] * (t + RODAS4_ALPHA[st] * hs)
-                                fy = np.asarray(self.F(Y, uu, p), dtype=float).ravel()
-                            r = fy + hs * RODAS4_GAMMAS[st] * ft
-                            for j, c in enumerate(RODAS4_C[st]):
-                                r = r + c / hs * K[j]
-                            K.append(sc * lu_solve(lu, r * Dinv))
-                        xn = x + sum(mm * kk for mm, kk in zip(RODAS4_M, K, strict=True))
-                        e = K[5] / (atol * sc + rtol * np.maximum(np.abs(x), np.abs(xn)))
+                        xn, err = self._attempt(lu_factor(Mt, check_finite=True), x, f0, ft,
+                                                U[k], dU[k], t, hs, p, sc)
+                        e = err / (atol * sc + rtol * np.maximum(np.abs(x), np.abs(xn)))
                         en = float(np.sqrt(np.mean(e * e)))
                         if not (np.all(np.isfinite(xn)) and math.isfinite(en)):
                             en = 1e10
                     except (ValueError, np.linalg.LinAlgError):
                         en = 1e10
-                fac = 6.0 if en == 0 else min(6.0, 0.9 * en ** (-1.0 / RODAS4_ORDER))
-                fac = max(fac, 0.2)
+                fac = CONTROL.factor(en, tab.order)
                 if en <= 1.0:
                     x, t, nacc, fresh = xn, t + hs, nacc + 1, False
                     if rejected:
@@ -792,8 +759,8 @@ class SolveIvp(Integrator):
             except _StepLimitError as stop:
                 raise ConvergenceError(
                     f"simulation of {m.name} did not converge at t = {t0 + stop.t:.6g} s "
-                    f"({self.name}): more than max_steps = {tol.max_steps} steps were needed "
-                    "(raise --max-steps, or loosen --rtol/--atol)") from None
+                    f"({self.name}): more than {term('max_steps')} = {tol.max_steps} steps "
+                    f"were needed ({_RAISE_OR_LOOSEN})") from None
             if sol.status != 0 or not np.all(np.isfinite(sol.y)):
                 raise ConvergenceError(
                     f"simulation of {m.name} did not converge between t = {t0 + ta:.6g} s "

@@ -50,9 +50,12 @@ Numeric and symbolic forms of the same equations:
 * ``plant.casadi_functions(symbolic_params=False)`` -- CasADi functions
   ``rhs(x, u[, p]) -> dx``, ``outputs(x, u[, p]) -> y`` and
   ``jacobians(x, u[, p]) -> (A, B, C, D)`` (exact, for the EKF);
-* ``plant.discrete_step(dt, substeps=1)`` -- CasADi ``step(x, u, p) ->
-  x_next`` over one sample with the input held (fixed-step RODAS4; the
-  prediction model of MPC, differentiable);
+* ``plant.discrete_step(dt, substeps=1, scheme=...)`` -- CasADi ``step(x, u,
+  p) -> x_next`` over one sample with the input held, differentiable: fixed
+  RODAS4 steps (``scheme="rodas4"``, default) or the linearly implicit Euler
+  (``"linearly-implicit-euler"``, with ``sensitivities=True`` also its step
+  Jacobians), the prediction model of the EKF and the MPC
+  (:class:`controllers.plant_model.ControlModel` takes it from here);
 * ``plant.ode_model()`` -- the :class:`~fcomp.simulation.OdeModel` the engine runs;
 * ``plant.param_vector(**changes)`` -- the numeric ``p``;
 * ``plant.initial_state(overrides)`` -- the documented default initial state.
@@ -87,9 +90,9 @@ import numpy as np
 
 from fcomp import __version__
 from fcomp.backend import CASADI, NUMPY, Backend
-from fcomp.errors import FcompError
+from fcomp.errors import FcompError, term
 from fcomp.measurement import Measurement
-from fcomp.models.base import FrictionModel, NotSymbolicError, Signals
+from fcomp.models.base import FrictionModel, Signals
 from fcomp.parameters import ParamSet, ParamValues
 from fcomp.paramsets import ParameterSet
 from fcomp.paramsets import get as get_paramset
@@ -101,21 +104,23 @@ from fcomp.simulation import (
     Trajectory,
     integrate,
 )
+from plants.discrete_memory import COUPLING, MemoryCoupling, MemoryStepper
 
 InputFn = Callable[[np.ndarray], np.ndarray]
 
 
 def output_times(duration: float, rate: float) -> np.ndarray:
     """Sample times ``0, 1/rate, ..., duration`` (s); validates both."""
+    d_, r_ = term("duration"), term("rate")
     if not (np.isfinite(duration) and duration > 0):
-        raise FcompError(f"--duration must be a positive number of seconds, got {duration}")
+        raise FcompError(f"{d_} must be a positive number of seconds, got {duration}")
     if not (np.isfinite(rate) and rate > 0):
-        raise FcompError(f"--rate must be a positive number of hertz, got {rate}")
+        raise FcompError(f"{r_} must be a positive number of hertz, got {rate}")
     n = int(round(duration * rate))
     if n < 1:
-        raise FcompError(f"--duration {duration} s at --rate {rate} Hz gives no samples")
+        raise FcompError(f"{d_} {duration} s at {r_} {rate} Hz gives no samples")
     if n > 50_000_000:
-        raise FcompError(f"{n} samples requested; lower --rate or --duration")
+        raise FcompError(f"{n} samples requested; lower {r_} or {d_}")
     return np.arange(n + 1) / rate
 
 
@@ -214,13 +219,6 @@ class OdePlant(Plant):
         overrides: Mapping[str, float] | None = None,
     ) -> None:
         super().__init__(friction, params)
-        from plants.discrete_memory import has_discrete_memory
-
-        if not friction.symbolic and not has_discrete_memory(friction):
-            raise NotSymbolicError(
-                f"plant {self.name}: friction model {friction.describe()!r} has no symbolic "
-                "form and no discrete-memory coupling; plants need one of the two"
-            )
         values = self.params_from_set(self.paramset)
         known = set(self.Params.names())
         for k, v in (overrides or {}).items():
@@ -378,9 +376,13 @@ class OdePlant(Plant):
         """The :class:`~fcomp.simulation.OdeModel` of this plant (``p`` symbolic)."""
         return self._ode
 
-    def discrete_step(self, dt: float, substeps: int = 1) -> ca.Function:
-        """CasADi ``step(x, u, p) -> x_next``: one sample of ``dt`` s with the input held."""
-        return self.ode_model().discrete_step(dt, substeps)
+    def discrete_step(self, dt: float, substeps: int = 1, *, scheme: str = "rodas4",
+                      sensitivities: bool = False) -> ca.Function:
+        """CasADi ``step(x, u, p) -> x_next``: one sample of ``dt`` s with the input held
+        (:meth:`fcomp.simulation.OdeModel.discrete_step`: ``scheme`` ``"rodas4"`` or
+        ``"linearly-implicit-euler"``, the controllers' prediction model)."""
+        return self.ode_model().discrete_step(dt, substeps, scheme=scheme,
+                                              sensitivities=sensitivities)
 
     def _scale_vector(self) -> np.ndarray:
         own = self.state_scales()
@@ -458,10 +460,10 @@ class OdePlant(Plant):
         U = self.input_samples(u, t)
         tol = Tolerances(rtol=rtol, atol=atol, max_steps=max_steps)
         start = self._x0(x0)
-        if self.friction.symbolic:
+        if self.friction.discrete_memory() is None:
             if coupling is not None:
-                raise FcompError(f"plant {self.name}: --coupling applies to friction with "
-                                 "discrete memory (nmlgm-hysteresis) only")
+                raise FcompError(f"plant {self.name}: {term('coupling')} applies to friction "
+                                 "with discrete memory (nmlgm-hysteresis) only")
             traj = integrate(self.ode_model(), start, t, U, self.param_vector(), hold=hold,
                              method=method, tolerances=tol)
             return self.to_measurement(traj)
@@ -472,8 +474,6 @@ class OdePlant(Plant):
         return out
 
     def _memory(self, coupling: float | None) -> Any:
-        from plants.discrete_memory import COUPLING, MemoryCoupling
-
         return MemoryCoupling(self, COUPLING if coupling is None else coupling)
 
     def stepper(self, dt: float, *, x0: Any = None, method: str = "rodas4",
@@ -482,11 +482,9 @@ class OdePlant(Plant):
         """A :class:`~fcomp.simulation.Stepper` advancing the plant ``dt`` s per ``step(u)``
         (:class:`plants.discrete_memory.MemoryStepper` for friction with discrete memory)."""
         tol = Tolerances(rtol=rtol, atol=atol)
-        if self.friction.symbolic:
+        if self.friction.discrete_memory() is None:
             return Stepper(self.ode_model(), dt, self.param_vector(), self._x0(x0),
                            method=method, tolerances=tol)
-        from plants.discrete_memory import MemoryStepper
-
         return MemoryStepper(self._memory(coupling), dt, self._x0(x0), method=method,
                              tolerances=tol)
 
@@ -494,7 +492,7 @@ class OdePlant(Plant):
                          values: Mapping[str, Any] | None = None) -> dict[str, np.ndarray]:
         """Every output at the samples ``X (n, nx)``, ``U (n, nu)`` (numpy; ``values``:
         flat parameters, scalars or one value per sample)."""
-        if not self.friction.symbolic:
+        if self.friction.discrete_memory() is not None:
             return self._memory(None).outputs(X, U)
         P = self.param_values(NUMPY, values)
         _, y = self._evaluate(NUMPY, [X[:, i] for i in range(self.nx)],

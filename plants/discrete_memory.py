@@ -44,7 +44,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from fcomp.backend import NUMPY, Backend
-from fcomp.errors import FcompError
+from fcomp.errors import FcompError, term
 from fcomp.models.base import FrictionModel, Signals
 from fcomp.parameters import ParamValues
 from fcomp.simulation import (
@@ -70,12 +70,6 @@ COUPLING = 1e-4
 _PROBE = 1e-9
 
 
-def has_discrete_memory(model: FrictionModel) -> bool:
-    """Whether ``model`` is a hysteresis-function model this module can couple."""
-    return not model.symbolic and hasattr(model, "hysteresis_function") and hasattr(
-        model, "carrier")
-
-
 class LocalBristle(FrictionModel):
     """The carrier of a hysteresis model with the tangent bristle law (module docstring).
 
@@ -86,7 +80,6 @@ class LocalBristle(FrictionModel):
     """
 
     name = "local-bristle"
-    symbolic = True
     static_map = False
 
     def __init__(self, carrier: FrictionModel) -> None:  # no super().__init__: a view
@@ -147,29 +140,32 @@ class MemoryCoupling:
 
     def __init__(self, plant: OdePlant, coupling: float = COUPLING) -> None:
         if not (math.isfinite(coupling) and coupling > 0):
-            raise FcompError(f"coupling interval must be a positive number of seconds, "
-                             f"got {coupling}")
+            raise FcompError(f"{term('coupling')} interval must be a positive number of "
+                             f"seconds, got {coupling}")
         self.plant = plant
-        model: Any = plant.friction
-        self.model = model
+        memory = plant.friction.discrete_memory()
+        if memory is None:
+            raise FcompError(f"plant {plant.name}: friction {plant.friction.describe()!r} has "
+                             "no discrete memory to couple")
+        self.model = memory
         self.coupling = float(coupling)
-        self.local = LocalBristle(model.carrier())
+        self.local = LocalBristle(memory.carrier())
         self.twin = type(plant)(self.local, plant.paramset,
                                 overrides=plant.plant_params.flat())
         names = list(self.twin.flat_params())
         self.i_tan = [names.index(n) for n in TANGENT]
         self.p_twin = self.twin.param_vector()
         self.n_plant = len(plant.plant_states)
-        self.i_F = len(self.model.base_states) - 1  # "Fz" among the friction states
-        self.P = self.model.param_values(NUMPY)
+        self.i_F = plant.friction.state_names.index(memory.memory_state)  # "Fz"
+        self.P = plant.friction.param_values(NUMPY)
         self.p_atm = plant.plant_params.flat().get("p_atm", 101325.0)
         states = plant.plant_states
         self._ip = [states.index(n) if n in states else None for n in ("p1", "p2")]
         # without effects the levels are the parameters: zs = Fs/sigma0 of the side
-        flat = self.model.flat_params()
+        flat = plant.friction.flat_params()
         steep = [abs(flat.get(f"c{i}", 0.0) * flat.get(f"k{i}", 0.0)) for i in (1, 2, 3, 8)]
         self.k_max = 10.0 * max(flat["sigma0"], *steep)
-        if not self.model.effects:
+        if not plant.friction.effects:
             zs = [self.P("Fs" if self.P.has("Fs") else "Fc", s) / flat["sigma0"]
                   for s in (1.0, -1.0)]
             self._zs: tuple[float, float] | None = (abs(float(zs[0])), abs(float(zs[1])))
@@ -252,8 +248,8 @@ class MemoryCoupling:
             raise FcompError(
                 f"plant {self.plant.name}: a coupling interval of {self.coupling:g} s over "
                 f"{float(t[-1] - t[0]):g} s needs {needed:.3g} coupling intervals of at least "
-                f"one step each, more than max_steps = {tolerances.max_steps}; raise --coupling "
-                f"(default {COUPLING:g} s) or --max-steps")
+                f"one step each, more than {term('max_steps')} = {tolerances.max_steps}; raise "
+                f"{term('coupling')} (default {COUPLING:g} s) or {term('max_steps')}")
         integ = make_integrator(self.twin.ode_model(), method)
         hf = self.start(x0)
         xt = self.to_twin(x0)

@@ -48,7 +48,7 @@ from fcomp.backend import Backend
 from fcomp.errors import FcompError
 from fcomp.parameters import ParamValues, make_params_class
 from fcomp.paramsets import ParameterSet
-from plants.mechanics import PISTON_SPECS, Drive, PistonPlant, _s, areas, piston_values
+from plants.mechanics import PISTON_SPECS, Drive, PistonPlant, _s, areas, piston_values, volumes
 from plants.mechanics import require_section as section
 
 INF = math.inf
@@ -128,8 +128,7 @@ class HydraulicPlant(PistonPlant):
               - orifice_flow(be, k, U - xv, p1 - pt, rho, lam))
         Q2 = (orifice_flow(be, k, U - xv, ps - p2, rho, lam)
               - orifice_flow(be, k, U + xv, p2 - pt, rho, lam))
-        V1 = P("V10") + A1 * pos
-        V2 = P("V20") + A2 * (P("stroke") - pos)
+        V1, V2 = volumes(pos, P, A1, A2)
         beta = P("beta")
         dp1 = beta / V1 * (Q1 - A1 * vel)
         dp2 = beta / V2 * (Q2 + A2 * vel)

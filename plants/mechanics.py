@@ -62,11 +62,12 @@ from typing import Any, ClassVar
 import numpy as np
 
 from fcomp.backend import NUMPY, Backend
-from fcomp.errors import FcompError
+from fcomp.errors import FcompError, term
 from fcomp.measurement import ORIENTATIONS, G
 from fcomp.models.base import FrictionModel, Signals
 from fcomp.parameters import ParamSpec, ParamValues, spec
 from fcomp.paramsets import ParameterSet
+from fcomp.piston import chamber_volumes, piston_areas
 from plants.base import OdePlant
 
 INF = math.inf
@@ -118,7 +119,7 @@ def orient_value(orientation: Any, where: str) -> float:
 def require_section(pset: ParameterSet | None, plant: str, *keys: str) -> dict[str, Any]:
     """The nested section ``keys`` of the set's TOML, or a one-line error naming it."""
     if pset is None:
-        raise FcompError(f"plant {plant} needs a parameter set (--params)")
+        raise FcompError(f"plant {plant} needs a parameter set ({term('params')})")
     node: Any = pset.raw
     for i, k in enumerate(keys):
         if not isinstance(node, dict) or k not in node:
@@ -130,9 +131,14 @@ def require_section(pset: ParameterSet | None, plant: str, *keys: str) -> dict[s
 
 
 def areas(be: Backend, P: ParamValues) -> tuple[Any, Any]:
-    """Piston areas ``A1 = pi/4*D^2`` (cap side), ``A2 = pi/4*(D^2 - d^2)`` (rod side), m^2."""
-    D, d = P("bore"), P("rod")
-    return math.pi / 4 * D * D, math.pi / 4 * (D * D - d * d)
+    """Piston areas ``A1``, ``A2`` (m^2) of the plant's ``bore`` and ``rod``
+    (:func:`fcomp.piston.piston_areas`)."""
+    return piston_areas(P("bore"), P("rod"))
+
+
+def volumes(pos: Any, P: ParamValues, A1: Any, A2: Any) -> tuple[Any, Any]:
+    """Chamber volumes ``V1``, ``V2`` (m^3) at position ``pos`` (:func:`fcomp.piston.chamber_volumes`)."""
+    return chamber_volumes(pos, P("stroke"), P("V10"), P("V20"), A1, A2)
 
 
 def end_stop_force(be: Backend, x: Any, v: Any, P: ParamValues) -> Any:
@@ -146,17 +152,10 @@ def end_stop_force(be: Backend, x: Any, v: Any, P: ParamValues) -> Any:
 
 
 def is_static_map(model: FrictionModel) -> bool:
-    """Whether ``model`` is a memoryless map needing the Karnopp band in a plant.
-
-    A model class may say so with a ``static_map`` attribute; in the LuGre
-    family it is every model without the bristle state (``presliding``).
-    """
-    flag = getattr(model, "static_map", None)
-    if flag is not None:
-        return bool(flag)
-    from fcomp.models.lugre_family import LuGreFamily
-
-    return isinstance(model, LuGreFamily) and "presliding" not in model.features
+    """Whether ``model`` is a memoryless map needing the Karnopp band in a plant (the model's
+    :attr:`~fcomp.models.base.FrictionModel.static_map`: in the LuGre family every model
+    without the bristle state ``presliding``)."""
+    return model.static_map
 
 
 @dataclass

@@ -63,6 +63,7 @@ from plants.mechanics import (
     areas,
     orient_value,
     piston_values,
+    volumes,
 )
 from plants.mechanics import require_section as section
 
@@ -165,8 +166,7 @@ class PneumaticPlant(PistonPlant):
         open_b = Av * be.fmin(be.fmax(lap - xs, 0.0), 1.0)
         mdot1 = iso6358_flow(be, ps, p1, open_a, P) - iso6358_flow(be, p1, pa, open_b, P)
         mdot2 = iso6358_flow(be, ps, p2, open_b, P) - iso6358_flow(be, p2, pa, open_a, P)
-        V1 = P("V10") + A1 * pos
-        V2 = P("V20") + A2 * (P("stroke") - pos)
+        V1, V2 = volumes(pos, P, A1, A2)
         k, RT = P("k_poly"), P("R_air") * P("T_air")
         dp1 = k / V1 * (RT * mdot1 - p1 * A1 * vel)
         dp2 = k / V2 * (RT * mdot2 + p2 * A2 * vel)

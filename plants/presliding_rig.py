@@ -41,6 +41,7 @@ import numpy as np
 from fcomp.backend import Backend
 from fcomp.parameters import ParamValues, make_params_class
 from fcomp.paramsets import ParameterSet
+from fcomp.piston import piston_areas
 from plants.mechanics import PISTON_SPECS, Drive, PistonPlant, _s, areas, piston_values
 from plants.mechanics import require_section as section
 
@@ -81,7 +82,8 @@ class PreslidingRig(PistonPlant):
         """Gauge ``(p1, p2)`` of the default state: ``p2 = ps_g/2``, ``p1*A1 = p2*A2``."""
         p = self.plant_params.flat()
         p2 = 0.5 * p["ps_g"]
-        return p2 * (1.0 - (p["rod"] / p["bore"]) ** 2), p2
+        A1, A2 = piston_areas(p["bore"], p["rod"])
+        return p2 * A2 / A1, p2
 
     def commands_at_rest(self) -> tuple[float, float]:
         """Valve commands (V) that hold the default pressures."""

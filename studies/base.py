@@ -60,12 +60,15 @@ class StudyConfig:
         Where the files are actually written while the study runs (set by
         :meth:`Study.main`: a staging folder that becomes ``out`` at the end;
         a study run inside another's staging folder writes there directly).
+    out_label
+        How messages name ``out`` (the command line gives its option, ``--out``).
     """
 
     out: Path
     fast: bool = False
     command: str | None = None
     workdir: Path | None = None
+    out_label: str = "out"
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "out", Path(self.out))
@@ -186,14 +189,15 @@ class Study(ABC):
                 shutil.rmtree(cfg.workdir, ignore_errors=True)
                 raise
         note = cfg.command or f"study {self.name}"
-        with staged_folder(cfg.out, "--out", "study", note=note) as staging:
+        with staged_folder(cfg.out, cfg.out_label, "study", note=note) as staging:
             return self._run(cfg, staging)
 
     def _run(self, cfg: StudyConfig, directory: Path) -> dict[str, Any]:
         try:
             directory.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
-            raise FcompError(f"--out {cfg.out}: cannot create it ({exc.strerror})") from None
+            raise FcompError(f"{cfg.out_label} {cfg.out}: cannot create it ({exc.strerror})") \
+                from None
         report = Report(self.title, subtitle=self.summary, command=cfg.command,
                         config={"study": self.name, **cfg.as_dict()},
                         table_label=self.table_label, figure_label=self.figure_label)

@@ -1,7 +1,7 @@
 """The report of study ``coulomb-viscous``: text, tables and figures from its results.
 
 Every number in the text comes from the results of
-:mod:`studies.coulomb_viscous`; the wording that depends on a test follows the
+:mod:`studies.coulomb_viscous_analysis`; the wording that depends on a test follows the
 test's outcome. "Table N" in the text means the paper's table (seed 001);
 the report's own tables carry their number in their caption.
 """
@@ -16,7 +16,7 @@ import numpy as np
 
 from fcomp.report import Comparison, Report
 from studies.base import StudyOutput
-from studies.coulomb_viscous import (
+from studies.coulomb_viscous_analysis import (
     ALPHA,
     B_CONSISTENCY_TOL,
     CYLINDERS,

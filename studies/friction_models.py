@@ -61,6 +61,7 @@ from fcomp.errors import FcompError
 from fcomp.measurement import Measurement
 from fcomp.models import FrictionModel, make_model
 from fcomp.paramsets import get as get_paramset
+from fcomp.piston import chamber_volumes, piston_areas
 from studies.base import Study, StudyConfig, StudyOutput
 
 #: Parameter set of the study.
@@ -186,10 +187,8 @@ def claim_holds(lugre: dict[str, float], nmlgm: dict[str, float],
 def oil_column_stiffness(plant: Any) -> float:
     """Hydraulic stiffness ``beta*(A1^2/V1 + A2^2/V2)`` (N/m) at mid-stroke, valve closed."""
     p = plant.plant_params.flat()
-    A1 = math.pi / 4 * p["bore"] ** 2
-    A2 = math.pi / 4 * (p["bore"] ** 2 - p["rod"] ** 2)
-    x = 0.5 * p["stroke"]
-    V1, V2 = p["V10"] + A1 * x, p["V20"] + A2 * (p["stroke"] - x)
+    A1, A2 = piston_areas(p["bore"], p["rod"])
+    V1, V2 = chamber_volumes(0.5 * p["stroke"], p["stroke"], p["V10"], p["V20"], A1, A2)
     return p["beta"] * (A1 * A1 / V1 + A2 * A2 / V2)
 
 

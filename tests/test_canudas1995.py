@@ -28,7 +28,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 import pytest
-import reference_lugre as ref
+from helpers import reference_lugre as ref
 
 from fcomp.models import FrictionModel, make_model
 from fcomp.trajectory import friction_along_motion

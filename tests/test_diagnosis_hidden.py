@@ -26,6 +26,8 @@ from fcomp.diagnosis import Diagnosis
 from fcomp.diagnosis.loop import trimmed_rms
 from fcomp.synthetic import generate
 
+pytestmark = pytest.mark.slow  # builds the study site or runs long diagnoses
+
 NOISE_STD = 0.4  # N, the generator's default force noise
 
 #: case -> (hidden effects, generator base law, baseline model, duration s)

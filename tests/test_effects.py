@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-import reference_lugre as ref
+from helpers import reference_lugre as ref
 from test_models import attachable
 
 from fcomp.backend import NUMPY, Backend

@@ -121,6 +121,7 @@ def test_process_pool_gives_the_sequential_results(sequential) -> None:
     assert d["pid"]["rms_error"]["median"] == pytest.approx(np.median(vals))
 
 
+@pytest.mark.slow
 def test_dask_local_cluster_gives_the_sequential_results(sequential) -> None:
     import distributed  # part of the test extra: a missing package fails, never skips
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
@@ -129,6 +130,7 @@ def test_dask_local_cluster_gives_the_sequential_results(sequential) -> None:
     assert _physics(res) == _physics(sequential)
 
 
+@pytest.mark.slow
 def test_unreachable_scheduler_is_a_clear_error() -> None:
     with pytest.raises(FcompError, match="cannot connect to the Dask scheduler"):
         run_jobs(JOBS[:1], scheduler="tcp://127.0.0.1:9")

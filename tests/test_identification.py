@@ -1,7 +1,7 @@
 """Identification (fcomp.identification): exact sensitivities, honest standard errors, and
 recovery of known parameters from data simulated *independently* of the package.
 
-The records are generated with the plain equations of ``tests/reference_lugre.py``
+The records are generated with the plain equations of ``tests/helpers/reference_lugre.py``
 (written from models.md, importing nothing from fcomp) integrated by SciPy's LSODA
 at rtol 1e-8 along a smooth velocity; the package then fits its own models to them.
 Recovery is checked against the stated uncertainty (|estimate - true| < 3 stderr)
@@ -14,7 +14,7 @@ import math
 
 import numpy as np
 import pytest
-from reference_lugre import FilmLuGreRef, LuGreRef, coulomb_viscous, stribeck_map
+from helpers.reference_lugre import FilmLuGreRef, LuGreRef, coulomb_viscous, stribeck_map
 from scipy.integrate import solve_ivp
 
 from fcomp.effects import make_effect
@@ -314,3 +314,63 @@ def test_zillen_friction_level_grows_with_chamber_pressure() -> None:
     values = [v for v, _ in levels]
     assert values == sorted(values)
     assert levels[0][1][1] < levels[-1][1][0]  # 1 bar and 7 bar intervals do not overlap
+
+
+# ------------------------------------------------------- several records, one vector
+def test_fit_records_recovers_one_vector_from_masked_samples_of_two_records() -> None:
+    """The engine's public multi-record entry point: two records of the same LuGre pushed
+    by a driving force (the mass estimated), part of each masked out, one parameter vector."""
+    from fcomp.identification import Record, fit_records
+
+    truth = LuGreRef(5.0, 8.0, 0.01, 2.0, 1e5, 50.0, 30.0)
+    mass = 2.5
+
+    def driven(duration: float, name: str) -> Measurement:
+        meas, _ = reference_record(truth, duration, 0.02)
+        return Measurement({k: meas[k] for k in ("t", "x", "v", "a")}
+                           | {"F_ext": meas["F"] + mass * meas["a"]}, {"name": name})
+
+    d1, d2 = fit_data(driven(3.0, "one")), fit_data(driven(2.0, "two"))
+    assert d1.inertia is not None and d2.inertia is not None
+    m1 = np.arange(d1.n) % 2 == 0
+    m2 = d2.sig["t"] < 1.5
+    model = make_model("lugre", params={"Fc": 4.0, "Fs": 7.0, "vs": 0.01, "n": 2.0,
+                                        "sigma0": 1e5, "sigma1": 50.0, "sigma2": 20.0})
+    names = ["Fc", "Fs", "sigma2", "mass"]
+    res = fit_records(model, [Record(d1, m1), Record(d2, m2)], names,
+                      starts=[{"sigma2": 10.0}, {"sigma2": 40.0, "mass": 1.0}], probe_nfev=5,
+                      bounds={"mass": (0.0, 10.0)}, max_nfev=50)
+    assert res.converged and not res.probed_only
+    want = {"Fc": 5.0, "Fs": 8.0, "sigma2": 30.0, "mass": mass}
+    for n, v in want.items():
+        assert res.values[n] == pytest.approx(v, rel=0.02), n
+    assert res.model.flat_params()["Fs"] == pytest.approx(res.values["Fs"])
+    assert "mass" not in res.model.flat_params()
+    assert res.solution.residuals.size == int(m1.sum() + m2.sum())
+    assert res.cost == pytest.approx(float(res.solution.residuals @ res.solution.residuals))
+    # a caller's stopping rule after the probes
+    stopped = fit_records(model, [Record(d1, m1)], ["Fc", "mass"], starts=[{}, {"Fc": 3.0}],
+                          probe_nfev=2, keep_going=lambda cost: False)
+    assert stopped.probed_only and not stopped.converged
+    with pytest.raises(FcompError, match="no parameter"):
+        fit_records(model, [Record(d1)], ["Fq"])
+
+
+def test_strategies_are_chosen_by_capability_and_pluggable() -> None:
+    from fcomp.identification import (
+        DiscreteMemoryStrategy,
+        StaticStrategy,
+        TrajectoryStrategy,
+        strategy_for,
+    )
+
+    assert isinstance(strategy_for(make_model("coulomb-viscous")), StaticStrategy)
+    assert isinstance(strategy_for(make_model("lugre", effects=["dwell-time"])),
+                      TrajectoryStrategy)
+    assert isinstance(strategy_for(make_model("nmlgm-hysteresis")), DiscreteMemoryStrategy)
+    meas, _ = reference_record(LuGreRef(5.0, 8.0, 0.01, 2.0, 1e5, 50.0, 30.0), 2.0, 0.02)
+    fit = FrictionFit("lugre", free=["Fc", "Fs", "sigma2"],
+                      strategy=TrajectoryStrategy()).fit(meas)
+    assert fit.strategy_.name == "trajectory" and fit.method_ == "trajectory"
+    with pytest.raises(FcompError, match="no discrete memory"):
+        FrictionFit("lugre", strategy=DiscreteMemoryStrategy()).fit(meas)

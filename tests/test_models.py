@@ -24,7 +24,7 @@ from collections.abc import Callable, Sequence
 import casadi as ca
 import numpy as np
 import pytest
-import reference_lugre as ref
+from helpers import reference_lugre as ref
 
 from fcomp.backend import NUMPY
 from fcomp.effects import make_effect

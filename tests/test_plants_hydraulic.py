@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import math
 
-import independent_plants as ip
 import numpy as np
 import pytest
+from helpers import independent_plants as ip
 from scipy.integrate import trapezoid
 from scipy.optimize import brentq
 

@@ -5,9 +5,9 @@ from __future__ import annotations
 
 import math
 
-import independent_plants as ip
 import numpy as np
 import pytest
+from helpers import independent_plants as ip
 
 from fcomp.inputs import parse_input
 from fcomp.models import make_model

@@ -1,6 +1,6 @@
 """The report site, checked as a reader would: rendered in headless Chromium, validated as HTML.
 
-``fcomp study all --fast`` builds the site once (:func:`browser.build_site`);
+``fcomp study all --fast`` builds the site once (:func:`helpers.browser.build_site`);
 every page (the index, each study's report and the diagnosis reports it
 links) is opened in Chromium at a desktop and a phone width: every figure
 must load and show, nothing may stick out of the page (wide tables scroll
@@ -15,9 +15,11 @@ import re
 from pathlib import Path
 
 import pytest
-from browser import CHROMIUM, Browser, build_site, page_problems, validate_html
+from helpers.browser import CHROMIUM, Browser, page_problems, validate_html
 
 from studies import STUDIES
+
+pytestmark = pytest.mark.slow  # builds the study site or runs long diagnoses
 
 WIDTHS = (1280, 390)
 
@@ -32,13 +34,6 @@ def _pages(out: Path) -> list[Path]:
         pages.append(out / name / "report.html")
         pages.extend(sorted((out / name).glob("*/report.html")))  # linked sub-reports
     return pages
-
-
-@pytest.fixture(scope="module")
-def site() -> Path:
-    out, code, err = build_site()
-    assert code == 0, f"fcomp study all --fast exited {code}:\n{err[-3000:]}"
-    return out
 
 
 @pytest.fixture(scope="module")

@@ -3,11 +3,14 @@
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import pytest
-from browser import build_site, study_summary
+from helpers.browser import study_summary
 
 from studies import STUDIES
+
+pytestmark = pytest.mark.slow  # builds the study site or runs long diagnoses
 
 FIELDS = ("plant", "controller", "task", "rms_error", "max_error", "steady_state_error",
           "solve_time_median", "solve_time_max")
@@ -61,9 +64,8 @@ def test_robustness_distributions_per_compensator(summary: dict) -> None:
                 assert min(vals) <= d["rms_error"]["median"] <= max(vals)
 
 
-def test_report_has_tables_figures_and_timing(summary: dict) -> None:
-    out, _, _ = build_site()
-    html = (out / "compensators" / "report.html").read_text(encoding="utf-8")
+def test_report_has_tables_figures_and_timing(summary: dict, site: Path) -> None:
+    html = (site / "compensators" / "report.html").read_text(encoding="utf-8")
     for text in ("Ranked results", "Friction estimate against the true friction",
                  "Robustness", "Compute time"):
         assert text in html

@@ -20,7 +20,8 @@ from scipy import stats
 
 from fcomp import datasets
 from studies import STUDIES
-from studies import coulomb_viscous as cv
+from studies import coulomb_viscous as cv_study
+from studies import coulomb_viscous_analysis as cv
 from studies.base import StudyConfig, StudyError
 
 # seed 001 Table 8 as printed: std, lower limit, upper limit
@@ -291,12 +292,12 @@ def test_report_files_and_self_containment(run) -> None:
 
 
 def test_fast_mode_and_config_mapping(run, tmp_path: Path) -> None:
-    s = cv.main({"out": tmp_path / "fast", "fast": True})
+    s = cv_study.main({"out": tmp_path / "fast", "fast": True})
     assert s["meta"]["fast"] is True and run[1]["meta"]["fast"] is False
     assert s["table8"] == run[1]["table8"]  # the study is small: fast mode runs it in full
     assert (tmp_path / "fast" / "report.html").is_file()
     with pytest.raises(ValueError, match="unknown key"):
-        cv.main({"out": tmp_path, "speed": 1})
+        cv_study.main({"out": tmp_path, "speed": 1})
     with pytest.raises(ValueError, match="'out'"):
         StudyConfig.coerce({"fast": True})
 
@@ -319,7 +320,7 @@ def test_out_is_a_file_is_one_line_exit_2(tmp_path: Path) -> None:
 
 
 # ---------------------------------------------------------------------- all
-class _Tiny(cv.Study):
+class _Tiny(cv_study.Study):
     name = "tiny-test"
     title = "Tiny"
     summary = "a tiny study for the test"

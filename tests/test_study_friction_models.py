@@ -11,9 +11,11 @@ import math
 
 import numpy as np
 import pytest
-from browser import study_summary
+from helpers.browser import study_summary
 
 from studies import friction_models as fm
+
+pytestmark = pytest.mark.slow  # builds the study site or runs long diagnoses
 
 FIELDS = ("hf_velocity_rms", "hf_force_rms", "hf_pressure_rms")
 

@@ -2,10 +2,14 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
-from browser import build_site, study_summary
+from helpers.browser import study_summary
 
 from studies import missing_physics as mp
+
+pytestmark = pytest.mark.slow  # builds the study site or runs long diagnoses
 
 
 @pytest.fixture(scope="module")
@@ -46,9 +50,8 @@ def test_real_data_error_falls(summary: dict) -> None:
     assert all(s["rms_after"] is None or s["rms_after"] >= 0 for s in d["steps"])
 
 
-def test_full_diagnosis_reports_written() -> None:
-    out, _, _ = build_site()
-    folder = out / "missing-physics"
+def test_full_diagnosis_reports_written(site: Path) -> None:
+    folder = site / "missing-physics"
     subs = sorted(folder.glob("diagnosis-*/report.html"))
     assert len(subs) == 2
     text = (folder / "report.html").read_text(encoding="utf-8")

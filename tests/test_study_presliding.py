@@ -2,7 +2,7 @@
 
 Independent references: the Dahl model's minor-loop drift in closed form,
 the area of seed 000's Table 3 loop by brute-force quadrature of Eq. 13,
-and (in the summary) the co-simulation of the rig against the plant engine.
+and (in the summary) the rig with the memory coupled to its engine against the plant engine.
 """
 
 from __future__ import annotations
@@ -11,10 +11,13 @@ import math
 
 import numpy as np
 import pytest
-from browser import study_summary
+from helpers.browser import study_summary
 
 from fcomp.models import make_model
-from studies import presliding as ps
+from studies import presliding_analysis as analysis
+from studies import presliding_runs as runs
+
+pytestmark = pytest.mark.slow  # builds the study site or runs long diagnoses
 
 
 @pytest.fixture(scope="module")
@@ -23,7 +26,7 @@ def summary() -> dict:
 
 
 def test_programme_reaches_its_waypoints() -> None:
-    prog = ps.programme("fig9", 0.02e6, 0.016e6)
+    prog = runs.programme("fig9", 0.02e6, 0.016e6)
     t = np.concatenate([[0.0], np.cumsum([w[0] for w in prog.waypoints])])
     P = prog.pressures(t)
     assert np.allclose(P[1:], [[w[1], w[2]] for w in prog.waypoints])
@@ -31,7 +34,7 @@ def test_programme_reaches_its_waypoints() -> None:
     assert fine.min() >= 0 and fine[:, 0].max() == pytest.approx(0.02e6)
     assert np.max(np.abs(np.diff(fine, axis=0))) < 0.02e6 * 0.01  # continuous ramps
     with pytest.raises(Exception, match="programme"):
-        ps.programme("fig99", 1.0)
+        runs.programme("fig99", 1.0)
 
 
 def _dahl_gaps(Fc: float, s0: float) -> list[float]:
@@ -40,7 +43,7 @@ def _dahl_gaps(Fc: float, s0: float) -> list[float]:
     On a monotone move in direction s, dz/dx = 1 - s*sigma0*z/Fc, so
     z(x) = s*Fc/sigma0 + (z0 - s*Fc/sigma0)*exp(-sigma0*|x - x0|/Fc).
     """
-    pts, _ = ps.memory_paths()
+    pts, _ = analysis.memory_paths()
     z, zs = 0.0, [0.0]
     for a, b in zip(pts[:-1], pts[1:], strict=True):
         s = math.copysign(1.0, b - a)
@@ -53,7 +56,7 @@ def _dahl_gaps(Fc: float, s0: float) -> list[float]:
 def test_memory_measure_against_closed_form_dahl() -> None:
     Fc, s0 = 5.0, 1.5e4
     dahl = make_model("dahl", params={"Fc": Fc, "sigma0": s0, "sigma2": 0.0})
-    got = ps.memory_properties(dahl)
+    got = analysis.memory_properties(dahl)
     want = _dahl_gaps(Fc, s0)
     assert got["closing_gaps"] == pytest.approx(want, rel=2e-3, abs=1e-5)
     assert min(want) > 0.01  # Dahl's minor loops do not close ...
@@ -61,7 +64,7 @@ def test_memory_measure_against_closed_form_dahl() -> None:
 
 
 def test_table3_area_against_quadrature() -> None:
-    v = ps.new_model(1).flat_params()
+    v = runs.new_model(1).flat_params()
     c = [v["c1"], v["c2"], v["c3"]]
     k = [v["k1"], v["k2"], v["k3"]]
     z1, z2, z3, z4, z5 = (v[f"z{i}"] for i in range(1, 6))
@@ -81,7 +84,7 @@ def test_table3_area_against_quadrature() -> None:
     top = up[-1]
     down = top - chain(z5 - z, [0.0, z5 - z4, z5 - z2, z5 + z1])       # from (z5, top)
     area = np.trapezoid(up - down, z)
-    assert ps.table3_loop_area(v) == pytest.approx(area, rel=1e-6)
+    assert analysis.table3_loop_area(v) == pytest.approx(area, rel=1e-6)
     assert area > 0
 
 
@@ -97,7 +100,7 @@ def test_summary_contract(summary: dict) -> None:
 
 
 def test_cosimulation_reproduces_the_plant_engine(summary: dict) -> None:
-    """No-op hysteresis function = NMLGM: co-simulation and RODAS4 plant run agree."""
+    """No-op hysteresis function = NMLGM: the coupled memory and the RODAS4 plant run agree."""
     assert summary["engine_check"]["relative"] < 1e-3
 
 

@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import Any
 
 from fcomp.effects import load_effects_module
-from fcomp.errors import FcompError, FcompWarning
+from fcomp.errors import FcompError, FcompWarning, render_terms
 from fcomp.models import FrictionModel, make_model
 from fcomp.outputs import InputSet, check_distinct, check_folder_target
 
@@ -29,8 +29,26 @@ ARGV: list[str] = []
 PYTHON_WARNINGS: list[warnings.WarningMessage] | None = None
 
 
+#: Library parameter -> the command-line option that sets it: library messages name the
+#: parameter (marked with :func:`fcomp.errors.term`), the command line shows its option.
+OPTIONS: dict[str, str] = {
+    "max_steps": "--max-steps", "rtol": "--rtol", "atol": "--atol", "duration": "--duration",
+    "rate": "--rate", "coupling": "--coupling", "params": "--params", "fixed": "--fix",
+    "out": "--out", "input": "--input", "mapping": "--map", "position_scale": "--position-scale",
+    "effects_module": "--effects",
+}
+
+
+def in_cli_terms(message: str) -> str:
+    """``message`` with every library parameter marked in it (:func:`fcomp.errors.term`)
+    written as the command-line option that sets it (:data:`OPTIONS`)."""
+    return render_terms(message, OPTIONS)
+
+
 def warn(code: str, message: str, parameter: str | None = None) -> None:
-    """Record a warning for a suspicious but legal input (one line, no duplicates)."""
+    """Record a warning for a suspicious but legal input (one line, no duplicates); library
+    parameters marked in it are written as their options (:func:`in_cli_terms`)."""
+    message = in_cli_terms(message)
     item = {"code": code, "parameter": parameter, "message": " ".join(message.split())}
     if item not in WARNINGS:
         WARNINGS.append(item)
@@ -40,7 +58,8 @@ def python_warning(w: warnings.WarningMessage) -> tuple[str, str]:
     """A Python or numpy warning as ``(code, one-line message)``."""
     text = str(w.message).strip().splitlines()[0] if str(w.message).strip() else ""
     if isinstance(w.message, FcompWarning):
-        return w.message.code, text
+        return w.message.code, in_cli_terms(w.message.template.strip().splitlines()[0]
+                                            if w.message.template.strip() else text)
     if issubclass(w.category, RuntimeWarning):
         return "numerical", (f"{text} (a computation left floating-point range; check the "
                              "inputs and the results)")

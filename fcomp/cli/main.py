@@ -125,8 +125,8 @@ def _run(args: argparse.Namespace) -> int:
 
     try:
         return int(args.func(args) or 0)
-    except FcompError as exc:
-        return _error(str(exc))
+    except FcompError as exc:  # the library's terms, written as this command's options
+        return _error(exc.render(common.OPTIONS))
     except _Terminated:
         sys.stderr.write("fcomp: terminated\n")
         return 143

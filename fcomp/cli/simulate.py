@@ -101,9 +101,9 @@ def run(args: argparse.Namespace) -> int:
                   if plant_set else plant_cls(model, params))
     x0 = parse_assignments(args.x0, option="--x0") if args.x0 else None
     _check_x0(plant, x0)
-    text = sampling_warning(u, args.rate)
-    if text:
-        warn("aliasing", text, "--input")
+    aliasing = sampling_warning(u, args.rate)
+    if aliasing is not None:
+        warn(aliasing.code, aliasing.template, "--input")
     if isinstance(plant, OdePlant):
         _command_range(plant, plant.input_samples(u, t))
     with Progress(f"simulate {args.plant}", args.duration, enabled=not args.no_progress):

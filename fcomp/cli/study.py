@@ -33,7 +33,7 @@ def run(args: argparse.Namespace) -> int:
     out = Path(args.out) if args.out else Path(f"study-{args.name}")
     check_folder_target("--out", out, "study")
     words = ["fcomp", "study", args.name, "--out", str(out)] + (["--fast"] if args.fast else [])
-    config = StudyConfig(out=out, fast=args.fast, command=shlex.join(words))
+    config = StudyConfig(out=out, fast=args.fast, command=shlex.join(words), out_label="--out")
     try:
         study.main(config)
     except StudyError as exc:

@@ -430,7 +430,8 @@ class Diagnosis:
                                                self.split_.train)
             first = self._refit.fit(model, starts)
             # the fits from here on weigh samples by how well the motion fixes the prediction
-            self._refit.set_weights(first.spread, self.noise_floor_.value)
+            if first.spread is not None:
+                self._refit.set_weights(first.spread, self.noise_floor_.value)
             self.baseline_fit_ = self._polish(self._refit.fit(model, [first.values, *starts]))
             self._tick(f"baseline {model.describe()}")
             self.fit_ = self.baseline_fit_

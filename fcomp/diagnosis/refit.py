@@ -296,17 +296,18 @@ class Refit:
         early). Fits after this weigh their residuals by ``sqrt(w)``.
         """
         self._weights = 1.0 / (1.0 + (np.asarray(spread) / (2.0 * max(noise, 1e-300))) ** 2)
-        self._record_weights: dict[int, list[np.ndarray]] = {}
+        self._record_weights: dict[int, list[np.ndarray | None]] = {}
 
-    def _weights_of(self, records: list[tuple[FitData, np.ndarray]]) -> list[np.ndarray] | None:
+    def _weights_of(self, records: list[tuple[FitData, np.ndarray]]
+                    ) -> list[np.ndarray | None]:
         """The square roots of the weights of ``records``' training samples (None: unweighted)."""
         w = getattr(self, "_weights", None)
         if w is None:
-            return None
+            return [None] * len(records)
         key = id(records)
         if key not in self._record_weights:
             q = next(k for k, v in self._by_q.items() if v is records)
-            out = []
+            out: list[np.ndarray | None] = []
             for e in self.data.experiments:
                 train = self.split.train[e.start:e.stop]
                 if not train.any():
@@ -434,7 +435,7 @@ class Refit:
         mass = values.get("mass")
         total = 0.0
         recs = self._probe_records
-        weights = self._weights_of(recs) or [None] * len(recs)
+        weights = self._weights_of(recs)
         for (d, m), w in zip(recs, weights, strict=True):
             s = d.sig
             F = d.band_limited(friction_along_motion(
@@ -533,11 +534,12 @@ class Refit:
         specs = self.specs(base, names)
         pv = self._pv(base, names, fit.values, specs)
         problems = [TrajectoryProblem(base, d, pv, mask=m) for d, m in self._records]
-        weights = self._weights_of(self._records) or [None] * len(problems)
+        weights = self._weights_of(self._records)
         theta = np.array([fit.values[n] for n in names])
         rs, Gs = [], []
         for p, w in zip(problems, weights, strict=True):
             r, G = p(theta, True)
+            assert G is not None
             if w is not None:  # as the fit weighed them
                 r, G = r * w, G * w[:, None]
             rs.append(r)
@@ -560,7 +562,7 @@ class Refit:
                records: list[tuple[FitData, np.ndarray]] | None = None):
         recs = self._records if records is None else records
         problems = [TrajectoryProblem(model, d, pv, mask=m) for d, m in recs]
-        weights = self._weights_of(recs) or [None] * len(problems)
+        weights = self._weights_of(recs)
 
         def fun(theta: np.ndarray, need_jac: bool = True
                 ) -> tuple[np.ndarray, np.ndarray | None]:

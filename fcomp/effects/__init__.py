@@ -10,34 +10,10 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
-from typing import Any
 
-from fcomp.effects.base import Effect, scale_levels
+from fcomp.effects.base import EFFECTS, Effect, make_effect, register_effect, scale_levels
 from fcomp.effects.catalogue import CATALOGUE
-from fcomp.errors import FcompError
-from fcomp.registry import Registry
-
-EFFECTS: Registry[type[Effect]] = Registry("effect")
-for _cls in CATALOGUE:
-    EFFECTS.register(_cls.name, _cls)
-
-
-def register_effect(cls: type[Effect], *, replace: bool = False) -> type[Effect]:
-    """Register a user effect class under ``cls.name`` (usable as a decorator)."""
-    if not (isinstance(cls, type) and issubclass(cls, Effect)):
-        raise ValueError(f"{cls!r} is not an Effect subclass")
-    if not cls.name:
-        raise ValueError(f"effect class {cls.__name__} has no name")
-    for attr in ("Params",):
-        if not hasattr(cls, attr):
-            raise ValueError(f"effect {cls.name!r} must define {attr}")
-    EFFECTS.register(cls.name, cls, replace=replace)
-    return cls
-
-
-def make_effect(name: str, params: Any = None, **config: Any) -> Effect:
-    """An effect instance by name, with parameters (defaults: a no-op)."""
-    return EFFECTS.get(name)(params, **config)
+from fcomp.errors import FcompError, term
 
 
 def experiment_for(effect: str, kind: str = "") -> str:
@@ -87,7 +63,7 @@ def load_effects_module(path: str | Path) -> list[str]:
     from fcomp.usercode import USER_FILES, run_module
 
     if not str(path).strip():
-        raise FcompError("--effects: no file name given (an empty argument)")
+        raise FcompError(f"{term('effects_module')}: no file name given (an empty argument)")
     p = Path(path)
     if not p.exists():
         raise FcompError(f"{p}: effects module not found")
@@ -102,6 +78,6 @@ def load_effects_module(path: str | Path) -> list[str]:
 
 
 __all__ = [
-    "EFFECTS", "Effect", "effect_of_parameter", "experiment_for", "load_effects_module",
+    "CATALOGUE", "EFFECTS", "Effect", "effect_of_parameter", "experiment_for", "load_effects_module",
     "make_effect", "register_effect", "scale_levels",
 ]

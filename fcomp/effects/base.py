@@ -41,6 +41,11 @@ instead of riding along.
 
 The class docstring of each effect is its physical explanation: what it is
 and what it leaves in a residual when a model lacks it.
+
+This module imports nothing of :mod:`fcomp.models` (the models resolve
+effect names through :data:`EFFECTS` here), so models and effects form no
+import circle: the catalogue builds on the models, the models only on this
+base.
 """
 
 from __future__ import annotations
@@ -50,14 +55,17 @@ from types import MappingProxyType
 from typing import TYPE_CHECKING, Any, ClassVar
 
 from fcomp.backend import Backend
-from fcomp.parameters import ParamSet, ParamValues
+from fcomp.parameters import ParamSet, ParamValues, PlainValue, adopt_params
+from fcomp.registry import Registry
 
 if TYPE_CHECKING:
     from fcomp.models.base import FrictionModel, Signals
 
 
-class Effect:
+class Effect(PlainValue):
     """Base class of effects (see the module docstring for the contract).
+
+    Effects are plain values: they pickle with their parameters and configuration.
 
     Parameters
     ----------
@@ -76,6 +84,10 @@ class Effect:
     experiments: ClassVar[Mapping[str, str]] = MappingProxyType({})
     #: signals the effect reads besides v (diagnosis checks the data has them)
     needs: ClassVar[tuple[str, ...]] = ()
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        adopt_params(cls)
 
     def __init__(self, params: ParamSet | Mapping[str, Any] | None = None, **config: Any) -> None:
         if params is None:
@@ -135,3 +147,32 @@ def scale_levels(L: dict, factor: Any, names: tuple[str, ...] = ("Fc", "Fs")) ->
         if n in out:
             out[n] = out[n] * factor
     return out
+
+
+#: Effects by public name: the catalogue (:mod:`fcomp.effects.catalogue`) registers itself
+#: when imported (importing any module of :mod:`fcomp.effects` imports it), users with
+#: :func:`register_effect`.
+EFFECTS: Registry[type[Effect]] = Registry("effect")
+
+
+def register_effect(cls: type[Effect], *, replace: bool = False) -> type[Effect]:
+    """Register a user effect class under ``cls.name`` (usable as a decorator)."""
+    if not (isinstance(cls, type) and issubclass(cls, Effect)):
+        raise ValueError(f"{cls!r} is not an Effect subclass")
+    if not cls.name:
+        raise ValueError(f"effect class {cls.__name__} has no name")
+    for attr in ("Params",):
+        if not hasattr(cls, attr):
+            raise ValueError(f"effect {cls.name!r} must define {attr}")
+    EFFECTS.register(cls.name, cls, replace=replace)
+    return cls
+
+
+def make_effect(name: str, params: Any = None, **config: Any) -> Effect:
+    """An effect instance by name, with parameters (defaults: a no-op)."""
+    return EFFECTS.get(name)(params, **config)
+
+
+def as_effect(effect: Effect | str) -> Effect:
+    """``effect`` itself, or the registered effect of that name with default parameters."""
+    return make_effect(effect) if isinstance(effect, str) else effect

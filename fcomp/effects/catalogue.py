@@ -14,11 +14,10 @@ from types import MappingProxyType
 from typing import TYPE_CHECKING, Any, ClassVar
 
 from fcomp.backend import Backend
-from fcomp.effects.base import Effect, scale_levels
+from fcomp.effects.base import EFFECTS, Effect, scale_levels
 from fcomp.models.hysteresis import (
     HYSTERESIS_CONSTRAINTS,
     NONLOCAL_MEMORY_DEFAULTS,
-    HysteresisFamily,
     hysteresis_specs,
     with_hysteresis,
 )
@@ -31,27 +30,38 @@ if TYPE_CHECKING:
 INF = math.inf
 
 
-def _family(model: FrictionModel, effect: str):  # -> LuGreFamily
-    from fcomp.models.lugre_family import LuGreFamily
-
-    if not isinstance(model, LuGreFamily):
+def _family(model: FrictionModel, effect: str) -> Any:
+    """The model as a member of the LuGre family (its :meth:`feature_family`), else an error."""
+    fam = model.feature_family()
+    if fam is None:
         raise ValueError(
             f"effect {effect!r} is a term of the LuGre family and does not apply to "
             f"model {model.describe()!r}"
         )
-    return model
+    return fam
+
+
+def _features(model: FrictionModel) -> frozenset[str] | None:
+    """The feature set of a family model, ``None`` for models outside a feature family."""
+    fam = model.feature_family()
+    return None if fam is None else fam.features
 
 
 class StructuralEffect(Effect):
-    """An effect that is a term of the LuGre family: attaching it changes the model class."""
+    """An effect that is a term of the LuGre family: attaching it changes the model class.
+
+    ``adds`` are the features attaching it switches on; a model that already has
+    every feature of ``marks`` (default: ``adds``) already has the effect.
+    """
 
     adds: ClassVar[frozenset[str]] = frozenset()
+    marks: ClassVar[frozenset[str] | None] = None
     requires: ClassVar[frozenset[str]] = frozenset()
 
     def applies_to(self, model: FrictionModel) -> bool:
-        from fcomp.models.lugre_family import LuGreFamily
-
-        return isinstance(model, LuGreFamily) and not self.adds <= model.features
+        features = _features(model)
+        marks = self.adds if self.marks is None else self.marks
+        return features is not None and not marks <= features
 
     def new_values(self, model: FrictionModel) -> dict[str, float]:
         """Parameter values of the added terms (from this effect's parameters)."""
@@ -73,6 +83,11 @@ class StructuralEffect(Effect):
 
 
 # ----------------------------------------------------------------- structural
+ViscousParams = make_params_class("ViscousParams", [
+    spec("sigma2", "Ns/m", 0.0, 0.0, INF, "viscous coefficient"),
+    FAMILY_SPECS["p_visc"], FAMILY_SPECS["v_ref"]], owner="effect viscous")
+
+
 class Viscous(StructuralEffect):
     """Viscous friction ``sigma2*v``: shear of the lubricant film between seal and bore.
 
@@ -87,21 +102,24 @@ class Viscous(StructuralEffect):
 
     name = "viscous"
     adds = frozenset({"viscous", "viscous-power"})
-    Params = make_params_class("ViscousParams", [
-        spec("sigma2", "Ns/m", 0.0, 0.0, INF, "viscous coefficient"),
-        FAMILY_SPECS["p_visc"], FAMILY_SPECS["v_ref"]], owner="effect viscous")
+    marks = frozenset({"viscous"})
+    Params = ViscousParams
     signature = "residual linear and odd in v, largest at high speed"
     experiment = "constant-speed runs at several speeds in both directions"
 
-    def applies_to(self, model: FrictionModel) -> bool:
-        from fcomp.models.lugre_family import LuGreFamily
-
-        return isinstance(model, LuGreFamily) and "viscous" not in model.features
 
     def new_values(self, model: FrictionModel) -> dict[str, float]:
         flat = self.params.flat()
-        return {model.viscous_name: flat["sigma2"], "p_visc": flat["p_visc"],  # type: ignore[attr-defined]
+        return {_family(model, self.name).viscous_name: flat["sigma2"], "p_visc": flat["p_visc"],
                 "v_ref": float(self.config.get("v_ref", flat["v_ref"]))}
+
+
+StribeckEffectParams = make_params_class("StribeckEffectParams", [
+    spec("Fs_excess", "N", 0.0, 0.0, INF, "Fs - Fc, break-away excess over Coulomb"),
+    spec("vs", "m/s", 0.01, 0.0, INF, "Stribeck velocity", lower_open=True),
+    spec("n", "-", 2.0, 0.0, 10.0, "Stribeck exponent", lower_open=True),
+    FAMILY_SPECS["kappa_s"],
+], owner="effect stribeck")
 
 
 class Stribeck(StructuralEffect):
@@ -119,31 +137,29 @@ class Stribeck(StructuralEffect):
 
     name = "stribeck"
     adds = frozenset({"stribeck", "stribeck-form"})
-    Params = make_params_class("StribeckEffectParams", [
-        spec("Fs_excess", "N", 0.0, 0.0, INF, "Fs - Fc, break-away excess over Coulomb"),
-        spec("vs", "m/s", 0.01, 0.0, INF, "Stribeck velocity", lower_open=True),
-        spec("n", "-", 2.0, 0.0, 10.0, "Stribeck exponent", lower_open=True),
-        FAMILY_SPECS["kappa_s"],
-    ], owner="effect stribeck")
+    marks = frozenset({"stribeck"})
+    Params = StribeckEffectParams
     signature = "residual hump at low |v| decaying with speed; peaks after starts"
     experiment = "slow constant-speed runs (0.1-10 vs) in both directions"
 
-    def applies_to(self, model: FrictionModel) -> bool:
-        from fcomp.models.lugre_family import LuGreFamily
-
-        return isinstance(model, LuGreFamily) and "stribeck" not in model.features
 
     def new_values(self, model: FrictionModel) -> dict[str, float]:
         flat = model.params.flat()
-        exc = self.params.Fs_excess  # type: ignore[attr-defined]
-        out: dict[str, float] = {"vs": self.params.vs, "n": self.params.n,  # type: ignore[attr-defined]
-                                 "kappa_s": self.params.kappa_s}  # type: ignore[attr-defined]
+        p = self.params
+        exc = p.scalar("Fs_excess")
+        out: dict[str, float] = {"vs": p.scalar("vs"), "n": p.scalar("n"),
+                                 "kappa_s": p.scalar("kappa_s")}
         if "Fc" in flat:
             out["Fs"] = flat["Fc"] + exc
         else:
             out["Fs_pos"] = flat["Fc_pos"] + exc
             out["Fs_neg"] = flat["Fc_neg"] + exc
         return out
+
+
+ViscousLeadParams = make_params_class("ViscousLeadParams", [
+    spec("T", "s", 0.0, 0.0, INF, "time constant of the fluid-friction lead",
+         directional=False)], owner="effect viscous-lead")
 
 
 class ViscousLead(StructuralEffect):
@@ -159,11 +175,15 @@ class ViscousLead(StructuralEffect):
     name = "viscous-lead"
     adds = frozenset({"lead"})
     requires = frozenset({"viscous"})
-    Params = make_params_class("ViscousLeadParams", [
-        spec("T", "s", 0.0, 0.0, INF, "time constant of the fluid-friction lead",
-             directional=False)], owner="effect viscous-lead")
+    Params = ViscousLeadParams
     signature = "residual proportional to acceleration while sliding fast"
     experiment = "sinusoidal velocity at two or more frequencies, same amplitude"
+
+
+FrictionalLagParams = make_params_class("FrictionalLagParams", [
+    dataclasses.replace(FAMILY_SPECS["vb"], default=INF),
+    *(FAMILY_SPECS[n] for n in ("tau_hp", "tau_hn", "tau_h0", "tau_L", "w_L")),
+], owner="effect frictional-lag")
 
 
 class FrictionalLag(StructuralEffect):
@@ -190,11 +210,9 @@ class FrictionalLag(StructuralEffect):
     name = "frictional-lag"
     FORMS: ClassVar[tuple[str, ...]] = ("film", "speed-lag")
     adds = frozenset({"film", "film-lag"})
+    marks = frozenset({"film-lag"})
     requires = frozenset({"stribeck"})
-    Params = make_params_class("FrictionalLagParams", [
-        dataclasses.replace(FAMILY_SPECS["vb"], default=INF),
-        *(FAMILY_SPECS[n] for n in ("tau_hp", "tau_hn", "tau_h0", "tau_L", "w_L")),
-    ], owner="effect frictional-lag")
+    Params = FrictionalLagParams
     signature = "residual loop against v: rising and falling |v| branches differ"
     experiment = "velocity sweeps up and down at several rates; dwell before restart"
 
@@ -236,6 +254,14 @@ class FrictionalLag(StructuralEffect):
         return new
 
 
+PreslidingParams = make_params_class("PreslidingParams", [
+    spec("sigma0", "N/m", INF, 0.0, INF, "bristle stiffness (inf: rigid, no-op)",
+         lower_open=True, directional=False),
+    spec("sigma1", "Ns/m", 0.0, 0.0, INF, "bristle damping", directional=False),
+    FAMILY_SPECS["i_pre"],
+], owner="effect presliding")
+
+
 class Presliding(StructuralEffect):
     """Pre-sliding: bristle compliance ``sigma0`` (the step from a static map to LuGre).
 
@@ -252,29 +278,21 @@ class Presliding(StructuralEffect):
 
     name = "presliding"
     adds = frozenset({"presliding", "damping", "bristle-exponent"})
-    Params = make_params_class("PreslidingParams", [
-        spec("sigma0", "N/m", INF, 0.0, INF, "bristle stiffness (inf: rigid, no-op)",
-             lower_open=True, directional=False),
-        spec("sigma1", "Ns/m", 0.0, 0.0, INF, "bristle damping", directional=False),
-        FAMILY_SPECS["i_pre"],
-    ], owner="effect presliding")
+    marks = frozenset({"presliding", "damping"})
+    Params = PreslidingParams
     signature = "residual spikes at reversals that follow displacement since reversal"
     experiment = "small-amplitude displacement cycles (well below break-away)"
 
-    def applies_to(self, model: FrictionModel) -> bool:
-        from fcomp.models.lugre_family import LuGreFamily
-
-        return isinstance(model, LuGreFamily) and not {"presliding", "damping"} <= model.features
 
     def attach(self, model: FrictionModel) -> FrictionModel:
         fam = _family(model, self.name)
         if "presliding" in fam.features and "damping" not in fam.features:
             # Dahl: compliant bristles already, only the damping is missing; the model's
             # own sigma0 is kept and sigma1 = 0 (the default) is a no-op.
-            new = fam.with_features({"damping"}, {"sigma1": self.params.sigma1})  # type: ignore[attr-defined]
+            new = fam.with_features({"damping"}, {"sigma1": self.params.scalar("sigma1")})
             new.lineage = (*(fam.lineage or (fam.name,)), self.name)
             return new
-        if math.isinf(self.params.sigma0):  # type: ignore[attr-defined]
+        if math.isinf(self.params.scalar("sigma0")):
             if "presliding" in fam.features:
                 raise ValueError(f"model {fam.describe()!r} already has effect {self.name!r}")
             return Effect.attach(self, model)  # rigid bristles: the static map, unchanged
@@ -282,6 +300,19 @@ class Presliding(StructuralEffect):
 
 
 # --------------------------------------------------------------------- add-ons
+PressureDependenceParams = make_params_class("PressureDependenceParams", [
+    spec("kp", "1/Pa", 0.0, -1e-3, 1e-3, "relative level change per pascal of p1 + p2"),
+    spec("kd", "1/Pa", 0.0, -1e-3, 1e-3, "relative level change per pascal of p1 - p2",
+         directional=False),
+    spec("kq", "1/Pa^2", 0.0, -INF, INF, "curvature of the law in p1 + p2",
+         directional=False),
+    spec("p_ref", "Pa", 0.0, -INF, INF, "reference gauge pressure sum (fixed)",
+         directional=False),
+    spec("d_ref", "Pa", 0.0, -INF, INF, "reference pressure difference (fixed)",
+         directional=False),
+], owner="effect pressure-dependence")
+
+
 class PressureDependence(Effect):
     """Pressure dependence: the levels scale with the chamber pressures (gauge).
 
@@ -301,17 +332,7 @@ class PressureDependence(Effect):
     """
 
     name = "pressure-dependence"
-    Params = make_params_class("PressureDependenceParams", [
-        spec("kp", "1/Pa", 0.0, -1e-3, 1e-3, "relative level change per pascal of p1 + p2"),
-        spec("kd", "1/Pa", 0.0, -1e-3, 1e-3, "relative level change per pascal of p1 - p2",
-             directional=False),
-        spec("kq", "1/Pa^2", 0.0, -INF, INF, "curvature of the law in p1 + p2",
-             directional=False),
-        spec("p_ref", "Pa", 0.0, -INF, INF, "reference gauge pressure sum (fixed)",
-             directional=False),
-        spec("d_ref", "Pa", 0.0, -INF, INF, "reference pressure difference (fixed)",
-             directional=False),
-    ], owner="effect pressure-dependence")
+    Params = PressureDependenceParams
     fixed: ClassVar[tuple[str, ...]] = ("p_ref", "d_ref")
     needs = ("p1", "p2")
     signature = "residual magnitude correlates with p1 + p2, sign follows friction"
@@ -333,6 +354,14 @@ class PressureDependence(Effect):
         return scale_levels(L, 1.0 + P("kp", sig.s) * dS + P("kd") * dD + P("kq") * dS * dS)
 
 
+DirectionAsymmetryParams = make_params_class("DirectionAsymmetryParams", [
+    spec("r_neg", "-", 1.0, 0.0, 10.0, "ratio of the v < 0 levels to the v > 0 levels",
+         lower_open=True, directional=False),
+    spec("rv_neg", "-", 1.0, 0.0, 10.0, "ratio of the viscous slope for v < 0 to that "
+         "for v > 0 (models with a viscous term)", directional=False),
+], owner="effect direction-asymmetry")
+
+
 class DirectionAsymmetry(Effect):
     """Direction asymmetry: a separate friction level, and viscous slope, for ``v < 0``.
 
@@ -346,12 +375,7 @@ class DirectionAsymmetry(Effect):
     """
 
     name = "direction-asymmetry"
-    Params = make_params_class("DirectionAsymmetryParams", [
-        spec("r_neg", "-", 1.0, 0.0, 10.0, "ratio of the v < 0 levels to the v > 0 levels",
-             lower_open=True, directional=False),
-        spec("rv_neg", "-", 1.0, 0.0, 10.0, "ratio of the viscous slope for v < 0 to that "
-             "for v > 0 (models with a viscous term)", directional=False),
-    ], owner="effect direction-asymmetry")
+    Params = DirectionAsymmetryParams
     signature = "residual even in v: same-sign offset in both directions, step at reversals"
     experiment = "the same speed profile in both directions of travel, with the force zero " \
         "known (see force-offset)"
@@ -369,6 +393,20 @@ class DirectionAsymmetry(Effect):
         if visc is None:  # no viscous term to differ between the directions
             return 0.0, 0.0
         return (P("rv_neg") - 1.0) * visc * be.fmin(sig.v, 0.0), 0.0
+
+
+PositionDependenceParams = make_params_class("PositionDependenceParams", [
+    spec("kx1", "-", 0.0, -1.0, 1.0, "linear Legendre coefficient", directional=False),
+    spec("kx2", "-", 0.0, -1.0, 1.0, "quadratic Legendre coefficient", directional=False),
+    spec("kx3", "-", 0.0, -1.0, 1.0, "cubic Legendre coefficient", directional=False),
+    spec("kb", "-", 0.0, -1.0, 3.0, "relative level change inside the local box (0: none)",
+         directional=False),
+    spec("xb", "m", 0.15, -INF, INF, "centre of the local box", directional=False),
+    spec("wb", "m", 0.01, 0.0, INF, "half-width of the local box", lower_open=True,
+         directional=False),
+    spec("eb", "m", 0.002, 0.0, INF, "edge width of the local box", lower_open=True,
+         directional=False),
+], owner="effect position-dependence")
 
 
 class PositionDependence(Effect):
@@ -392,18 +430,7 @@ class PositionDependence(Effect):
     """
 
     name = "position-dependence"
-    Params = make_params_class("PositionDependenceParams", [
-        spec("kx1", "-", 0.0, -1.0, 1.0, "linear Legendre coefficient", directional=False),
-        spec("kx2", "-", 0.0, -1.0, 1.0, "quadratic Legendre coefficient", directional=False),
-        spec("kx3", "-", 0.0, -1.0, 1.0, "cubic Legendre coefficient", directional=False),
-        spec("kb", "-", 0.0, -1.0, 3.0, "relative level change inside the local box (0: none)",
-             directional=False),
-        spec("xb", "m", 0.15, -INF, INF, "centre of the local box", directional=False),
-        spec("wb", "m", 0.01, 0.0, INF, "half-width of the local box", lower_open=True,
-             directional=False),
-        spec("eb", "m", 0.002, 0.0, INF, "edge width of the local box", lower_open=True,
-             directional=False),
-    ], owner="effect position-dependence")
+    Params = PositionDependenceParams
     needs = ("x",)
     signature = "residual a function of x, repeated stroke after stroke (smooth or local)"
     experiment = "the same slow stroke repeated, break-away measured along the stroke"
@@ -423,6 +450,19 @@ class PositionDependence(Effect):
         box = 0.5 * (be.tanh((sig.x - xb + wb) / eb) - be.tanh((sig.x - xb - wb) / eb))
         return scale_levels(L, 1.0 + P("kx1") * xi + P("kx2") * p2 + P("kx3") * p3
                             + P("kb") * box)
+
+
+DwellTimeParams = make_params_class("DwellTimeParams", [
+    spec("dFs", "N", 0.0, 0.0, INF, "break-away increase after a long dwell"),
+    spec("tau_dwell", "s", 1.0, 0.0, INF, "ageing time constant", lower_open=True,
+         directional=False),
+    spec("L_dwell", "m", 1e-4, 0.0, INF, "sliding distance that erases the age",
+         lower_open=True, directional=False),
+    spec("k_dwell", "-", 0.0, 0.0, 5.0, "ageing shape: 0 exponential (Kato), > 0 "
+         "towards logarithmic (Dieterich)", directional=False),
+    spec("v_rest", "m/s", 1e-5, 0.0, INF, "speed scale of rest (fixed): ageing "
+         "weighted by exp(-|v|/v_rest)", lower_open=True, directional=False),
+], owner="effect dwell-time")
 
 
 class DwellTime(Effect):
@@ -450,17 +490,7 @@ class DwellTime(Effect):
     name = "dwell-time"
     states = ("w",)
     initial = (0.0,)
-    Params = make_params_class("DwellTimeParams", [
-        spec("dFs", "N", 0.0, 0.0, INF, "break-away increase after a long dwell"),
-        spec("tau_dwell", "s", 1.0, 0.0, INF, "ageing time constant", lower_open=True,
-             directional=False),
-        spec("L_dwell", "m", 1e-4, 0.0, INF, "sliding distance that erases the age",
-             lower_open=True, directional=False),
-        spec("k_dwell", "-", 0.0, 0.0, 5.0, "ageing shape: 0 exponential (Kato), > 0 "
-             "towards logarithmic (Dieterich)", directional=False),
-        spec("v_rest", "m/s", 1e-5, 0.0, INF, "speed scale of rest (fixed): ageing "
-             "weighted by exp(-|v|/v_rest)", lower_open=True, directional=False),
-    ], owner="effect dwell-time")
+    Params = DwellTimeParams
     fixed: ClassVar[tuple[str, ...]] = ("v_rest",)
     signature = "break-away spikes growing with the dwell time before the start"
     experiment = "starts after dwells of different lengths (0.1 s to 10 s)"
@@ -484,6 +514,11 @@ class DwellTime(Effect):
         return [L * rest / (L * rest + be.abs(sig.v) * tau)]
 
 
+InertiaErrorParams = make_params_class("InertiaErrorParams", [
+    spec("dm", "kg", 0.0, -INF, INF, "mass error (true minus assumed)", directional=False),
+], owner="effect inertia-error")
+
+
 class InertiaError(Effect):
     """Inertia error: a mass correction ``dm*a`` in the reconstructed force.
 
@@ -495,14 +530,17 @@ class InertiaError(Effect):
     """
 
     name = "inertia-error"
-    Params = make_params_class("InertiaErrorParams", [
-        spec("dm", "kg", 0.0, -INF, INF, "mass error (true minus assumed)", directional=False),
-    ], owner="effect inertia-error")
+    Params = InertiaErrorParams
     signature = "residual proportional to acceleration at all speeds"
     experiment = "the same motion with a known added mass"
 
     def extra_force(self, be: Backend, sig: Signals, P: ParamValues) -> tuple[Any, Any]:
         return 0.0, P("dm")
+
+
+ForceOffsetParams = make_params_class("ForceOffsetParams", [
+    spec("offset", "N", 0.0, -INF, INF, "constant force offset", directional=False),
+], owner="effect force-offset")
 
 
 class ForceOffset(Effect):
@@ -515,9 +553,7 @@ class ForceOffset(Effect):
     """
 
     name = "force-offset"
-    Params = make_params_class("ForceOffsetParams", [
-        spec("offset", "N", 0.0, -INF, INF, "constant force offset", directional=False),
-    ], owner="effect force-offset")
+    Params = ForceOffsetParams
     signature = "residual with a constant non-zero mean in both directions"
     experiment = "a zero reading of the force measurement at rest with nothing driving or " \
         "loading the actuator"
@@ -533,6 +569,14 @@ class ForceOffset(Effect):
 
     def extra_force(self, be: Backend, sig: Signals, P: ParamValues) -> tuple[Any, Any]:
         return P("offset"), 0.0
+
+
+NonlocalMemoryParams = make_params_class(
+    "NonlocalMemoryParams",
+    [*hysteresis_specs(NONLOCAL_MEMORY_DEFAULTS),
+     *(FAMILY_SPECS[n] for n in FEATURE_PARAMS["elements"])],
+    owner="effect nonlocal-memory", constraints=HYSTERESIS_CONSTRAINTS,
+)
 
 
 class NonlocalMemory(StructuralEffect):
@@ -571,12 +615,7 @@ class NonlocalMemory(StructuralEffect):
 
     name = "nonlocal-memory"
     FORMS: ClassVar[tuple[str, ...]] = ("hysteresis", "maxwell-slip")
-    Params = make_params_class(
-        "NonlocalMemoryParams",
-        [*hysteresis_specs(NONLOCAL_MEMORY_DEFAULTS),
-         *(FAMILY_SPECS[n] for n in FEATURE_PARAMS["elements"])],
-        owner="effect nonlocal-memory", constraints=HYSTERESIS_CONSTRAINTS,
-    )
+    Params = NonlocalMemoryParams
     signature = ("small-displacement residual following travel since reversal; minor-loop "
                  "offsets erased past earlier reversal points")
     experiment = "small displacement cycles with nested minor loops (seed 000 Figs. 10, 16)"
@@ -592,15 +631,13 @@ class NonlocalMemory(StructuralEffect):
         return str(self.config.get("form", "hysteresis"))
 
     def applies_to(self, model: FrictionModel) -> bool:
-        from fcomp.models.lugre_family import LuGreFamily
-
-        return (isinstance(model, LuGreFamily) and "presliding" in model.features
-                and "elements" not in model.features
-                and not isinstance(model, HysteresisFamily))
+        features = _features(model)
+        return (features is not None and "presliding" in features
+                and "elements" not in features and model.discrete_memory() is None)
 
     def attach(self, model: FrictionModel) -> FrictionModel:
         fam = _family(model, self.name)
-        if isinstance(fam, HysteresisFamily) or "elements" in fam.features:
+        if model.discrete_memory() is not None or "elements" in fam.features:
             raise ValueError(f"model {fam.describe()!r} already has effect {self.name!r}")
         if "presliding" not in fam.features:
             raise ValueError(
@@ -622,3 +659,5 @@ CATALOGUE: tuple[type[Effect], ...] = (
     PressureDependence, PositionDependence, ViscousLead, InertiaError, ForceOffset,
     NonlocalMemory,
 )
+for _cls in CATALOGUE:
+    EFFECTS.register(_cls.name, _cls)

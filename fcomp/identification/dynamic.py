@@ -13,18 +13,24 @@ all samples or a ``mask``. Where the target was low-passed (parallel
 filtering, :attr:`~.target.FitData.band_hz`) the model force and its
 sensitivities pass through the same filter before the extras are added.
 
-Jacobian: for symbolic models the exact forward sensitivities of
-:class:`~fcomp.identification.sensitivity.SensitivityLoop` (one compiled pass
-gives the force and all its derivatives); for models with discrete memory
-(``symbolic = False``) forward finite differences of the numeric simulation
-(step ``1e-6`` of each parameter's scale, one extra simulation per parameter). The ``mass`` and
+Jacobian: a *gradient strategy*, chosen by what the model can do (its
+:meth:`~fcomp.models.base.FrictionModel.discrete_memory` capability), never by
+its type: :class:`ExactSensitivities` for models whose memory is their
+continuous states (the forward sensitivities of
+:class:`~fcomp.identification.sensitivity.SensitivityLoop`: one compiled pass
+gives the force and all its derivatives), :class:`FiniteDifferences` for
+models with discrete memory (forward differences of the numeric simulation,
+step ``1e-6`` of each parameter's scale, one extra simulation per parameter).
+Everything else of the fit is the same path for every model. The ``mass`` and
 ``offset`` columns are ``a + g*s_o`` and ``1``.
 """
 
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 
@@ -54,6 +60,96 @@ class Dependent:
         return self.constant + sum(c * values[k] for k, c in self.coef.items())
 
 
+class GradientStrategy(ABC):
+    """The model force along a record and its derivatives with respect to ``names``.
+
+    Parameters
+    ----------
+    model
+        The friction model.
+    data
+        The record's signals.
+    names
+        Flat parameter names to differentiate with respect to.
+    substeps
+        Integration steps per sample interval.
+    """
+
+    #: whether the derivatives come with every evaluation at no extra cost
+    free_jacobian: ClassVar[bool] = False
+
+    def __init__(self, model: FrictionModel, data: FitData, names: Sequence[str],
+                 substeps: int = 1) -> None:
+        self.model = model
+        self.data = data
+        self.names = tuple(names)
+        self.substeps = substeps
+
+    @abstractmethod
+    def __call__(self, values: Mapping[str, float], jac: bool
+                 ) -> tuple[np.ndarray, np.ndarray]:
+        """``(F, dF/d names)`` at the flat ``values`` (``dF`` zeros when not ``jac`` and not free)."""
+
+    def simulate(self, values: Mapping[str, float]) -> np.ndarray:
+        """The model force (N) along the record with the flat ``values``."""
+        s = self.data.sig
+        return friction_along_motion(self.model, s["t"], s["v"], a=s["a"], x=s["x"],
+                                     p1=s["p1"], p2=s["p2"], values=values,
+                                     substeps=self.substeps).F
+
+
+class ExactSensitivities(GradientStrategy):
+    """Exact derivatives: the forward sensitivities of the simulation step (models whose
+    memory is their continuous states; :class:`~fcomp.identification.sensitivity.SensitivityLoop`)."""
+
+    free_jacobian = True
+
+    def __init__(self, model: FrictionModel, data: FitData, names: Sequence[str],
+                 substeps: int = 1) -> None:
+        super().__init__(model, data, names, substeps)
+        self.loop = SensitivityLoop(model, self.names, substeps=substeps)
+
+    def __call__(self, values: Mapping[str, float], jac: bool
+                 ) -> tuple[np.ndarray, np.ndarray]:
+        return self.loop(self.data.sig, values)
+
+
+class FiniteDifferences(GradientStrategy):
+    """Forward differences of the numeric simulation, one extra run per name (models with
+    discrete memory). ``steps`` gives the step of each name (default ``1e-6`` of its
+    magnitude); a step that would cross ``upper`` is taken backwards."""
+
+    def __init__(self, model: FrictionModel, data: FitData, names: Sequence[str],
+                 substeps: int = 1, steps: Mapping[str, float] | None = None,
+                 upper: Mapping[str, float] | None = None) -> None:
+        super().__init__(model, data, names, substeps)
+        self.steps = dict(steps or {})
+        self.upper = dict(upper or {})
+
+    def __call__(self, values: Mapping[str, float], jac: bool
+                 ) -> tuple[np.ndarray, np.ndarray]:
+        F = self.simulate(values)
+        G = np.zeros((F.size, len(self.names)))
+        if jac:
+            for j, name in enumerate(self.names):
+                h = self.steps.get(name) or 1e-6 * max(abs(values[name]), 1e-12)
+                if values[name] + h > self.upper.get(name, np.inf):
+                    h = -h
+                G[:, j] = (self.simulate({**values, name: values[name] + h}) - F) / h
+        return F, G
+
+
+def gradient_strategy(model: FrictionModel, data: FitData, names: Sequence[str], *,
+                      substeps: int = 1, steps: Mapping[str, float] | None = None,
+                      upper: Mapping[str, float] | None = None) -> GradientStrategy:
+    """The gradient strategy the model's capabilities allow: exact sensitivities unless its
+    memory is discrete (then finite differences); a plain simulation where there is
+    nothing to differentiate and no state to integrate."""
+    if model.discrete_memory() is None and model.n_states + len(names) > 0:
+        return ExactSensitivities(model, data, names, substeps)
+    return FiniteDifferences(model, data, names, substeps, steps, upper)
+
+
 class TrajectoryProblem:
     """Residuals ``y - F_hat`` and ``dF_hat/dtheta`` along a record (see the module docstring).
 
@@ -72,11 +168,14 @@ class TrajectoryProblem:
         Integration steps per sample interval.
     dependent
         Model parameters tied to the fitted ones by :class:`Dependent` equalities.
+    gradient
+        The gradient strategy (default :func:`gradient_strategy`: by the model's capability).
     """
 
     def __init__(self, model: FrictionModel, data: FitData, pv: ParameterVector, *,
                  mask: np.ndarray | None = None, substeps: int = 1,
-                 dependent: Sequence[Dependent] = ()) -> None:
+                 dependent: Sequence[Dependent] = (),
+                 gradient: GradientStrategy | None = None) -> None:
         self.model = model
         self.data = data
         self.pv = pv
@@ -88,8 +187,10 @@ class TrajectoryProblem:
         self.substeps = substeps
         self.dependent = tuple(dependent)
         diff = [*self.model_free, *(dep.name for dep in self.dependent)]
-        self.loop = (SensitivityLoop(model, diff, substeps=substeps)
-                     if model.symbolic and model.n_states + len(diff) > 0 else None)
+        self.gradient = gradient or gradient_strategy(
+            model, data, diff, substeps=substeps,
+            steps={n: 1e-6 * pv.scale[pv.index(n)] for n in self.model_free},
+            upper={n: pv.upper[pv.index(n)] for n in self.model_free})
         self.evaluations = 0
 
     # ------------------------------------------------------------------ model
@@ -100,35 +201,14 @@ class TrajectoryProblem:
         return out
 
     def _model_force(self, values: dict[str, float], jac: bool) -> tuple[np.ndarray, np.ndarray]:
-        d = self.data
         nf = len(self.model_free)
-        full = self._with_dependent(values)
-        if self.loop is not None:
-            F, Gall = self.loop(d.sig, full)
-            G = Gall[:, :nf].copy() if self.dependent else Gall
-            for k, dep in enumerate(self.dependent):
-                for name, c in dep.coef.items():
-                    if name in self.model_free:
-                        G[:, self.model_free.index(name)] += c * Gall[:, nf + k]
-            return F, G
-        F = self._simulate(full)
-        G = np.zeros((F.size, nf))
-        if jac:
-            for j, name in enumerate(self.model_free):
-                i = self.pv.index(name)
-                h = 1e-6 * self.pv.scale[i]
-                if values[name] + h > self.pv.upper[i]:
-                    h = -h
-                step = self._with_dependent({**values, name: values[name] + h})
-                G[:, j] = (self._simulate(step) - F) / h
+        F, Gall = self.gradient(self._with_dependent(values), jac)
+        G = Gall[:, :nf].copy() if self.dependent else Gall
+        for k, dep in enumerate(self.dependent):  # dF/dtheta_k += coef_k*dF/d(dependent)
+            for name, c in dep.coef.items():
+                if name in self.model_free:
+                    G[:, self.model_free.index(name)] += c * Gall[:, nf + k]
         return F, G
-
-    def _simulate(self, values: dict[str, float]) -> np.ndarray:
-        s = self.data.sig
-        run = friction_along_motion(self.model, s["t"], s["v"], a=s["a"], x=s["x"],
-                                    p1=s["p1"], p2=s["p2"], values=values,
-                                    substeps=self.substeps)
-        return run.F
 
     def values(self, theta: Sequence[float] | np.ndarray) -> dict[str, float]:
         return dict(zip(self.pv.names, map(float, theta), strict=True))
@@ -176,4 +256,4 @@ class TrajectoryProblem:
     @property
     def jacobian_is_free(self) -> bool:
         """Whether the Jacobian comes with every evaluation (exact sensitivities)."""
-        return self.loop is not None or not self.model_free
+        return self.gradient.free_jacobian or not self.model_free

@@ -42,6 +42,7 @@ from typing import Any
 import numpy as np
 
 from fcomp.effects import effect_of_parameter, experiment_for
+from fcomp.piston import piston_areas
 
 #: Codes of :class:`FitWarning`, in the order the checks run.
 CODES = ("not-converged", "at-bound", "not-identified", "interval-crosses-zero",
@@ -150,8 +151,10 @@ def mass_range(context: RigContext) -> tuple[float, float, str]:
     d = context.rod or 0.0
     L = context.stroke or 0.0
 
+    A1, A2 = piston_areas(D, d)
+
     def parts(piston_length: float, rod_length: float) -> float:  # volume, m^3
-        return math.pi / 4.0 * (D * D * piston_length + d * d * rod_length)
+        return A1 * piston_length + (A1 - A2) * rod_length
 
     low = FLOOR_FRACTION * RHO_ALUMINIUM * parts(PISTON_LENGTH_MIN * D, L)
     high = CEILING_FACTOR * RHO_STEEL * parts(PISTON_LENGTH_MAX * D, L + D)

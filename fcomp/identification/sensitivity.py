@@ -1,7 +1,7 @@
 """Exact parameter sensitivities of the friction force along a motion (forward sensitivities).
 
 The simulation engine (:mod:`fcomp.trajectory`) advances the friction states
-sample to sample with one CasADi step ``x_{k+1} = Phi(x_k, u_k, dt_k, p)``.
+sample to sample with one CasADi step (:mod:`fcomp.models.stepping`) ``x_{k+1} = Phi(x_k, u_k, dt_k, p)``.
 Differentiating that *same* step gives the exact derivative of the simulated
 force with respect to the parameters (exact for the discrete scheme that
 produces the simulated force, not a finite-difference approximation):
@@ -27,8 +27,8 @@ import numpy as np
 from fcomp.backend import CASADI
 from fcomp.compiled import Loop, stepping_loop
 from fcomp.models.base import SIGNAL_NAMES, FrictionModel, Signals
+from fcomp.models.stepping import friction_step, midpoint_signals, structure_key
 from fcomp.parameters import ParamValues
-from fcomp.trajectory import _structure_key, friction_step, midpoint_signals
 
 _LOOPS: dict[tuple, tuple[Loop, ca.Function]] = {}
 
@@ -91,7 +91,7 @@ class SensitivityLoop:
         self.model = model
         self.free = tuple(free)
         self.names = names
-        key = (_structure_key(model), self.free, int(substeps), bool(compiled))
+        key = (structure_key(model), self.free, int(substeps), bool(compiled))
         if key not in _LOOPS:
             _LOOPS[key] = _build(model, self.free, int(substeps), bool(compiled))
         self._loop, self._force = _LOOPS[key]

@@ -13,6 +13,8 @@ from fcomp.models.base import FrictionModel, NotSymbolicError, Signals, side_of
 from fcomp.models.gms import GMS
 from fcomp.models.hysteresis import NMLGMHysteresis
 from fcomp.models.lugre_family import PRESETS, LuGreFamily
+from fcomp.parameters import ParamSet
+from fcomp.paramsets import friction_values
 from fcomp.registry import Registry
 
 MODELS: Registry[type[FrictionModel]] = Registry("friction model")
@@ -46,16 +48,23 @@ def make_model(
         Effect names or instances to add (:meth:`FrictionModel.with_effects`).
     """
     cls = MODELS.get(name)
-    if isinstance(params, str):
-        from fcomp.paramsets import model_params
-
-        model = cls(model_params(params, name))
-    else:
-        model = cls(params)
+    model = cls(model_params(params, name)) if isinstance(params, str) else cls(params)
     return model.with_effects(*effects) if effects else model
+
+
+def model_params(set_name: str, model_name: str) -> ParamSet:
+    """The ``Params`` of model ``model_name`` filled from parameter set ``set_name``.
+
+    Parameters the set does not give keep the model's defaults; parameters
+    the model does not have are ignored (:func:`fcomp.paramsets.friction_values`).
+    """
+    cls = MODELS.get(model_name)
+    accepted = set(cls.Params.names())
+    values = friction_values(set_name, model_name)
+    return cls.Params(**{k: v for k, v in values.items() if k in accepted})
 
 
 __all__ = [
     "MODELS", "FrictionModel", "LuGreFamily", "NotSymbolicError", "Signals", "make_model",
-    "register_model", "side_of",
+    "model_params", "register_model", "side_of",
 ]

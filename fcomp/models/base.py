@@ -33,10 +33,26 @@ terms; :meth:`FrictionModel.with_effects` composes them. Everything the
 simulation engine, identification, EKF and MPC need is derived here:
 :meth:`rhs`, :meth:`force`, :meth:`steady_state`, :meth:`casadi_functions`.
 
-Models whose memory is discrete (the turning-point stack of
-``nmlgm-hysteresis``) set ``symbolic = False`` and implement
-:meth:`step_memory`; asking them for a symbolic form raises
-:class:`NotSymbolicError`.
+Capabilities, asked for, never switched on by type
+==================================================
+Every model can be put anywhere a model goes; what differs between models
+is asked for, and the answer says which route to take:
+
+:meth:`FrictionModel.discrete_memory`
+    ``None`` for models whose memory is in their continuous states (every
+    equation then has its symbolic form: :attr:`FrictionModel.symbolic` is
+    true); otherwise the model's :class:`DiscreteMemory` (the turning-point
+    stack of ``nmlgm-hysteresis``), which integrates a motion and couples to
+    plants its own way, while :meth:`rhs` and :meth:`casadi_functions` raise
+    :class:`NotSymbolicError`;
+:meth:`FrictionModel.feature_family`
+    ``None``, or the model as a member of a family of feature sets that
+    structural effects extend (:class:`FeatureFamily`: the LuGre family);
+:attr:`FrictionModel.static_map`
+    whether the model is a memoryless map that plants hold with Karnopp's
+    stick band;
+``Params.UNIT_SUMS``
+    parameter groups that sum to 1 (the fit keeps them so).
 """
 
 from __future__ import annotations
@@ -45,14 +61,14 @@ import math
 from abc import ABC, abstractmethod
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar, Protocol
 
 import casadi as ca
 import numpy as np
 
 from fcomp.backend import CASADI, NUMPY, Backend
 from fcomp.errors import FcompError
-from fcomp.parameters import ParamSet, ParamValues
+from fcomp.parameters import ParamSet, ParamValues, PlainValue, adopt_params
 
 if TYPE_CHECKING:
     from fcomp.effects.base import Effect
@@ -102,6 +118,62 @@ class Signals:
         return [self.v, self.a, self.x, self.p1, self.p2, self.s]
 
 
+class DiscreteMemory(Protocol):
+    """The capability of a model whose memory is discrete (:meth:`FrictionModel.discrete_memory`).
+
+    The model's states are those of a *carrier* -- the model with continuous
+    states it is built on -- plus :attr:`memory_state`, the value the memory
+    gives (``Fz``, the force of the hysteresis function); the memory itself
+    (the turning-point stack) is not a state vector and has no symbolic form.
+    """
+
+    #: name of the state the memory sets (among the model's ``state_names``)
+    memory_state: str
+
+    def carrier(self) -> FrictionModel:
+        """The model with continuous states that integrates everything but the memory."""
+        ...
+
+    def hysteresis_function(self, values: Mapping[str, float] | None = None) -> Any:
+        """A fresh memory (``reset``, ``step``, ``move_to``, ``snapshot``/``restore``)."""
+        ...
+
+    def bristle_inputs(self, x: Sequence[Any], sig: Signals, P: Any) -> tuple[Any, Any]:
+        """What the memory reads at state ``x``: the sliding force ``g`` and threshold ``zs``."""
+        ...
+
+    def integrate_motion(self, sig: Mapping[str, np.ndarray], x0: np.ndarray,
+                         flat: Mapping[str, float], substeps: int) -> np.ndarray:
+        """The states ``(N, n_states)`` along sampled signals (``t, v, a, x, p1, p2, s``)."""
+        ...
+
+
+class FeatureFamily(Protocol):
+    """The capability of a model that belongs to a family of feature sets
+    (:meth:`FrictionModel.feature_family`): structural effects extend it."""
+
+    @property
+    def features(self) -> frozenset[str]:
+        """The family's features the model has (``viscous``, ``presliding``, ...)."""
+        ...
+
+    @property
+    def viscous_name(self) -> str:
+        """The name of its viscous coefficient (``sigma2``, ``B``)."""
+        ...
+
+    @property
+    def lineage(self) -> tuple[str, ...]:
+        """The model and the effects it was built from, in order (for :meth:`describe`)."""
+        ...
+
+    def with_features(self, add: set[str], values: dict[str, float]) -> Any:
+        """The family's model with more features (new parameters from ``values``)."""
+        ...
+
+    def describe(self) -> str: ...
+
+
 def side_of(v: np.ndarray, initial: float = 1.0) -> np.ndarray:
     """Side ``s`` (+1/-1) for a velocity record: ``sign(v)``, holding the last side at ``v = 0``."""
     v = np.asarray(v, dtype=float)
@@ -114,8 +186,12 @@ def side_of(v: np.ndarray, initial: float = 1.0) -> np.ndarray:
     return s[idx]
 
 
-class FrictionModel(ABC):
+class FrictionModel(PlainValue, ABC):
     """Base class of every friction model (see the module docstring for the contract).
+
+    Models are plain values: they pickle (:class:`~fcomp.parameters.PlainValue`),
+    with their parameters and effects, also when their class was made for a
+    feature combination (it pickles by its recipe).
 
     Parameters
     ----------
@@ -129,9 +205,12 @@ class FrictionModel(ABC):
     name: ClassVar[str] = ""
     Params: ClassVar[type[ParamSet]]
     base_states: ClassVar[tuple[str, ...]] = ()
-    symbolic: ClassVar[bool] = True
     #: level parameters that effects may scale (present ones only)
     level_names: ClassVar[tuple[str, ...]] = ("Fc", "Fs")
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        adopt_params(cls)
 
     def __init__(
         self,
@@ -147,11 +226,12 @@ class FrictionModel(ABC):
                 f"{self.name}: expected {self.Params.__name__}, got {type(params).__name__}"
             )
         self.params: ParamSet = params
-        from fcomp.effects import make_effect
+        # effect names are resolved in fcomp.effects.base (a module that imports no model);
+        # imported here, not at the top, because importing it registers the catalogue,
+        # which is built on the model modules and so cannot load before this one
+        from fcomp.effects.base import as_effect
 
-        self.effects: tuple[Effect, ...] = tuple(
-            make_effect(e) if isinstance(e, str) else e for e in effects
-        )
+        self.effects: tuple[Effect, ...] = tuple(as_effect(e) for e in effects)
         names = list(self.params.flat())
         for e in self.effects:
             for n in e.params.flat():
@@ -160,6 +240,28 @@ class FrictionModel(ABC):
                         f"{self.name}: parameter {n!r} of effect {e.name!r} clashes with another"
                     )
                 names.append(n)
+
+    # -------------------------------------------------------- capabilities
+    def discrete_memory(self) -> DiscreteMemory | None:
+        """The model's discrete memory, or ``None`` when its memory is its continuous
+        states (module docstring, "Capabilities")."""
+        return None
+
+    @property
+    def symbolic(self) -> bool:
+        """Whether every equation has its symbolic (CasADi) form: no discrete memory."""
+        return self.discrete_memory() is None
+
+    def feature_family(self) -> FeatureFamily | None:
+        """The model as a member of a feature family that structural effects extend, or
+        ``None`` (module docstring, "Capabilities")."""
+        return None
+
+    @property
+    def static_map(self) -> bool:
+        """Whether the model is a memoryless map (plants hold it with Karnopp's stick band,
+        :mod:`plants.mechanics`); models with a bristle or element states are not."""
+        return False
 
     # ------------------------------------------------------------ contract
     def base_initial_state(self) -> list[float]:
@@ -211,12 +313,11 @@ class FrictionModel(ABC):
         ``presliding``, ``frictional-lag``, ``nonlocal-memory``) turn the
         model into the richer model of the family; the others are added on.
         """
-        from fcomp.effects import make_effect
+        from fcomp.effects.base import as_effect
 
         model: FrictionModel = self
         for e in effects:
-            eff = make_effect(e) if isinstance(e, str) else e
-            model = eff.attach(model)
+            model = as_effect(e).attach(model)
         return model
 
     def with_params(self, **flat: float) -> FrictionModel:
@@ -298,7 +399,7 @@ class FrictionModel(ABC):
 
         A model whose states have hard limits (Maxwell-slip element deflections
         within their slip band) clips them here; the sampled engine applies it
-        after every step (:func:`fcomp.trajectory.friction_step`).
+        after every step (:func:`fcomp.models.stepping.friction_step`).
         """
         return x
 
@@ -364,7 +465,8 @@ class FrictionModel(ABC):
 
     # -------------------------------------------------------------- symbolic
     def require_symbolic(self) -> None:
-        if not self.symbolic:
+        """Raise :class:`NotSymbolicError` unless the model has its symbolic form."""
+        if self.discrete_memory() is not None:
             raise NotSymbolicError(
                 f"model {self.describe()!r} has discrete (turning-point) memory and no "
                 "symbolic CasADi form; use its numeric simulation, or 'nmlgm'/'gms' for "

@@ -51,24 +51,33 @@ from typing import Any, ClassVar
 
 from fcomp.backend import Backend
 from fcomp.models.base import FrictionModel, Signals
-from fcomp.models.lugre_family import FAMILY_SPECS, PRESETS
-from fcomp.parameters import ParamSet, ParamValues, make_params_class, spec
+from fcomp.models.lugre_family import FAMILY_SPECS, PRESETS, LuGreFamily
+from fcomp.parameters import (
+    ParamSet,
+    ParamValues,
+    make_params_class,
+    spec,
+    with_recipe,
+)
 
 INF = math.inf
 
-#: Tolerance of the ``sum(alpha_i) = 1`` check.
-ALPHA_SUM_TOL = 1e-9
 
 
 @cache
-def _stribeck_model() -> FrictionModel:
+def _stribeck_model() -> LuGreFamily:
     """The family's ``stribeck`` model, whose ``g(v, h)`` GMS evaluates with ``h = 0``."""
     return PRESETS["stribeck"]()
 
 
-@cache
 def gms_params_class(n: int) -> type[ParamSet]:
-    """The frozen parameter class of a GMS model with ``n`` elements (``k1..kn``, ``alpha1..alphan``)."""
+    """The frozen parameter class of a GMS model with ``n`` elements (``k1..kn``,
+    ``alpha1..alphan``, which sum to 1); cached, pickles by its recipe."""
+    return _gms_params_class(n)
+
+
+@cache
+def _gms_params_class(n: int) -> type[ParamSet]:
     if not (isinstance(n, int) and n >= 1):
         raise ValueError(f"gms: the number of elements must be an integer >= 1, got {n!r}")
     total = n * (n + 1) / 2
@@ -81,20 +90,12 @@ def gms_params_class(n: int) -> type[ParamSet]:
                    f"slip-force fraction of element {i} (sum of all alpha = 1)",
                    lower_open=True, directional=False)
               for i in range(1, n + 1)]
-    base = make_params_class(f"GMS{n}ParamsBase", specs, owner=owner, constraints=[("Fc", "Fs")])
-
-    def check_alpha_sum(self: Any) -> None:
-        base.__post_init__(self)
-        s = sum(getattr(self, f"alpha{i}") for i in range(1, n + 1))
-        if abs(s - 1.0) > ALPHA_SUM_TOL:
-            raise ValueError(
-                f"{owner}: parameters alpha1..alpha{n} must sum to 1 (they sum to {s:.12g}); "
-                "the slip forces alpha_i*g(v) add up to the Stribeck curve g(v)"
-            )
-
-    return type(f"GMS{n}Params", (base,), {
-        "__post_init__": check_alpha_sum, "__doc__": base.__doc__, "__module__": __name__,
-    })
+    alphas = tuple(f"alpha{i}" for i in range(1, n + 1))
+    cls = make_params_class(
+        "GMSParams" if n == 4 else f"GMS{n}Params", specs, owner=owner,
+        constraints=[("Fc", "Fs")], module=__name__,
+        unit_sums=[(alphas, "the slip forces alpha_i*g(v) add up to the Stribeck curve g(v)")])
+    return with_recipe(cls, _gms_params_class, n)
 
 
 class GMSModel(FrictionModel):
@@ -107,7 +108,7 @@ class GMSModel(FrictionModel):
 
     def g(self, be: Backend, v: Any, P: ParamValues, L: dict, s: Any) -> Any:
         """Stribeck curve ``g(v) = Fc + (Fs - Fc)*exp(-(|v|/vs)^n)`` (N), the family's."""
-        return _stribeck_model().g(be, v, 0.0, P, L, s)  # type: ignore[attr-defined]
+        return _stribeck_model().g(be, v, 0.0, P, L, s)
 
     def _k_alpha(self, P: ParamValues) -> list[tuple[Any, Any]]:
         return [(P(f"k{i}"), P(f"alpha{i}")) for i in range(1, self.n_elements + 1)]
@@ -144,7 +145,7 @@ class GMSModel(FrictionModel):
         (as for LuGre, passivity above that speed is not guaranteed: flagged).
         """
         p = self.params
-        sigma1 = p.sigma1  # type: ignore[attr-defined]
+        sigma1 = p.scalar("sigma1")
         if sigma1 == 0.0:
             return {"applies": True, "passive": True, "v_max": INF,
                     "reason": "no bristle damping: dissipative for every velocity"}
@@ -155,20 +156,41 @@ class GMSModel(FrictionModel):
                 "beyond that the damping can return energy (flagged)"}
 
 
-@cache
+def _element_states(n: int) -> tuple[str, ...]:
+    return tuple(f"z{i}" for i in range(1, n + 1))
+
+
+class GMS(GMSModel):
+    """Generalized Maxwell-slip friction with 4 elements (models.md 1.7; Al-Bender,
+    Lampaert, Swevers 2005): the registered ``gms``."""
+
+    name = "gms"
+    n_elements = 4
+    Params = gms_params_class(4)
+    base_states = _element_states(4)
+
+
+GMSParams = GMS.Params
+
+
 def gms_class(n: int) -> type[GMSModel]:
-    """The GMS model class with ``n`` elements (``n = 4`` is the registered ``gms``)."""
+    """The GMS model class with ``n`` elements (``n = 4`` is the registered :class:`GMS`;
+    others are made here, cached, and pickle by their recipe)."""
+    return _gms_class(n)
+
+
+@cache
+def _gms_class(n: int) -> type[GMSModel]:
     params = gms_params_class(n)
-    return type(f"GMS{n}", (GMSModel,), {
-        "name": "gms" if n == 4 else f"gms{n}",
+    if n == 4:
+        return GMS
+    made = type(f"GMS{n}", (GMSModel,), {
+        "name": f"gms{n}",
         "n_elements": n,
         "Params": params,
-        "base_states": tuple(f"z{i}" for i in range(1, n + 1)),
+        "base_states": _element_states(n),
         "__doc__": f"Generalized Maxwell-slip friction with {n} elements (models.md 1.7; "
                    "Al-Bender, Lampaert, Swevers 2005).",
         "__module__": __name__,
     })
-
-
-GMS = gms_class(4)
-GMSParams = GMS.Params
+    return with_recipe(made, _gms_class, n)

@@ -152,12 +152,15 @@ film state ``h`` and effect states do not depend on ``z``; they are
 integrated by the compiled family model (the *carrier*). Pure Python per
 sample (~10 us).
 
-The memory is discrete, so the model has no symbolic (CasADi) form:
-``symbolic = False``; :meth:`casadi_functions` and :meth:`rhs` raise
-:class:`~fcomp.models.base.NotSymbolicError`. Use
-:func:`fcomp.trajectory.friction_along_motion` (which calls
-:meth:`HysteresisFamily.integrate_motion`) or the stateful
-:class:`HysteresisStepper` (``model.stepper()``) for plant simulation.
+The memory is discrete, so the model has no symbolic (CasADi) form: it
+answers :meth:`~fcomp.models.base.FrictionModel.discrete_memory` with itself
+(``symbolic`` is false); :meth:`casadi_functions` and :meth:`rhs` raise
+:class:`~fcomp.models.base.NotSymbolicError`. Callers ask for that capability:
+:func:`fcomp.trajectory.friction_along_motion` then calls
+:meth:`HysteresisFamily.integrate_motion`, the plants couple the memory to
+their engine (:mod:`plants.discrete_memory`), identification differentiates
+by finite differences; the stateful :class:`HysteresisStepper`
+(``model.stepper()``) steps it one interval at a time.
 """
 
 from __future__ import annotations
@@ -166,15 +169,17 @@ import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from functools import cache
-from typing import Any, ClassVar
+from typing import Any
 
 import numpy as np
 
 from fcomp.backend import NUMPY, Backend
+from fcomp.compiled import Loop
 from fcomp.errors import ConvergenceError, FcompError
 from fcomp.models.base import NotSymbolicError, Signals
 from fcomp.models.lugre_family import PRESETS, LuGreFamily, family_class, params_class
-from fcomp.parameters import ParamSet, ParamSpec, ParamValues, make_params_class, spec
+from fcomp.models.stepping import midpoint_signals, step_loop
+from fcomp.parameters import ParamSet, ParamSpec, ParamValues, make_params_class, spec, with_recipe
 
 INF = math.inf
 
@@ -606,13 +611,24 @@ class HysteresisFunction:
 
 
 # ---------------------------------------------------------------------- model
-def _params_class(features: frozenset[str], viscous_name: str, cls_name: str,
-                  owner: str) -> type[ParamSet]:
+def hysteresis_params_class(features: frozenset[str], viscous_name: str = "sigma2",
+                            cls_name: str = "HysteresisParams",
+                            owner: str = "") -> type[ParamSet]:
+    """The family's parameters of ``features`` and those of the hysteresis function (cached;
+    pickles by its recipe)."""
+    return _hysteresis_params_class(frozenset(features), viscous_name, cls_name, owner)
+
+
+@cache
+def _hysteresis_params_class(features: frozenset[str], viscous_name: str, cls_name: str,
+                             owner: str) -> type[ParamSet]:
     base = params_class(features, viscous_name)
-    return make_params_class(
-        cls_name, [*base.SPECS, *hysteresis_specs(SEED_DEFAULTS)], owner=owner,
-        constraints=[("Fc", "Fs"), *HYSTERESIS_CONSTRAINTS],
+    cls = make_params_class(
+        cls_name, [*base.SPECS, *hysteresis_specs(SEED_DEFAULTS)],
+        owner=owner or "model " + "+".join(sorted(features)) + "+nonlocal-memory",
+        constraints=[("Fc", "Fs"), *HYSTERESIS_CONSTRAINTS], module=__name__,
     )
+    return with_recipe(cls, _hysteresis_params_class, features, viscous_name, cls_name, owner)
 
 
 class HysteresisFamily(LuGreFamily):
@@ -624,11 +640,16 @@ class HysteresisFamily(LuGreFamily):
     bristle deflection ``Fz/sigma0`` in place of ``z`` (module docstring).
     """
 
-    symbolic: ClassVar[bool] = False
+    #: the state the memory sets: the value of ``F(z)`` (N)
+    memory_state = "Fz"
+
+    def discrete_memory(self) -> HysteresisFamily:
+        """The model itself: it is its own :class:`~fcomp.models.base.DiscreteMemory`."""
+        return self
 
     @property
     def base_states(self) -> tuple[str, ...]:  # type: ignore[override]
-        return (*super().base_states, "Fz")
+        return (*super().base_states, self.memory_state)
 
     def _family_states(self, x: list[Any], P: ParamValues) -> list[Any]:
         """The family's state list with the deflection carrying ``F(z)``: ``[Fz/sigma0, h]``."""
@@ -706,19 +727,13 @@ class HysteresisFamily(LuGreFamily):
         velocity and ``g`` at the interval start. ``substeps > 1`` refines the
         sample grid (signals linearly interpolated).
         """
-        from fcomp.trajectory import friction_along_motion, midpoint_signals
-
         fine = _refine(sig, substeps)
         iF = len(self.base_states) - 1
         x0 = np.asarray(x0, dtype=float)
         carrier = self.carrier()
-        run = friction_along_motion(
-            carrier, fine["t"], fine["v"], a=fine["a"], x=fine["x"], p1=fine["p1"],
-            p2=fine["p2"], state0=np.delete(x0, iF),
-            values={k: flat[k] for k in carrier.flat_params()},
-        )
-        X = np.insert(run.states, iF, 0.0, axis=1)
         M, dt = midpoint_signals(fine)
+        pc = np.array([flat[k] for k in carrier.flat_params()], dtype=float)
+        X = np.insert(step_loop(carrier)(np.delete(x0, iF), M.T, dt, pc), iF, 0.0, axis=1)
         P = ParamValues(flat, NUMPY)
         mid = Signals(v=M[0], a=M[1], x=M[2], p1=M[3], p2=M[4], s=M[5])
         g, zs = self.bristle_inputs([X[:-1, i] for i in range(X.shape[1])], mid, P)
@@ -772,7 +787,7 @@ def with_hysteresis(model: LuGreFamily, values: Mapping[str, float]) -> Hysteres
 
     ``values`` are the hysteresis-function parameters (others keep their defaults).
     """
-    if not isinstance(model, LuGreFamily) or "presliding" not in model.features:
+    if model.feature_family() is None or "presliding" not in model.features:
         raise ValueError(
             f"the hysteresis function replaces sigma0*z: model {model.describe()!r} has no "
             "bristle state (add 'presliding' first)"
@@ -796,22 +811,33 @@ class NMLGMHysteresis(HysteresisFamily):
     name = "nmlgm-hysteresis"
     features = PRESETS["nmlgm"].features
     viscous_name = "sigma2"
-    Params = _params_class(features, "sigma2", "NMLGMHysteresisParams", "nmlgm-hysteresis")
+    Params = hysteresis_params_class(features, "sigma2", "NMLGMHysteresisParams",
+                                     "nmlgm-hysteresis")
+
+
+NMLGMHysteresisParams = NMLGMHysteresis.Params
+
+
+def hysteresis_class(features: frozenset[str], viscous_name: str = "sigma2") -> type[HysteresisFamily]:
+    """The hysteresis model class of a family feature set (``nmlgm-hysteresis`` if it matches;
+    other classes are made here, cached, and pickle by their recipe)."""
+    return _hysteresis_class(frozenset(features), viscous_name)
 
 
 @cache
-def hysteresis_class(features: frozenset[str], viscous_name: str = "sigma2") -> type[HysteresisFamily]:
-    """The hysteresis model class of a family feature set (``nmlgm-hysteresis`` if it matches)."""
+def _hysteresis_class(features: frozenset[str], viscous_name: str) -> type[HysteresisFamily]:
     if "presliding" not in features:
         raise ValueError("the hysteresis function needs the bristle state (presliding)")
     if features == NMLGMHysteresis.features and viscous_name == NMLGMHysteresis.viscous_name:
         return NMLGMHysteresis
     label = "+".join(sorted(features)) + "+nonlocal-memory"
-    params = _params_class(features, viscous_name, "HysteresisParams", "model " + label)
-    return type("HysteresisModel", (HysteresisFamily,), {
-        "name": "custom", "features": features, "viscous_name": viscous_name, "Params": params,
+    made = type("HysteresisModel", (HysteresisFamily,), {
+        "name": "custom", "features": features, "viscous_name": viscous_name,
+        "Params": hysteresis_params_class(features, viscous_name),
         "__doc__": f"LuGre-family model ({label}) with the hysteresis function.",
+        "__module__": __name__,
     })
+    return with_recipe(made, _hysteresis_class, features, viscous_name)
 
 
 # -------------------------------------------------------------------- stepper
@@ -832,7 +858,7 @@ class HysteresisStepper:
     """
 
     def __init__(self, model: HysteresisFamily, values: Mapping[str, float] | None = None) -> None:
-        if not isinstance(model, HysteresisFamily):
+        if model.discrete_memory() is None:
             raise ValueError(f"HysteresisStepper needs a hysteresis model, got {model.describe()!r}")
         self.model = model
         self.flat = {**model.flat_params(), **(values or {})}
@@ -841,12 +867,9 @@ class HysteresisStepper:
         self.carrier = model.carrier()
         self._iF = len(model.base_states) - 1
         self._cidx = np.delete(np.arange(model.n_states), self._iF)  # carrier's states
-        self._cstep = None
+        self._cstep: Loop | None = None
         if self.carrier.n_states > 1:  # film or effect states besides z: the family's step
-            from fcomp.compiled import stepping_loop
-            from fcomp.trajectory import friction_step
-
-            self._cstep = stepping_loop(friction_step(self.carrier))
+            self._cstep = step_loop(self.carrier)
             self._cp = np.array([self.flat[k] for k in self.carrier.flat_params()], dtype=float)
         self.reset()
 

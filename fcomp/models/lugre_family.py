@@ -70,7 +70,7 @@ from typing import Any, ClassVar
 
 from fcomp.backend import Backend
 from fcomp.models.base import FrictionModel, Signals
-from fcomp.parameters import ParamSet, ParamSpec, ParamValues, make_params_class, spec
+from fcomp.parameters import ParamSet, ParamSpec, ParamValues, make_params_class, spec, with_recipe
 
 INF = math.inf
 _TINY = 1e-30
@@ -148,26 +148,26 @@ FEATURE_ORDER = ("stribeck", "viscous", "presliding", "damping", "film", "film-l
                  "elements", "stribeck-form", "bristle-exponent", "viscous-power", "speed-lag")
 
 
+#: Feature -> (the feature it builds on, the message when that is missing).
+FEATURE_NEEDS: dict[str, tuple[str, str]] = {
+    "film": ("stribeck", "the film term needs the Stribeck term (Fs) to act on"),
+    "film-lag": ("film", "film-lag needs the film term"),
+    "damping": ("presliding", "bristle damping needs the bristle state (presliding)"),
+    "elements": ("presliding", "Maxwell-slip elements split the bristle: they need presliding"),
+    "stribeck-form": ("stribeck", "the Stribeck curve form needs the Stribeck term"),
+    "viscous-power": ("viscous", "the viscous exponent needs the viscous term"),
+    "bristle-exponent": ("presliding", "the bristle exponent needs the bristle (presliding)"),
+    "speed-lag": ("stribeck", "the lagged speed needs the Stribeck term it acts on"),
+}
+
+
 def _check_features(features: frozenset[str]) -> None:
     unknown = features - set(FEATURE_PARAMS)
     if unknown:
         raise ValueError(f"unknown model feature(s): {sorted(unknown)}")
-    if "film" in features and "stribeck" not in features:
-        raise ValueError("the film term needs the Stribeck term (Fs) to act on")
-    if "film-lag" in features and "film" not in features:
-        raise ValueError("film-lag needs the film term")
-    if "damping" in features and "presliding" not in features:
-        raise ValueError("bristle damping needs the bristle state (presliding)")
-    if "elements" in features and "presliding" not in features:
-        raise ValueError("Maxwell-slip elements split the bristle: they need presliding")
-    if "stribeck-form" in features and "stribeck" not in features:
-        raise ValueError("the Stribeck curve form needs the Stribeck term")
-    if "speed-lag" in features and "stribeck" not in features:
-        raise ValueError("the lagged speed needs the Stribeck term it acts on")
-    if "viscous-power" in features and "viscous" not in features:
-        raise ValueError("the viscous exponent needs the viscous term")
-    if "bristle-exponent" in features and "presliding" not in features:
-        raise ValueError("the bristle exponent needs the bristle (presliding)")
+    for feature, (needed, why) in FEATURE_NEEDS.items():
+        if feature in features and needed not in features:
+            raise ValueError(why)
 
 
 def _param_names(features: frozenset[str], viscous_name: str) -> tuple[str, ...]:
@@ -180,19 +180,26 @@ def _param_names(features: frozenset[str], viscous_name: str) -> tuple[str, ...]
     return tuple(names)
 
 
-@cache
 def params_class(
     features: frozenset[str], viscous_name: str = "sigma2", cls_name: str = "", owner: str = ""
 ) -> type[ParamSet]:
-    """The frozen parameter dataclass of a feature set (cached)."""
+    """The frozen parameter dataclass of a feature set (cached; pickles by its recipe)."""
+    return _params_class(frozenset(features), viscous_name, cls_name, owner)
+
+
+@cache
+def _params_class(features: frozenset[str], viscous_name: str, cls_name: str,
+                  owner: str) -> type[ParamSet]:
     _check_features(features)
     names = _param_names(features, viscous_name)
-    return make_params_class(
-        cls_name or "Params_" + "_".join(sorted(features)),
+    cls = make_params_class(
+        cls_name or "Params_" + "_".join(sorted(f.replace("-", "_") for f in features)),
         [FAMILY_SPECS[n] for n in names],
         owner=owner or "model",
         constraints=[("Fc", "Fs")],
+        module=__name__,
     )
+    return with_recipe(cls, _params_class, features, viscous_name, cls_name, owner)
 
 
 class LuGreFamily(FrictionModel):
@@ -234,6 +241,15 @@ class LuGreFamily(FrictionModel):
         return new
 
     lineage: tuple[str, ...] = ()
+
+    def feature_family(self) -> LuGreFamily:
+        """The model itself: structural effects extend its feature set (:meth:`with_features`)."""
+        return self
+
+    @property
+    def static_map(self) -> bool:
+        """Without the bristle state (``presliding``) the model is a memoryless map."""
+        return "presliding" not in self.features
 
     def describe(self) -> str:
         base = self.name if not self.lineage else self.lineage[0]
@@ -429,7 +445,7 @@ class LuGreFamily(FrictionModel):
         if "presliding" not in self.features:
             return {"applies": False, "passive": True, "reason": "memoryless monotone map"}
         p = self.params
-        sigma1 = p.sigma1 if "damping" in self.features else 0.0  # type: ignore[attr-defined]
+        sigma1 = p.scalar("sigma1") if "damping" in self.features else 0.0
         gmin = min(p.side_values("Fc"))
         if sigma1 == 0.0:
             return {"applies": True, "passive": True, "v_max": INF,
@@ -444,14 +460,19 @@ class LuGreFamily(FrictionModel):
         }
 
 
-@cache
 def family_class(features: frozenset[str], viscous_name: str = "sigma2") -> type[LuGreFamily]:
-    """The model class of a feature set: a registered preset if one matches."""
+    """The model class of a feature set: a registered preset if one matches, else a class
+    made here (named after its features; cached, its instances pickle by its recipe)."""
+    return _family_class(frozenset(features), viscous_name)
+
+
+@cache
+def _family_class(features: frozenset[str], viscous_name: str) -> type[LuGreFamily]:
     for cls in PRESETS.values():
         if cls.features == features and cls.viscous_name == viscous_name:
             return cls
     name = "+".join(sorted(features))
-    return type(
+    made = type(
         "LuGreFamily_" + name.replace("-", "_").replace("+", "__"),
         (LuGreFamily,),
         {
@@ -459,57 +480,83 @@ def family_class(features: frozenset[str], viscous_name: str = "sigma2") -> type
             "features": features,
             "viscous_name": viscous_name,
             "Params": params_class(features, viscous_name, owner="model " + name),
+            "__module__": __name__,
         },
     )
+    return with_recipe(made, _family_class, features, viscous_name)
 
 
-_CLASS_NAMES = {
-    "coulomb": "Coulomb", "coulomb-viscous": "CoulombViscous", "stribeck": "Stribeck",
-    "dahl": "Dahl", "lugre": "LuGre", "modified-lugre": "ModifiedLuGre", "nmlgm": "NMLGM",
-}
+# ------------------------------------------------------------------ the presets
+class Coulomb(LuGreFamily):
+    """Coulomb friction ``F = Fc*sign(v)`` (models.md 1.1)."""
+
+    name = "coulomb"
+    features = frozenset()
+    Params = params_class(features, "sigma2", "CoulombParams", "coulomb")
 
 
-def _preset(name: str, features: set[str], doc: str, viscous_name: str = "sigma2") -> type:
-    fs = frozenset(features)
-    cls_name = _CLASS_NAMES[name]
-    params = params_class(fs, viscous_name, cls_name + "Params", owner=name)
-    cls = type(cls_name, (LuGreFamily,), {
-        "name": name, "features": fs, "viscous_name": viscous_name, "Params": params,
-        "__doc__": doc, "__module__": __name__,
-    })
-    return cls
+class CoulombViscous(LuGreFamily):
+    """Coulomb-viscous friction ``F = Fc*sign(v) + B*v`` (seed 001 Eq. 4)."""
+
+    name = "coulomb-viscous"
+    features = frozenset({"viscous"})
+    viscous_name = "B"
+    Params = params_class(features, "B", "CoulombViscousParams", "coulomb-viscous")
+
+
+class Stribeck(LuGreFamily):
+    """Stribeck steady-state map with film term, seed 002 Eq. 12 / seed 000 Eq. 9:
+    ``F = sign(v)*(Fc + ((1 - h_ss)*Fs - Fc)*exp(-(|v|/vs)^n)) + sigma2*v``;
+    ``vb = inf`` gives the classical Stribeck curve."""
+
+    name = "stribeck"
+    features = frozenset({"stribeck", "viscous", "film"})
+    Params = params_class(features, "sigma2", "StribeckParams", "stribeck")
+
+
+class Dahl(LuGreFamily):
+    """Dahl model ``dz/dt = v - sigma0*|v|*z/Fc``, ``F = sigma0*z + sigma2*v`` (models.md 1.2)."""
+
+    name = "dahl"
+    features = frozenset({"presliding", "viscous"})
+    Params = params_class(features, "sigma2", "DahlParams", "dahl")
+
+
+class LuGre(LuGreFamily):
+    """LuGre model (Canudas de Wit et al. 1995, models.md 1.3)."""
+
+    name = "lugre"
+    features = frozenset({"stribeck", "viscous", "presliding", "damping"})
+    Params = params_class(features, "sigma2", "LuGreParams", "lugre")
+
+
+class ModifiedLuGre(LuGreFamily):
+    """Modified LuGre with lubricant-film state h (Yanada & Sekikawa; seed 000 Eqs. 2-8,
+    T = 0; models.md 1.4)."""
+
+    name = "modified-lugre"
+    features = frozenset({"stribeck", "viscous", "presliding", "damping", "film", "film-lag"})
+    Params = params_class(features, "sigma2", "ModifiedLuGreParams", "modified-lugre")
+
+
+class NMLGM(LuGreFamily):
+    """New modified LuGre model (Tran et al.; seed 002 Eqs. 5-11, seed 000 Eq. 8):
+    ``F = sigma0*z + sigma1*dz/dt + sigma2*(v + T*dv/dt)`` (models.md 1.5)."""
+
+    name = "nmlgm"
+    features = frozenset({"stribeck", "viscous", "presliding", "damping", "film", "film-lag",
+                          "lead"})
+    Params = params_class(features, "sigma2", "NMLGMParams", "nmlgm")
 
 
 PRESETS: dict[str, type[LuGreFamily]] = {
-    "coulomb": _preset("coulomb", set(), "Coulomb friction ``F = Fc*sign(v)`` (models.md 1.1)."),
-    "coulomb-viscous": _preset(
-        "coulomb-viscous", {"viscous"},
-        "Coulomb-viscous friction ``F = Fc*sign(v) + B*v`` (seed 001 Eq. 4).", "B"),
-    "stribeck": _preset(
-        "stribeck", {"stribeck", "viscous", "film"},
-        "Stribeck steady-state map with film term, seed 002 Eq. 12 / seed 000 Eq. 9: "
-        "``F = sign(v)*(Fc + ((1 - h_ss)*Fs - Fc)*exp(-(|v|/vs)^n)) + sigma2*v``; "
-        "``vb = inf`` gives the classical Stribeck curve."),
-    "dahl": _preset(
-        "dahl", {"presliding", "viscous"},
-        "Dahl model ``dz/dt = v - sigma0*|v|*z/Fc``, ``F = sigma0*z + sigma2*v`` (models.md 1.2)."),
-    "lugre": _preset(
-        "lugre", {"stribeck", "viscous", "presliding", "damping"},
-        "LuGre model (Canudas de Wit et al. 1995, models.md 1.3)."),
-    "modified-lugre": _preset(
-        "modified-lugre", {"stribeck", "viscous", "presliding", "damping", "film", "film-lag"},
-        "Modified LuGre with lubricant-film state h (Yanada & Sekikawa; seed 000 Eqs. 2-8, "
-        "T = 0; models.md 1.4)."),
-    "nmlgm": _preset(
-        "nmlgm", {"stribeck", "viscous", "presliding", "damping", "film", "film-lag", "lead"},
-        "New modified LuGre model (Tran et al.; seed 002 Eqs. 5-11, seed 000 Eq. 8): "
-        "``F = sigma0*z + sigma1*dz/dt + sigma2*(v + T*dv/dt)`` (models.md 1.5)."),
+    cls.name: cls for cls in (Coulomb, CoulombViscous, Stribeck, Dahl, LuGre, ModifiedLuGre, NMLGM)
 }
 
-CoulombParams = PRESETS["coulomb"].Params
-CoulombViscousParams = PRESETS["coulomb-viscous"].Params
-StribeckParams = PRESETS["stribeck"].Params
-DahlParams = PRESETS["dahl"].Params
-LuGreParams = PRESETS["lugre"].Params
-ModifiedLuGreParams = PRESETS["modified-lugre"].Params
-NMLGMParams = PRESETS["nmlgm"].Params
+CoulombParams = Coulomb.Params
+CoulombViscousParams = CoulombViscous.Params
+StribeckParams = Stribeck.Params
+DahlParams = Dahl.Params
+LuGreParams = LuGre.Params
+ModifiedLuGreParams = ModifiedLuGre.Params
+NMLGMParams = NMLGM.Params

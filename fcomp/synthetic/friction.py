@@ -29,9 +29,9 @@ from dataclasses import replace
 
 import numpy as np
 
+import fcomp.synthetic.dynamics as dyn
+import fcomp.synthetic.laws as lw
 from fcomp.errors import FcompError
-from fcomp.synthetic import dynamics as dyn
-from fcomp.synthetic import laws as lw
 from fcomp.synthetic.catalogue import Law, shape
 from fcomp.synthetic.scales import TruthParams
 

@@ -67,7 +67,11 @@ class TruthParams:
 
     @property
     def areas(self) -> tuple[float, float]:
-        """Piston areas ``A1 = pi/4*bore^2`` and ``A2 = pi/4*(bore^2 - rod^2)`` (m^2)."""
+        """Piston areas ``A1 = pi/4*bore^2`` and ``A2 = pi/4*(bore^2 - rod^2)`` (m^2).
+
+        Written here on purpose, not taken from :mod:`fcomp.piston`: the generator is
+        the independent reference of the reconstruction it tests (module docstring).
+        """
         return math.pi / 4 * self.bore**2, math.pi / 4 * (self.bore**2 - self.rod**2)
 
 

@@ -35,8 +35,8 @@ VALUES: dict[str, dict[str, float]] = {
     "presliding": {"sigma0": 5e4, "sigma1": 50.0, "i_pre": 1.5},
     "frictional-lag": {"vb": 0.02},
     "dwell-time": {"dFs": 0.5, "tau_dwell": 0.2},
-    "direction-asymmetry": {"r_neg": 1.2, "c_neg": 5.0},
-    "pressure-dependence": {"kp": 1e-6},
+    "direction-asymmetry": {"r_neg": 1.2, "rv_neg": 1.4},
+    "pressure-dependence": {"kp": 1e-6, "kd": -4e-7, "kq": 1e-13, "p_ref": 2e5, "d_ref": 1e5},
     "position-dependence": {"kx1": 0.1, "kb": 0.3, "xb": 0.1},
     "viscous-lead": {"T": 0.01},
     "inertia-error": {"dm": 0.3},
@@ -80,6 +80,22 @@ def test_model_with_effect_pickles_to_equal_forces(name: str, effect: str | None
     assert back.describe() == model.describe()
     assert back.flat_params() == model.flat_params()
     np.testing.assert_array_equal(_force(back), _force(model))
+
+
+#: Effects in their other forms (the diagnosis fits these): lugre with each.
+FORM_CASES = [("frictional-lag", {"form": "speed-lag"}, {"tau_L": 0.05, "w_L": 0.8}),
+              ("nonlocal-memory", {"form": "maxwell-slip"},
+               {"ms_share": 0.8, "ms_dmax": 2e-4, "ms_spread": 20.0, "ms_scaling": 0.5})]
+
+
+@pytest.mark.parametrize(("effect", "config", "values"), FORM_CASES,
+                         ids=[c[0] for c in FORM_CASES])
+def test_effect_forms_pickle_to_equal_forces(effect: str, config: dict, values: dict) -> None:
+    model = make_model("lugre").with_effects(make_effect(effect, values, **config))
+    back = _roundtrip(model)
+    assert back.describe() == model.describe() and back.state_names == model.state_names
+    np.testing.assert_array_equal(_force(back), _force(model))
+    assert np.abs(_force(model) - _force(make_model("lugre"))).max() > 1e-3
 
 
 @pytest.mark.parametrize("name", MODELS.names())

@@ -295,7 +295,8 @@ class Refit:
         otherwise dominate the squares (a static law's 500 N step one sample
         early). Fits after this weigh their residuals by ``sqrt(w)``.
         """
-        self._weights = 1.0 / (1.0 + (np.asarray(spread) / (2.0 * max(noise, 1e-300))) ** 2)
+        ratio = np.minimum(np.asarray(spread) / (2.0 * max(noise, 1e-300)), 1e100)
+        self._weights = 1.0 / (1.0 + ratio**2)
         self._record_weights: dict[int, list[np.ndarray | None]] = {}
 
     def _weights_of(self, records: list[tuple[FitData, np.ndarray]]

@@ -172,7 +172,8 @@ def estimate(
     else:
         s2 = float(r @ r) / (n - p)
         cov_s = s2 * H_inv_s
-    cov[np.ix_(kept, kept)] = cov_s / np.outer(scale, scale)
+    with np.errstate(over="ignore"):  # a tiny scale: an error too large to matter (inf)
+        cov[np.ix_(kept, kept)] = cov_s / np.outer(scale, scale)
     var = np.full(p, np.inf)
     var[kept] = np.diag(cov)[kept]
     stderr = np.sqrt(np.maximum(var, 0.0))

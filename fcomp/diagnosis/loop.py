@@ -72,7 +72,7 @@ import multiprocessing
 import os
 import sys
 from collections.abc import Sequence
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -268,9 +268,6 @@ def delta_bic(before: FitResult, after: FitResult, train: np.ndarray) -> float:
 
 
 # ------------------------------------------------------------- parallel jobs
-_JOB: dict[str, Any] = {}
-
-
 #: Evaluation budget of a refit without exact sensitivities (finite differences).
 NONSYMBOLIC_NFEV = 8
 
@@ -294,15 +291,6 @@ def refit_candidate(refit: Refit, prop: catalogue.Proposal, current: FitResult
                          reference=refit.train_cost(current.model, current.values), fast=True)
     except (FcompError, ValueError, ArithmeticError) as exc:
         return f"refit failed: {str(exc).splitlines()[0] if str(exc) else type(exc).__name__}"
-
-
-def _fit_job(i: int) -> tuple[int, dict[str, Any] | str]:
-    res = refit_candidate(_JOB["refit"], _JOB["proposals"][i], _JOB["current"])
-    if isinstance(res, str):
-        return i, res
-    return i, {"values": res.values, "n_params": res.n_params, "converged": res.converged,
-               "nfev": res.nfev, "F_hat": res.F_hat, "residual": res.residual,
-               "rms_train": res.rms_train, "rms_test": res.rms_test, "spread": res.spread}
 
 
 class Diagnosis:
@@ -425,6 +413,8 @@ class Diagnosis:
             heldout_pieces(self.split_.test, [e.start for e in self.data_.experiments],
                                    self.data_.scales.dt)
         self._bar = _progress(self.progress)
+        self._pool: ProcessPoolExecutor | None = None
+        self._fitting = True
         try:
             starts = catalogue.baseline_starts(model, self.data_, self.segmentation_,
                                                self.split_.train)
@@ -450,6 +440,10 @@ class Diagnosis:
             self.other_ = self._other_baseline(model, names) if self.check_baseline else None
         finally:
             self._bar.close()
+            self._fitting = False
+            if self._pool is not None:
+                self._pool.shutdown()
+                self._pool = None
         self._conclude()
         return self
 
@@ -529,7 +523,7 @@ class Diagnosis:
         if reason is not None:
             raise FcompError(f"effect {effect!r} cannot be added to {self.fit_.model.describe()}: "
                              f"{reason}")
-        cand = self._evaluate([effect])[0]
+        cand = self._evaluate([effect])[0]  # one job: no worker processes
         if cand.fit is None:
             raise FcompError(f"adding {effect!r}: {cand.reason}")
         before = self.fit_
@@ -580,35 +574,40 @@ class Diagnosis:
         return [c for c in out if c is not None]
 
     def _run(self, proposals: list[catalogue.Proposal]) -> list[FitResult | str]:
-        n_jobs = self.n_jobs if self.n_jobs is not None else min(os.cpu_count() or 1, 4)
+        """Refit every proposal: in the diagnosis's worker processes where there are several.
+
+        Each job carries everything it needs -- the record (:class:`Refit`, whose
+        derived records are rebuilt in the worker), the proposal and the current
+        fit -- as plain picklable values, so the workers are started with
+        ``spawn`` (the default on macOS and Windows) and nothing passes through
+        module state; the same job runs on a Dask worker
+        (:func:`refit_candidate`).
+        """
         results: list[FitResult | str] = [""] * len(proposals)
-        if n_jobs > 1 and len(proposals) > 1:
-            _JOB.update(refit=self._refit, proposals=proposals, current=self.fit_)
-            try:
-                ctx = multiprocessing.get_context("fork")
-                with ProcessPoolExecutor(max_workers=min(n_jobs, len(proposals)),
-                                         mp_context=ctx) as pool:
-                    for i, payload in pool.map(_fit_job, range(len(proposals))):
-                        results[i] = self._result(proposals[i], payload)
-                        self._tick(proposals[i].effect)
-            finally:
-                _JOB.clear()
+        pool = self._workers(len(proposals))
+        if pool is not None:
+            futures = {pool.submit(refit_candidate, self._refit, prop, self.fit_): i
+                       for i, prop in enumerate(proposals)}
+            for fut in as_completed(futures):
+                i = futures[fut]
+                results[i] = fut.result()
+                self._tick(proposals[i].effect)
             return results
         for i, prop in enumerate(proposals):
             results[i] = refit_candidate(self._refit, prop, self.fit_)
             self._tick(prop.effect)
         return results
 
-    def _result(self, prop: catalogue.Proposal, payload: dict[str, Any] | str
-                ) -> FitResult | str:
-        if isinstance(payload, str):
-            return payload
-        values = payload["values"]
-        model_vals = {k: v for k, v in values.items() if k != "mass"}
-        model = prop.model.with_params(**model_vals) if model_vals else prop.model
-        return FitResult(model, dict(values), payload["F_hat"], payload["residual"],
-                         payload["rms_train"], payload["rms_test"], payload["n_params"],
-                         payload["converged"], payload["nfev"], payload["spread"])
+    def _workers(self, jobs: int) -> ProcessPoolExecutor | None:
+        """The diagnosis's process pool (``spawn``), started on first use within :meth:`fit`;
+        None to run here (one job, one process, or a later :meth:`add_effect`)."""
+        n_jobs = self.n_jobs if self.n_jobs is not None else min(os.cpu_count() or 1, 4)
+        if n_jobs < 2 or jobs < 2 or not getattr(self, "_fitting", False):
+            return None
+        if self._pool is None:
+            self._pool = ProcessPoolExecutor(max_workers=n_jobs,
+                                             mp_context=multiprocessing.get_context("spawn"))
+        return self._pool
 
     def _judge(self, name: str, res: FitResult) -> Candidate:
         before = self.fit_

@@ -42,6 +42,7 @@ import dataclasses
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -272,10 +273,23 @@ class Refit:
         self.max_nfev = max_nfev
         self.q = max(1, math.ceil(data.n / max_samples))
         self.windows = timing_windows(data.signal("v"), data.scales.dt, data.scales.resolution)
+        self._build_records()
+
+    def _build_records(self) -> None:
         self._records = self._fit_records(self.q)
         self._by_q: dict[int, list[tuple[FitData, np.ndarray]]] = {self.q: self._records}
         self._probe_records = self._coarse(PROBE_SAMPLES)
         self._candidate_records = self._coarse(CANDIDATE_SAMPLES)
+        self._record_weights: dict[int, list[np.ndarray | None]] = {}
+
+    def __getstate__(self) -> dict[str, Any]:
+        """A lean copy for another process: the records and their weights are rebuilt there."""
+        drop = {"_records", "_by_q", "_probe_records", "_candidate_records", "_record_weights"}
+        return {k: v for k, v in self.__dict__.items() if k not in drop}
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+        self._build_records()
 
     def _coarse(self, samples: int) -> list[tuple[FitData, np.ndarray]]:
         """The fit records averaged over blocks so that at most ``samples`` remain (cached)."""
@@ -297,7 +311,7 @@ class Refit:
         """
         ratio = np.minimum(np.asarray(spread) / (2.0 * max(noise, 1e-300)), 1e100)
         self._weights = 1.0 / (1.0 + ratio**2)
-        self._record_weights: dict[int, list[np.ndarray | None]] = {}
+        self._record_weights = {}
 
     def _weights_of(self, records: list[tuple[FitData, np.ndarray]]
                     ) -> list[np.ndarray | None]:

@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from fcomp import datasets
+import fcomp.datasets as datasets
 from fcomp.diagnosis import Diagnosis
 from fcomp.diagnosis.report import figures
 from fcomp.measurement import Measurement

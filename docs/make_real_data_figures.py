@@ -24,7 +24,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from fcomp import datasets  # noqa: E402
+import fcomp.datasets as datasets  # noqa: E402
 from fcomp.identification import FrictionFit, fit_data  # noqa: E402
 
 DOCS = Path(__file__).resolve().parent

@@ -38,12 +38,12 @@ from typing import Any
 
 import numpy as np
 
-from fcomp import __version__
 from fcomp.errors import FcompError, term
 from fcomp.matfile import from_variables, load_mat, parse_mapping
 from fcomp.measurement import Measurement, checked, read_sidecar
 from fcomp.registry import Registry
 from fcomp.textdata import check_path, data_rows, parse_rows, read_text
+from fcomp.version import __version__
 
 #: Where each known data set comes from (written into the ``[source]`` table).
 ORIGINS: dict[str, dict[str, str]] = {

@@ -47,6 +47,42 @@ COLUMN_UNITS: dict[str, str] = {
     "t": "s", "x": "m", "v": "m/s", "a": "m/s^2", "p1": "Pa", "p2": "Pa",
     "u": "A or V", "F": "N", "F_ext": "N",
 }
+#: Units a column may be given in (import csv ``--units``, :meth:`Measurement.from_dataframe`):
+#: unit -> (the SI unit, factor to SI). A column's unit must have its SI unit
+#: (:data:`COLUMN_UNITS`; ``u`` in A or V).
+UNITS: dict[str, tuple[str, float]] = {
+    "s": ("s", 1.0), "ms": ("s", 1e-3), "us": ("s", 1e-6), "min": ("s", 60.0),
+    "m": ("m", 1.0), "cm": ("m", 1e-2), "mm": ("m", 1e-3), "um": ("m", 1e-6),
+    "in": ("m", 0.0254),
+    "m/s": ("m/s", 1.0), "mm/s": ("m/s", 1e-3), "cm/s": ("m/s", 1e-2), "um/s": ("m/s", 1e-6),
+    "m/s^2": ("m/s^2", 1.0), "mm/s^2": ("m/s^2", 1e-3), "g": ("m/s^2", 9.80665),
+    "Pa": ("Pa", 1.0), "kPa": ("Pa", 1e3), "MPa": ("Pa", 1e6), "bar": ("Pa", 1e5),
+    "mbar": ("Pa", 1e2), "psi": ("Pa", 6894.757293168361),
+    "N": ("N", 1.0), "kN": ("N", 1e3), "lbf": ("N", 4.4482216152605),
+    "A": ("A", 1.0), "mA": ("A", 1e-3), "V": ("V", 1.0), "mV": ("V", 1e-3),
+}
+
+
+def si_factor(column: str, unit: str, where: str = "units") -> float:
+    """The factor that turns ``column`` given in ``unit`` into SI units (:data:`UNITS`).
+
+    A column of the format must be given in a unit of its own kind (``x`` in
+    ``mm``, not ``bar``); another column may be in any unit of the table (its
+    values are scaled to the SI unit). Raises :class:`FcompError` naming ``where``.
+    """
+    unit = unit.strip()
+    if unit in ("", "-", "1"):
+        return 1.0
+    if unit not in UNITS:
+        raise FcompError(f"{where}: {column}={unit}: unknown unit (known: {', '.join(UNITS)})")
+    si, factor = UNITS[unit]
+    want = COLUMN_UNITS.get(column)
+    if want is not None and si not in want.split(" or "):
+        raise FcompError(f"{where}: {column}={unit}: column {column!r} is in {want}, and "
+                         f"{unit} is a unit of {si}")
+    return factor
+
+
 #: Rig kinds of the sidecar's ``kind`` (data-format.md): they choose, e.g., which experiment
 #: the diagnosis advises (:func:`fcomp.effects.experiment_for`).
 KINDS = ("pneumatic-cylinder", "hydraulic-cylinder", "friction-rig", "electromechanical-axis")
@@ -87,6 +123,103 @@ class Measurement:
     def __post_init__(self) -> None:
         self.columns = {k: np.asarray(v, dtype=float) for k, v in self.columns.items()}
         self.validate()
+
+    def __repr__(self) -> str:
+        t = self.columns.get("t")
+        span = (f", t {float(t[0]):.4g}..{float(t[-1]):.4g} s" if t is not None and t.size
+                else "")
+        return (f"<Measurement {self.label!r}: {len(self)} samples{span}, columns "
+                f"{', '.join(self.columns)}>")
+
+    # ----------------------------------------------------------------- pandas
+    def units(self) -> dict[str, str]:
+        """The unit of every column: SI for the columns of the format (``u``: the sidecar's
+        ``signals.u_unit`` where given), the sidecar's ``[units]`` or ``""`` for others."""
+        extra = self.meta.get("units", {})
+        u_unit = self.meta.get("signals", {}).get("u_unit", "A or V")
+        return {k: (u_unit if k == "u" else COLUMN_UNITS[k]) if k in COLUMN_UNITS
+                else str(extra.get(k, "")) if isinstance(extra, Mapping) else ""
+                for k in self.columns}
+
+    def to_dataframe(self) -> Any:
+        """The measurement as a :class:`pandas.DataFrame` (pandas is optional: ``pip install
+        'fcomp[pandas]'``).
+
+        One column per measurement column (``t`` first, float64, unchanged);
+        ``df.attrs["units"]`` gives each column's unit and ``df.attrs["meta"]``
+        the sidecar, so :meth:`from_dataframe` gives back an equal measurement.
+        """
+        import copy
+
+        pd = _pandas()
+        df = pd.DataFrame({k: v.copy() for k, v in self.columns.items()})
+        df.attrs["units"] = self.units()
+        df.attrs["meta"] = copy.deepcopy({k: v for k, v in self.meta.items()
+                                          if not k.startswith("_")})
+        return df
+
+    @classmethod
+    def from_dataframe(cls, df: Any, meta: Mapping[str, Any] | None = None, *,
+                       time: str | None = "t", units: Mapping[str, str] | None = None,
+                       columns: Mapping[str, str] | None = None) -> Measurement:
+        """A measurement from a :class:`pandas.DataFrame`.
+
+        Parameters
+        ----------
+        df
+            The frame: numeric columns, one row per sample.
+        meta
+            The sidecar content (default: ``df.attrs["meta"]``, as
+            :meth:`to_dataframe` leaves it, else none).
+        time
+            The column holding the time (s); ``None`` takes the index (numbers in
+            seconds, or datetimes/timedeltas, counted from the first sample).
+        units
+            Column -> unit (``{"x": "mm", "p1": "bar", "t": "ms"}``, :data:`UNITS`):
+            the values are converted to SI. Default: ``df.attrs["units"]``
+            where it holds units of the table, else SI.
+        columns
+            Measurement column -> frame column, to rename (``{"x": "position"}``).
+
+        A round trip ``Measurement.from_dataframe(m.to_dataframe())`` gives an equal
+        measurement (the same columns, values and sidecar).
+        """
+        pd = _pandas()
+        if not isinstance(df, pd.DataFrame):
+            raise FcompError(f"from_dataframe: expected a pandas DataFrame, got "
+                             f"{type(df).__name__}")
+        rename = {v: k for k, v in (columns or {}).items()}
+        for src in rename:
+            if src not in df.columns:
+                raise FcompError(f"from_dataframe: no column {src!r} in the frame (columns: "
+                                 f"{', '.join(map(str, df.columns))})")
+        given = dict(units) if units is not None else {
+            k: v for k, v in (df.attrs.get("units") or {}).items() if v in UNITS}
+        cols: dict[str, np.ndarray] = {}
+        if time is None:
+            idx = df.index
+            if isinstance(idx, pd.DatetimeIndex | pd.TimedeltaIndex):
+                cols["t"] = np.asarray((idx - idx[0]) / pd.Timedelta(seconds=1), dtype=float)
+            else:
+                cols["t"] = np.asarray(idx, dtype=float)
+        elif rename.get(time, time) not in [rename.get(str(c), str(c)) for c in df.columns]:
+            raise FcompError(f"from_dataframe: no time column {time!r} (columns: "
+                             f"{', '.join(map(str, df.columns))}); give time=None to take "
+                             "the index")
+        for c in df.columns:
+            name = rename.get(str(c), str(c))
+            if name == "t" and time is None:
+                continue
+            try:
+                values = np.asarray(df[c].to_numpy(), dtype=float)
+            except (TypeError, ValueError):
+                raise FcompError(f"from_dataframe: column {c!r} is not numeric") from None
+            cols["t" if time is not None and name == rename.get(time, time) else name] = values
+        for k in list(cols):
+            if k in given:
+                cols[k] = cols[k] * si_factor(k, given[k], "from_dataframe units")
+        doc = dict(meta) if meta is not None else dict(df.attrs.get("meta") or {})
+        return cls({"t": cols.pop("t"), **cols}, doc)
 
     # ----------------------------------------------------------------- access
     @property
@@ -291,6 +424,15 @@ class Measurement:
         cols = {n: raw[:, i] for i, n in enumerate(names)}
         check_values(cols, label, lines)
         return checked(cols, meta, csv)
+
+
+def _pandas() -> Any:
+    try:
+        import pandas
+    except ImportError:
+        raise FcompError("pandas is not installed; pip install 'fcomp[pandas]' (or pandas) for "
+                         "to_dataframe and from_dataframe") from None
+    return pandas
 
 
 def measurement_paths(path: str | Path) -> tuple[Path, Path]:

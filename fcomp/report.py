@@ -35,8 +35,8 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
-from fcomp import __version__
 from fcomp.errors import FcompError
+from fcomp.version import __version__
 
 __all__ = ["Comparison", "Link", "Report", "atomic_write_text", "format_value", "render_png"]
 

@@ -88,7 +88,6 @@ from typing import Any, ClassVar
 import casadi as ca
 import numpy as np
 
-from fcomp import __version__
 from fcomp.backend import CASADI, NUMPY, Backend
 from fcomp.errors import FcompError, term
 from fcomp.measurement import Measurement
@@ -104,6 +103,7 @@ from fcomp.simulation import (
     Trajectory,
     integrate,
 )
+from fcomp.version import __version__
 from plants.discrete_memory import COUPLING, MemoryCoupling, MemoryStepper
 
 InputFn = Callable[[np.ndarray], np.ndarray]

@@ -14,10 +14,10 @@ from typing import Any
 
 import numpy as np
 
-from fcomp import __version__
 from fcomp.errors import FcompError
 from fcomp.measurement import Measurement
 from fcomp.trajectory import friction_along_motion
+from fcomp.version import __version__
 from plants.base import InputFn, Plant, output_times
 
 

@@ -32,10 +32,10 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from fcomp import __version__
 from fcomp.errors import FcompError
 from fcomp.outputs import staged_folder, write_files, write_text
 from fcomp.report import Report, render_png
+from fcomp.version import __version__
 
 __all__ = ["Study", "StudyConfig", "StudyError", "StudyOutput", "to_jsonable"]
 

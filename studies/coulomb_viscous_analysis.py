@@ -118,7 +118,7 @@ class Seed001Data:
 
 
 def _read_table(file: str, columns: tuple[str, ...]) -> dict[str, np.ndarray]:
-    from fcomp import datasets
+    import fcomp.datasets as datasets
 
     path = datasets.path("seed001", file)
     with path.open(newline="", encoding="utf-8") as fh:

@@ -135,7 +135,7 @@ def run_generated(case: GeneratedCase, record: dict[str, Any],
 
 def run_real(case: RealCase, options: dict[str, Any]) -> tuple[dict[str, Any], Any]:
     """Diagnose one shipped measurement."""
-    from fcomp import datasets
+    import fcomp.datasets as datasets
 
     data = datasets.load(case.dataset, case.file)
     diag = _diagnose(data, case.baseline, options)

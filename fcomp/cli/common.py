@@ -178,6 +178,15 @@ def json_target(path: str | None) -> Path | None:
     return out
 
 
+def report_dir(path: str | None, option: str = "--report") -> Path | None:
+    """The folder ``--report DIR`` names (``None`` without the option)."""
+    if path is None:
+        return None
+    if not path.strip():
+        raise FcompError(f"{option}: no folder name given (an empty argument)")
+    return Path(path)
+
+
 def check_outputs(inputs: InputSet, files: list[tuple[str, Path | None]],
                   folders: list[tuple[str, Path | None, str]] | None = None) -> None:
     """Refuse outputs that would overwrite an input (or its sidecar, or a folder holding

@@ -15,7 +15,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     from pathlib import Path
 
-    from fcomp import paramsets
+    import fcomp.paramsets as paramsets
     from fcomp.demo import run_demo
     from fcomp.errors import FcompError
     from fcomp.outputs import staged_folder

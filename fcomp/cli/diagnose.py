@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import argparse
 import shlex
-from pathlib import Path
 
 from fcomp.cli import common
 from fcomp.cli.common import emit_result, finite_float, json_target, result_text
@@ -103,7 +102,7 @@ def run(args: argparse.Namespace) -> int:
     from fcomp.outputs import staged_folder
 
     out = json_target(args.json)
-    report = _report_dir(args.report)
+    report = common.report_dir(args.report)
     if args.max_steps < 0:
         raise FcompError(f"--max-steps must be a non-negative integer, got {args.max_steps}")
     if args.jobs is not None and args.jobs < 1:
@@ -135,10 +134,3 @@ def run(args: argparse.Namespace) -> int:
     emit_result(text, args.json, out, summary(doc))
     return 0
 
-
-def _report_dir(path: str | None) -> Path | None:
-    if path is None:
-        return None
-    if not path.strip():
-        raise FcompError("--report: no folder name given (an empty argument)")
-    return Path(path)

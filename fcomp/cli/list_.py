@@ -14,7 +14,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from fcomp import paramsets
+    import fcomp.paramsets as paramsets
     from fcomp.effects import EFFECTS
     from fcomp.models import MODELS
     from plants import PLANTS

@@ -31,11 +31,12 @@ from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from typing import Any
 
-from fcomp import __version__
 from fcomp.cli import common
 from fcomp.errors import FcompError
+from fcomp.version import __version__
 
-COMMANDS = ("simulate", "fit", "diagnose", "study", "import_", "demo", "list_")
+COMMANDS = ("simulate", "fit", "compare", "diagnose", "sweep", "study", "import_", "demo",
+            "list_")
 
 
 class _Parser(argparse.ArgumentParser):

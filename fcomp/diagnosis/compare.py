@@ -6,28 +6,43 @@ Force domain
     :func:`regime_errors` gives the RMS error (N) over the held-out samples of
     each regime of :mod:`.regimes`; :func:`worst_segments` finds the held-out
     windows where the model fails most; :func:`compare` does the whole thing
-    for a model (fitted on the training samples first, by default).
+    for one given model -- with its own parameter values (a fitted model, a
+    parameter set), judged on every usable sample, or with ``fit=True``
+    fitted on the training samples first and judged on the held-out ones --
+    and returns a :class:`Comparison` (JSON of ``fcomp compare``, figures by
+    :meth:`Comparison.plot`, a report by :meth:`Comparison.write_report`).
 
 Plant domain
     For plant data (a valve command ``u`` and the responses ``x``, ``p1``,
     ``p2``), :func:`compare_plant` simulates the plant (:mod:`plants`) with the
     measured input from the measured initial state and compares the simulated
-    ``x``, ``p1``, ``p2`` with the measured ones (RMS errors in m and Pa).
+    ``x``, ``p1``, ``p2`` with the measured ones (RMS errors in m and Pa), as
+    a :class:`PlantComparison` with its own :meth:`PlantComparison.plot`.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
-from dataclasses import dataclass
-from typing import Any
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from fcomp.diagnosis.regimes import REGIMES, Segmentation
+from fcomp.diagnosis.data import DiagnosisData, prepare
+from fcomp.diagnosis.features import FeatureStrength, residual_structure
+from fcomp.diagnosis.noise import noise_floor
+from fcomp.diagnosis.refit import FitResult, Refit
+from fcomp.diagnosis.regimes import REGIMES, Segmentation, segment
+from fcomp.diagnosis.split import Split, make_split
 from fcomp.errors import FcompError
+from fcomp.identification.plausibility import FitWarning
 from fcomp.measurement import Measurement
-from fcomp.models import FrictionModel
+from fcomp.models import FrictionModel, make_model
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 
 def regime_errors(residual: np.ndarray, seg: Segmentation, mask: np.ndarray
@@ -81,9 +96,41 @@ def worst_segments(residual: np.ndarray, mask: np.ndarray, width: int, count: in
     return out
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class Comparison:
-    """A model compared with a record in the force domain (held-out errors, N)."""
+    """A model compared with a record in the force domain (errors in N).
+
+    Attributes
+    ----------
+    model
+        The model compared (with the values it was compared with).
+    rms
+        RMS error over the judged samples.
+    regimes
+        Per regime and ``"all"``: ``{"rms", "n"}`` over the judged samples.
+    worst
+        The judged windows (about 0.25 s) where the model fails most.
+    F_measured, F_model
+        The force matched and the model's prediction at every sample.
+    split
+        How the samples were split (one line).
+    data, segmentation, heldout, result
+        The prepared record, its regimes, the train/held-out split and the
+        model's :class:`~fcomp.diagnosis.refit.FitResult` (residual everywhere).
+    judged, judged_label
+        The samples the errors are computed on: the held-out ones of a fitted
+        comparison, every usable one (after the warm-ups) of a given model.
+    residual_features
+        How strongly the residual follows each feature, strongest first.
+    fitted
+        Whether the model was fitted on the training samples first.
+    noise_floor
+        The record's noise floor (N): the error a perfect model would leave.
+    warnings
+        Plausibility of the fit (fitted comparisons) and what the comparison cannot judge.
+    plant
+        Plant-domain comparisons, one per record (``compare(..., plant=NAME)``).
+    """
 
     model: FrictionModel
     rms: float
@@ -92,37 +139,248 @@ class Comparison:
     F_measured: np.ndarray
     F_model: np.ndarray
     split: str
+    data: DiagnosisData
+    segmentation: Segmentation
+    heldout: Split
+    result: FitResult
+    judged: np.ndarray
+    judged_label: str
+    residual_features: list[FeatureStrength]
+    fitted: bool
+    noise_floor: float
+    warnings: list[FitWarning] = field(default_factory=list)
+    plant: list[PlantComparison] = field(default_factory=list)
+    values: dict[str, float] = field(default_factory=dict)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON of ``fcomp compare``: ``{"model", "rms", "regimes", "residual_features",
+        "warnings", ...}`` (N; ``plant`` with the plant-domain errors in m and Pa)."""
+        def num(x: float | None) -> float | None:
+            return float(x) if x is not None and math.isfinite(x) else None
+
+        lineage = getattr(self.model, "lineage", ()) or (self.model.name,)
+        return {
+            "model": lineage[0],
+            "description": self.model.describe(),
+            "effects": [e.name for e in self.model.effects],
+            "fitted": self.fitted,
+            "judged": self.judged_label,
+            "rms": num(self.rms),
+            "noise_floor": num(self.noise_floor),
+            "regimes": {k: {"rms": num(v["rms"]), "n": v["n"]}  # type: ignore[arg-type]
+                        for k, v in self.regimes.items()},
+            "residual_features": [{"feature": f.feature, "strength": round(f.strength, 4)}
+                                  for f in self.residual_features],
+            "worst": [{"t_start": float(self.data.signal("t")[w.start]),
+                       "t_stop": float(self.data.signal("t")[w.stop - 1]),
+                       "rms": w.rms} for w in self.worst],
+            "params": {k: num(v) for k, v in {**self.model.flat_params(),
+                                                **self.values}.items()},
+            "split": self.split,
+            "records": list(self.data.labels),
+            "plant": {pc.label: {"plant": pc.plant, "rms": pc.rms} for pc in self.plant},
+            "units": {"force": "N", "x": "m", "p1": "Pa", "p2": "Pa"},
+            "warnings": [w.to_dict() for w in self.warnings],
+        }
+
+    def plot(self, name: str | None = None) -> Figure | dict[str, Figure]:
+        """One figure by name (``regimes``, ``residuals``, ``loops``, ``worst``,
+        ``before_after``; ``plant`` for the plant domain), or all of them by name."""
+        from fcomp.diagnosis.report import comparison_figures
+
+        figs = comparison_figures(self, only=name)
+        return figs if name is None else figs[name]
+
+    def write_report(self, directory: str | Path, *, command: str | None = None) -> Path:
+        """Write ``DIRECTORY/report.html`` (self-contained) and return its path."""
+        from fcomp.diagnosis.report import write_comparison_report
+
+        return write_comparison_report(self, directory, command=command)
+
+    def __repr__(self) -> str:
+        return (f"<Comparison {self.model.describe()}: RMS {self.rms:.4g} N over "
+                f"{int(self.judged.sum())} {self.judged_label} samples of "
+                f"{', '.join(self.data.labels[:3])}{' ...' if len(self.data.labels) > 3 else ''}"
+                f"{'; fitted' if self.fitted else ''}>")
+
+    def _repr_html_(self) -> str:
+        from fcomp.diagnosis.report import comparison_html
+
+        return comparison_html(self)
 
 
-def compare(model: str | FrictionModel, data: Measurement | Sequence[Measurement], *,
-            fit: bool = True, split: str = "auto", cutoff_hz: float | None = None
-            ) -> Comparison:
-    """Compare ``model`` with ``data`` in the force domain, on held-out samples.
+def model_from_fit(doc: Mapping[str, Any], model: FrictionModel | None = None,
+                   source: str = "fit") -> tuple[FrictionModel, float | None]:
+    """The fitted model of a fit's JSON (``fcomp fit --json``) and its moving mass.
 
-    With ``fit`` (default) the model is first fitted on the training samples
-    (the baseline step of :class:`~fcomp.diagnosis.loop.Diagnosis`); without
-    it the model's own parameter values are used as they are.
+    ``doc`` gives ``model``, ``effects``, ``params`` and the parameters held
+    (``fixed``); ``mass`` becomes the returned mass and ``offset`` a
+    ``force-offset`` effect; direction-dependent values (``Fc_pos``, ...) make the
+    model directional. ``model`` (default: the model ``doc`` names) is the model
+    the values are put into. Raises :class:`FcompError` naming ``source`` for a
+    document that is not a fit or values the model does not have.
+    """
+    from fcomp.effects import make_effect
+    from fcomp.identification.estimator import directional_model
+
+    if not isinstance(doc, Mapping) or not isinstance(doc.get("params"), Mapping) \
+            or not isinstance(doc.get("model"), str):
+        raise FcompError(f"{source}: not the JSON of a fit (fcomp fit --json): it needs "
+                         "'model' and 'params'")
+    mdl = make_model(doc["model"]) if model is None else model
+    have = {e.name for e in mdl.effects}
+    for e in doc.get("effects") or []:
+        if e not in have and e != "force-offset":
+            mdl = mdl.with_effects(e)
+    values: dict[str, float] = {}
+    for k, v in {**(doc.get("fixed") or {}), **doc["params"]}.items():
+        try:
+            values[k] = float(v)
+        except (TypeError, ValueError):
+            raise FcompError(f"{source}: params.{k} = {v!r} is not a number") from None
+    mass = values.pop("mass", None)
+    offset = values.pop("offset", None)
+    if any(k not in mdl.flat_params() for k in values):
+        directional = directional_model(mdl)
+        if all(k in directional.flat_params() for k in values):
+            mdl = directional
+    unknown = sorted(k for k in values if k not in mdl.flat_params())
+    if unknown:
+        raise FcompError(f"{source}: model {mdl.describe()!r} has no parameter(s) "
+                         f"{', '.join(unknown)}; was the fit of another model?")
+    mdl = mdl.with_params(**values) if values else mdl
+    if offset:
+        mdl = mdl.with_effects(make_effect("force-offset", {"offset": offset}))
+    return mdl, mass
+
+
+#: Longest record a given model is compared on in full (longer ones are block-averaged
+#: for the prediction's alternatives only; every score is on the full record).
+COMPARE_SAMPLES = 200_000
+
+
+def compare(model: str | FrictionModel, data: Measurement | Sequence[Measurement] | DiagnosisData,
+            *, fit: bool = False, mass: float | None = None, split: str = "auto",
+            cutoff_hz: float | None = None, plant: str | None = None,
+            plant_params: str | None = None) -> Comparison:
+    """Compare ``model`` with ``data`` in the force domain (and the plant domain).
+
+    Parameters
+    ----------
+    model
+        A model name (its default values) or a :class:`FrictionModel` with its values
+        (a fitted one, a parameter set, effects added).
+    data
+        One or several measurements (several = several experiments).
+    fit
+        Fit the model on the training samples first (the baseline step of
+        :class:`~fcomp.diagnosis.loop.Diagnosis`) and judge it on the held-out
+        ones; by default the model is compared as given, on every usable sample.
+    mass
+        The moving mass (kg) for records that give a driving force and no
+        ``rig.mass`` (a fit's ``params.mass``); fitted with ``fit``.
+    split, cutoff_hz
+        As for :class:`~fcomp.diagnosis.loop.Diagnosis`.
+    plant, plant_params
+        Also simulate this plant with each record's command ``u`` and compare
+        ``x``, ``p1``, ``p2`` (:func:`compare_plant`).
     """
     from fcomp.diagnosis.loop import Diagnosis
 
-    diag = Diagnosis(model, search=False, split=split, cutoff_hz=cutoff_hz, n_jobs=1)
+    mdl = make_model(model) if isinstance(model, str) else model
+    if not isinstance(mdl, FrictionModel):
+        raise FcompError(f"model must be a model name or a FrictionModel, got {model!r}")
+    warnings: list[FitWarning] = []
     if fit:
-        diag.fit(data)
-        res = diag.fit_
+        diag = Diagnosis(mdl, search=False, split=split, cutoff_hz=cutoff_hz, n_jobs=1,
+                         check_baseline=False).fit(data)
+        d, seg, sp, res = diag.data_, diag.segmentation_, diag.split_, diag.fit_
+        judged, label, floor = sp.test, "held-out", diag.noise_floor_.value
+        warnings = list(diag.warnings_)
+        values = {k: v for k, v in res.values.items() if k == "mass"}
     else:
-        diag.fit(data)
-        mdl = diag.baseline_fit_.model if isinstance(model, str) else model
-        res = diag._refit.result(mdl if isinstance(model, FrictionModel) else mdl, {}, 0)
-    seg, sp = diag.segmentation_, diag.split_
-    width = max(10, int(round(0.25 / diag.data_.scales.dt)))
-    bounds = [e.start for e in diag.data_.experiments[1:]]
-    return Comparison(res.model, res.rms_test, regime_errors(res.residual, seg, sp.test),
-                      worst_segments(res.residual, sp.test, width, 3, bounds),
-                      diag.data_.y, res.F_hat, sp.description)
+        d = data if isinstance(data, DiagnosisData) else prepare(data, cutoff_hz=cutoff_hz)
+        seg = segment(d)
+        sp = make_split(d, seg.valid, split)
+        floor = noise_floor(d, seg).value
+        values = {}
+        if d.fits_mass:
+            if mass is None:
+                raise FcompError(f"{', '.join(d.labels[:3])}: the record gives a driving force "
+                                 "and no rig.mass, so the friction force depends on the moving "
+                                 "mass: give it (mass, a fit's params.mass) or fit the model")
+            values["mass"] = float(mass)
+        refit = Refit(d, sp, seg.d_pre, max_samples=COMPARE_SAMPLES)
+        res = refit.result(mdl, values, 0)
+        judged, label = seg.valid, "usable"
+    r = res.residual
+    rms = float(np.sqrt(np.mean(r[judged] ** 2))) if judged.any() else math.nan
+    width = max(10, int(round(0.25 / d.scales.dt)))
+    bounds = [e.start for e in d.experiments[1:]]
+    features = residual_structure(r, d, seg, sp.train, sp.test)
+    plants: list[PlantComparison] = []
+    if plant is not None:
+        records = [data] if isinstance(data, Measurement) else (
+            list(data) if not isinstance(data, DiagnosisData) else [])
+        if not records:
+            raise FcompError("a plant-domain comparison needs the measurements themselves")
+        plants = [compare_plant(m, plant, res.model, params=plant_params) for m in records]
+    return Comparison(res.model, rms, regime_errors(r, seg, judged),
+                      worst_segments(r, judged, width, 3, bounds), d.y, res.F_hat,
+                      sp.description, d, seg, sp, res, judged, label, features, fit, floor,
+                      warnings, plants, values)
+
+
+@dataclass(frozen=True, repr=False)
+class PlantComparison:
+    """A plant simulated with a record's command beside the record (:func:`compare_plant`).
+
+    Attributes
+    ----------
+    label, plant
+        The record and the plant name.
+    simulated
+        The simulated run (a :class:`Measurement`).
+    measured
+        The compared signals as recorded (gauge pressures), on the record's time ``t``.
+    predicted
+        The same signals simulated, interpolated onto ``t``.
+    t
+        The record's time (s).
+    rms
+        RMS error of every compared signal (m, Pa).
+    """
+
+    label: str
+    plant: str
+    simulated: Measurement
+    measured: dict[str, np.ndarray]
+    predicted: dict[str, np.ndarray]
+    t: np.ndarray
+    rms: dict[str, float]
+
+    def __getitem__(self, key: str) -> Any:
+        """``result["rms"]``, ``result["simulated"]`` (the dictionary it once was)."""
+        if key not in ("simulated", "rms", "measured", "predicted", "t", "plant", "label"):
+            raise KeyError(key)
+        return getattr(self, key)
+
+    def plot(self) -> Figure:
+        """Measured and simulated ``x``, ``p1``, ``p2`` over time, and their differences."""
+        from fcomp.diagnosis.report import fig_plant
+
+        return fig_plant(self)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"label": self.label, "plant": self.plant, "rms": dict(self.rms)}
+
+    def __repr__(self) -> str:
+        errs = ", ".join(f"{k} {v:.3g} {'m' if k == 'x' else 'Pa'}" for k, v in self.rms.items())
+        return f"<PlantComparison {self.plant} on {self.label}: RMS {errs}>"
 
 
 def compare_plant(meas: Measurement, plant: str, friction: FrictionModel, *,
-                  params: str | None = None) -> dict[str, Any]:
+                  params: str | None = None) -> PlantComparison:
     """Simulate ``plant`` with the measured command ``u`` and compare ``x``, ``p1``, ``p2``.
 
     The plant starts from the measured ``x``, ``p1``, ``p2`` at the first
@@ -131,7 +389,7 @@ def compare_plant(meas: Measurement, plant: str, friction: FrictionModel, *,
     atmospheric pressure of a pneumatic plant's absolute chamber pressures)
     and is driven by ``u`` interpolated linearly between samples. Returns
     the simulated measurement and the RMS error of every compared signal
-    (m, gauge Pa).
+    (m, gauge Pa) as a :class:`PlantComparison`.
     """
     from plants import PLANTS
 
@@ -159,12 +417,14 @@ def compare_plant(meas: Measurement, plant: str, friction: FrictionModel, *,
             x0[k] = float(col[0]) + offset
     rate = (t.size - 1) / float(t[-1] - t[0])
     sim = p.simulate(u_of, float(t[-1] - t[0]), rate, x0=p.initial_state(x0))
-    errors = {}
+    errors, predicted = {}, {}
     for k, col in measured.items():
         if k in sim:
             ys = np.interp(t - t[0], sim.t, sim.gauge_pressure(k) if k in ("p1", "p2")
                            else sim[k])
+            predicted[k] = ys
             errors[k] = float(np.sqrt(np.mean((ys - col) ** 2)))
     if not errors:
         raise FcompError(f"{meas.label}: no signal (x, p1, p2) to compare with plant {plant!r}")
-    return {"simulated": sim, "rms": errors}
+    return PlantComparison(meas.label, plant, sim, {k: measured[k] for k in predicted},
+                           predicted, t, errors)

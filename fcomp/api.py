@@ -1,0 +1,100 @@
+"""The Python face of fcomp: the main calls of the command line as functions.
+
+``import fcomp`` offers them (and the classes behind them) at the top level::
+
+    import fcomp
+
+    rec = fcomp.simulate("motion", "lugre", "sine:amplitude=0.01,frequency=0.5",
+                         duration=4.0, params="canudas1995")
+    f = fcomp.fit(rec, "lugre")                     # FrictionFit: params_, stderr_, rms_
+    c = fcomp.compare(f.model_, rec)                 # Comparison: rms, regimes, plot()
+    d = fcomp.diagnose(rec, "coulomb-viscous")       # Diagnosis: added_, verdict_
+
+Each function is what its command does (``fcomp simulate``, ``fcomp fit``,
+``fcomp compare``, ``fcomp diagnose``), minus the files: it takes and
+returns objects (:class:`~fcomp.measurement.Measurement`, models, results).
+A measurement argument may also be the path of a measurement file.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from fcomp.diagnosis import Comparison, Diagnosis, compare
+from fcomp.identification import FrictionFit
+from fcomp.inputs import parse_input
+from fcomp.measurement import Measurement
+from fcomp.models import FrictionModel, make_model
+
+Data = Measurement | str | Path
+
+
+def read(path: str | Path) -> Measurement:
+    """The measurement file ``path`` (CSV and its TOML sidecar)."""
+    return Measurement.read(path)
+
+
+def _measurements(data: Data | Sequence[Data]) -> Measurement | list[Measurement]:
+    if isinstance(data, Measurement):
+        return data
+    if isinstance(data, str | Path):
+        return Measurement.read(data)
+    return [d if isinstance(d, Measurement) else Measurement.read(d) for d in data]
+
+
+def fit(data: Data, model: str | FrictionModel, **options: Any) -> FrictionFit:
+    """Identify ``model`` from the measurement ``data`` (``fcomp fit``).
+
+    ``options`` are those of :class:`~fcomp.identification.FrictionFit`
+    (``offset``, ``mass``, ``fixed``, ``free``, ``directional``, ...). Returns the
+    fitted estimator: ``params_``, ``stderr_``, ``ci_``, ``rms_``, ``warnings_``,
+    ``model_`` (the model with the fitted values), ``to_dict()``.
+    """
+    meas = _measurements(data)
+    if isinstance(meas, list):
+        if len(meas) != 1:
+            from fcomp.identification import fit_records  # noqa: F401 (documented alternative)
+
+            raise ValueError("fit takes one measurement; fcomp.identification.fit_records fits "
+                             "one parameter vector to several records")
+        meas = meas[0]
+    return FrictionFit(model, **options).fit(meas)
+
+
+def diagnose(data: Data | Sequence[Data], baseline: str | FrictionModel,
+             **options: Any) -> Diagnosis:
+    """Find the missing physics (``fcomp diagnose``): :class:`~fcomp.diagnosis.Diagnosis`
+    with ``options`` (``effects``, ``add``, ``split``, ``max_steps``, ...), fitted."""
+    return Diagnosis(baseline, **options).fit(_measurements(data))
+
+
+def simulate(plant: str, friction: str | FrictionModel,
+             input: str | Callable[[np.ndarray], np.ndarray], duration: float, *,
+             rate: float = 1000.0, params: str | None = None,
+             x0: Mapping[str, float] | None = None, **engine: Any) -> Measurement:
+    """Simulate ``plant`` with the friction model ``friction`` (``fcomp simulate``).
+
+    ``input`` is a SPEC (``sine:amplitude=A,frequency=F``, ``step:amplitude=A``,
+    ``csv:PATH``) or a function of time; ``params`` a parameter set (default: the
+    plant's, which also gives a model named by ``friction`` its values);
+    ``engine`` the integrator options (``method``, ``rtol``, ``atol``,
+    ``max_steps``, ``coupling``). Returns the run as a measurement.
+    """
+    from plants import PLANTS
+
+    cls = PLANTS.get(plant)
+    pset = params if params is not None else getattr(cls, "default_params", None)
+    model = make_model(friction, params=pset) if isinstance(friction, str) else friction
+    u = parse_input(input) if isinstance(input, str) else input
+    run = cls(model, pset).simulate(u, duration, rate, x0=dict(x0) if x0 else None, **engine)
+    if isinstance(input, str):
+        run.meta.setdefault("simulation", {})["input"] = input
+    return run
+
+
+__all__ = ["Comparison", "Diagnosis", "FrictionFit", "Measurement", "compare", "diagnose",
+           "fit", "make_model", "read", "simulate"]

@@ -1,0 +1,162 @@
+"""``fcomp compare DATA.csv [DATA2.csv ...] --model NAME [--params FIT.json|SET] [--plant NAME]
+[--json OUT] [--report DIR]`` -- one given model beside the records.
+
+The model (``--model``, with the values of a fit's JSON or a parameter set
+given by ``--params``, effects added by ``--add-effect`` and values changed
+by ``--set``) is run along each record's measured motion and its friction
+force compared with the measured one: the RMS error per regime
+(pre-sliding, reversal, sliding, dwell/break-away), how strongly the residual
+still follows every feature (velocity, acceleration, position, pressure,
+time and displacement since the last reversal, dwell time), the
+force-velocity and force-position loops and the windows where the model
+fails most. Without ``--fit`` the model is compared as given, on every usable
+sample; with ``--fit`` it is first fitted on the training samples and judged
+on the held-out ones. ``--plant NAME`` also simulates that plant with each
+record's valve command ``u`` and compares ``x``, ``p1``, ``p2``.
+
+JSON (``--json OUT``, ``-`` for standard output)::
+
+    {"model", "rms", "regimes": {REGIME: {"rms", "n"}, ..., "all": ...},
+     "residual_features": [{"feature", "strength"}, ...], "worst": [...],
+     "plant": {RECORD: {"plant", "rms": {"x", "p1", "p2"}}}, "params", "warnings"}
+
+(errors in N; plant-domain errors in m and Pa); ``--report DIR`` writes the
+figures into a self-contained ``DIR/report.html``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import shlex
+from typing import Any
+
+from fcomp.cli import common
+from fcomp.cli.common import emit_result, finite_float, json_target, report_dir, result_text
+from fcomp.errors import FcompError
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("compare", help="put one given model beside measurements: errors per "
+                       "regime, residual against every feature, loops, worst windows",
+                       description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("data", nargs="+", metavar="DATA.csv",
+                   help="measurement(s) (CSV + TOML sidecar); several files = several experiments")
+    p.add_argument("--model", required=True, help="friction model name (fcomp list models)")
+    p.add_argument("--params", default=None, metavar="FIT.json|SET",
+                   help="the values compared: a fit's JSON (fcomp fit --json) or a parameter "
+                   "set (default: the model's defaults)")
+    common.add_model_options(p)  # --add-effect, --effects, --set
+    p.add_argument("--fit", action="store_true",
+                   help="fit the model on the training samples first and judge it on the "
+                   "held-out ones")
+    p.add_argument("--mass", type=finite_float, default=None, metavar="KG",
+                   help="moving mass for records with a driving force and no rig.mass "
+                   "(default: a fit JSON's params.mass)")
+    p.add_argument("--plant", default=None, metavar="NAME",
+                   help="also compare in the plant domain: simulate this plant with the "
+                   "records' command u (hydraulic, pneumatic, ...)")
+    p.add_argument("--plant-params", default=None, metavar="SET",
+                   help="parameter set of the plant (default: the plant's)")
+    p.add_argument("--split", default="auto", choices=["auto", "experiment", "segment"],
+                   help="train/held-out split (for --fit and the feature strengths)")
+    p.add_argument("--cutoff", type=finite_float, default=None, metavar="HZ",
+                   help="cutoff of the zero-phase filter deriving v, a from x (default: from "
+                   "the sample rate and the position noise)")
+    p.add_argument("--json", metavar="OUT", default=None,
+                   help="write the result as JSON to OUT ('-' for standard output)")
+    p.add_argument("--report", metavar="DIR", default=None,
+                   help="write a self-contained HTML report with every figure to "
+                   "DIR/report.html")
+    p.set_defaults(func=run)
+
+
+def summary(doc: dict[str, Any]) -> str:
+    """The printed summary of a comparison's JSON."""
+    lines = [f"model {doc['description']} ({'fitted on the training samples' if doc['fitted'] else 'as given'}): "
+             f"RMS {doc['rms']:.4g} N over the {doc['judged']} samples "
+             f"(noise floor {doc['noise_floor']:.3g} N)"]
+    for name, r in doc["regimes"].items():
+        rms = "-" if r["rms"] is None else f"{r['rms']:.4g} N"
+        lines.append(f"  {name:18s} {rms:>12s}  ({r['n']} samples)")
+    top = ", ".join(f"{f['feature']} {f['strength']:.2f}" for f in doc["residual_features"][:3])
+    lines.append(f"residual follows: {top} (strength)")
+    for label, pc in doc["plant"].items():
+        errs = ", ".join(f"{k} {v:.3g} {'m' if k == 'x' else 'Pa'}" for k, v in pc["rms"].items())
+        lines.append(f"plant {pc['plant']} on {label}: RMS {errs}")
+    return "\n".join(lines)
+
+
+def _model(args: argparse.Namespace) -> tuple[Any, float | None]:
+    """The model compared and the mass a fit JSON gives (None otherwise)."""
+    from fcomp.diagnosis.compare import model_from_fit
+    from fcomp.textdata import check_path, read_text
+
+    mass = None
+    spec = args.params
+    if spec is not None and spec.lower().endswith(".json"):
+        path = check_path(spec, "fit JSON file")
+        try:
+            doc = json.loads(read_text(path, spec, what="JSON"))
+        except json.JSONDecodeError as exc:
+            raise FcompError(f"--params {spec}: not valid JSON ({exc.msg}, line {exc.lineno})") \
+                from None
+        if isinstance(doc, dict) and doc.get("model") not in (None, args.model):
+            raise FcompError(f"--params {spec}: is a fit of {doc['model']}, not of "
+                             f"{args.model}; give --model {doc['model']}")
+        args.params = None
+        base = common.build_model(args.model, None, argparse.Namespace(
+            effects=args.effects, add_effect=[], set=[]))
+        model, mass = model_from_fit(doc, base, source=f"--params {spec}")
+        if args.add_effect:
+            model = model.with_effects(*args.add_effect)
+        overrides = common.parse_assignments(args.set)
+        return (model.with_params(**overrides) if overrides else model), mass
+    return common.build_model(args.model, spec, args), mass
+
+
+def run(args: argparse.Namespace) -> int:
+    from fcomp.diagnosis.compare import compare
+    from fcomp.measurement import Measurement
+    from fcomp.outputs import staged_folder
+
+    out = json_target(args.json)
+    report = report_dir(args.report)
+    if args.cutoff is not None and not args.cutoff > 0:
+        raise FcompError(f"--cutoff must be a positive frequency in Hz, got {args.cutoff:g}")
+    if args.mass is not None and not args.mass >= 0:
+        raise FcompError(f"--mass must be a non-negative number of kg, got {args.mass:g}")
+    if args.plant is not None:
+        from plants import PLANTS
+
+        PLANTS.get(args.plant)  # an unknown name now, with the list of known ones
+    extra = [args.params] if args.params and args.params.lower().endswith(".json") else []
+    inputs = common.measurement_inputs(args.data)
+    for f in extra:
+        inputs.file(f, "--params")
+    if args.effects is not None:
+        inputs.file(args.effects, "--effects")
+    common.check_outputs(inputs, [("--json", out)], [("--report", report, "report")])
+    given = bool(args.params or args.set or args.fit)
+    model, mass = _model(args)
+    data = [Measurement.read(p) for p in args.data]
+    for d in data:
+        common.warn_sidecar(d)
+    if not given:
+        common.warn("default-params", f"the model {model.describe()} is compared with its "
+                    "default values: give params (a fit's JSON or a parameter set) or --fit "
+                    "for a model that belongs to these records", "params")
+    comp = compare(model, data, fit=args.fit, mass=args.mass if args.mass is not None else mass,
+                   split=args.split, cutoff_hz=args.cutoff, plant=args.plant,
+                   plant_params=args.plant_params)
+    doc = common.with_warnings(comp.to_dict())
+    text = result_text(doc)
+    command = "fcomp " + shlex.join(common.ARGV) if common.ARGV else None
+    if report is not None:
+        with staged_folder(report, "--report", "report", note=command or "fcomp compare") as tmp:
+            comp.write_report(tmp, command=command)
+        if args.json != "-":
+            print(f"wrote {report / 'report.html'}")
+    emit_result(text, args.json, out, summary(doc))
+    return 0
+

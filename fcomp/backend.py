@@ -106,6 +106,13 @@ class Backend:
     fmod: Callable[[Any, Any], Any]
     pi: float = float(np.pi)
 
+    def __getattr__(self, name: str) -> Any:  # only for names it does not have
+        if name.startswith("__"):
+            raise AttributeError(name)
+        raise AttributeError(f"the backend has no function {name!r}; equations may use "
+                             f"{', '.join(FUNCTIONS)}, if_else and the constant pi "
+                             "(fcomp.backend)")
+
 
 NUMPY = Backend(
     name="numpy",

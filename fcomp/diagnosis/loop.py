@@ -74,6 +74,7 @@ import sys
 from collections.abc import Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -87,7 +88,7 @@ from fcomp.diagnosis.noise import NoiseFloor, effective_sample_size, noise_floor
 from fcomp.diagnosis.refit import FitResult, Refit
 from fcomp.diagnosis.regimes import Segmentation, segment
 from fcomp.diagnosis.split import Split, make_split
-from fcomp.effects import EFFECTS
+from fcomp.effects import EFFECTS, Effect
 from fcomp.errors import FcompError
 from fcomp.identification.plausibility import FitWarning
 from fcomp.measurement import Measurement
@@ -365,7 +366,7 @@ class Diagnosis:
         baseline: str | FrictionModel,
         *,
         effects: Sequence[str] | None = None,
-        add: Sequence[str] = (),
+        add: Sequence[str | Effect] = (),
         search: bool = True,
         split: str = "auto",
         cutoff_hz: float | None = None,
@@ -398,7 +399,7 @@ class Diagnosis:
                              f"{self.baseline!r}")
         names = list(self.effects) if self.effects is not None else EFFECTS.names()
         for n in [*names, *self.add]:
-            EFFECTS.get(n)  # unknown names fail here, with the list of known ones
+            EFFECTS.get(n if isinstance(n, str) else n.name)  # unknown names fail here
         self.baseline_name_ = self.baseline if isinstance(self.baseline, str) else model.describe()
         self.data_ = data if isinstance(data, DiagnosisData) else prepare(
             data, cutoff_hz=self.cutoff_hz)
@@ -432,6 +433,7 @@ class Diagnosis:
             self.skipped_: dict[str, str] = {}
             self.removed_: list[str] = []
             self._forms: dict[str, str | None] = {}
+            self._instances: dict[str, Effect] = {}
             for name in self.add:
                 self.add_effect(name)
             if self.search:
@@ -509,33 +511,100 @@ class Diagnosis:
                              f"parameters of {model.describe()!r}; record longer")
 
     # ---------------------------------------------------------------- steps
-    def add_effect(self, effect: str) -> Diagnosis:
+    def add_effect(self, effect: str | Effect) -> Diagnosis:
         """Add ``effect`` to the current model, refit, score and record the step (forced).
 
         Works after :meth:`fit` (or inside it, for ``add``); the effect may be a
         catalogue entry or one the user registered
-        (:func:`fcomp.effects.register_effect`).
+        (:func:`fcomp.effects.register_effect`), by name or as a configured
+        instance (``make_effect("cogging", period=0.01)``: its configuration is
+        kept, its parameter values are the start of the refit).
         """
         if not hasattr(self, "fit_"):
             raise FcompError("call fit(data) before add_effect")
-        EFFECTS.get(effect)
-        reason = catalogue.applicability(effect, self.fit_.model, self.data_, self.segmentation_)
+        instance = effect if isinstance(effect, Effect) else None
+        name = effect.name if isinstance(effect, Effect) else effect
+        EFFECTS.get(name)
+        reason = (catalogue.applicability(name, self.fit_.model, self.data_, self.segmentation_)
+                  if instance is None else _instance_applicability(instance, self.fit_.model,
+                                                                   self.data_))
         if reason is not None:
-            raise FcompError(f"effect {effect!r} cannot be added to {self.fit_.model.describe()}: "
+            raise FcompError(f"effect {name!r} cannot be added to {self.fit_.model.describe()}: "
                              f"{reason}")
-        cand = self._evaluate([effect])[0]  # one job: no worker processes
+        cand = (self._evaluate([name]) if instance is None  # one job: no worker processes
+                else self._evaluate_instance(instance))[0]
         if cand.fit is None:
-            raise FcompError(f"adding {effect!r}: {cand.reason}")
+            raise FcompError(f"adding {name!r}: {cand.reason}")
         before = self.fit_
         fit = self._polish(cand.fit)
-        self._forms[effect] = cand.form
-        self.steps_.append(Step(effect, before.rms_test, fit.rms_test, cand.qualifies,
+        self._forms[name] = cand.form
+        if instance is not None:
+            self._instances[name] = instance
+        self.steps_.append(Step(name, before.rms_test, fit.rms_test, cand.qualifies,
                                 forced=True, candidates=[cand], fit=fit))
         self.fit_ = fit
-        self.added_.append(effect)
+        self.added_.append(name)
         if hasattr(self, "verdict_"):
             self._conclude()
         return self
+
+    def remove_effect(self, effect: str) -> Diagnosis:
+        """Take ``effect`` out of the current model again and refit the rest (after :meth:`fit`).
+
+        The step that added it is marked not accepted and the effect is listed in
+        ``removed_`` (the error-fall chart shows the removal); the verdict is
+        judged again.
+        """
+        if not hasattr(self, "verdict_"):
+            raise FcompError("call fit(data) before remove_effect")
+        if effect not in self.added_:
+            raise FcompError(f"effect {effect!r} is not in the model (added: "
+                             f"{', '.join(self.added_) or 'none'})")
+        others = [n for n in self.added_ if n != effect]
+        try:
+            reduced = self._rebuilt(others)
+        except (FcompError, ValueError) as exc:
+            raise FcompError(f"cannot remove {effect!r}: {str(exc).splitlines()[0]}") from None
+        self.fit_, self.added_ = reduced, others
+        self.removed_.append(effect)
+        self._instances.pop(effect, None)
+        self.ties_ = [t for t in self.ties_ if t[0] != effect]
+        for st in self.steps_:
+            if st.effect == effect and (st.accepted or st.forced) and not st.removed:
+                st.accepted = False
+                st.removed = "removed on request"
+        self._conclude()
+        return self
+
+    def _evaluate_instance(self, effect: Effect) -> list[Candidate]:
+        """Refit ``current + effect`` (a configured instance) and judge it."""
+        model = self.fit_.model.with_effects(effect)
+        flat = model.flat_params()
+        start = {**flat, **{k: v for k, v in self.fit_.values.items() if k in flat or k == "mass"}}
+        res = self._run([catalogue.Proposal(effect.name, model, [start])])[0]
+        if isinstance(res, str):
+            return [Candidate(effect.name, None, math.nan, reason=res)]
+        return [self._judge(effect.name, res)]
+
+    # ------------------------------------------------------------- display
+    def __repr__(self) -> str:
+        name = self.baseline if isinstance(self.baseline, str) else self.baseline.describe()
+        if not hasattr(self, "verdict_"):
+            return f"<Diagnosis from {name}: not fitted>"
+        return (f"<Diagnosis from {name}: added {', '.join(self.added_) or 'nothing'}; "
+                f"held-out RMS {self.rms_baseline_:.4g} -> {self.rms_final_:.4g} N; "
+                f"{self.verdict_}>")
+
+    def _repr_html_(self) -> str:
+        from fcomp.diagnosis.report import diagnosis_html
+
+        return diagnosis_html(self)
+
+    def write_report(self, directory: str | Path, *, command: str | None = None) -> Path:
+        """Write the self-contained ``DIRECTORY/report.html`` (:func:`.report.write_report`)."""
+        from fcomp.diagnosis.report import write_report
+
+        return write_report(self, directory, command=command)
 
     def _context(self) -> catalogue.Context:
         return catalogue.Context(self.data_, self.segmentation_, self.split_.train, self.fit_)
@@ -719,7 +788,8 @@ class Diagnosis:
         """The baseline with the effects ``names`` (in order) refitted from the current values."""
         model = self.baseline_fit_.model
         for n in names:
-            model = catalogue.attach(model, n, self.data_, self._forms.get(n))
+            model = (model.with_effects(self._instances[n]) if n in self._instances else
+                     catalogue.attach(model, n, self.data_, self._forms.get(n)))
         flat = model.flat_params()
         start = {k: v for k, v in self.fit_.values.items() if k in flat or k == "mass"}
         # the parameters fitted now that remain (terms held for the record stay held)
@@ -986,6 +1056,17 @@ def _comparable(added: Sequence[str], ties: Sequence[Sequence[str]],
         group = next((t for t in ties if name in t), [name])
         out.add(frozenset(group))
     return frozenset(out)
+
+
+def _instance_applicability(effect: Effect, model: FrictionModel, data: DiagnosisData
+                            ) -> str | None:
+    """Why a configured effect cannot be added to ``model`` on ``data`` (None if it can)."""
+    if not effect.applies_to(model):
+        return f"already part of {model.describe()} or not applicable to it"
+    for sig in effect.needs:
+        if not data.available.get(sig, False):
+            return f"needs {sig}: {data.reasons.get(sig, 'not available')}"
+    return None
 
 
 class _NoBar:

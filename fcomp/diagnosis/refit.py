@@ -164,14 +164,14 @@ class FitResult:
 
     model: FrictionModel
     values: dict[str, float]
-    F_hat: np.ndarray
-    residual: np.ndarray
+    F_hat: np.ndarray = dataclasses.field(repr=False)
+    residual: np.ndarray = dataclasses.field(repr=False)
     rms_train: float
     rms_test: float
     n_params: int
     converged: bool
     nfev: int
-    spread: np.ndarray | None = None
+    spread: np.ndarray | None = dataclasses.field(default=None, repr=False)
 
 
 #: Largest timing tolerance (s) of :func:`tolerant_residual`.

@@ -38,7 +38,8 @@ from typing import Any
 from fcomp.errors import FcompError
 from fcomp.version import __version__
 
-__all__ = ["Comparison", "Link", "Report", "atomic_write_text", "format_value", "render_png"]
+__all__ = ["Comparison", "Link", "Report", "atomic_write_text", "format_value",
+           "notebook_html", "render_png"]
 
 _CSS = """
 :root { --fg:#1d2430; --muted:#5b6577; --line:#d9dee7; --bg:#ffffff; --soft:#f4f6fa;
@@ -480,3 +481,18 @@ def _render(fig: Any, fmt: str, dpi: int) -> bytes:
 def render_png(fig: Any, *, dpi: int = 110) -> bytes:
     """PNG bytes of a matplotlib figure (the figure is closed)."""
     return _render(fig, "png", dpi)
+
+
+def notebook_html(title: str, rows: Iterable[Sequence[Any]], fig: Any = None) -> str:
+    """A small HTML block for Jupyter's ``_repr_html_``: a title, a table of ``rows`` (cells
+    as text) and a figure (a matplotlib figure, embedded as PNG; closed)."""
+    cells = "".join("<tr>" + "".join(
+        f"<td style='text-align:{'right' if i else 'left'}'>{html.escape(str(c))}</td>"
+        for i, c in enumerate(row)) + "</tr>" for row in rows)
+    img = ""
+    if fig is not None:
+        data = base64.b64encode(render_png(fig, dpi=80)).decode("ascii")
+        img = (f'<img src="data:image/png;base64,{data}" style="max-width:100%" '
+               f'alt="{html.escape(title)}">')
+    return (f"<div class='fcomp'><strong>{html.escape(title)}</strong>"
+            f"<table>{cells}</table>{img}</div>")

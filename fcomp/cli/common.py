@@ -7,6 +7,7 @@ import argparse
 import json
 import math
 import sys
+import threading
 import time
 import warnings
 from pathlib import Path
@@ -309,6 +310,53 @@ class Progress:
         if self.shown:
             sys.stderr.write("\r\x1b[K")
             sys.stderr.flush()
+
+
+class Activity:
+    """A one-line "still working" display for a step of unknown length (a fit), terminal only.
+
+    Shown once the step has taken ``delay`` s: the label and the time spent,
+    refreshed every half second by a background thread, erased at the end.
+    """
+
+    def __init__(self, label: str, *, enabled: bool = True, delay: float = 2.0) -> None:
+        self.label, self.delay = label, delay
+        self.enabled = enabled and sys.stderr.isatty()
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        self.shown = False
+
+    def _run(self) -> None:
+        start = time.monotonic()
+        while not self._stop.wait(0.5):
+            spent = time.monotonic() - start
+            if spent >= self.delay:
+                sys.stderr.write(f"\r{self.label}: {_clock(spent)} spent (Ctrl-C stops)\x1b[K")
+                sys.stderr.flush()
+                self.shown = True
+
+    def __enter__(self) -> Activity:
+        if self.enabled:
+            self._thread = threading.Thread(target=self._run, daemon=True)
+            self._thread.start()
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        if self._thread is not None:
+            self._stop.set()
+            self._thread.join()
+        if self.shown:
+            sys.stderr.write("\r\x1b[K")
+            sys.stderr.flush()
+
+
+def bar(label: str, total: int, *, enabled: bool = True, unit: str = "run") -> Any:
+    """A tqdm progress bar on stderr (terminal or not, as the diagnosis's), left off the
+    screen at the end; ``enabled=False`` gives one that shows nothing."""
+    from tqdm import tqdm
+
+    return tqdm(total=total, desc=label, unit=unit, file=sys.stderr, leave=False,
+                disable=not enabled, dynamic_ncols=True)
 
 
 def _clock(seconds: float) -> str:

@@ -12,14 +12,20 @@ parameters not determined or trading off) are printed under the table, one
 ``fcomp: warning: ...`` line each, and listed in the JSON's ``warnings``. A fit that does not converge
 says so on one line and exits with status 2 (no JSON is written).
 ``--set NAME=VALUE`` gives a start value, ``--fix NAME=VALUE`` holds a parameter.
+``--report DIR`` draws the fit into ``DIR/report.html``: the estimates, the
+measured and fitted force, and the fitted model compared with the record as
+``fcomp compare`` does (errors per regime, residual against every feature,
+loops, worst windows).
 """
 
 from __future__ import annotations
 
 import argparse
-from typing import TYPE_CHECKING
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 from fcomp.cli.common import (
+    Activity,
     add_model_options,
     build_model,
     emit_result,
@@ -28,6 +34,7 @@ from fcomp.cli.common import (
     json_target,
     name_list,
     parse_assignments,
+    report_dir,
     result_text,
     warn,
     warn_sidecar,
@@ -75,27 +82,24 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="level of the confidence intervals (default 0.95)")
     p.add_argument("--max-nfev", type=int, default=200, metavar="N",
                    help="evaluation budget of each least-squares stage (default 200)")
+    p.add_argument("--report", metavar="DIR", default=None,
+                   help="write a self-contained HTML report of the fit to DIR/report.html: the "
+                   "estimates, the fit drawn, and the fitted model compared with the record "
+                   "(errors per regime, residual against every feature, loops, worst windows)")
+    p.add_argument("--no-progress", action="store_true", help="no progress line on stderr")
     p.set_defaults(func=run)
 
 
 def _table(f: FrictionFit) -> str:
     """The printed result: estimates, the parameters held (not determined by the record)
     and the RMS error (the plausibility warnings follow as ``fcomp: warning:`` lines)."""
-    from fcomp.report import format_value
-
     lines = [f"model {f.to_dict()['model']}  ({f.method_} fit, target {f.target_}, "
              f"{f.n_samples_} samples)"]
     pct = round(100 * f.confidence)
     head = f"{'parameter':12s} {'value':>12s} {'stderr':>11s}   {pct}% interval{'':14s} unit"
     lines += [head, "-" * len(head)]
-    for n, val in f.params_.items():
-        lo, hi = f.ci_[n]
-        row = (f"{n:12s} {format_value(val):>12s} {format_value(f.stderr_[n]):>11s}   "
-               f"[{format_value(lo)}, {format_value(hi)}]")
-        lines.append(row.ljust(62) + f" {f.unit(n)}")
-    for n, val in f.held_.items():
-        row = f"{n:12s} {format_value(val):>12s} {'-':>11s}   held: not determined"
-        lines.append(row.ljust(62) + f" {f.unit(n)}")
+    for name, value, err, interval, unit in f.rows():
+        lines.append(f"{name:12s} {value:>12s} {err:>11s}   {interval}".ljust(62) + f" {unit}")
     lines.append(f"rms force error {f.rms_:.4g} N; residual autocorrelation time "
                  f"{f.tau_int_:.3g} samples (effective sample size {f.n_eff_:.0f})")
     return "\n".join(lines)
@@ -117,7 +121,8 @@ def run(args: argparse.Namespace) -> int:
     if not 0 < args.confidence < 1:
         raise FcompError(f"--confidence must be a level between 0 and 1 (e.g. 0.95), "
                          f"got {args.confidence:g}")
-    guard_outputs([args.data], args.effects, [("--json", out)])
+    report = report_dir(args.report)
+    guard_outputs([args.data], args.effects, [("--json", out)], [("--report", report, "report")])
     model = build_model(args.model, args.params, args)
     initial = parse_assignments(args.set)
     fixed = parse_assignments(args.fix, "--fix")
@@ -132,9 +137,35 @@ def run(args: argparse.Namespace) -> int:
                       directional=args.directional, initial=initial, method=args.method,
                       v_min=args.v_min, cutoff_hz=args.cutoff, confidence=args.confidence,
                       max_nfev=args.max_nfev)
-    fit.fit(data)
+    with Activity(f"fit {args.model}", enabled=not args.no_progress):
+        fit.fit(data)
     for w in fit.warnings_:  # printed under the table, recorded in the JSON
         warn(w.code, w.message, w.parameter)
     doc = with_warnings(fit.to_dict())
+    if report is not None:
+        _write_report(fit, data, report, args)
     emit_result(result_text(doc), args.json, out, _table(fit))
     return 0
+
+
+def _write_report(fit: FrictionFit, data: Any, report: Path, args: argparse.Namespace) -> None:
+    """The fit's report: estimates, the fit drawn, the fitted model compared with the record."""
+    import shlex
+
+    from fcomp.cli import common
+    from fcomp.diagnosis.compare import compare, fitted_model
+    from fcomp.diagnosis.report import write_fit_report
+    from fcomp.outputs import staged_folder
+
+    command = "fcomp " + shlex.join(common.ARGV) if common.ARGV else "fcomp fit"
+    model, mass = fitted_model(fit)
+    try:
+        comp = compare(model, data, mass=mass)
+    except FcompError as exc:  # e.g. steady-state points a dynamic view cannot take
+        comp, why = None, str(exc)
+    else:
+        why = ""
+    with staged_folder(report, "--report", "report", note=command) as tmp:
+        write_fit_report(fit, comp, tmp, command=command, note=why)
+    if args.json != "-":
+        print(f"wrote {report / 'report.html'}")

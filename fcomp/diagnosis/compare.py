@@ -254,6 +254,20 @@ def model_from_fit(doc: Mapping[str, Any], model: FrictionModel | None = None,
     return mdl, mass
 
 
+def fitted_model(fit: Any) -> tuple[FrictionModel, float | None]:
+    """The model of a fitted :class:`~fcomp.identification.FrictionFit` as :func:`compare`
+    takes it: its fitted values, a fitted ``offset`` as a ``force-offset`` effect, and the
+    fitted (or given) mass."""
+    from fcomp.effects import make_effect
+
+    values = {**fit.held_, **fit.params_}
+    model = fit.model_
+    if values.get("offset"):
+        model = model.with_effects(make_effect("force-offset", {"offset": values["offset"]}))
+    mass = values.get("mass", fit.mass)
+    return model, (None if mass is None else float(mass))
+
+
 #: Longest record a given model is compared on in full (longer ones are block-averaged
 #: for the prediction's alternatives only; every score is on the full record).
 COMPARE_SAMPLES = 200_000

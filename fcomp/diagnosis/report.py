@@ -40,7 +40,7 @@ from fcomp.diagnosis.refit import FitResult
 from fcomp.diagnosis.regimes import REGIMES, Segmentation
 from fcomp.effects import EFFECTS
 from fcomp.errors import FcompError
-from fcomp.report import Report
+from fcomp.report import Report, notebook_html
 
 _UNITS = {"t": "s", "v": "m/s", "a": "m/s^2", "x": "m", "p1+p2": "bar",
           "time_since_reversal": "s", "displacement_since_reversal": "m", "dwell_time": "s"}
@@ -428,24 +428,6 @@ def _summary_rows(obj: Diagnosis | Comparison) -> tuple[str, list[list[Any]]]:
     return f"Diagnosis: {d['baseline']} on {', '.join(obj.data_.labels[:3])}", rows
 
 
-def notebook_html(title: str, rows: list[list[Any]], fig: Figure | None) -> str:
-    """A small HTML block for Jupyter: a title, a table and the key figure (embedded PNG)."""
-    import base64
-    import html
-
-    from fcomp.report import render_png
-
-    cells = "".join(f"<tr><td>{html.escape(str(a))}</td><td style='text-align:right'>"
-                    f"{html.escape(str(b))}</td><td>{html.escape(str(c))}</td></tr>"
-                    for a, b, c in rows)
-    img = ""
-    if fig is not None:
-        data = base64.b64encode(render_png(fig, dpi=80)).decode("ascii")
-        img = f'<img src="data:image/png;base64,{data}" style="max-width:100%" alt="{html.escape(title)}">'
-    return (f"<div class='fcomp'><strong>{html.escape(title)}</strong>"
-            f"<table>{cells}</table>{img}</div>")
-
-
 def comparison_html(comp: Comparison) -> str:
     """``Comparison._repr_html_``: the key numbers and the per-regime errors."""
     title, rows = _summary_rows(comp)
@@ -477,6 +459,14 @@ def build_comparison_report(comp: Comparison, *, command: str | None = None) -> 
         rep.section("What a careful engineer would question", level=3)
         rep.table(["warning", "parameter", "what it means"],
                   [[w["code"], w["parameter"] or "", w["message"]] for w in d["warnings"]])
+    comparison_sections(rep, comp)
+    rep.parameters({k: v for k, v in d["params"].items()}, heading="Parameters (SI units)")
+    return rep
+
+
+def comparison_sections(rep: Report, comp: Comparison) -> Report:
+    """Add a comparison's sections to ``rep``: errors per regime, where the model fails
+    (residual against every feature, loops, worst windows) and the plant domain."""
     figs = comparison_figures(comp)
     rep.section("1. Errors per regime")
     rep.figure(figs["regimes"], f"RMS error per regime over the {comp.judged_label} samples "
@@ -494,8 +484,8 @@ def build_comparison_report(comp: Comparison, *, command: str | None = None) -> 
     rep.figure(figs["worst"], "The windows where the model fails most.")
     rep.figure(figs["before_after"], "A stretch of about two seconds where the model fails "
                "most.")
-    rep.table(["feature", "strength"], [[f["feature"], f["strength"]]
-                                        for f in d["residual_features"]], digits=[None, 3])
+    rep.table(["feature", "strength"], [[f.feature, f.strength]
+                                        for f in comp.residual_features], digits=[None, 3])
     if comp.plant:
         rep.section("3. Plant domain")
         rep.figure(figs["plant"], "The plant simulated with each record's command from its "
@@ -503,8 +493,42 @@ def build_comparison_report(comp: Comparison, *, command: str | None = None) -> 
         rep.table(["record", "plant", "signal", "RMS"],
                   [[c.label, c.plant, k, f"{v:.4g} {'m' if k == 'x' else 'Pa'}"]
                    for c in comp.plant for k, v in c.rms.items()])
-    rep.parameters({k: v for k, v in d["params"].items()}, heading="Parameters (SI units)")
     return rep
+
+
+def build_fit_report(fit: Any, comp: Comparison | None, *, command: str | None = None,
+                     note: str = "") -> Report:
+    """The report of a fit (``fcomp fit --report``): the estimates and their warnings, the fit
+    drawn, and -- where the record takes it -- the comparison's sections for the fitted model."""
+    d = fit.to_dict()
+    rep = Report(f"Fit: {fit.model_.describe()} on {fit.data_.label}",
+                 subtitle=f"{fit.method_} fit, target {fit.target_}, RMS {fit.rms_:.4g} N over "
+                 f"{fit.n_samples_} samples", command=command,
+                 config={"model": d["model"], "method": d["method"]})
+    rep.section("Estimates")
+    pct = round(100 * fit.confidence)
+    rep.table(["parameter", "value", "stderr", f"{pct} % interval", "unit"], fit.rows(),
+              caption="Estimates with standard errors robust to the residuals' "
+              "autocorrelation; held parameters are not determined by the record.")
+    if d["warnings"]:
+        rep.table(["warning", "parameter", "what it means"],
+                  [[w["code"], w["parameter"] or "", w["message"]] for w in d["warnings"]],
+                  caption="Plausibility of the estimates.")
+    rep.figure(fit.plot(), "The measured force and the fitted model, over time and against "
+               "the velocity.")
+    if comp is None:
+        rep.note(f"No comparison by regime: {note}", kind="warn")
+        return rep
+    rep.paragraph(f"The fitted model beside the record, as `fcomp compare` shows it: RMS "
+                  f"{comp.rms:.4g} N over the {comp.judged_label} samples (noise floor "
+                  f"{comp.noise_floor:.3g} N).")
+    return comparison_sections(rep, comp)
+
+
+def write_fit_report(fit: Any, comp: Comparison | None, directory: str | Path, *,
+                     command: str | None = None, note: str = "") -> Path:
+    """Write ``DIRECTORY/report.html`` of a fit (:func:`build_fit_report`)."""
+    return _write(build_fit_report(fit, comp, command=command, note=note), directory)
 
 
 def write_comparison_report(comp: Comparison, directory: str | Path, *,

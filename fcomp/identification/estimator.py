@@ -245,6 +245,7 @@ class FrictionFit:
             attributes, ``warnings_`` included).
         """
         self._failure = ""
+        self.data_ = data
         self._fit(data)
         self.context_ = RigContext.from_meta(data.meta, mass=self.mass)
         self.warnings_ = self.plausibility()
@@ -342,6 +343,66 @@ class FrictionFit:
         if "mass" in self._extras and d.inertia is not None:
             F = F + self._extras["mass"] * d.inertia
         return F + self._extras.get("offset", 0.0)
+
+    def plot(self, data: Measurement | None = None) -> Any:
+        """The fit drawn: measured (or reconstructed) force and the fitted model over time and
+        against the velocity, for ``data`` (default: the record fitted)."""
+        from matplotlib.figure import Figure
+
+        data = self.data_ if data is None else data
+        d = self._data(data)
+        y, F = d.y, self.predict(data)
+        t, v = d.sig["t"], d.sig["v"]
+        fig = Figure(figsize=(11.0, 3.4))
+        ax1, ax2 = fig.add_subplot(1, 2, 1), fig.add_subplot(1, 2, 2)
+        for ax, q, label in ((ax1, t, "t (s)"), (ax2, v, "velocity v (m/s)")):
+            style = "-" if ax is ax1 else "."
+            ax.plot(q, y, style, color="0.25", lw=0.8, ms=1.5, label=f"measured ({self.target_})")
+            ax.plot(q, F, style, color="#2356a8", lw=0.8, ms=1.0,
+                    label=f"fitted {self.model_.describe()}")
+            ax.set_xlabel(label, fontsize=8)
+            ax.set_ylabel("force (N)", fontsize=8)
+            ax.tick_params(labelsize=7)
+        ax1.legend(fontsize=7, loc="lower left", bbox_to_anchor=(0.0, 1.01), ncol=2,
+                   frameon=False, borderaxespad=0.0)
+        ax2.set_title(f"RMS error {self.score(data):.4g} N", fontsize=8)
+        fig.tight_layout()
+        return fig
+
+    def rows(self) -> list[list[str]]:
+        """The estimates as table rows: name, value, standard error, interval, unit."""
+        from fcomp.report import format_value
+
+        self._check_fitted()
+        out = [[n, format_value(v), format_value(self.stderr_[n]),
+                f"[{format_value(self.ci_[n][0])}, {format_value(self.ci_[n][1])}]", self.unit(n)]
+               for n, v in self.params_.items()]
+        out += [[n, format_value(v), "-", "held: not determined", self.unit(n)]
+                for n, v in self.held_.items()]
+        return out
+
+    def __repr__(self) -> str:
+        name = self.model if isinstance(self.model, str) else self.model.describe()
+        if not hasattr(self, "params_"):
+            return f"<FrictionFit {name}: not fitted>"
+        return (f"<FrictionFit {self.model_.describe()}: {len(self.params_)} estimates, RMS "
+                f"{self.rms_:.4g} N over {self.n_samples_} samples, {len(self.warnings_)} "
+                f"warning(s)>")
+
+    def _repr_html_(self) -> str:
+        from fcomp.report import notebook_html
+
+        if not hasattr(self, "params_"):
+            return f"<pre>{self!r}</pre>"
+        pct = round(100 * self.confidence)
+        rows = [["parameter", "value", "stderr", f"{pct} % interval", "unit"], *self.rows(),
+                ["RMS error", f"{self.rms_:.4g}", "", "", "N"]]
+        rows += [["warning", w.code, w.parameter or "", w.message, ""] for w in self.warnings_]
+        try:
+            fig = self.plot()
+        except (FcompError, ValueError):
+            fig = None
+        return notebook_html(f"Fit: {self.model_.describe()} ({self.method_})", rows, fig)
 
     def score(self, data: Measurement) -> float:
         """RMS force error (N) of the fitted model on ``data`` (e.g. a validation record)."""

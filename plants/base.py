@@ -576,11 +576,37 @@ class OdePlant(Plant):
         def outfcn(t: float, x: Any, u: Any, params: Any = None) -> np.ndarray:
             return np.asarray(g(x, u, pvec(params)), dtype=float).ravel()
 
-        return ct.NonlinearIOSystem(
+        return _named_iosys()(
             updfcn, outfcn, states=list(self.state_names), inputs=list(self.input_names),
             outputs=list(self.output_names), name=name or self.name.replace("-", "_"),
             params=dict(base),
         )
+
+
+_IOSYS: list[type] = []
+
+
+def _named_iosys() -> type:
+    """python-control's ``NonlinearIOSystem`` whose ``linearize`` keeps the signal names.
+
+    The linear system of ``plant.to_iosys().linearize(x0, u0)`` has the plant's
+    state, input and output names (``x``, ``v``, ``p1``, ...; python-control's
+    default would number them ``x[0]``, ``u[0]``, ``y[0]``), so it can be
+    connected and indexed by name; pass ``copy_names=False`` for the numbered ones.
+    """
+    if not _IOSYS:
+        import control as ct
+
+        class PlantIOSystem(ct.NonlinearIOSystem):
+            __doc__ = _named_iosys.__doc__
+
+            def linearize(self, x0: Any, u0: Any = None, t: float = 0, params: Any = None,
+                          eps: float = 1e-6, copy_names: bool = True, **kwargs: Any) -> Any:
+                return super().linearize(x0, u0, t=t, params=params, eps=eps,
+                                         copy_names=copy_names, **kwargs)
+
+        _IOSYS.append(PlantIOSystem)
+    return _IOSYS[0]
 
 
 def friction_state_scales(model: FrictionModel) -> np.ndarray:

@@ -26,12 +26,16 @@ Kinds
 ``mat``
     Any ``.mat`` file through a column mapping (:mod:`fcomp.matfile`) and an
     optional sidecar TOML giving the rig.
+``csv``
+    Any CSV file (comma, semicolon or tab separated; ``.`` or ``,`` decimal
+    point) through the same mapping, with units and an optional sidecar TOML:
+    :func:`import_csv`.
 """
 
 from __future__ import annotations
 
 import hashlib
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -310,6 +314,95 @@ def import_mat(src: Path, *, mapping: str | Mapping[str, str],
     return from_variables(load_mat(src), cmap, meta, source=src)
 
 
+def _csv_table(src: Path, delimiter: str | None, decimal: str) -> dict[str, np.ndarray]:
+    """The named columns of a CSV file: the first non-comment line is the header."""
+    text = read_text(src, str(src), what="CSV numbers")
+    lines = text.splitlines()
+    idx = next((i for i, line in enumerate(lines) if line.strip() and
+                not line.lstrip().startswith("#")), None)
+    if idx is None:
+        raise FcompError(f"{src}: the file is empty (a header line of column names is needed)")
+    header = lines[idx]
+    if delimiter is None:
+        counts = {d: header.count(d) for d in (",", ";", "\t")}
+        delimiter = max(counts, key=lambda d: counts[d]) if any(counts.values()) else ","
+    if decimal not in (".", ","):
+        raise FcompError(f"decimal: {decimal!r} must be '.' or ','")
+    if decimal == delimiter:
+        raise FcompError(f"{src}: the decimal mark and the delimiter are both {decimal!r}")
+    from fcomp.matfile import split_outside_quotes
+
+    names = [n.strip().strip("\"'").strip() for n in split_outside_quotes(header, delimiter)]
+    if any(not n for n in names):
+        raise FcompError(f"{src}: line {idx + 1}: a column name of the header is empty")
+    dup = next((n for i, n in enumerate(names) if n in names[:i]), None)
+    if dup is not None:
+        raise FcompError(f"{src}: line {idx + 1}: column {dup!r} appears twice in the header")
+    rows = data_rows(text, idx + 1)
+    if decimal == ",":
+        rows = [(n, r.replace(",", ".")) for n, r in rows]
+    table = parse_rows(str(src), rows, delimiter, names, what="CSV numbers")
+    return {n: table.data[:, i] for i, n in enumerate(names)}
+
+
+def import_csv(src: Path, *, mapping: str | Mapping[str, str],
+               units: str | Mapping[str, str] | None = None,
+               sidecar: str | Path | None = None, drop: str | Sequence[str] | None = None,
+               delimiter: str | None = None, decimal: str = ".") -> Measurement:
+    """Any CSV file through a column mapping (the language of :mod:`fcomp.matfile`).
+
+    ``mapping`` gives each measurement column as a product of CSV columns and
+    numbers (``t=time_ms*1e-3,x='Position [mm]'*1e-3,F=-force``; a leading
+    ``-`` flips the sign); ``units`` the unit of mapped columns, converted to SI
+    (``x=mm,p1=bar,t=ms``; :data:`fcomp.measurement.UNITS`). Every CSV column
+    must be used by the mapping or named in ``drop`` (``"*"``: every other one):
+    a column left over is an error, so no signal is lost unnoticed.
+    ``sidecar`` is a TOML file with the rig (as for ``mat``); ``delimiter``
+    (default: the one of ``,``, ``;``, tab the header uses) and ``decimal``
+    (``.`` or ``,``) describe the file.
+    """
+    from fcomp.matfile import split_outside_quotes
+
+    _require_file(src)
+    cmap = parse_mapping(mapping) if isinstance(mapping, str) else dict(mapping)
+    umap = _pairs(units, "units") if isinstance(units, str) else dict(units or {})
+    cols = _csv_table(src, delimiter, decimal)
+    dropped = ([s.strip() for s in split_outside_quotes(drop, ",") if s.strip()]
+               if isinstance(drop, str) else list(drop or []))
+    dropped = [d.strip("\"'") for d in dropped]
+    for d in dropped:
+        if d != "*" and d not in cols:
+            raise FcompError(f"{src}: drop: no column {d!r} in the file (columns: "
+                             f"{', '.join(cols)})")
+    meta: dict[str, Any] = read_sidecar(check_path(sidecar, "sidecar file")) if sidecar else {}
+    meta.setdefault("name", src.stem)
+    meta["source"] = provenance(src, "csv", mapping=cmap, units=umap,
+                                **({"sidecar": Path(sidecar).name} if sidecar else {}))
+    meas = from_variables(cols, cmap, meta, source=src, noun="column", units=umap)
+    used = {tok.strip().lstrip("-").strip().strip("\"'") for e in cmap.values()
+            for tok in split_outside_quotes(e.strip().lstrip("-"), "*")}
+    left = [c for c in cols if c not in used and c not in dropped]
+    if left and "*" not in dropped:
+        names = ",".join(c if c.isidentifier() else f"'{c}'" for c in left)
+        raise FcompError(f"{src}: column(s) {', '.join(repr(c) for c in left)} of the file "
+                         f"are not mapped: map them ({term('mapping')} NAME=COLUMN) or leave "
+                         f"them out ({term('drop')} {names})")
+    return meas
+
+
+def _pairs(spec: str, what: str) -> dict[str, str]:
+    """``"x=mm,t=ms"`` -> ``{"x": "mm", "t": "ms"}``."""
+    out: dict[str, str] = {}
+    for item in (s.strip() for s in spec.split(",") if s.strip()):
+        if "=" not in item:
+            raise FcompError(f"{term(what)} {item!r}: expected COLUMN=UNIT")
+        k, v = (x.strip() for x in item.split("=", 1))
+        if k in out:
+            raise FcompError(f"{term(what)}: column {k!r} is given twice")
+        out[k] = v
+    return out
+
+
 IMPORTERS.register("emps", Importer(import_emps, (), "EMPS benchmark .mat (Janot et al. 2019)"))
 IMPORTERS.register("zillen", Importer(import_zillen, ("bore",),
                                       "TU Delft pneumatic seal-friction text file (Zillen 2021)"))
@@ -317,3 +410,6 @@ IMPORTERS.register("mataveid", Importer(import_mataveid, ("position_scale",),
                                         "MataveID hydraulic bench CSV (raw volts)"))
 IMPORTERS.register("mat", Importer(import_mat, ("mapping", "sidecar"),
                                    "any MATLAB .mat file with --map COLUMN=VARIABLE,..."))
+IMPORTERS.register("csv", Importer(import_csv, ("mapping", "units", "sidecar", "drop",
+                                                "delimiter", "decimal"),
+                                   "any CSV file with --map COLUMN=EXPR,... and --units"))

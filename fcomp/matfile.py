@@ -6,7 +6,10 @@ of each entry is a product of factors separated by ``*``, each factor a
 variable name (``qm``; a field of a MATLAB struct as ``data.qm``) or a number
 (``1e-3`` to convert mm to m), optionally preceded by one ``-`` for a sign
 change. Vector variables (``N``, ``N x 1`` or ``1 x N``) give the samples;
-scalar variables (``1 x 1``, e.g. a gain) multiply every sample.
+scalar variables (``1 x 1``, e.g. a gain) multiply every sample. A name
+that is not an identifier (a CSV header such as ``Position [mm]``) is quoted:
+``x='Position [mm]'*1e-3``. The same language maps the columns of any CSV
+file (``fcomp import csv``, :func:`fcomp.importers.import_csv`).
 
 MATLAB v4, v6 and v7 files are read with :func:`scipy.io.loadmat`; v7.3 files
 (HDF5) are refused with a one-line error telling the user to save with ``-v7``.
@@ -22,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from fcomp.errors import FcompError, term
-from fcomp.measurement import Measurement, checked
+from fcomp.measurement import Measurement, checked, si_factor
 from fcomp.textdata import check_path
 
 _NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*(\.[A-Za-z_][A-Za-z0-9_]*)*$")
@@ -62,10 +65,27 @@ def _bad(message: str) -> FcompError:
     return FcompError(message.replace("mapping", term("mapping"), 1))
 
 
+def split_outside_quotes(text: str, sep: str) -> list[str]:
+    """``text`` split at ``sep`` where it is not inside single or double quotes."""
+    parts, buf, quote = [], [], ""
+    for ch in text:
+        if quote:
+            quote = "" if ch == quote else quote
+        elif ch in "'\"":
+            quote = ch
+        elif ch == sep:
+            parts.append("".join(buf))
+            buf = []
+            continue
+        buf.append(ch)
+    parts.append("".join(buf))
+    return parts
+
+
 def parse_mapping(spec: str) -> dict[str, str]:
     """``"t=time,x=qm,F_ext=gtau*vir"`` -> ``{"t": "time", "x": "qm", "F_ext": "gtau*vir"}``."""
     out: dict[str, str] = {}
-    for item in (s.strip() for s in spec.split(",")):
+    for item in (s.strip() for s in split_outside_quotes(spec, ",")):
         if not item:
             continue
         if "=" not in item:
@@ -83,24 +103,30 @@ def parse_mapping(spec: str) -> dict[str, str]:
     return out
 
 
-def _lookup(variables: Mapping[str, Any], name: str, path: Path) -> Any:
+def _lookup(variables: Mapping[str, Any], name: str, path: Path, quoted: bool = False,
+            noun: str = "variable") -> Any:
     obj: Any = variables
-    for part in name.split("."):
+    for part in [name] if quoted or noun != "variable" else name.split("."):
         if not isinstance(obj, Mapping) or part not in obj:
             have = ", ".join(sorted(k for k in variables)) or "none"
-            raise FcompError(f"{path}: no variable {name!r} in the file (variables: {have})")
+            raise FcompError(f"{path}: no {noun} {name!r} in the file ({noun}s: {have})")
         obj = obj[part]
     return obj
 
 
-def _factor(variables: Mapping[str, Any], token: str, path: Path, column: str) -> np.ndarray:
+def _factor(variables: Mapping[str, Any], token: str, path: Path, column: str,
+            noun: str = "variable") -> np.ndarray:
     try:
         return np.asarray(float(token))
     except ValueError:
         pass
-    if not _NAME.match(token):
-        raise FcompError(f"{path}: column {column!r}: {token!r} is neither a variable nor a number")
-    value = _lookup(variables, token, path)
+    quoted = len(token) >= 2 and token[0] == token[-1] and token[0] in "'\""
+    if quoted:
+        token = token[1:-1]
+    elif not _NAME.match(token):
+        raise FcompError(f"{path}: column {column!r}: {token!r} is neither a variable nor a "
+                         "number (quote a name that is not an identifier: 'Position [mm]')")
+    value = _lookup(variables, token, path, quoted, noun)
     try:
         arr = np.asarray(value)
         if np.iscomplexobj(arr) or arr.dtype.kind not in "biuf":
@@ -119,22 +145,24 @@ def _factor(variables: Mapping[str, Any], token: str, path: Path, column: str) -
     return arr
 
 
-def evaluate(variables: Mapping[str, Any], expr: str, *, path: str | Path, column: str) -> np.ndarray:
+def evaluate(variables: Mapping[str, Any], expr: str, *, path: str | Path, column: str,
+             noun: str = "variable") -> np.ndarray:
     """Evaluate one mapping expression (product of variables / numbers, optional leading ``-``)."""
     p = Path(path)
     text = expr.strip()
     sign = 1.0
     if text.startswith("-"):
         sign, text = -1.0, text[1:].strip()
-    tokens = [s.strip() for s in text.split("*")]
+    tokens = [s.strip() for s in split_outside_quotes(text, "*")]
     if any(not s for s in tokens):
         raise FcompError(f"{p}: column {column!r}: cannot parse {expr!r}")
     value: np.ndarray = np.asarray(sign)
     with np.errstate(over="ignore", invalid="ignore"):
         for token in tokens:
-            value = value * _factor(variables, token, p, column)
+            value = value * _factor(variables, token, p, column, noun)
     out = np.asarray(value, dtype=float)
-    finite = [np.all(np.isfinite(np.asarray(_factor(variables, tk, p, column), dtype=float)))
+    finite = [np.all(np.isfinite(np.asarray(_factor(variables, tk, p, column, noun),
+                                            dtype=float)))
               for tk in tokens]
     if all(finite) and not np.all(np.isfinite(out)):
         raise FcompError(f"{p}: column {column!r}: {expr!r} overflows (the product is beyond "
@@ -167,13 +195,22 @@ def read_mat(path: str | Path, mapping: Mapping[str, str] | str,
 
 
 def from_variables(variables: Mapping[str, Any], mapping: Mapping[str, str],
-                   meta: Mapping[str, Any] | None, *, source: str | Path) -> Measurement:
-    """:func:`read_mat` on variables already loaded with :func:`load_mat`."""
+                   meta: Mapping[str, Any] | None, *, source: str | Path,
+                   noun: str = "variable", units: Mapping[str, str] | None = None
+                   ) -> Measurement:
+    """:func:`read_mat` on variables already loaded with :func:`load_mat` (or the columns of
+    a CSV file, ``noun="column"``); ``units`` gives the unit of mapped columns, converted
+    to SI (:func:`fcomp.measurement.si_factor`)."""
     p = Path(source)
     cmap = dict(mapping)
     if "t" not in cmap:
         raise FcompError(f"{p}: the mapping must give the time column 't'")
-    cols = {c: evaluate(variables, e, path=p, column=c) for c, e in cmap.items()}
+    cols = {c: evaluate(variables, e, path=p, column=c, noun=noun) for c, e in cmap.items()}
+    for c, unit in (units or {}).items():
+        if c not in cols:
+            raise FcompError(f"{p}: units: column {c!r} is not mapped (mapped: "
+                             f"{', '.join(cols)})")
+        cols[c] = cols[c] * si_factor(c, unit, "units")
     n = max((v.size for v in cols.values() if v.ndim == 1), default=0)
     if cols["t"].ndim != 1:
         raise FcompError(f"{p}: time {cmap['t']!r} is a scalar, not a vector of sample times")

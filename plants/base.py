@@ -554,7 +554,6 @@ class OdePlant(Plant):
         """
         fns = self.casadi_functions(symbolic_params=True)  # first: refuse non-symbolic models
 
-        import control as ct
 
         f, g = fns["rhs"], fns["outputs"]
         base = self.flat_params()

@@ -36,7 +36,8 @@ OPTIONS: dict[str, str] = {
     "max_steps": "--max-steps", "rtol": "--rtol", "atol": "--atol", "duration": "--duration",
     "rate": "--rate", "coupling": "--coupling", "params": "--params", "fixed": "--fix",
     "out": "--out", "input": "--input", "mapping": "--map", "position_scale": "--position-scale",
-    "effects_module": "--effects",
+    "effects_module": "--effects", "units": "--units", "drop": "--drop",
+    "decimal": "--decimal", "delimiter": "--delimiter", "scheduler": "--scheduler",
 }
 
 

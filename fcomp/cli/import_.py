@@ -1,9 +1,22 @@
 """``fcomp import KIND SRC -o OUT.csv`` -- convert a real data file to the measurement format.
 
 KIND is ``emps`` (EMPS benchmark .mat), ``zillen`` (TU Delft pneumatic
-seal-friction text file), ``mataveid`` (MataveID hydraulic bench CSV) or ``mat``
+seal-friction text file), ``mataveid`` (MataveID hydraulic bench CSV), ``mat``
 (any MATLAB .mat file with ``--map COLUMN=VARIABLE,...`` and an optional
-``--sidecar RIG.toml``). Writes OUT.csv and OUT.toml (SI units, provenance in
+``--sidecar RIG.toml``) or ``csv`` (any CSV file from another tool, with the
+same ``--map`` language over its column names, ``--units COLUMN=UNIT,...``
+converting to SI, ``--drop`` for columns left out, and ``--sidecar``).
+
+The mapping: ``COLUMN=EXPR`` items separated by commas; ``EXPR`` a product of
+names and numbers (``*``), a leading ``-`` flips the sign, a name that is not
+an identifier is quoted (``x='Position [mm]'*1e-3``). Example::
+
+    fcomp import csv log.csv --map "t=time_ms,x='pos [mm]',F=-force" \
+          --units t=ms,x=mm --drop comment -o run.csv
+
+Units (``--units``): s ms us min, m cm mm um in, m/s mm/s, m/s^2 g, Pa kPa MPa
+bar mbar psi, N kN lbf, A mA V mV. The measurement format is described in
+docs/data-format.md. Writes OUT.csv and OUT.toml (SI units, provenance in
 the ``[source]`` table of the sidecar) atomically: on any error nothing is
 written and the command exits with status 2.
 """
@@ -31,11 +44,23 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("kind", metavar="KIND", help=f"the file's kind: {kinds}")
     p.add_argument("src", metavar="SRC", help="the file to convert")
     p.add_argument("-o", "--output", required=True, metavar="OUT.csv")
-    p.add_argument("--map", dest="mapping", default=None, metavar="COL=VAR,...",
-                   help="mat: column mapping, e.g. t=time,x=qm,F_ext=gtau*vir "
-                   "(products of variables and numbers; a leading - flips the sign)")
+    p.add_argument("--map", dest="mapping", default=None, metavar="COL=EXPR,...",
+                   help="mat, csv: column mapping, e.g. t=time,x=qm,F_ext=gtau*vir "
+                   "(products of variables or CSV columns and numbers; a leading - flips the "
+                   "sign; quote other names: x='pos [mm]')")
+    p.add_argument("--units", default=None, metavar="COL=UNIT,...",
+                   help="csv: the unit of mapped columns, converted to SI (e.g. t=ms,x=mm,"
+                   "p1=bar)")
+    p.add_argument("--drop", default=None, metavar="COLUMN,...",
+                   help="csv: columns of the file left out ('*': every column not mapped); "
+                   "any other unmapped column is an error")
+    p.add_argument("--delimiter", default=None, choices=[",", ";", "tab"],
+                   help="csv: the field separator (default: the one the header uses)")
+    p.add_argument("--decimal", default=".", choices=[".", ","],
+                   help="csv: the decimal mark (default '.')")
     p.add_argument("--sidecar", default=None, metavar="RIG.toml",
-                   help="mat: a TOML file with kind, pressure, [rig], [signals] (data-format.md)")
+                   help="mat, csv: a TOML file with kind, pressure, [rig], [signals] "
+                   "(docs/data-format.md)")
     p.add_argument("--bore", type=finite_float, default=None, metavar="M",
                    help="zillen: piston bore in m (default from the file name: 0.0257 if it "
                    "contains 257, else 0.025)")
@@ -51,11 +76,16 @@ def run(args: argparse.Namespace) -> int:
     from fcomp.textdata import check_path
 
     out = output_path(args.output)
-    options = {k: getattr(args, k) for k in ("mapping", "sidecar", "bore", "position_scale")
+    if args.delimiter == "tab":
+        args.delimiter = "\t"
+    if args.decimal == ".":
+        args.decimal = None  # the default: an option only csv takes
+    options = {k: getattr(args, k) for k in ("mapping", "sidecar", "bore", "position_scale",
+                                             "units", "drop", "delimiter", "decimal")
                if getattr(args, k) is not None}
     IMPORTERS.get(args.kind)  # an unknown kind first: it decides which options apply
-    if args.kind == "mat" and "mapping" not in options:
-        raise FcompError("import mat: --map COLUMN=VARIABLE,... is required (t at least)")
+    if args.kind in ("mat", "csv") and "mapping" not in options:
+        raise FcompError(f"import {args.kind}: --map COLUMN=EXPR,... is required (t at least)")
     if args.bore is not None and not 0 < args.bore <= 2.0:
         raise FcompError(f"--bore {args.bore:g}: must be a positive length in metres "
                          "(e.g. 0.025 for 25 mm)")

@@ -26,9 +26,7 @@ counted, never dropped.
 from __future__ import annotations
 
 import math
-import os
 from collections.abc import Callable, Mapping, Sequence
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field, replace
 from typing import Any
 
@@ -36,6 +34,7 @@ import numpy as np
 
 from controllers.harness import LoopConfig, run_closed_loop
 from fcomp.errors import FcompError
+from fcomp.parallel import run_tasks
 
 #: Friction parameters perturbed by the sweep (those a model lacks are ignored).
 MISMATCH_PARAMS: tuple[str, ...] = ("Fc", "Fs", "vs", "sigma0", "sigma1", "sigma2", "vb",
@@ -86,54 +85,8 @@ def run_jobs(jobs: Sequence[Job], *, workers: int | None = None, scheduler: str 
     progress
         Called with ``(done, total)`` as results arrive.
     """
-    jobs = list(jobs)
-    total = len(jobs)
-    if scheduler:
-        return _run_dask(jobs, scheduler, progress)
-    n = workers or os.cpu_count() or 1
-    if n < 1:
-        raise FcompError(f"workers must be >= 1, got {workers}")
-    if n == 1 or total <= 1:
-        out = []
-        for i, job in enumerate(jobs):
-            out.append(run_job(job))
-            if progress:
-                progress(i + 1, total)
-        return out
-    results: list[dict[str, Any] | None] = [None] * total
-    with ProcessPoolExecutor(max_workers=min(n, total)) as pool:
-        futures = {pool.submit(run_job, job): i for i, job in enumerate(jobs)}
-        from concurrent.futures import as_completed
-
-        for done, fut in enumerate(as_completed(futures), start=1):
-            results[futures[fut]] = fut.result()
-            if progress:
-                progress(done, total)
-    return [r for r in results if r is not None]
-
-
-def _run_dask(jobs: list[Job], scheduler: str,
-              progress: Callable[[int, int], None] | None) -> list[dict[str, Any]]:
-    try:
-        from distributed import Client, as_completed
-    except ImportError:
-        raise FcompError("a Dask scheduler was given but dask.distributed is not installed "
-                         "(pip install 'fcomp[distributed]')") from None
-    try:
-        client = Client(scheduler, timeout=10)
-    except (OSError, TimeoutError) as exc:
-        raise FcompError(f"cannot connect to the Dask scheduler {scheduler}: {exc}") from None
-    try:
-        futures = client.map(run_job, jobs, pure=False)
-        index = {f.key: i for i, f in enumerate(futures)}
-        results: list[dict[str, Any] | None] = [None] * len(jobs)
-        for done, fut in enumerate(as_completed(futures), start=1):
-            results[index[fut.key]] = fut.result()
-            if progress:
-                progress(done, len(jobs))
-        return [r for r in results if r is not None]
-    finally:
-        client.close()
+    return run_tasks(run_job, list(jobs), workers=workers, scheduler=scheduler,
+                     progress=progress)
 
 
 @dataclass(frozen=True)
@@ -228,4 +181,34 @@ def distributions(results: Sequence[Mapping[str, Any]],
     return out
 
 
-__all__ = ["MISMATCH_PARAMS", "Job", "Sweep", "distributions", "run_job", "run_jobs"]
+#: Fewest draws a box plot (quartiles, 10-90 % whiskers) is drawn from; fewer: the points.
+MIN_BOX_DRAWS = 20
+
+
+def draw_distribution(ax: Any, dist: Mapping[str, Any], order: Sequence[str],
+                      metric: str = "rms_error", scale: float = 1.0) -> str:
+    """Draw each controller's ``metric`` over the draws on ``ax`` (log scale): box plots when
+    every controller has at least :data:`MIN_BOX_DRAWS` values, else every value as a point
+    (a box of three draws would invent quartiles). Returns ``"box"`` or ``"points"``."""
+    names = [c for c in order if c in dist and dist[c][metric]["values"]]
+    values = [np.asarray(dist[c][metric]["values"]) * scale for c in names]
+    pos = np.arange(1, len(names) + 1)
+    box = bool(values) and min(v.size for v in values) >= MIN_BOX_DRAWS
+    if box:
+        ax.boxplot(values, positions=pos, whis=(10, 90), showfliers=True)
+    else:
+        rng = np.random.default_rng(0)  # a fixed jitter: the figure is reproducible
+        for x, v in zip(pos, values, strict=True):
+            ax.plot(x + rng.uniform(-0.12, 0.12, v.size), v, "o", ms=4, alpha=0.75,
+                    color="#2356a8")
+            if v.size:
+                ax.plot([x - 0.25, x + 0.25], [np.median(v)] * 2, "-", color="0.2", lw=1.2)
+    ax.set_xticks(pos, names, rotation=30, fontsize=8)
+    ax.set_xlim(0.4, len(names) + 0.6)
+    ax.set_yscale("log")
+    ax.grid(alpha=0.3)
+    return "box" if box else "points"
+
+
+__all__ = ["MIN_BOX_DRAWS", "MISMATCH_PARAMS", "Job", "Sweep", "distributions",
+           "draw_distribution", "run_job", "run_jobs"]

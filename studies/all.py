@@ -37,7 +37,8 @@ class AllStudies(Study):
             bar.set_postfix_str(name)
             study = STUDIES.get(name)
             sub = StudyConfig(out=config.out / name, workdir=out.directory / name,
-                              fast=config.fast,
+                              fast=config.fast, scheduler=config.scheduler,
+                              workers=config.workers, progress=config.progress,
                               command=f"(part of) {config.command}" if config.command else None)
             start = time.perf_counter()
             try:

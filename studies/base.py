@@ -62,6 +62,14 @@ class StudyConfig:
         a study run inside another's staging folder writes there directly).
     out_label
         How messages name ``out`` (the command line gives its option, ``--out``).
+    scheduler
+        Address of a Dask distributed scheduler: the study's independent jobs
+        (closed-loop runs, candidate refits) run on its workers
+        (:mod:`fcomp.parallel`); the results are those of a local run.
+    workers
+        Local worker processes (default: the study's own choice).
+    progress
+        Show progress bars on a terminal.
     """
 
     out: Path
@@ -69,6 +77,9 @@ class StudyConfig:
     command: str | None = None
     workdir: Path | None = None
     out_label: str = "out"
+    scheduler: str | None = None
+    workers: int | None = None
+    progress: bool = True
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "out", Path(self.out))
@@ -82,13 +93,14 @@ class StudyConfig:
             return config
         if not isinstance(config, Mapping):
             raise FcompError(f"study config must be a mapping, got {type(config).__name__}")
-        unknown = set(config) - {"out", "fast", "command"}
+        unknown = set(config) - {"out", "fast", "command", "scheduler", "workers"}
         if unknown:
             raise FcompError(f"study config: unknown key(s) {', '.join(sorted(unknown))}")
         if "out" not in config:
             raise FcompError("study config: 'out' (output directory) is required")
         return cls(out=Path(config["out"]), fast=bool(config.get("fast", False)),
-                   command=config.get("command"))
+                   command=config.get("command"), scheduler=config.get("scheduler"),
+                   workers=config.get("workers"))
 
     def as_dict(self) -> dict[str, Any]:
         return {"out": str(self.out), "fast": self.fast, "command": self.command}

@@ -22,9 +22,11 @@ Outputs:
   distributions), and the MPC step time beside do-mpc where do-mpc is
   installed (``pip install 'fcomp[bench]'``; ``benchmarks/bench_mpc.py``).
 
-The runs go to a local process pool (2 workers by default; ``FCOMP_WORKERS``)
-or, if ``FCOMP_DASK_SCHEDULER`` holds a scheduler address, to that Dask
-cluster.
+The runs go to a local process pool (2 workers by default; ``fcomp study
+--workers N``, or ``FCOMP_WORKERS``) or to a Dask cluster (``fcomp study
+--scheduler ADDRESS``, or ``FCOMP_DASK_SCHEDULER``), with a progress bar on a
+terminal. The Monte Carlo sweep uses :data:`FULL_DRAWS` draws in full mode
+(:data:`FAST_DRAWS` in fast mode, drawn as points rather than box plots).
 """
 
 from __future__ import annotations
@@ -38,8 +40,9 @@ import numpy as np
 from controllers import CONTROLLERS
 from controllers.harness import DEFAULT_MISMATCH, LoopConfig
 from controllers.plant_model import PLANT_SETTINGS
-from controllers.robustness import Job, Sweep, distributions, run_jobs
+from controllers.robustness import Job, Sweep, distributions, draw_distribution, run_jobs
 from controllers.tasks import TASKS
+from fcomp.parallel import progress_bar
 from studies.base import Study, StudyConfig, StudyOutput
 
 PLANTS = ("hydraulic", "pneumatic")
@@ -51,13 +54,31 @@ SUMMARY_FIELDS = ("rms_error", "max_error", "steady_state_error", "solve_time_me
                   "solve_time_max")
 
 
-def _workers() -> int:
+#: Monte Carlo draws per plant: full mode (enough for quantiles and box plots) and fast mode.
+FULL_DRAWS = 20
+FAST_DRAWS = 3
+
+
+def _workers(config: StudyConfig) -> int:
+    if config.workers is not None:
+        return config.workers
     raw = os.environ.get("FCOMP_WORKERS", "")
     return int(raw) if raw.isdigit() and int(raw) > 0 else min(2, os.cpu_count() or 1)
 
 
-def _scheduler() -> str | None:
-    return os.environ.get("FCOMP_DASK_SCHEDULER") or None
+def _scheduler(config: StudyConfig) -> str | None:
+    return config.scheduler or os.environ.get("FCOMP_DASK_SCHEDULER") or None
+
+
+def _ticker(bar: Any) -> Any:
+    """``progress(done, total)`` of one batch of runs, advancing ``bar`` by one per run."""
+    seen = [0]
+
+    def tick(done: int, total: int) -> None:
+        bar.update(done - seen[0] if done >= seen[0] else done)
+        seen[0] = done if done < total else 0
+
+    return tick
 
 
 class CompensatorsStudy(Study):
@@ -72,14 +93,21 @@ class CompensatorsStudy(Study):
         fast = config.fast
         jobs = [Job(c, t, LoopConfig(plant=p, fast=fast), keep_signals=True)
                 for p in PLANTS for t in TASK_ORDER for c in CONTROLLER_ORDER]
-        runs = run_jobs(jobs, workers=_workers(), scheduler=_scheduler())
-        results = [self._row(r) for r in runs]
-        sweeps = {p: Sweep(plant=p, samples=3 if fast else 12, fast=True,
+        sweeps = {p: Sweep(plant=p, samples=FAST_DRAWS if fast else FULL_DRAWS, fast=True,
                            controllers=CONTROLLER_ORDER) for p in PLANTS}
-        robust = {}
-        for p, sw in sweeps.items():
-            robust[p] = distributions(run_jobs(sw.jobs(), workers=_workers(),
-                                               scheduler=_scheduler()))
+        sweep_jobs = {p: sw.jobs() for p, sw in sweeps.items()}
+        bar = progress_bar("compensators", len(jobs) + sum(map(len, sweep_jobs.values())),
+                           enabled=config.progress)
+        tick = _ticker(bar)
+        try:
+            runs = run_jobs(jobs, workers=_workers(config), scheduler=_scheduler(config),
+                            progress=tick)
+            robust = {p: distributions(run_jobs(js, workers=_workers(config),
+                                                scheduler=_scheduler(config), progress=tick))
+                      for p, js in sweep_jobs.items()}
+        finally:
+            bar.close()
+        results = [self._row(r) for r in runs]
         timing = self._timing(runs)
         bench = self._do_mpc(fast)
         verdict = self._verdict(results)
@@ -267,7 +295,8 @@ class CompensatorsStudy(Study):
             f"parameter of the controllers' model multiplied by `exp(N(0, {sw.spread}^2))`, "
             f"sensor noise scaled by a factor uniform in {list(sw.noise)}; every controller "
             "sees the same draws. Runs on a process pool, or a Dask cluster "
-            "(`FCOMP_DASK_SCHEDULER`).")
+            "(`fcomp study compensators --scheduler ADDRESS`); `fcomp sweep` runs such sweeps "
+            "and grids on their own.")
         rows = []
         for p, dist in robust.items():
             for c in CONTROLLER_ORDER:
@@ -284,26 +313,36 @@ class CompensatorsStudy(Study):
         fig, axes = out.subplots(1, len(robust), figsize=(10, 3.8))
         axes = np.atleast_1d(axes)
         for ax, (p, dist) in zip(axes, robust.items(), strict=True):
-            names = [c for c in CONTROLLER_ORDER if c in dist and dist[c]["rms_error"]["values"]]
-            ax.boxplot([np.asarray(dist[c]["rms_error"]["values"]) * 1e6 for c in names])
-            ax.set_xticks(range(1, len(names) + 1), names, rotation=30, fontsize=8)
-            ax.set_yscale("log")
+            shown = draw_distribution(ax, dist, CONTROLLER_ORDER, scale=1e6)
             ax.set_title(p, fontsize=9)
             ax.set_ylabel("RMS error [um]")
-            ax.grid(alpha=0.3)
         fig.tight_layout()
-        out.figure(fig, "robustness", "RMS tracking error over the Monte Carlo draws, per "
-                   "compensator (log scale).")
+        how = ("box: quartiles, whiskers: 10-90 %" if shown == "box" else
+               f"every draw as a point: {sw.samples} draws are too few for quantiles")
+        out.figure(fig, "robustness", f"RMS tracking error over the Monte Carlo draws, per "
+                   f"compensator (log scale; {how}).")
 
     @staticmethod
     def _benchmark(out: StudyOutput, timing: dict[str, Any], bench: dict[str, Any]) -> None:
         rep = out.report
         rep.section("Compute time: EKF and MPC steps")
-        rows = [[k, v["median_of_medians"] * 1e6, v["max"] * 1e3, v["fallbacks"]]
-                for k, v in timing.items()]
-        rep.table(["plant/controller", "median step [us]", "max step [ms]", "fallbacks"], rows,
+        rows, late = [], []
+        for k, v in timing.items():
+            period = 1.0 / PLANT_SETTINGS[k.split("/")[0]].control_rate
+            ok = v["max"] <= period
+            rows.append([k, v["median_of_medians"] * 1e6, v["max"] * 1e3, period * 1e3,
+                         "yes" if ok else "NO", v["fallbacks"]])
+            if not ok:
+                late.append(f"`{k}` {v['max'] * 1e3:.3g} ms > {period * 1e3:g} ms")
+        rep.table(["plant/controller", "median step [us]", "max step [ms]", "period [ms]",
+                   "real-time", "fallbacks"], rows,
                   caption="Controller step time in the closed-loop runs above (whole step: "
-                  "EKF + law/QP; wall clock on this machine).", digits=[None, 0, 2, 0])
+                  "EKF + law/QP; wall clock on this machine) against the sampling period of "
+                  "the loop.", digits=[None, 0, 2, 2, None, 0])
+        if late:
+            rep.note("Worst step longer than the sampling period -- not real-time on this "
+                     "machine, the run only works because the simulation waits: "
+                     + "; ".join(late) + ".", kind="bad")
         if not bench.get("available"):
             rep.note(bench.get("note", "do-mpc comparison not run"), kind="warn")
             return

@@ -228,17 +228,19 @@ class MissingPhysicsStudy(Study):
         real = FAST_REAL if config.fast else REAL
         options = FAST_OPTIONS if config.fast else OPTIONS
         record = FAST_RECORD if config.fast else RECORD
+        # a cluster runs the candidate refits (the results are the same; not in the summary)
+        cluster = {"scheduler": config.scheduler} if config.scheduler else {}
         bar = _progress(len(gen) + len(real))
         results: dict[str, Any] = {"generated": [], "real": []}
         diags: dict[str, Any] = {}
         for case in gen:
             bar.set_postfix_str(case.name)
-            res, diags[case.name] = run_generated(case, record, options)
+            res, diags[case.name] = run_generated(case, record, {**options, **cluster})
             results["generated"].append(res)
             bar.update()
         for rcase in real:
             bar.set_postfix_str(rcase.name)
-            res, diags[rcase.name] = run_real(rcase, options)
+            res, diags[rcase.name] = run_real(rcase, {**options, **cluster})
             results["real"].append(res)
             bar.update()
         bar.close()

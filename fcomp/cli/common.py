@@ -351,15 +351,6 @@ class Activity:
             sys.stderr.flush()
 
 
-def bar(label: str, total: int, *, enabled: bool = True, unit: str = "run") -> Any:
-    """A tqdm progress bar on stderr (terminal or not, as the diagnosis's), left off the
-    screen at the end; ``enabled=False`` gives one that shows nothing."""
-    from tqdm import tqdm
-
-    return tqdm(total=total, desc=label, unit=unit, file=sys.stderr, leave=False,
-                disable=not enabled, dynamic_ncols=True)
-
-
 def _clock(seconds: float) -> str:
     m, s = divmod(int(seconds), 60)
     h, m = divmod(m, 60)

@@ -66,13 +66,14 @@ records the step, so the error-fall chart shows it.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import math
 import multiprocessing
 import os
 import sys
 from collections.abc import Sequence
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures import Executor, ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -93,6 +94,7 @@ from fcomp.errors import FcompError
 from fcomp.identification.plausibility import FitWarning
 from fcomp.measurement import Measurement
 from fcomp.models import FrictionModel, make_model
+from fcomp.parallel import executor
 
 #: Largest one-sided p-value of a held-out fall that counts as significant.
 ACCEPT_P = 0.05
@@ -315,6 +317,9 @@ class Diagnosis:
         Most effects the search adds.
     n_jobs
         Processes refitting candidates in parallel (default: the CPU count, at most 4).
+    scheduler
+        Address of a Dask distributed scheduler: the candidate refits run on its
+        workers instead (:mod:`fcomp.parallel`; the results are the same).
     max_nfev
         Evaluation budget of each refit.
     max_samples
@@ -372,6 +377,7 @@ class Diagnosis:
         cutoff_hz: float | None = None,
         max_steps: int = 6,
         n_jobs: int | None = None,
+        scheduler: str | None = None,
         max_nfev: int = 60,
         max_samples: int = 40_000,
         progress: bool = False,
@@ -385,6 +391,7 @@ class Diagnosis:
         self.cutoff_hz = cutoff_hz
         self.max_steps = max_steps
         self.n_jobs = n_jobs
+        self.scheduler = scheduler
         self.max_nfev = max_nfev
         self.max_samples = max_samples
         self.progress = progress
@@ -414,7 +421,8 @@ class Diagnosis:
             heldout_pieces(self.split_.test, [e.start for e in self.data_.experiments],
                                    self.data_.scales.dt)
         self._bar = _progress(self.progress)
-        self._pool: ProcessPoolExecutor | None = None
+        self._pool: Executor | None = None
+        self._cluster = contextlib.ExitStack()
         self._fitting = True
         try:
             starts = catalogue.baseline_starts(model, self.data_, self.segmentation_,
@@ -446,6 +454,7 @@ class Diagnosis:
             if self._pool is not None:
                 self._pool.shutdown()
                 self._pool = None
+            self._cluster.close()
         self._conclude()
         return self
 
@@ -457,6 +466,7 @@ class Diagnosis:
         self._tick(f"baseline check: {other}")
         d = Diagnosis(other, effects=names, add=[], search=self.search, split=self.split,
                       cutoff_hz=self.cutoff_hz, max_steps=self.max_steps, n_jobs=self.n_jobs,
+                      scheduler=self.scheduler,
                       max_nfev=self.max_nfev, max_samples=self.max_samples,
                       check_baseline=False)
         try:
@@ -667,12 +677,14 @@ class Diagnosis:
             self._tick(prop.effect)
         return results
 
-    def _workers(self, jobs: int) -> ProcessPoolExecutor | None:
+    def _workers(self, jobs: int) -> Executor | None:
         """The diagnosis's process pool (``spawn``), started on first use within :meth:`fit`;
         None to run here (one job, one process, or a later :meth:`add_effect`)."""
         n_jobs = self.n_jobs if self.n_jobs is not None else min(os.cpu_count() or 1, 4)
-        if n_jobs < 2 or jobs < 2 or not getattr(self, "_fitting", False):
+        if (n_jobs < 2 and not self.scheduler) or jobs < 2 or not getattr(self, "_fitting", False):
             return None
+        if self._pool is None and self.scheduler:
+            self._pool = self._cluster.enter_context(executor(self.scheduler))
         if self._pool is None:
             self._pool = ProcessPoolExecutor(max_workers=n_jobs,
                                              mp_context=multiprocessing.get_context("spawn"))

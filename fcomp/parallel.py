@@ -1,0 +1,131 @@
+"""Independent jobs run in parallel: local processes by default, or a Dask cluster.
+
+Every command that runs many independent jobs -- the closed-loop runs of
+``fcomp study compensators`` and ``fcomp sweep``, the fits of ``fcomp fit``
+over several records, the candidate refits of ``fcomp diagnose`` -- runs them
+through here:
+
+* **local processes** (default): a :class:`concurrent.futures.ProcessPoolExecutor`
+  with ``workers`` processes (default: the CPU count); one worker runs the jobs
+  in this process;
+* **an existing Dask distributed cluster** (``scheduler="tcp://host:8786"``,
+  the command line's ``--scheduler ADDRESS``): the jobs go to its workers
+  (started with ``dask scheduler`` / ``dask worker``, or by a cluster manager),
+  which must have fcomp installed. The cluster is only used, never started or
+  stopped here.
+
+A job is a picklable function and argument: it carries everything it needs,
+so a result does not depend on where it ran (the tests compare a cluster's
+results with the local ones). Results come back in the order of the jobs;
+``progress(done, total)`` is called as they arrive.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Iterator, Sequence
+from concurrent.futures import Executor, ProcessPoolExecutor, as_completed
+from contextlib import contextmanager
+from typing import Any, TypeVar
+
+from fcomp.errors import FcompError, term
+
+T = TypeVar("T")
+R = TypeVar("R")
+
+#: Seconds to wait for a Dask scheduler to answer.
+CONNECT_TIMEOUT = 10.0
+
+
+def check_scheduler(address: str | None) -> str | None:
+    """``address`` as a Dask scheduler address (``tcp://host:port``, ``host:port``), checked
+    for its form only; ``None`` stays ``None``."""
+    if address is None:
+        return None
+    text = address.strip()
+    if not text:
+        raise FcompError(f"{term('scheduler')}: no address given (an empty argument)")
+    rest = text.split("://", 1)[1] if "://" in text else text
+    if ":" not in rest and "/" not in rest:
+        raise FcompError(f"{term('scheduler')} {address}: give the scheduler's address with "
+                         "its port, e.g. tcp://127.0.0.1:8786")
+    return text
+
+
+@contextmanager
+def dask_client(address: str) -> Iterator[Any]:
+    """A :class:`distributed.Client` connected to the scheduler at ``address`` (closed at the
+    end); one clear line when Dask is missing or the scheduler does not answer."""
+    try:
+        from distributed import Client
+    except ImportError:
+        raise FcompError(f"{term('scheduler')} needs Dask distributed: pip install "
+                         "'fcomp[distributed]'") from None
+    try:
+        client = Client(address, timeout=CONNECT_TIMEOUT)
+    except (OSError, TimeoutError, ValueError) as exc:
+        raise FcompError(f"{term('scheduler')} {address}: cannot connect to the Dask "
+                         f"scheduler ({str(exc).splitlines()[0] if str(exc) else 'no answer'})"
+                         ) from None
+    try:
+        yield client
+    finally:
+        client.close()
+
+
+@contextmanager
+def executor(scheduler: str | None = None, workers: int | None = None
+             ) -> Iterator[Executor | None]:
+    """A :class:`concurrent.futures.Executor` for jobs: the Dask cluster's at ``scheduler``,
+    else a local process pool of ``workers`` (``None`` when one worker: run here)."""
+    if scheduler:
+        with dask_client(scheduler) as client:
+            yield client.get_executor(pure=False)
+        return
+    n = workers if workers is not None else (os.cpu_count() or 1)
+    if n < 1:
+        raise FcompError(f"workers must be a positive number, got {workers}")
+    if n == 1:
+        yield None
+        return
+    with ProcessPoolExecutor(max_workers=n) as pool:
+        yield pool
+
+
+def run_tasks(fn: Callable[[T], R], items: Sequence[T], *, workers: int | None = None,
+              scheduler: str | None = None,
+              progress: Callable[[int, int], None] | None = None) -> list[R]:
+    """``[fn(item) for item in items]``, run in parallel (see the module docstring)."""
+    items = list(items)
+    total = len(items)
+    results: list[Any] = [None] * total
+    if not scheduler and (total <= 1 or (workers or os.cpu_count() or 1) == 1):
+        for i, item in enumerate(items):
+            results[i] = fn(item)
+            if progress:
+                progress(i + 1, total)
+        return results
+    with executor(scheduler, min(workers or os.cpu_count() or 1, total)) as pool:
+        assert pool is not None
+        futures = {pool.submit(fn, item): i for i, item in enumerate(items)}
+        for done, fut in enumerate(as_completed(futures), start=1):
+            results[futures[fut]] = fut.result()
+            if progress:
+                progress(done, total)
+    return results
+
+
+def progress_bar(label: str, total: int, *, enabled: bool = True, unit: str = "run",
+                 tty_only: bool = True) -> Any:
+    """A tqdm progress bar on stderr, left off the screen at the end; shown only when
+    ``enabled`` (and, with ``tty_only``, stderr is a terminal)."""
+    import sys
+
+    from tqdm import tqdm
+
+    show = enabled and (sys.stderr.isatty() or not tty_only)
+    return tqdm(total=total, desc=label, unit=unit, file=sys.stderr, leave=False,
+                disable=not show, dynamic_ncols=True)
+
+
+__all__ = ["check_scheduler", "dask_client", "executor", "progress_bar", "run_tasks"]

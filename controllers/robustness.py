@@ -18,7 +18,9 @@ executed by :func:`run_jobs`
   :class:`distributed.LocalCluster` or a cluster started with
   ``dask scheduler`` / ``dask worker`` on other machines.
 
-A run that fails (a plant integration that does not converge, a loop gone
+A grid (:class:`Grid`) runs every combination of given mismatch factors and
+of the friction models the controllers are built with instead (``fcomp
+sweep --grid``). A run that fails (a plant integration that does not converge, a loop gone
 unstable) is returned with ``status = "failed: ..."`` and no metrics: it is
 counted, never dropped.
 """
@@ -58,10 +60,12 @@ def run_job(job: Job) -> dict[str, Any]:
     out: dict[str, Any] = {
         "controller": job.controller, "task": job.task, "plant": job.config.plant,
         "sample": job.sample, "noise": job.config.noise, "mismatch": dict(job.config.mismatch),
+        "friction": job.config.friction, "controller_friction": job.config.controller_friction,
     }
     try:
         res = run_closed_loop(job.controller, job.task, job.config, job.options)
-    except FcompError as exc:  # ConvergenceError included: an unstable or failed run
+    except (FcompError, ValueError, ArithmeticError) as exc:  # ConvergenceError included: an
+        # unstable or failed run, or a controller model the factors made invalid (Fc > Fs)
         out.update(status=f"failed: {str(exc).splitlines()[0]}", metrics=None)
         return out
     out.update(status="ok", metrics=res.metrics.as_dict(), description=res.description)
@@ -155,6 +159,66 @@ class Sweep:
         return out
 
 
+@dataclass(frozen=True)
+class Grid:
+    """A parameter grid: every combination of mismatch factors and controller friction models.
+
+    Attributes
+    ----------
+    plant, task, controllers
+        As for :class:`Sweep`.
+    factors
+        Friction parameter -> the factors on the controller model's value to try
+        (:data:`MISMATCH_PARAMS`); every combination is a grid point.
+    controller_frictions
+        The friction models the controllers are built with (friction-model
+        mismatch: the plant keeps ``base.friction``).
+    noise, seed, fast, base
+        Sensor-noise factor, seed of the sensor noise, fast task durations, the
+        configuration the points modify.
+    """
+
+    plant: str = "hydraulic"
+    task: str = "low-velocity-ramp"
+    controllers: tuple[str, ...] = ("pid", "pid-ff", "lugre-observer", "ekf", "mpc")
+    factors: Mapping[str, tuple[float, ...]] = field(default_factory=dict)
+    controller_frictions: tuple[str, ...] = ()
+    noise: float = 1.0
+    seed: int = 2026
+    fast: bool = True
+    base: LoopConfig = field(default_factory=LoopConfig)
+
+    def __post_init__(self) -> None:
+        for k, vals in self.factors.items():
+            if k not in MISMATCH_PARAMS:
+                raise FcompError(f"grid: {k!r} is not a friction parameter the controllers' "
+                                 f"model is perturbed in ({', '.join(MISMATCH_PARAMS)})")
+            if not vals or any(not (math.isfinite(v) and v > 0) for v in vals):
+                raise FcompError(f"grid: {k}: factors must be positive numbers, got "
+                                 f"{list(vals)}")
+        if not self.factors and not self.controller_frictions:
+            raise FcompError("grid: give mismatch factors or controller friction models")
+
+    def points(self) -> list[tuple[dict[str, float], str]]:
+        """``(mismatch factors, controller friction)`` of every grid point, in order."""
+        import itertools
+
+        names = list(self.factors)
+        combos = list(itertools.product(*(self.factors[n] for n in names))) or [()]
+        frictions = self.controller_frictions or (self.base.controller_friction,)
+        return [({**dict(self.base.mismatch), **dict(zip(names, c, strict=True))}, f)
+                for f in frictions for c in combos]
+
+    def jobs(self) -> list[Job]:
+        """One job per (grid point, controller)."""
+        out = []
+        for i, (mismatch, friction) in enumerate(self.points()):
+            cfg = replace(self.base, plant=self.plant, mismatch=mismatch, noise=self.noise,
+                          seed=self.seed, fast=self.fast, controller_friction=friction)
+            out.extend(Job(c, self.task, cfg, sample=i) for c in self.controllers)
+        return out
+
+
 def distributions(results: Sequence[Mapping[str, Any]],
                   metrics: Sequence[str] = ("rms_error", "max_error", "steady_state_error")
                   ) -> dict[str, dict[str, Any]]:
@@ -210,5 +274,5 @@ def draw_distribution(ax: Any, dist: Mapping[str, Any], order: Sequence[str],
     return "box" if box else "points"
 
 
-__all__ = ["MIN_BOX_DRAWS", "MISMATCH_PARAMS", "Job", "Sweep", "distributions",
+__all__ = ["MIN_BOX_DRAWS", "MISMATCH_PARAMS", "Grid", "Job", "Sweep", "distributions",
            "draw_distribution", "run_job", "run_jobs"]

@@ -25,6 +25,7 @@ import shlex
 from fcomp.cli import common
 from fcomp.cli.common import emit_result, finite_float, json_target, result_text
 from fcomp.errors import FcompError
+from fcomp.parallel import check_scheduler
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -60,6 +61,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--no-baseline-check", action="store_true",
                    help="do not diagnose again from a baseline of the other kind (static <-> "
                    "dynamic) to say whether the answer depends on the baseline")
+    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="run the candidate refits on the Dask distributed scheduler at ADDRESS "
+                   "(tcp://host:8786) instead of local processes (--jobs); the same results")
     p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
     p.set_defaults(func=run)
 
@@ -120,6 +124,7 @@ def run(args: argparse.Namespace) -> int:
     diag = Diagnosis(args.baseline, effects=candidates, add=args.add,
                      search=not args.no_search, split=args.split, cutoff_hz=args.cutoff,
                      max_steps=args.max_steps, n_jobs=args.jobs,
+                     scheduler=check_scheduler(args.scheduler),
                      progress=not args.no_progress,
                      check_baseline=not args.no_baseline_check)
     diag.fit(data)

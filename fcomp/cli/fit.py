@@ -1,4 +1,5 @@
-"""``fcomp fit DATA.csv --model NAME [--offset] [--json OUT]`` -- identify a friction model.
+"""``fcomp fit DATA.csv [DATA2.csv ...] --model NAME [--offset] [--json OUT]`` -- identify a
+friction model.
 
 Prints a table of estimates with standard errors and confidence intervals
 and the RMS force error (N). Where the sidecar gives no ``rig.mass`` and the
@@ -12,6 +13,9 @@ parameters not determined or trading off) are printed under the table, one
 ``fcomp: warning: ...`` line each, and listed in the JSON's ``warnings``. A fit that does not converge
 says so on one line and exits with status 2 (no JSON is written).
 ``--set NAME=VALUE`` gives a start value, ``--fix NAME=VALUE`` holds a parameter.
+Several records are fitted one by one, each on its own, in local processes
+(``--jobs N``) or on a Dask cluster (``--scheduler ADDRESS``); the JSON is then
+``{"model", "records": [{"data", "params", "stderr", "rms", ...}, ...], "warnings"}``.
 ``--report DIR`` draws the fit into ``DIR/report.html``: the estimates, the
 measured and fitted force, and the fitted model compared with the record as
 ``fcomp compare`` does (errors per regime, residual against every feature,
@@ -41,6 +45,7 @@ from fcomp.cli.common import (
     with_warnings,
 )
 from fcomp.errors import FcompError
+from fcomp.parallel import check_scheduler
 
 if TYPE_CHECKING:
     from fcomp.identification import FrictionFit
@@ -50,7 +55,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("fit", help="identify a friction model from a measurement, with "
                        "standard errors", description=__doc__,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("data", metavar="DATA.csv", help="measurement (CSV + TOML sidecar)")
+    p.add_argument("data", nargs="+", metavar="DATA.csv",
+                   help="measurement (CSV + TOML sidecar); several files are fitted one by "
+                   "one, in parallel (--jobs, --scheduler)")
     p.add_argument("--model", required=True, help="friction model name (fcomp list models)")
     p.add_argument("--offset", action="store_true",
                    help="fit a constant force offset too (params.offset, N)")
@@ -87,6 +94,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    "estimates, the fit drawn, and the fitted model compared with the record "
                    "(errors per regime, residual against every feature, loops, worst windows)")
     p.add_argument("--no-progress", action="store_true", help="no progress line on stderr")
+    p.add_argument("--jobs", type=int, default=None, metavar="N",
+                   help="several records: local processes fitting them (default: CPU count)")
+    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="several records: fit them on the Dask distributed scheduler at "
+                   "ADDRESS (tcp://host:8786) instead of local processes")
     p.set_defaults(func=run)
 
 
@@ -122,7 +134,13 @@ def run(args: argparse.Namespace) -> int:
         raise FcompError(f"--confidence must be a level between 0 and 1 (e.g. 0.95), "
                          f"got {args.confidence:g}")
     report = report_dir(args.report)
-    guard_outputs([args.data], args.effects, [("--json", out)], [("--report", report, "report")])
+    scheduler = check_scheduler(args.scheduler)
+    if args.jobs is not None and args.jobs < 1:
+        raise FcompError(f"--jobs must be a positive integer, got {args.jobs}")
+    if report is not None and len(args.data) > 1:
+        raise FcompError("--report draws one fit: give one record (or fit the records one "
+                         "by one)")
+    guard_outputs(args.data, args.effects, [("--json", out)], [("--report", report, "report")])
     model = build_model(args.model, args.params, args)
     initial = parse_assignments(args.set)
     fixed = parse_assignments(args.fix, "--fix")
@@ -131,12 +149,17 @@ def run(args: argparse.Namespace) -> int:
         raise FcompError(f"{both[0]}: given both --set (a start value) and --fix (held); "
                          "choose one")
     free = name_list(args.free, "--free")
-    data = Measurement.read(args.data)
-    warn_sidecar(data)
-    fit = FrictionFit(model, offset=args.offset, mass=args.mass, free=free, fixed=fixed,
-                      directional=args.directional, initial=initial, method=args.method,
-                      v_min=args.v_min, cutoff_hz=args.cutoff, confidence=args.confidence,
-                      max_nfev=args.max_nfev)
+    options = {"offset": args.offset, "mass": args.mass, "free": free, "fixed": fixed,
+               "directional": args.directional, "initial": initial, "method": args.method,
+               "v_min": args.v_min, "cutoff_hz": args.cutoff, "confidence": args.confidence,
+               "max_nfev": args.max_nfev}
+    records = [Measurement.read(p) for p in args.data]
+    for d in records:
+        warn_sidecar(d)
+    if len(records) > 1:
+        return _run_many(args, model, options, out, scheduler)
+    data = records[0]
+    fit = FrictionFit(model, **options)
     with Activity(f"fit {args.model}", enabled=not args.no_progress):
         fit.fit(data)
     for w in fit.warnings_:  # printed under the table, recorded in the JSON
@@ -145,6 +168,47 @@ def run(args: argparse.Namespace) -> int:
     if report is not None:
         _write_report(fit, data, report, args)
     emit_result(result_text(doc), args.json, out, _table(fit))
+    return 0
+
+
+def fit_record(job: tuple[str, Any, dict[str, Any]]) -> dict[str, Any]:
+    """Fit one record: ``(path, model, FrictionFit options)`` -> its JSON (a picklable job,
+    run in a local process or on a Dask worker); a fit that fails gives ``{"error"}``."""
+    from fcomp.identification import FrictionFit
+    from fcomp.measurement import Measurement
+
+    path, model, options = job
+    try:
+        fit = FrictionFit(model, **options).fit(Measurement.read(path))
+    except FcompError as exc:
+        return {"data": path, "error": str(exc).splitlines()[0]}
+    return {"data": path, **fit.to_dict()}
+
+
+def _run_many(args: argparse.Namespace, model: Any, options: dict[str, Any],
+              out: Path | None, scheduler: str | None) -> int:
+    """Several records, fitted one by one in parallel; JSON ``{"model", "records": [...]}``."""
+    from fcomp.parallel import progress_bar, run_tasks
+
+    jobs = [(path, model, options) for path in args.data]
+    bar = progress_bar(f"fit {args.model}", len(jobs), enabled=not args.no_progress,
+                       unit="record")
+    try:
+        docs = run_tasks(fit_record, jobs, workers=args.jobs, scheduler=scheduler,
+                         progress=lambda done, total: bar.update(done - bar.n))
+    finally:
+        bar.close()
+    failed = [d for d in docs if "error" in d]
+    if failed:
+        raise FcompError(f"{failed[0]['data']}: {failed[0]['error']}"
+                         + (f" (and {len(failed) - 1} more record(s))" if len(failed) > 1 else ""))
+    for d in docs:
+        for w in d["warnings"]:
+            warn(w["code"], f"{d['data']}: {w['message']}", w["parameter"])
+    doc = with_warnings({"model": docs[0]["model"], "records": docs})
+    lines = [f"{d['data']}: rms {d['rms']:.4g} N; " + ", ".join(
+        f"{k} {v:.4g}" for k, v in d["params"].items()) for d in docs]
+    emit_result(result_text(doc), args.json, out, "\n".join(lines))
     return 0
 
 

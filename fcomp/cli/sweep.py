@@ -1,0 +1,255 @@
+"""``fcomp sweep [--plant P] [--task T] [--controllers C,...] [--samples N | --grid
+PARAM=F1,F2,...] [--json OUT] [--report DIR] [--scheduler ADDRESS]`` -- Monte Carlo and
+parameter grids over compensators and friction-model mismatch.
+
+Every controller (``pid``, ``pid-ff``, ``lugre-observer``, ``ekf``, ``mpc``) runs
+the task (``slow-sine``, ``steps``, ``low-velocity-ramp``, ``seed002-sine``) on
+the plant (``hydraulic``, ``pneumatic``) in closed loop, the plant integrating
+its true friction (``--friction``, default ``nmlgm``) while the controllers
+know another:
+
+* **Monte Carlo** (default): ``--samples`` draws; in each, every friction
+  parameter of the controllers' model is multiplied by ``exp(N(0, spread^2))``
+  and the sensor noise by a factor uniform in ``--noise LO,HI``; every
+  controller sees the same draws;
+* **grid** (``--grid PARAM=F1,F2,...``, repeatable, and/or
+  ``--controller-friction A,B,...``): every combination of the factors on the
+  controllers' model parameters and of the friction models the controllers
+  are built with (friction-model mismatch).
+
+The runs are independent jobs: local processes by default (``--workers``),
+or the Dask distributed cluster at ``--scheduler ADDRESS``; the results are
+the same. JSON: ``{"mode", "plant", "task", "controllers", "runs": [{"controller",
+"sample", "mismatch", "noise", "controller_friction", "status", "metrics"}, ...],
+"distributions" (Monte Carlo) | "points" (grid), "warnings"}`` (errors in m,
+times in s); ``--report DIR`` draws them.
+"""
+
+from __future__ import annotations
+
+import argparse
+import shlex
+from typing import Any
+
+from fcomp.cli import common
+from fcomp.cli.common import emit_result, finite_float, json_target, report_dir, result_text
+from fcomp.errors import FcompError
+
+#: Metrics of a run that do not depend on the machine (solve times do).
+METRICS = ("rms_error", "max_error", "steady_state_error")
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("sweep", help="Monte Carlo and parameter grids over compensators and "
+                       "friction-model mismatch (local processes or a Dask cluster)",
+                       description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--plant", default="hydraulic", help="hydraulic (default) or pneumatic")
+    p.add_argument("--task", default="low-velocity-ramp",
+                   help="slow-sine, steps, low-velocity-ramp (default), seed002-sine")
+    p.add_argument("--controllers", default="pid,pid-ff,lugre-observer,ekf,mpc",
+                   metavar="C1,C2,...", help="controllers to run (default: all five)")
+    p.add_argument("--samples", type=int, default=20, metavar="N",
+                   help="Monte Carlo draws (default 20)")
+    p.add_argument("--spread", type=finite_float, default=0.3,
+                   help="log-normal spread of the mismatch factors (default 0.3)")
+    p.add_argument("--noise", default="0.5,3", metavar="LO,HI",
+                   help="range of the sensor-noise factor (default 0.5,3)")
+    p.add_argument("--grid", action="append", default=[], metavar="PARAM=F1,F2,...",
+                   help="a grid instead of Monte Carlo: factors on one friction parameter of "
+                   "the controllers' model (Fc, Fs, vs, sigma0, sigma1, sigma2, ...); repeatable")
+    p.add_argument("--controller-friction", default=None, metavar="M1,M2,...",
+                   help="grid over the friction models the controllers are built with "
+                   "(e.g. lugre,nmlgm; friction-model mismatch)")
+    p.add_argument("--friction", default="nmlgm",
+                   help="the plant's true friction model (default nmlgm)")
+    p.add_argument("--seed", type=int, default=2026, help="seed of the draws and the noise")
+    p.add_argument("--full", action="store_true",
+                   help="full task durations (default: the fast ones)")
+    p.add_argument("--workers", type=int, default=None, metavar="N",
+                   help="local worker processes (default: CPU count)")
+    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="run on the Dask distributed scheduler at ADDRESS (tcp://host:8786)")
+    p.add_argument("--json", metavar="OUT", default=None,
+                   help="write the result as JSON to OUT ('-' for standard output)")
+    p.add_argument("--report", metavar="DIR", default=None,
+                   help="write a self-contained HTML report to DIR/report.html")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
+    p.set_defaults(func=run)
+
+
+def _factors(items: list[str]) -> dict[str, tuple[float, ...]]:
+    out: dict[str, tuple[float, ...]] = {}
+    for item in items:
+        if "=" not in item:
+            raise FcompError(f"--grid {item!r}: expected PARAM=F1,F2,...")
+        name, values = (s.strip() for s in item.split("=", 1))
+        if name in out:
+            raise FcompError(f"--grid {name}: given twice")
+        try:
+            out[name] = tuple(common.finite_float(v) for v in values.split(",") if v.strip())
+        except argparse.ArgumentTypeError as exc:
+            raise FcompError(f"--grid {item!r}: {exc}") from None
+    return out
+
+
+def _plan(args: argparse.Namespace) -> Any:
+    """The :class:`~controllers.robustness.Sweep` or :class:`~controllers.robustness.Grid`."""
+    from controllers import CONTROLLERS
+    from controllers.harness import LoopConfig
+    from controllers.robustness import Grid, Sweep
+    from controllers.tasks import TASKS
+    from fcomp.models import MODELS
+
+    if args.plant not in ("hydraulic", "pneumatic"):
+        raise FcompError(f"--plant {args.plant!r}: the closed loops run on hydraulic or pneumatic")
+    TASKS.get(args.task)
+    controllers = tuple(common.name_list(args.controllers, "--controllers") or ())
+    for c in controllers:
+        CONTROLLERS.get(c)
+    MODELS.get(args.friction)
+    base = LoopConfig(plant=args.plant, friction=args.friction)
+    frictions = tuple(common.name_list(args.controller_friction, "--controller-friction") or ())
+    for f in frictions:
+        MODELS.get(f)
+    if args.grid or frictions:
+        return Grid(plant=args.plant, task=args.task, controllers=controllers,
+                    factors=_factors(args.grid), controller_frictions=frictions,
+                    seed=args.seed, fast=not args.full, base=base)
+    try:
+        lo, hi = (common.finite_float(v) for v in args.noise.split(","))
+    except (ValueError, argparse.ArgumentTypeError):
+        raise FcompError(f"--noise {args.noise!r}: expected LO,HI (two numbers)") from None
+    return Sweep(plant=args.plant, task=args.task, controllers=controllers,
+                 samples=args.samples, spread=args.spread, noise=(lo, hi), seed=args.seed,
+                 fast=not args.full, base=base)
+
+
+def summary(doc: dict[str, Any]) -> str:
+    lines = [f"{doc['mode']} on {doc['plant']}, task {doc['task']}: {len(doc['runs'])} runs"]
+    if doc["mode"] == "monte-carlo":
+        for c, d in doc["distributions"].items():
+            r = d["rms_error"]
+            lines.append(f"  {c:16s} RMS median {r['median'] * 1e6:9.3g} um (10-90 %: "
+                         f"{r['p10'] * 1e6:.3g}-{r['p90'] * 1e6:.3g} um), {d['failed']} of "
+                         f"{d['runs']} failed")
+    else:
+        for pt in doc["points"]:
+            errs = ", ".join(f"{c} {v * 1e6:.3g}" if v is not None else f"{c} failed"
+                             for c, v in pt["rms_error"].items())
+            lines.append(f"  point {pt['point']} {pt['label']}: RMS [um] {errs}")
+    return "\n".join(lines)
+
+
+def result(plan: Any, runs: list[dict[str, Any]]) -> dict[str, Any]:
+    """The JSON of a sweep (machine-dependent timings left out of the runs' metrics)."""
+    from controllers.robustness import Grid, distributions
+
+    clean = [{**r, "metrics": None if r["metrics"] is None else
+              {k: v for k, v in r["metrics"].items() if not k.startswith("solve_time")}}
+             for r in runs]
+    doc: dict[str, Any] = {"mode": "grid" if isinstance(plan, Grid) else "monte-carlo",
+                           "plant": plan.plant, "task": plan.task,
+                           "controllers": list(plan.controllers), "fast": plan.fast,
+                           "runs": clean, "units": {"errors": "m"}}
+    if isinstance(plan, Grid):
+        doc["grid"] = {k: list(v) for k, v in plan.factors.items()}
+        doc["controller_frictions"] = list(plan.controller_frictions)
+        points = []
+        for i, (mismatch, friction) in enumerate(plan.points()):
+            mine = [r for r in clean if r["sample"] == i]
+            label = ", ".join([f"{k}x{mismatch[k]:g}" for k in plan.factors]
+                              + ([f"controller model {friction}"]
+                                 if plan.controller_frictions else []))
+            points.append({"point": i, "label": label, "mismatch": mismatch,
+                           "controller_friction": friction,
+                           "rms_error": {r["controller"]: (r["metrics"] or {}).get("rms_error")
+                                         for r in mine}})
+        doc["points"] = points
+    else:
+        doc.update(samples=plan.samples, spread=plan.spread, noise=list(plan.noise),
+                   seed=plan.seed, distributions=distributions(clean, METRICS))
+    return doc
+
+
+def report(doc: dict[str, Any], command: str | None) -> Any:
+    """The sweep's :class:`~fcomp.report.Report`: the distributions (Monte Carlo) or the
+    error at every grid point."""
+    import numpy as np
+    from matplotlib.figure import Figure
+
+    from controllers.robustness import draw_distribution
+    from fcomp.report import Report
+
+    rep = Report(f"Sweep: {doc['mode']} on {doc['plant']}, task {doc['task']}",
+                 subtitle=f"{len(doc['runs'])} closed-loop runs of "
+                 f"{', '.join(doc['controllers'])}", command=command,
+                 config={k: doc[k] for k in ("mode", "plant", "task", "fast")})
+    failed = sum(r["status"] != "ok" for r in doc["runs"])
+    if failed:
+        rep.note(f"{failed} run(s) failed (counted, not dropped): see the table.", kind="warn")
+    fig = Figure(figsize=(8.0, 3.8))
+    ax = fig.add_subplot()
+    if doc["mode"] == "monte-carlo":
+        shown = draw_distribution(ax, doc["distributions"], doc["controllers"], scale=1e6)
+        ax.set_ylabel("RMS tracking error (um)")
+        fig.tight_layout()
+        rep.figure(fig, f"RMS tracking error over the {doc['samples']} draws, per controller "
+                   f"(log scale; {'box: quartiles, whiskers 10-90 %' if shown == 'box' else 'every draw a point, line: median'}).")
+        rep.table(["controller", "RMS median (um)", "p10 (um)", "p90 (um)", "runs", "failed"],
+                  [[c, d["rms_error"]["median"] * 1e6, d["rms_error"]["p10"] * 1e6,
+                    d["rms_error"]["p90"] * 1e6, d["runs"], d["failed"]]
+                   for c, d in doc["distributions"].items()], digits=[None, 3, 3, 3, 0, 0])
+    else:
+        xs = np.arange(len(doc["points"]))
+        for c in doc["controllers"]:
+            ys = [pt["rms_error"].get(c) for pt in doc["points"]]
+            ax.plot(xs, [np.nan if y is None else y * 1e6 for y in ys], "o-", label=c)
+        ax.set_xticks(xs, [pt["label"] for pt in doc["points"]], rotation=30, ha="right",
+                      fontsize=7)
+        ax.set_yscale("log")
+        ax.set_ylabel("RMS tracking error (um)")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7, loc="lower left", bbox_to_anchor=(0.0, 1.01), ncol=5,
+                  frameon=False, borderaxespad=0.0)
+        fig.tight_layout()
+        rep.figure(fig, "RMS tracking error at every grid point, per controller (log scale).")
+        rep.table(["point", *doc["controllers"]],
+                  [[pt["label"], *[None if pt["rms_error"].get(c) is None
+                                   else pt["rms_error"][c] * 1e6 for c in doc["controllers"]]]
+                   for pt in doc["points"]],
+                  caption="RMS tracking error (um) at every grid point.",
+                  digits=[None, *[3] * len(doc["controllers"])])
+    rep.table(["controller", "point/draw", "status"],
+              [[r["controller"], r["sample"], r["status"]] for r in doc["runs"]
+               if r["status"] != "ok"] or [["-", "-", "every run ok"]])
+    return rep
+
+
+def run(args: argparse.Namespace) -> int:
+    from controllers.robustness import run_jobs
+    from fcomp.outputs import InputSet, staged_folder
+    from fcomp.parallel import check_scheduler, progress_bar
+
+    out = json_target(args.json)
+    folder = report_dir(args.report)
+    scheduler = check_scheduler(args.scheduler)
+    if args.workers is not None and args.workers < 1:
+        raise FcompError(f"--workers must be a positive integer, got {args.workers}")
+    common.check_outputs(InputSet(), [("--json", out)], [("--report", folder, "report")])
+    plan = _plan(args)
+    jobs = plan.jobs()
+    bar = progress_bar("sweep", len(jobs), enabled=not args.no_progress)
+    try:
+        runs = run_jobs(jobs, workers=args.workers, scheduler=scheduler,
+                        progress=lambda done, total: bar.update(done - bar.n))
+    finally:
+        bar.close()
+    doc = common.with_warnings(result(plan, runs))
+    command = "fcomp " + shlex.join(common.ARGV) if common.ARGV else None
+    if folder is not None:
+        with staged_folder(folder, "--report", "report", note=command or "fcomp sweep") as tmp:
+            report(doc, command).write(tmp / "report.html")
+        if args.json != "-":
+            print(f"wrote {folder / 'report.html'}")
+    emit_result(result_text(doc), args.json, out, summary(doc))
+    return 0

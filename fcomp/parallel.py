@@ -8,6 +8,8 @@ through here:
 * **local processes** (default): a :class:`concurrent.futures.ProcessPoolExecutor`
   with ``workers`` processes (default: the CPU count); one worker runs the jobs
   in this process;
+* the user's own code (``--effects`` files) is executed in every worker first,
+  so jobs carrying a user's effect unpickle there;
 * **an existing Dask distributed cluster** (``scheduler="tcp://host:8786"``,
   the command line's ``--scheduler ADDRESS``): the jobs go to its workers
   (started with ``dask scheduler`` / ``dask worker``, or by a cluster manager),
@@ -29,6 +31,7 @@ from contextlib import contextmanager
 from typing import Any, TypeVar
 
 from fcomp.errors import FcompError, term
+from fcomp.usercode import load_sources, user_sources
 
 T = TypeVar("T")
 R = TypeVar("R")
@@ -80,6 +83,8 @@ def executor(scheduler: str | None = None, workers: int | None = None
     else a local process pool of ``workers`` (``None`` when one worker: run here)."""
     if scheduler:
         with dask_client(scheduler) as client:
+            if user_sources():  # the user's --effects code, on every worker of the cluster
+                client.run(load_sources, user_sources())
             yield client.get_executor(pure=False)
         return
     n = workers if workers is not None else (os.cpu_count() or 1)
@@ -88,8 +93,19 @@ def executor(scheduler: str | None = None, workers: int | None = None
     if n == 1:
         yield None
         return
-    with ProcessPoolExecutor(max_workers=n) as pool:
+    with process_pool(n) as pool:
         yield pool
+
+
+def process_pool(workers: int, *, spawn: bool = False) -> ProcessPoolExecutor:
+    """A local process pool whose workers first execute the user's own code (``--effects``
+    files, :func:`fcomp.usercode.load_sources`); ``spawn`` starts them fresh (the default
+    on macOS and Windows) rather than forked."""
+    import multiprocessing
+
+    ctx = multiprocessing.get_context("spawn") if spawn else None
+    return ProcessPoolExecutor(max_workers=workers, mp_context=ctx,
+                               initializer=load_sources, initargs=(user_sources(),))
 
 
 def run_tasks(fn: Callable[[T], R], items: Sequence[T], *, workers: int | None = None,
@@ -128,4 +144,5 @@ def progress_bar(label: str, total: int, *, enabled: bool = True, unit: str = "r
                 disable=not show, dynamic_ncols=True)
 
 
-__all__ = ["check_scheduler", "dask_client", "executor", "progress_bar", "run_tasks"]
+__all__ = ["check_scheduler", "dask_client", "executor", "process_pool", "progress_bar",
+           "run_tasks"]

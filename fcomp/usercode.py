@@ -23,6 +23,10 @@ from fcomp.errors import FcompError
 
 #: Real paths of the user files executed so far -> the path as the user gave it.
 USER_FILES: dict[str, str] = {}
+#: Module name -> (the path as given, the source) of every user file executed, so that
+#: worker processes (local or on a cluster) can execute the same code before they
+#: unpickle jobs that use it (:func:`user_sources`, :func:`load_sources`).
+SOURCES: dict[str, tuple[str, str]] = {}
 
 
 def run_module(path: Path, module_name: str, what: str) -> ModuleType:
@@ -38,18 +42,48 @@ def run_module(path: Path, module_name: str, what: str) -> ModuleType:
     module = importlib.util.module_from_spec(spec)
     sys.modules[spec.name] = module
     try:
+        SOURCES[module_name] = (str(path), Path(path).read_text(encoding="utf-8",
+                                                                 errors="replace"))
         spec.loader.exec_module(module)
     except KeyboardInterrupt:
         raise
     except SyntaxError as exc:
         sys.modules.pop(spec.name, None)
+        SOURCES.pop(module_name, None)
         raise FcompError(f"{path} line {exc.lineno}: the {what} has a syntax error "
                          f"({exc.msg})") from None
     except BaseException as exc:  # SystemExit too: a plugin must not end the command
         sys.modules.pop(spec.name, None)
+        SOURCES.pop(module_name, None)
         where = locate(exc) or str(path)
         raise FcompError(f"{where}: importing the {what} failed: {_describe(exc)}") from None
     return module
+
+
+def user_sources() -> tuple[tuple[str, str, str], ...]:
+    """``(module name, path, source)`` of every user file executed in this process."""
+    return tuple((name, path, src) for name, (path, src) in SOURCES.items())
+
+
+def load_sources(items: tuple[tuple[str, str, str], ...]) -> None:
+    """Execute the user files of another process (:func:`user_sources`) here, once each.
+
+    Run by every worker process before it takes jobs (a pool's initializer, a
+    Dask ``client.run``): a job that carries a user's effect is unpickled by
+    importing its module, which only exists where the file was executed.
+    Errors raised later from this code still name the user's file and line.
+    """
+    import types
+
+    for name, path, source in items:
+        if name in sys.modules:
+            continue
+        USER_FILES[os.path.realpath(path)] = path
+        SOURCES[name] = (path, source)
+        module = types.ModuleType(name)
+        module.__file__ = path
+        sys.modules[name] = module
+        exec(compile(source, os.path.realpath(path), "exec"), module.__dict__)
 
 
 def _describe(exc: BaseException) -> str:

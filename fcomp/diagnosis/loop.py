@@ -69,11 +69,10 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import math
-import multiprocessing
 import os
 import sys
 from collections.abc import Sequence
-from concurrent.futures import Executor, ProcessPoolExecutor, as_completed
+from concurrent.futures import Executor, as_completed
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -94,7 +93,7 @@ from fcomp.errors import FcompError
 from fcomp.identification.plausibility import FitWarning
 from fcomp.measurement import Measurement
 from fcomp.models import FrictionModel, make_model
-from fcomp.parallel import executor
+from fcomp.parallel import executor, process_pool
 
 #: Largest one-sided p-value of a held-out fall that counts as significant.
 ACCEPT_P = 0.05
@@ -686,8 +685,7 @@ class Diagnosis:
         if self._pool is None and self.scheduler:
             self._pool = self._cluster.enter_context(executor(self.scheduler))
         if self._pool is None:
-            self._pool = ProcessPoolExecutor(max_workers=n_jobs,
-                                             mp_context=multiprocessing.get_context("spawn"))
+            self._pool = process_pool(n_jobs, spawn=True)  # runs the user's --effects code
         return self._pool
 
     def _judge(self, name: str, res: FitResult) -> Candidate:

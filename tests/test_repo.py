@@ -15,7 +15,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 def _readme_commands() -> list[str]:
     text = (ROOT / "README.md").read_text()
-    block = re.search(r"```(?:bash|sh)?\n(.*?)```", text, re.S)
+    block = re.search(r"```(?:bash|sh)?[^\n`]*\n(.*?)```", text, re.S)
     assert block, "README has no code block"
     return [line.strip() for line in block.group(1).splitlines() if line.strip()]
 

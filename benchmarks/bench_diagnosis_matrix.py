@@ -17,6 +17,7 @@ why, and the time per case.
     python benchmarks/bench_diagnosis_matrix.py                 # the whole matrix
     python benchmarks/bench_diagnosis_matrix.py --seeds 1 --rows dwell-time,nothing
     python benchmarks/bench_diagnosis_matrix.py --json matrix.json
+    python benchmarks/bench_diagnosis_matrix.py --seed-list 4,5 --sample 120   # a seeded draw
 """
 
 from __future__ import annotations
@@ -126,6 +127,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--duration", type=float, default=40.0)
     ap.add_argument("--rate", type=float, default=1000.0)
     ap.add_argument("--json", default=None, help="write every case's result here")
+    ap.add_argument("--sample", type=int, default=None,
+                    help="run this many cases drawn at random (seeded) from the selection")
     ap.add_argument("--list", action="store_true", help="list the cases and stop")
     args = ap.parse_args(argv)
     pick = {f: (getattr(args, f).split(",") if getattr(args, f) else None)
@@ -133,6 +136,9 @@ def main(argv: list[str] | None = None) -> int:
     seeds = ([int(x) for x in args.seed_list.split(",")] if args.seed_list
              else list(range(1, args.seeds + 1)))
     todo = cases(seeds=seeds, duration=args.duration, rate=args.rate, **pick)
+    if args.sample is not None and args.sample < len(todo):
+        keep = np.random.default_rng(sum(seeds)).choice(len(todo), args.sample, replace=False)
+        todo = [todo[i] for i in sorted(keep)]
     if args.list:
         for c in todo:
             print(" ".join(str(getattr(c, f)) for f in CASE_FIELDS))

@@ -103,6 +103,9 @@ FALL_NOISE = 0.1
 EXCESS_SHARE = 0.5
 #: ... and of the held-out RMS before.
 FALL_RELATIVE = 0.02
+#: Falls below this share of the record's force scale are rounding, not evidence
+#: (an exact table of points is fitted to 1e-15 N by the right model already).
+FALL_NUMERIC = 1e-9
 #: Candidates within this share of the best candidate's fall tie with it.
 TIE_SHARE = 0.1
 #: The search stops when the held-out RMS is within this factor of the noise floor.
@@ -704,7 +707,7 @@ class Diagnosis:
             rb, ra = trimmed_rms(before.residual[changed]), trimmed_rms(res.residual[changed])
         else:
             rb = ra = before.rms_test
-        need = max(FALL_NOISE * nf, FALL_RELATIVE * rb)
+        need = max(FALL_NOISE * nf, FALL_RELATIVE * rb, FALL_NUMERIC * self.data_.scales.force)
         if fall > 0 and rb - ra < need:
             reasons.append(f"where it changes the prediction the held-out RMS falls by "
                            f"{rb - ra:.3g} N < {need:.3g} N")

@@ -211,7 +211,7 @@ class Grid:
 
     def jobs(self) -> list[Job]:
         """One job per (grid point, controller)."""
-        out = []
+        out: list[Job] = []
         for i, (mismatch, friction) in enumerate(self.points()):
             cfg = replace(self.base, plant=self.plant, mismatch=mismatch, noise=self.noise,
                           seed=self.seed, fast=self.fast, controller_friction=friction)

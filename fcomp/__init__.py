@@ -38,9 +38,8 @@ from typing import TYPE_CHECKING, Any
 from fcomp.version import __version__
 
 if TYPE_CHECKING:
-    from fcomp.api import diagnose, fit, read, simulate
-    from fcomp.diagnosis import Comparison, Diagnosis, compare
-    from fcomp.diagnosis.compare import PlantComparison, compare_plant
+    from fcomp.api import PlantComparison, compare, compare_plant, diagnose, fit, read, simulate
+    from fcomp.diagnosis import Comparison, Diagnosis
     from fcomp.effects import Effect, make_effect, register_effect
     from fcomp.identification import FrictionFit
     from fcomp.measurement import Measurement
@@ -54,8 +53,8 @@ _API: dict[str, str] = {
     "make_effect": "fcomp.effects", "register_effect": "fcomp.effects", "Effect": "fcomp.effects",
     "Measurement": "fcomp.measurement", "friction_along_motion": "fcomp.trajectory",
     "FrictionFit": "fcomp.identification", "Diagnosis": "fcomp.diagnosis",
-    "Comparison": "fcomp.diagnosis", "compare": "fcomp.diagnosis",
-    "compare_plant": "fcomp.diagnosis.compare", "PlantComparison": "fcomp.diagnosis.compare",
+    "Comparison": "fcomp.diagnosis", "compare": "fcomp.api",
+    "compare_plant": "fcomp.api", "PlantComparison": "fcomp.api",
     "fit": "fcomp.api", "diagnose": "fcomp.api", "simulate": "fcomp.api", "read": "fcomp.api",
     "generate": "fcomp.synthetic",
 }

@@ -19,16 +19,20 @@ A measurement argument may also be the path of a measurement file.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from fcomp.diagnosis import Comparison, Diagnosis, compare
+from fcomp.diagnosis import Comparison, Diagnosis
+from fcomp.diagnosis import compare as compare_force
 from fcomp.identification import FrictionFit
 from fcomp.inputs import parse_input
 from fcomp.measurement import Measurement
 from fcomp.models import FrictionModel, make_model
+from plants import PLANTS
+from plants.comparison import PlantComparison, compare_plant
 
 Data = Measurement | str | Path
 
@@ -65,6 +69,26 @@ def fit(data: Data, model: str | FrictionModel, **options: Any) -> FrictionFit:
     return FrictionFit(model, **options).fit(meas)
 
 
+def compare(model: str | FrictionModel, data: Data | Sequence[Data], *, fit: bool = False,
+            mass: float | None = None, split: str = "auto", cutoff_hz: float | None = None,
+            plant: str | None = None, plant_params: str | None = None) -> Comparison:
+    """One given model beside records (``fcomp compare``).
+
+    The force domain is :func:`fcomp.diagnosis.compare` (``fit``, ``mass``,
+    ``split``, ``cutoff_hz`` as there); with ``plant`` the plant of that name is
+    also simulated with each record's command ``u`` and compared in ``x``,
+    ``p1``, ``p2`` (:func:`plants.comparison.compare_plant`, with the parameter
+    set ``plant_params``), the results in ``Comparison.plant``.
+    """
+    meas = _measurements(data)
+    records = [meas] if isinstance(meas, Measurement) else meas
+    comp = compare_force(model, meas, fit=fit, mass=mass, split=split, cutoff_hz=cutoff_hz)
+    if plant is None:
+        return comp
+    return replace(comp, plant=[compare_plant(m, plant, comp.result.model, params=plant_params)
+                                for m in records])
+
+
 def diagnose(data: Data | Sequence[Data], baseline: str | FrictionModel,
              **options: Any) -> Diagnosis:
     """Find the missing physics (``fcomp diagnose``): :class:`~fcomp.diagnosis.Diagnosis`
@@ -84,8 +108,6 @@ def simulate(plant: str, friction: str | FrictionModel,
     ``engine`` the integrator options (``method``, ``rtol``, ``atol``,
     ``max_steps``, ``coupling``). Returns the run as a measurement.
     """
-    from plants import PLANTS
-
     cls = PLANTS.get(plant)
     pset = params if params is not None else getattr(cls, "default_params", None)
     model = make_model(friction, params=pset) if isinstance(friction, str) else friction
@@ -96,5 +118,5 @@ def simulate(plant: str, friction: str | FrictionModel,
     return run
 
 
-__all__ = ["Comparison", "Diagnosis", "FrictionFit", "Measurement", "compare", "diagnose",
-           "fit", "make_model", "read", "simulate"]
+__all__ = ["Comparison", "Diagnosis", "FrictionFit", "Measurement", "PlantComparison", "compare",
+           "compare_plant", "diagnose", "fit", "make_model", "read", "simulate"]

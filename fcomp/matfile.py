@@ -67,7 +67,9 @@ def _bad(message: str) -> FcompError:
 
 def split_outside_quotes(text: str, sep: str) -> list[str]:
     """``text`` split at ``sep`` where it is not inside single or double quotes."""
-    parts, buf, quote = [], [], ""
+    parts: list[str] = []
+    buf: list[str] = []
+    quote = ""
     for ch in text:
         if quote:
             quote = "" if ch == quote else quote

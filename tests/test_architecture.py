@@ -19,19 +19,9 @@ from helpers.import_graph import cycles, graph
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = ["fcomp", "plants", "controllers", "studies"]
 
-#: ALLOW-LIST (one entry, temporary): the diagnosis is being rewritten; cycles among its own
-#: modules are tolerated until that rewrite lands, which removes this entry.
-DIAGNOSIS_REWRITE_IN_PROGRESS = "fcomp.diagnosis"
-
-
-def _allowed(cycle: list[str]) -> bool:
-    return all(m == DIAGNOSIS_REWRITE_IN_PROGRESS
-               or m.startswith(DIAGNOSIS_REWRITE_IN_PROGRESS + ".") for m in cycle)
-
-
 def test_no_import_cycles() -> None:
-    found = cycles(graph(ROOT, PACKAGES))
-    bad = [c for c in found if not _allowed(c)]
+    """No circle at all, counting imports inside functions (no allow-list)."""
+    bad = cycles(graph(ROOT, PACKAGES))
     assert not bad, "import cycles:\n" + "\n".join(" <-> ".join(c) for c in bad)
 
 

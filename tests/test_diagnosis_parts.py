@@ -191,9 +191,9 @@ def test_plant_domain_comparison_starts_from_the_measured_gauge_state() -> None:
     The recorded chamber pressures are gauge while the plant's states are
     absolute: a wrong start would leave a 1 atm (101 kPa) transient in ``p1, p2``.
     """
-    from fcomp.diagnosis import compare_plant
     from fcomp.models import make_model
     from plants import PLANTS
+    from plants.comparison import compare_plant
 
     lugre = make_model("lugre")
     run = PLANTS.get("pneumatic")(lugre, "seed000-servo").simulate(

@@ -116,7 +116,7 @@ def _model(args: argparse.Namespace) -> tuple[Any, float | None]:
 
 
 def run(args: argparse.Namespace) -> int:
-    from fcomp.diagnosis.compare import compare
+    from fcomp.api import compare
     from fcomp.measurement import Measurement
     from fcomp.outputs import staged_folder
 

@@ -18,9 +18,10 @@ The pieces, one concept per module:
 >>> d.added_, d.verdict_, d.rms_baseline_, d.rms_final_         # doctest: +SKIP
 """
 
-from fcomp.diagnosis.compare import Comparison, compare, compare_plant, regime_errors
+from fcomp.diagnosis.compare import Comparison, compare
 from fcomp.diagnosis.data import DiagnosisData, prepare
 from fcomp.diagnosis.loop import Candidate, Diagnosis, Step
+from fcomp.diagnosis.residuals import regime_errors
 
 __all__ = ["Candidate", "Comparison", "Diagnosis", "DiagnosisData", "Step", "compare",
-           "compare_plant", "prepare", "regime_errors"]
+           "prepare", "regime_errors"]

@@ -3,8 +3,8 @@
 Force domain
     The model is simulated along the measured motion and its force compared
     with the measured (or reconstructed, models.md 2) friction force:
-    :func:`regime_errors` gives the RMS error (N) over the held-out samples of
-    each regime of :mod:`.regimes`; :func:`worst_segments` finds the held-out
+    :func:`~.residuals.regime_errors` gives the RMS error (N) over the held-out samples of
+    each regime of :mod:`.regimes`; :func:`~.residuals.worst_segments` finds the held-out
     windows where the model fails most; :func:`compare` does the whole thing
     for one given model -- with its own parameter values (a fitted model, a
     parameter set), judged on every usable sample, or with ``fit=True``
@@ -13,11 +13,10 @@ Force domain
     :meth:`Comparison.plot`, a report by :meth:`Comparison.write_report`).
 
 Plant domain
-    For plant data (a valve command ``u`` and the responses ``x``, ``p1``,
-    ``p2``), :func:`compare_plant` simulates the plant (:mod:`plants`) with the
-    measured input from the measured initial state and compares the simulated
-    ``x``, ``p1``, ``p2`` with the measured ones (RMS errors in m and Pa), as
-    a :class:`PlantComparison` with its own :meth:`PlantComparison.plot`.
+    The plant domain (a valve command ``u`` and the responses ``x``, ``p1``,
+    ``p2``) needs a plant, which lives above this package:
+    :func:`plants.comparison.compare_plant`, and ``fcomp.compare(...,
+    plant=NAME)`` (:mod:`fcomp.api`) that attaches it to a :class:`Comparison`.
 """
 
 from __future__ import annotations
@@ -32,9 +31,18 @@ import numpy as np
 
 from fcomp.diagnosis.data import DiagnosisData, prepare
 from fcomp.diagnosis.features import FeatureStrength, residual_structure
+from fcomp.diagnosis.loop import Diagnosis
 from fcomp.diagnosis.noise import noise_floor
 from fcomp.diagnosis.refit import FitResult, Refit
-from fcomp.diagnosis.regimes import REGIMES, Segmentation, segment
+from fcomp.diagnosis.regimes import Segmentation, segment
+from fcomp.diagnosis.report import (
+    Series,
+    View,
+    comparison_figures,
+    comparison_html,
+    write_comparison_report,
+)
+from fcomp.diagnosis.residuals import Segment, regime_errors, worst_segments
 from fcomp.diagnosis.split import Split, make_split
 from fcomp.errors import FcompError
 from fcomp.identification.plausibility import FitWarning
@@ -43,57 +51,6 @@ from fcomp.models import FrictionModel, make_model
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
-
-
-def regime_errors(residual: np.ndarray, seg: Segmentation, mask: np.ndarray
-                  ) -> dict[str, dict[str, float | int | None]]:
-    """Per regime and ``"all"``: RMS of ``residual`` (N) over ``mask`` and the sample count."""
-    out: dict[str, dict[str, float | int | None]] = {}
-    for i, name in enumerate(REGIMES):
-        sel = mask & (seg.regime == i)
-        n = int(sel.sum())
-        out[name] = {"rms": float(np.sqrt(np.mean(residual[sel] ** 2))) if n else None, "n": n}
-    n = int(mask.sum())
-    out["all"] = {"rms": float(np.sqrt(np.mean(residual[mask] ** 2))) if n else None, "n": n}
-    return out
-
-
-@dataclass(frozen=True)
-class Segment:
-    """A window of samples ``[start, stop)`` and its RMS error (N)."""
-
-    start: int
-    stop: int
-    rms: float
-
-
-def worst_segments(residual: np.ndarray, mask: np.ndarray, width: int, count: int = 3,
-                   boundaries: Sequence[int] = ()) -> list[Segment]:
-    """The ``count`` non-overlapping windows of ``width`` samples with the largest RMS.
-
-    Only windows lying entirely in ``mask`` (e.g. the held-out samples) and not
-    crossing an experiment boundary are considered.
-    """
-    n = residual.size
-    width = max(1, min(width, n))
-    sq = np.where(mask, residual**2, 0.0)
-    c = np.concatenate([[0.0], np.cumsum(sq)])
-    cm = np.concatenate([[0], np.cumsum(mask.astype(int))])
-    starts = np.arange(0, n - width + 1)
-    full = (cm[starts + width] - cm[starts]) == width
-    for b in boundaries:
-        full &= ~((starts < b) & (starts + width > b))
-    score = np.where(full, (c[starts + width] - c[starts]) / width, -1.0)
-    out: list[Segment] = []
-    taken = np.zeros(n, dtype=bool)
-    for k in np.argsort(-score):
-        if score[k] < 0 or len(out) >= count:
-            break
-        if taken[k:k + width].any():
-            continue
-        taken[k:k + width] = True
-        out.append(Segment(int(k), int(k + width), float(math.sqrt(score[k]))))
-    return out
 
 
 @dataclass(frozen=True, repr=False)
@@ -129,7 +86,8 @@ class Comparison:
     warnings
         Plausibility of the fit (fitted comparisons) and what the comparison cannot judge.
     plant
-        Plant-domain comparisons, one per record (``compare(..., plant=NAME)``).
+        Plant-domain comparisons (:class:`plants.comparison.PlantComparison`), one per
+        record, attached by ``fcomp.compare(..., plant=NAME)``.
     """
 
     model: FrictionModel
@@ -149,7 +107,7 @@ class Comparison:
     fitted: bool
     noise_floor: float
     warnings: list[FitWarning] = field(default_factory=list)
-    plant: list[PlantComparison] = field(default_factory=list)
+    plant: list[Any] = field(default_factory=list)
     values: dict[str, float] = field(default_factory=dict)
 
     def to_dict(self) -> dict[str, Any]:
@@ -183,18 +141,21 @@ class Comparison:
             "warnings": [w.to_dict() for w in self.warnings],
         }
 
+    def view(self) -> View:
+        """What the figures draw: the record and this one model beside it."""
+        return View(self.data, self.segmentation, self.judged, self.judged_label,
+                    (Series(f"model: {self.model.describe()}", "final", self.result,
+                            self.regimes),),
+                    {f.feature: f.strength for f in self.residual_features}, None)
+
     def plot(self, name: str | None = None) -> Figure | dict[str, Figure]:
         """One figure by name (``regimes``, ``residuals``, ``loops``, ``worst``,
         ``before_after``; ``plant`` for the plant domain), or all of them by name."""
-        from fcomp.diagnosis.report import comparison_figures
-
         figs = comparison_figures(self, only=name)
         return figs if name is None else figs[name]
 
     def write_report(self, directory: str | Path, *, command: str | None = None) -> Path:
         """Write ``DIRECTORY/report.html`` (self-contained) and return its path."""
-        from fcomp.diagnosis.report import write_comparison_report
-
         return write_comparison_report(self, directory, command=command)
 
     def __repr__(self) -> str:
@@ -204,8 +165,6 @@ class Comparison:
                 f"{'; fitted' if self.fitted else ''}>")
 
     def _repr_html_(self) -> str:
-        from fcomp.diagnosis.report import comparison_html
-
         return comparison_html(self)
 
 
@@ -275,9 +234,8 @@ COMPARE_SAMPLES = 200_000
 
 def compare(model: str | FrictionModel, data: Measurement | Sequence[Measurement] | DiagnosisData,
             *, fit: bool = False, mass: float | None = None, split: str = "auto",
-            cutoff_hz: float | None = None, plant: str | None = None,
-            plant_params: str | None = None) -> Comparison:
-    """Compare ``model`` with ``data`` in the force domain (and the plant domain).
+            cutoff_hz: float | None = None) -> Comparison:
+    """Compare ``model`` with ``data`` in the force domain.
 
     Parameters
     ----------
@@ -295,12 +253,10 @@ def compare(model: str | FrictionModel, data: Measurement | Sequence[Measurement
         ``rig.mass`` (a fit's ``params.mass``); fitted with ``fit``.
     split, cutoff_hz
         As for :class:`~fcomp.diagnosis.loop.Diagnosis`.
-    plant, plant_params
-        Also simulate this plant with each record's command ``u`` and compare
-        ``x``, ``p1``, ``p2`` (:func:`compare_plant`).
-    """
-    from fcomp.diagnosis.loop import Diagnosis
 
+    The plant domain is added by ``fcomp.compare(..., plant=NAME)``
+    (:func:`fcomp.api.compare`), since the plants live above this package.
+    """
     mdl = make_model(model) if isinstance(model, str) else model
     if not isinstance(mdl, FrictionModel):
         raise FcompError(f"model must be a model name or a FrictionModel, got {model!r}")
@@ -332,113 +288,7 @@ def compare(model: str | FrictionModel, data: Measurement | Sequence[Measurement
     width = max(10, int(round(0.25 / d.scales.dt)))
     bounds = [e.start for e in d.experiments[1:]]
     features = residual_structure(r, d, seg, sp.train, sp.test)
-    plants: list[PlantComparison] = []
-    if plant is not None:
-        records = [data] if isinstance(data, Measurement) else (
-            list(data) if not isinstance(data, DiagnosisData) else [])
-        if not records:
-            raise FcompError("a plant-domain comparison needs the measurements themselves")
-        plants = [compare_plant(m, plant, res.model, params=plant_params) for m in records]
     return Comparison(res.model, rms, regime_errors(r, seg, judged),
                       worst_segments(r, judged, width, 3, bounds), d.y, res.F_hat,
                       sp.description, d, seg, sp, res, judged, label, features, fit, floor,
-                      warnings, plants, values)
-
-
-@dataclass(frozen=True, repr=False)
-class PlantComparison:
-    """A plant simulated with a record's command beside the record (:func:`compare_plant`).
-
-    Attributes
-    ----------
-    label, plant
-        The record and the plant name.
-    simulated
-        The simulated run (a :class:`Measurement`).
-    measured
-        The compared signals as recorded (gauge pressures), on the record's time ``t``.
-    predicted
-        The same signals simulated, interpolated onto ``t``.
-    t
-        The record's time (s).
-    rms
-        RMS error of every compared signal (m, Pa).
-    """
-
-    label: str
-    plant: str
-    simulated: Measurement
-    measured: dict[str, np.ndarray]
-    predicted: dict[str, np.ndarray]
-    t: np.ndarray
-    rms: dict[str, float]
-
-    def __getitem__(self, key: str) -> Any:
-        """``result["rms"]``, ``result["simulated"]`` (the dictionary it once was)."""
-        if key not in ("simulated", "rms", "measured", "predicted", "t", "plant", "label"):
-            raise KeyError(key)
-        return getattr(self, key)
-
-    def plot(self) -> Figure:
-        """Measured and simulated ``x``, ``p1``, ``p2`` over time, and their differences."""
-        from fcomp.diagnosis.report import fig_plant
-
-        return fig_plant(self)
-
-    def to_dict(self) -> dict[str, Any]:
-        return {"label": self.label, "plant": self.plant, "rms": dict(self.rms)}
-
-    def __repr__(self) -> str:
-        errs = ", ".join(f"{k} {v:.3g} {'m' if k == 'x' else 'Pa'}" for k, v in self.rms.items())
-        return f"<PlantComparison {self.plant} on {self.label}: RMS {errs}>"
-
-
-def compare_plant(meas: Measurement, plant: str, friction: FrictionModel, *,
-                  params: str | None = None) -> PlantComparison:
-    """Simulate ``plant`` with the measured command ``u`` and compare ``x``, ``p1``, ``p2``.
-
-    The plant starts from the measured ``x``, ``p1``, ``p2`` at the first
-    sample (gauge pressures, converted to the plant's states with the offset
-    between each state and the recorded output of the same name, e.g. the
-    atmospheric pressure of a pneumatic plant's absolute chamber pressures)
-    and is driven by ``u`` interpolated linearly between samples. Returns
-    the simulated measurement and the RMS error of every compared signal
-    (m, gauge Pa) as a :class:`PlantComparison`.
-    """
-    from plants import PLANTS
-
-    if "u" not in meas:
-        raise FcompError(f"{meas.label}: a plant-domain comparison needs the command column 'u'")
-    cls = PLANTS.get(plant)
-    p = cls(friction, params if params is not None else getattr(cls, "default_params", None))
-    t, u = meas.t, meas["u"]
-
-    def u_of(tt: Any) -> Any:
-        return np.interp(tt, t - t[0], u)
-
-    names = p.state_names
-    measured = {k: (meas.gauge_pressure(k) if k in ("p1", "p2") else meas[k])
-                for k in ("x", "p1", "p2") if k in meas}
-    # the plant's states may be absolute pressures while its recorded outputs are gauge:
-    # the offset between a state and the output of the same name maps one onto the other
-    default = p.initial_state()
-    outputs = getattr(p, "evaluate_outputs", None)  # ODE plants; others record their states
-    y0 = outputs(default[None, :], np.array([[float(u[0])]])) if outputs is not None else {}
-    x0: dict[str, float] = {}
-    for k, col in measured.items():
-        if k in names:
-            offset = float(default[names.index(k)] - y0[k][0]) if k in y0 else 0.0
-            x0[k] = float(col[0]) + offset
-    rate = (t.size - 1) / float(t[-1] - t[0])
-    sim = p.simulate(u_of, float(t[-1] - t[0]), rate, x0=p.initial_state(x0))
-    errors, predicted = {}, {}
-    for k, col in measured.items():
-        if k in sim:
-            ys = np.interp(t - t[0], sim.t, sim.gauge_pressure(k) if k in ("p1", "p2")
-                           else sim[k])
-            predicted[k] = ys
-            errors[k] = float(np.sqrt(np.mean((ys - col) ** 2)))
-    if not errors:
-        raise FcompError(f"{meas.label}: no signal (x, p1, p2) to compare with plant {plant!r}")
-    return PlantComparison(meas.label, plant, sim, {k: measured[k] for k in predicted},
-                           predicted, t, errors)
+                      warnings, [], values)

@@ -80,13 +80,13 @@ from typing import Any
 import numpy as np
 from scipy import stats
 
-from fcomp.diagnosis import catalogue
-from fcomp.diagnosis.compare import regime_errors
+import fcomp.diagnosis.catalogue as catalogue
 from fcomp.diagnosis.data import DiagnosisData, prepare
 from fcomp.diagnosis.features import FeatureStrength, event_structure, residual_structure
 from fcomp.diagnosis.noise import NoiseFloor, effective_sample_size, noise_floor
 from fcomp.diagnosis.refit import FitResult, Refit
 from fcomp.diagnosis.regimes import Segmentation, segment
+from fcomp.diagnosis.residuals import regime_errors
 from fcomp.diagnosis.split import Split, make_split
 from fcomp.effects import EFFECTS, Effect
 from fcomp.errors import FcompError

@@ -23,24 +23,27 @@ Figures
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.ticker import MaxNLocator
 
-from fcomp.diagnosis.compare import Comparison, worst_segments
 from fcomp.diagnosis.data import DiagnosisData
 from fcomp.diagnosis.features import feature_values
-from fcomp.diagnosis.loop import Diagnosis
 from fcomp.diagnosis.refit import FitResult
 from fcomp.diagnosis.regimes import REGIMES, Segmentation
+from fcomp.diagnosis.residuals import worst_segments
 from fcomp.effects import EFFECTS
 from fcomp.errors import FcompError
 from fcomp.report import Report, notebook_html
+
+if TYPE_CHECKING:  # the results draw themselves through this module, which sits below them
+    from fcomp.diagnosis.compare import Comparison
+    from fcomp.diagnosis.loop import Diagnosis
 
 _UNITS = {"t": "s", "v": "m/s", "a": "m/s^2", "x": "m", "p1+p2": "bar",
           "time_since_reversal": "s", "displacement_since_reversal": "m", "dwell_time": "s"}
@@ -91,11 +94,8 @@ def view(obj: Diagnosis | Comparison | View) -> View:
     """The :class:`View` of a diagnosis (baseline and final model) or a comparison."""
     if isinstance(obj, View):
         return obj
-    if isinstance(obj, Comparison):
-        return View(obj.data, obj.segmentation, obj.judged, obj.judged_label,
-                    (Series(f"model: {obj.model.describe()}", "final", obj.result,
-                            obj.regimes),),
-                    {f.feature: f.strength for f in obj.residual_features}, None)
+    if hasattr(obj, "view"):  # a Comparison builds its own view
+        return obj.view()
     if not hasattr(obj, "verdict_"):
         raise FcompError("the diagnosis is not fitted: call fit(data) before drawing it")
     return View(obj.data_, obj.segmentation_, obj.split_.test, "held-out",
@@ -147,7 +147,7 @@ def fig_regimes(obj: Diagnosis | Comparison | View) -> Figure:
     top = 1.1 * top if top > 0 else 1.0
     for x, n in zip(xs, names, strict=True):
         if (counts[n]["n"] or 0) < MIN_REGIME_SAMPLES:
-            ax.text(x, 0.05 * top, "too few\nsamples", ha="center", va="bottom", fontsize=7,
+            ax.text(float(x), 0.05 * top, "too few\nsamples", ha="center", va="bottom", fontsize=7,
                     color="0.4")
     ax.set_xticks(xs, [f"{n}\n(n={counts[n]['n']})" for n in names], fontsize=8)
     ax.set_ylabel(f"{vw.judged_label} RMS error (N)")
@@ -334,7 +334,7 @@ def fig_before_after(obj: Diagnosis | View) -> Figure:
     return fig
 
 
-FIGURES = {
+FIGURES: dict[str, Callable[[Any], Figure]] = {
     "regimes": fig_regimes,
     "residuals": fig_residuals,
     "loops": fig_loops,
@@ -379,7 +379,7 @@ def short_reason(reason: str, limit: int = 110) -> str:
 
 def fig_plant(comps: Any) -> Figure:
     """Plant domain: measured and simulated ``x``, ``p1``, ``p2`` of each record (one
-    :class:`~fcomp.diagnosis.compare.PlantComparison` or a list of them)."""
+    :class:`~plants.comparison.PlantComparison` or a list of them)."""
     items = comps if isinstance(comps, list | tuple) else [comps]
     names = [k for k in ("x", "p1", "p2") if any(k in c.rms for c in items)]
     fig = Figure(figsize=(11.0, 2.6 * max(len(names), 1)))

@@ -1,0 +1,121 @@
+"""The engineer's toolbox through its public faces: ``fcomp compare``, ``fcomp import csv``,
+``import fcomp`` and the plant-domain comparison.
+
+Every check is against a number computed here independently (the generating law
+evaluated by hand, unit factors written out), never against the code's own output.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import fcomp
+from fcomp.cli.main import main
+from fcomp.measurement import Measurement
+
+
+def _coulomb_viscous_record(path: Path, Fc: float = 30.0, sigma2: float = 80.0,
+                            noise: float = 0.0) -> Measurement:
+    """A force-velocity record of ``F = Fc sign(v) + sigma2 v`` (+ white noise), 4 s at 500 Hz."""
+    t = np.arange(2000) / 500.0
+    x = 0.05 * np.sin(2 * np.pi * 0.5 * t)
+    v = 0.05 * 2 * np.pi * 0.5 * np.cos(2 * np.pi * 0.5 * t)
+    F = Fc * np.sign(v) + sigma2 * v + noise * np.random.default_rng(3).standard_normal(t.size)
+    m = Measurement({"t": t, "x": x, "v": v, "F": F},
+                    {"name": path.stem, "kind": "friction-rig", "rig": {"mass": 1.0}})
+    m.write(path)
+    return m
+
+
+def test_compare_command_gives_the_contract_json_and_the_right_error(tmp_path: Path) -> None:
+    """The generating model compared as given leaves nothing; a wrong one leaves its own error."""
+    _coulomb_viscous_record(tmp_path / "rec.csv")
+    out = tmp_path / "cmp.json"
+    assert main(["compare", str(tmp_path / "rec.csv"), "--model", "coulomb-viscous",
+                 "--set", "Fc=30", "--set", "B=80", "--json", str(out)]) == 0
+    doc = json.loads(out.read_text())
+    for key in ("model", "rms", "regimes", "residual_features", "warnings"):
+        assert key in doc
+    assert doc["model"] == "coulomb-viscous"
+    assert doc["rms"] < 1e-6  # the exact law
+    # a Coulomb level 5 N too low: the error is 5 N wherever the rig slides (by hand)
+    assert main(["compare", str(tmp_path / "rec.csv"), "--model", "coulomb-viscous",
+                 "--set", "Fc=25", "--set", "B=80", "--json", str(out)]) == 0
+    doc = json.loads(out.read_text())
+    assert doc["regimes"]["sliding"]["rms"] == pytest.approx(5.0, rel=0.02)
+
+
+def test_compare_fit_judges_held_out_samples_and_reports(tmp_path: Path) -> None:
+    _coulomb_viscous_record(tmp_path / "rec.csv", noise=0.5)
+    out = tmp_path / "cmp.json"
+    assert main(["compare", str(tmp_path / "rec.csv"), "--model", "coulomb-viscous", "--fit",
+                 "--json", str(out), "--report", str(tmp_path / "rep")]) == 0
+    doc = json.loads(out.read_text())
+    assert doc["fitted"] is True and doc["judged"] == "held-out"
+    assert doc["params"]["Fc"] == pytest.approx(30.0, abs=0.3)
+    assert doc["params"]["B"] == pytest.approx(80.0, rel=0.05)
+    assert doc["rms"] == pytest.approx(0.5, rel=0.15)  # the white noise put in
+    assert (tmp_path / "rep" / "report.html").stat().st_size > 10_000
+
+
+def test_compare_never_writes_onto_its_input(tmp_path: Path, capsys: pytest.CaptureFixture
+                                             ) -> None:
+    rec = tmp_path / "rec.csv"
+    _coulomb_viscous_record(rec)
+    before = rec.read_bytes()
+    assert main(["compare", str(rec), "--model", "coulomb", "--json", str(rec)]) == 2
+    assert rec.read_bytes() == before
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "Traceback" not in err[0]
+
+
+def test_plant_domain_through_the_public_compare(tmp_path: Path) -> None:
+    """``fcomp.compare(..., plant=)``: the plant's own run replayed matches it in x."""
+    model = fcomp.make_model("lugre")
+    run = fcomp.simulate("pneumatic", model, "sine:amplitude=0.3,frequency=0.5", duration=3.0,
+                         rate=500.0)
+    comp = fcomp.compare(model, run, plant="pneumatic")
+    assert len(comp.plant) == 1 and comp.plant[0].rms["x"] < 1e-9
+    assert comp.to_dict()["plant"][run.label]["plant"] == "pneumatic"
+    assert isinstance(comp.plant[0], fcomp.PlantComparison)
+
+
+def test_import_csv_converts_units_signs_and_columns(tmp_path: Path) -> None:
+    """ms, mm, bar and a negated force with a decimal comma, converted by hand here."""
+    src = tmp_path / "log.csv"
+    rows = ["time_ms;pos [mm];force;p_a [bar]"]
+    for k in range(50):
+        rows.append(f"{k * 2};{10 + k * 0.1:.1f};{-3 - k};{2 + k * 0.01:.2f}".replace(".", ","))
+    src.write_text("\n".join(rows) + "\n")
+    out = tmp_path / "run.csv"
+    assert main(["import", "csv", str(src), "--map",
+                 "t=time_ms,x='pos [mm]',F=-force,p1='p_a [bar]'", "--units",
+                 "t=ms,x=mm,p1=bar", "--delimiter", ";", "--decimal", ",", "-o", str(out)]) == 0
+    m = Measurement.read(out)
+    k = np.arange(50)
+    np.testing.assert_allclose(m["t"], k * 2e-3)
+    np.testing.assert_allclose(m["x"], (10 + k * 0.1) * 1e-3)
+    np.testing.assert_allclose(m["F"], 3.0 + k)
+    np.testing.assert_allclose(m["p1"], (2 + k * 0.01) * 1e5)
+
+
+def test_import_csv_names_an_unmapped_column(tmp_path: Path, capsys: pytest.CaptureFixture
+                                             ) -> None:
+    src = tmp_path / "log.csv"
+    src.write_text("time,pos,extra\n0,0,1\n0.001,0.1,2\n")
+    out = tmp_path / "run.csv"
+    assert main(["import", "csv", str(src), "--map", "t=time,x=pos", "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "extra" in err and not out.exists()
+
+
+def test_python_face_fits_what_the_command_fits(tmp_path: Path) -> None:
+    rec = _coulomb_viscous_record(tmp_path / "rec.csv", noise=0.2)
+    f = fcomp.fit(rec, "coulomb-viscous")
+    assert f.params_["Fc"] == pytest.approx(30.0, abs=0.1)
+    assert f.params_["B"] == pytest.approx(80.0, rel=0.02)
+    assert fcomp.fit(tmp_path / "rec.csv", "coulomb-viscous").params_["Fc"] == f.params_["Fc"]

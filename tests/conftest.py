@@ -13,10 +13,30 @@ Helpers shared by several test modules live in the package :mod:`helpers`
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
 from helpers.browser import build_site
+
+
+@pytest.fixture(autouse=True)
+def _user_code_stays_in_its_test() -> Iterator[None]:
+    """What a test's user module registers (effects, models) and the list of user files the
+    worker processes re-run are undone after the test: a diagnosis elsewhere in the suite
+    takes every registered effect as a candidate and must not meet another test's."""
+    from fcomp.effects import EFFECTS
+    from fcomp.models import MODELS
+    from fcomp.usercode import USER_FILES
+
+    saved = [(reg, dict(reg._items)) for reg in (EFFECTS, MODELS)]
+    files = dict(USER_FILES)
+    yield
+    for reg, items in saved:
+        reg._items.clear()
+        reg._items.update(items)
+    USER_FILES.clear()
+    USER_FILES.update(files)
 
 
 @pytest.fixture(scope="session")

@@ -225,7 +225,7 @@ def test_unreadable_mat_files(tmp_path: Path) -> None:
 
 
 def test_registry_and_options() -> None:
-    assert IMPORTERS.names() == ["emps", "mat", "mataveid", "zillen"]
+    assert IMPORTERS.names() == ["csv", "emps", "mat", "mataveid", "zillen"]
     with pytest.raises(UnknownNameError, match="unknown import kind 'csv'"):
         import_file("csv", "x")
     with pytest.raises(FcompError, match="option\\(s\\) bore do not apply"):
@@ -253,7 +253,7 @@ def test_cli_import_round_trips(tmp_path: Path, capsys: pytest.CaptureFixture[st
     ("argv", "message"),
     [
         (["import", "emps", "{d}/missing.mat"], "missing.mat: file not found"),
-        (["import", "mat", "{emps}"], "--map COLUMN=VARIABLE,... is required"),
+        (["import", "mat", "{emps}"], "--map COLUMN=EXPR,... is required"),
         (["import", "mat", "{emps}", "--map", "t=t,x=nope"], "no variable 'nope'"),
         (["import", "zillen", "{emps}"], "cannot read as whitespace-separated numbers"),
         (["import", "emps", "{zillen}"], "cannot read as a MATLAB .mat file"),

@@ -119,3 +119,86 @@ def test_python_face_fits_what_the_command_fits(tmp_path: Path) -> None:
     assert f.params_["Fc"] == pytest.approx(30.0, abs=0.1)
     assert f.params_["B"] == pytest.approx(80.0, rel=0.02)
     assert fcomp.fit(tmp_path / "rec.csv", "coulomb-viscous").params_["Fc"] == f.params_["Fc"]
+
+
+def test_dataframe_round_trip_is_lossless_with_units(tmp_path: Path) -> None:
+    rec = _coulomb_viscous_record(tmp_path / "rec.csv", noise=0.3)
+    df = rec.to_dataframe()
+    assert list(df.columns)[0] == "t" and df.attrs["units"]["F"] == "N"
+    back = Measurement.from_dataframe(df)
+    for k in ("t", "x", "v", "F"):
+        assert np.array_equal(back[k], rec[k])  # bit for bit
+    assert back.meta["rig"]["mass"] == 1.0
+
+
+def test_backend_elementary_functions_agree_on_numpy_and_casadi() -> None:
+    """Every documented function gives the same number on both backends (and numpy's own)."""
+    import casadi as ca
+
+    from fcomp.backend import CASADI, FUNCTIONS, NUMPY
+
+    x, y = 0.37, -1.3
+    two = {"copysign", "fmin", "fmax", "power", "hypot", "atan2", "fmod"}
+    for name in FUNCTIONS:
+        args = (x, y) if name in two else ((1.7,) if name == "acosh" else (x,))
+        a = float(getattr(NUMPY, name)(*args))
+        sym = [ca.SX.sym(f"a{i}") for i in range(len(args))]
+        f = ca.Function("f", sym, [getattr(CASADI, name)(*sym)])
+        b = float(f(*args))
+        assert a == pytest.approx(b, rel=1e-12, abs=1e-15), name
+    assert float(NUMPY.atan2(y, x)) == pytest.approx(np.arctan2(y, x))
+    assert float(NUMPY.erf(0.5)) == pytest.approx(0.5204998778130465)  # tabulated
+
+
+def test_add_and_remove_a_configured_effect_instance() -> None:
+    """``add_effect`` takes a configured instance and the error falls; ``remove_effect`` undoes it."""
+    from fcomp.effects import make_effect
+    from fcomp.synthetic import generate
+
+    rec = generate(["pressure-dependence"], duration=12.0, seed=1).measurement
+    d = fcomp.Diagnosis("lugre", search=False, n_jobs=1).fit(rec)
+    before = d.rms_final_
+    d.add_effect(make_effect("pressure-dependence"))
+    assert d.added_ == ["pressure-dependence"] and d.rms_final_ < 0.5 * before
+    d.remove_effect("pressure-dependence")
+    assert d.added_ == [] and d.rms_final_ == pytest.approx(before, rel=0.05)
+    assert "array(" not in repr(d) and len(repr(d)) < 300
+    assert "<table" in d._repr_html_()
+
+
+def test_rich_display_and_short_reprs(tmp_path: Path) -> None:
+    rec = _coulomb_viscous_record(tmp_path / "rec.csv", noise=0.2)
+    f = fcomp.fit(rec, "coulomb-viscous")
+    c = fcomp.compare(f.model_, rec)
+    for obj in (f, c):
+        assert "array(" not in repr(obj) and len(repr(obj)) < 400
+        assert "<table" in obj._repr_html_()
+
+
+def test_linearize_keeps_the_signal_names() -> None:
+    from plants import make_plant
+
+    plant = make_plant("hydraulic", fcomp.make_model("lugre", params="seed002-type1"))
+    sys = plant.to_iosys()
+    lin = sys.linearize(plant.initial_state({"x": 0.1}), [0.0])
+    assert list(lin.state_labels) == list(plant.state_names)
+    assert list(lin.input_labels) == list(plant.input_names)
+    assert list(lin.output_labels) == list(plant.output_names)
+
+
+def test_the_packages_carry_their_type_hints() -> None:
+    import controllers
+    import plants
+    import studies
+
+    for pkg in (fcomp, plants, controllers, studies):
+        assert (Path(pkg.__file__).parent / "py.typed").exists()
+
+
+def test_fit_report_draws_the_fit(tmp_path: Path) -> None:
+    _coulomb_viscous_record(tmp_path / "rec.csv", noise=0.2)
+    rep = tmp_path / "fitrep"
+    assert main(["fit", str(tmp_path / "rec.csv"), "--model", "coulomb-viscous",
+                 "--report", str(rep)]) == 0
+    html = (rep / "report.html").read_text()
+    assert html.count("<img") >= 2 and "Fc" in html

@@ -404,7 +404,7 @@ def fig_plant(comps: Any) -> Figure:
 
 def _summary_rows(obj: Diagnosis | Comparison) -> tuple[str, list[list[Any]]]:
     """A title and the key numbers of a diagnosis or a comparison (for notebooks)."""
-    if isinstance(obj, Comparison):
+    if hasattr(obj, "view"):  # a Comparison
         rows = [["model", obj.model.describe(), ""],
                 [f"RMS error ({obj.judged_label} samples)", f"{obj.rms:.4g}", "N"],
                 ["noise floor", f"{obj.noise_floor:.3g}", "N"]]

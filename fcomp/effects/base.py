@@ -53,15 +53,15 @@ starts after a dwell, whether the mass is fitted.
     whether the effect needs a motion (a memory or the acceleration);
     effects with ``states`` are dynamic anyway. Not a candidate for
     steady-state points;
-:meth:`diagnosis_config` ``(scales) -> dict`` (class method, default ``{}``)
-    the configuration of an instance fitted to a record with these scales
-    (a reference speed, the stroke's ends);
-:meth:`diagnosis_forms` ``() -> tuple[DiagnosisForm, ...]`` (class method,
-    default one form, ``DiagnosisForm()``)
-    the forms the diagnosis refits side by side, of which it keeps the one the
-    information criterion prefers: each a label, a configuration and the
-    parameters it holds at their no-op values
-    (:class:`~fcomp.effects.record.DiagnosisForm`);
+:meth:`diagnosis_config` ``(scales) -> dict``
+    class method (default ``{}``): the configuration of an instance fitted to a
+    record with these :class:`~fcomp.conditioning.Scales` (a reference speed,
+    the stroke's ends);
+:meth:`diagnosis_forms` ``() -> tuple[DiagnosisForm, ...]``
+    class method (default one form, ``DiagnosisForm()``): the forms the
+    diagnosis refits side by side, of which it keeps the one the information
+    criterion prefers; each a label, a configuration and the parameters it
+    holds at their no-op values (:class:`~fcomp.effects.record.DiagnosisForm`);
 :meth:`unsuitable` ``(view) -> str | None`` (default ``None``)
     why this record cannot show the effect (no start after a dwell; the mass
     already fitted), ``None`` if it can;
@@ -75,11 +75,15 @@ starts after a dwell, whether the mass is fitted.
     parameters the record cannot determine (columns it cannot tell apart),
     held at their no-op values in the refit.
 
-The hooks are called on an instance with default parameters, configured for
-the record (``diagnosis_config`` and the form's ``config``); only
-``unsuitable`` is asked of the instance at its defaults and record
-configuration before any form is chosen. Guesses only start the refit:
-every parameter of the model is refitted.
+The diagnosis judges a candidate in this order: it must change the model
+(:meth:`applies_to`), the signals of ``needs`` but ``"a"`` must be there, a
+``dynamic`` effect needs a motion, then the acceleration (``"a"`` in
+``needs``), then :meth:`unsuitable`, then attaching it must work. The
+methods are called on an instance with default parameters configured for the
+record: ``diagnosis_config`` (and, for :meth:`guess` and :meth:`held`, the
+form's ``config``; :meth:`unsuitable` is asked before a form is chosen).
+Guesses only start the refit: every parameter of the model is refitted, but
+the held ones.
 
 *Structural* effects (terms of the LuGre family itself: ``stribeck``,
 ``viscous``, ``viscous-lead``, ``presliding``, ``frictional-lag``,

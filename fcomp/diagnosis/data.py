@@ -18,9 +18,11 @@ hold independent steady-state points (each row a force at a constant
 velocity, e.g. the tables of seed 001) rather than a motion; only static
 models and memoryless effects can be compared with them.
 
-:class:`Scales` holds the magnitudes every threshold and bound of the
-diagnosis is derived from (force, speed, acceleration, stroke, pressure,
-position resolution), so nothing is tuned to one rig.
+:class:`~fcomp.conditioning.Scales` (defined with the signal conditioning, below
+the effects, whose diagnosis hooks read it; importable from here too) holds the
+magnitudes every threshold and bound of the diagnosis is derived from (force,
+speed, acceleration, stroke, pressure, position resolution), so nothing is tuned
+to one rig.
 """
 
 from __future__ import annotations
@@ -35,6 +37,7 @@ import numpy as np
 from fcomp.conditioning import (
     Conditioning,
     Motion,
+    Scales,
     condition_motion,
     force_cutoff,
     motion_ensemble,
@@ -53,45 +56,6 @@ GAP_FACTOR = 20.0
 #: Fewest samples an experiment must have.
 MIN_SAMPLES = 20
 STEADY_STATE = "steady-state"
-@dataclass(frozen=True)
-class Scales:
-    """Magnitudes of a record, the reference of every data-derived threshold (SI).
-
-    Attributes
-    ----------
-    force : N
-        Typical friction magnitude: median ``|y|`` over moving samples.
-    speed : m/s
-        95th percentile of ``|v|``.
-    accel : m/s^2
-        95th percentile of ``|a|``.
-    x_min, x_max : m
-        1st and 99th percentiles of the position.
-    resolution : m
-        Position resolution: the smallest clearly non-zero step of ``x``.
-    p_mid, p_span : Pa
-        Mean and range (1st to 99th percentile) of ``p1 + p2``.
-    dt : s
-        Median sample interval.
-    duration : s
-        Total duration of all experiments.
-    """
-
-    force: float
-    speed: float
-    accel: float
-    x_min: float
-    x_max: float
-    resolution: float
-    p_mid: float
-    p_span: float
-    dt: float
-    duration: float
-
-    @property
-    def stroke(self) -> float:
-        """Position range covered (m), at least 100 resolutions."""
-        return max(self.x_max - self.x_min, 100.0 * self.resolution)
 
 
 @dataclass(frozen=True)

@@ -537,7 +537,7 @@ class Diagnosis:
         instance = effect if isinstance(effect, Effect) else None
         name = effect.name if isinstance(effect, Effect) else effect
         EFFECTS.get(name)
-        reason = (catalogue.applicability(name, self.fit_.model, self.data_, self.segmentation_)
+        reason = (catalogue.applicability(name, self._context())
                   if instance is None else _instance_applicability(instance, self.fit_.model,
                                                                    self.data_))
         if reason is not None:
@@ -728,11 +728,11 @@ class Diagnosis:
             if step_no and self.fit_.rms_test <= AT_FLOOR * self.noise_floor_.value:
                 break
             todo = []
+            ctx = self._context()
             for name in names:
                 if name in self.added_:
                     continue
-                reason = catalogue.applicability(name, self.fit_.model, self.data_,
-                                                 self.segmentation_)
+                reason = catalogue.applicability(name, ctx)
                 if reason is not None:
                     self.skipped_[name] = reason
                     continue

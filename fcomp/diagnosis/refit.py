@@ -14,7 +14,7 @@ diagnosis needs:
   simulated from rest over its whole length.
 * **Bounds from the data scale.** Each parameter's box is its
   :class:`~fcomp.parameters.ParamSpec` bounds intersected with a box set by
-  its unit and the record's :class:`~fcomp.diagnosis.data.Scales`
+  its unit and the record's :class:`~fcomp.conditioning.Scales`
   (:func:`data_bounds`), so no fit can run away to a value the record could
   not support (a stiffness softer than the stroke allows, a time constant
   shorter than a sample...).
@@ -46,7 +46,8 @@ from typing import Any
 
 import numpy as np
 
-from fcomp.diagnosis.data import DiagnosisData, Experiment, Scales
+from fcomp.conditioning import Scales
+from fcomp.diagnosis.data import DiagnosisData, Experiment
 from fcomp.diagnosis.split import Split
 from fcomp.errors import FcompError
 from fcomp.identification.dynamic import EXTRAS, TrajectoryProblem

@@ -3,7 +3,7 @@
 Every sample gets one regime, so errors can be reported per regime and the
 worst places found. The segmentation reads only the motion (and, for the
 presliding length, the force near reversals); its thresholds come from the
-data (:class:`~fcomp.diagnosis.data.Scales`), not from constants tuned to a rig:
+data (:class:`~fcomp.conditioning.Scales`), not from constants tuned to a rig:
 
 ``v_rest``
     speed below which the piston is at rest: the largest of five times the

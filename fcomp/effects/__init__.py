@@ -3,7 +3,10 @@
 ``model.with_effects("pressure-dependence", "dwell-time")`` adds effects by
 name; :func:`register_effect` adds a user's own (an :class:`Effect` subclass);
 :func:`load_effects_module` imports a user's ``.py`` file that registers
-effects (the CLI's ``--effects path/to/module.py``).
+effects (the CLI's ``--effects path/to/module.py``). Every registered effect
+is a diagnosis candidate; its diagnosis hooks (:class:`Effect`) read a
+:class:`~fcomp.effects.record.RecordView` and may offer several forms
+(:class:`~fcomp.effects.record.DiagnosisForm`).
 """
 
 from __future__ import annotations
@@ -13,6 +16,7 @@ from pathlib import Path
 
 from fcomp.effects.base import EFFECTS, Effect, make_effect, register_effect, scale_levels
 from fcomp.effects.catalogue import CATALOGUE
+from fcomp.effects.record import DiagnosisForm, RecordView
 from fcomp.errors import FcompError, term
 
 
@@ -78,6 +82,6 @@ def load_effects_module(path: str | Path) -> list[str]:
 
 
 __all__ = [
-    "CATALOGUE", "EFFECTS", "Effect", "effect_of_parameter", "experiment_for", "load_effects_module",
-    "make_effect", "register_effect", "scale_levels",
+    "CATALOGUE", "EFFECTS", "DiagnosisForm", "Effect", "RecordView", "effect_of_parameter",
+    "experiment_for", "load_effects_module", "make_effect", "register_effect", "scale_levels",
 ]

@@ -34,6 +34,57 @@ backend ``be`` (so it works numerically and symbolically):
 :meth:`steady_state` ``(be, sig, P) -> list``
     its states at constant velocity.
 
+Diagnosis hooks
+---------------
+A diagnosis (:class:`fcomp.diagnosis.Diagnosis`) takes every registered effect
+as a candidate and treats each the same way, through these class attributes
+and methods. Each has a neutral default, so an effect that overrides none of
+them is still a candidate (started from its defaults). The methods receive a
+:class:`~fcomp.effects.record.RecordView`: the record's signals, the force to
+match, the current model's prediction and residual, the training mask, the
+current parameter values, the record's scales
+(:class:`~fcomp.conditioning.Scales`), rest speed, presliding length, the
+starts after a dwell, whether the mass is fitted.
+
+``needs`` (class attribute, default ``()``)
+    signals the effect reads besides ``v`` (``"x"``, ``"p1"``, ``"p2"``,
+    ``"a"``): a record without one measured and informative cannot show it;
+``dynamic`` (class attribute, default ``False``)
+    whether the effect needs a motion (a memory or the acceleration);
+    effects with ``states`` are dynamic anyway. Not a candidate for
+    steady-state points;
+:meth:`diagnosis_config` ``(scales) -> dict``
+    class method (default ``{}``): the configuration of an instance fitted to a
+    record with these :class:`~fcomp.conditioning.Scales` (a reference speed,
+    the stroke's ends);
+:meth:`diagnosis_forms` ``() -> tuple[DiagnosisForm, ...]``
+    class method (default one form, ``DiagnosisForm()``): the forms the
+    diagnosis refits side by side, of which it keeps the one the information
+    criterion prefers; each a label, a configuration and the parameters it
+    holds at their no-op values (:class:`~fcomp.effects.record.DiagnosisForm`);
+:meth:`unsuitable` ``(view) -> str | None`` (default ``None``)
+    why this record cannot show the effect (no start after a dwell; the mass
+    already fitted), ``None`` if it can;
+:meth:`guess` ``(view, form) -> list[dict]`` (default ``[{}]``: the defaults)
+    data-driven starts of the refit, flat values of the effect's own
+    parameters (a guess may also move parameters of the model, e.g. a
+    stiffer bristle), read off the current residual and the motion; one
+    dict per alternative start. ``form`` is the label of the form tried
+    (``None`` for an effect with one form);
+:meth:`held` ``(view) -> list[str]`` (default ``[]``)
+    parameters the record cannot determine (columns it cannot tell apart),
+    held at their no-op values in the refit.
+
+The diagnosis judges a candidate in this order: it must change the model
+(:meth:`applies_to`), the signals of ``needs`` but ``"a"`` must be there, a
+``dynamic`` effect needs a motion, then the acceleration (``"a"`` in
+``needs``), then :meth:`unsuitable`, then attaching it must work. The
+methods are called on an instance with default parameters configured for the
+record: ``diagnosis_config`` (and, for :meth:`guess` and :meth:`held`, the
+form's ``config``; :meth:`unsuitable` is asked before a form is chosen).
+Guesses only start the refit: every parameter of the model is refitted, but
+the held ones.
+
 *Structural* effects (terms of the LuGre family itself: ``stribeck``,
 ``viscous``, ``viscous-lead``, ``presliding``, ``frictional-lag``,
 ``nonlocal-memory``) override :meth:`attach` to return the richer model
@@ -59,6 +110,8 @@ from fcomp.parameters import ParamSet, ParamValues, PlainValue, adopt_params
 from fcomp.registry import Registry
 
 if TYPE_CHECKING:
+    from fcomp.conditioning import Scales
+    from fcomp.effects.record import DiagnosisForm, RecordView
     from fcomp.models.base import FrictionModel, Signals
 
 
@@ -84,6 +137,8 @@ class Effect(PlainValue):
     experiments: ClassVar[Mapping[str, str]] = MappingProxyType({})
     #: signals the effect reads besides v (diagnosis checks the data has them)
     needs: ClassVar[tuple[str, ...]] = ()
+    #: needs a motion (memory, acceleration): not a candidate for steady-state points
+    dynamic: ClassVar[bool] = False
 
     def __init_subclass__(cls, **kwargs: Any) -> None:
         super().__init_subclass__(**kwargs)
@@ -135,6 +190,31 @@ class Effect(PlainValue):
 
     def steady_state(self, be: Backend, sig: Signals, P: ParamValues) -> list:
         return list(self.initial)
+
+    # ------------------------------------------------------- diagnosis hooks
+    @classmethod
+    def diagnosis_config(cls, scales: Scales) -> dict[str, Any]:
+        """Configuration of an instance fitted to a record of these ``scales`` (default none)."""
+        return {}
+
+    @classmethod
+    def diagnosis_forms(cls) -> tuple[DiagnosisForm, ...]:
+        """The forms a diagnosis refits side by side (default: one, unconfigured)."""
+        from fcomp.effects.record import DiagnosisForm
+
+        return (DiagnosisForm(),)
+
+    def unsuitable(self, view: RecordView) -> str | None:
+        """Why the record cannot show this effect, ``None`` if it can (default: it can)."""
+        return None
+
+    def guess(self, view: RecordView, form: str | None = None) -> list[dict[str, float]]:
+        """Data-driven starts of the refit (default: the parameters' defaults)."""
+        return [{}]
+
+    def held(self, view: RecordView) -> list[str]:
+        """Parameters the record cannot determine, held at their no-op values (default none)."""
+        return []
 
     def __repr__(self) -> str:
         return f"<effect {self.name} {self.params}>"

@@ -13,8 +13,17 @@ from collections.abc import Mapping
 from types import MappingProxyType
 from typing import TYPE_CHECKING, Any, ClassVar
 
+import numpy as np
+
 from fcomp.backend import Backend
 from fcomp.effects.base import EFFECTS, Effect, scale_levels
+from fcomp.effects.record import (
+    DiagnosisForm,
+    RecordView,
+    distinct_columns,
+    ls_slope,
+    stribeck_start,
+)
 from fcomp.models.hysteresis import (
     HYSTERESIS_CONSTRAINTS,
     NONLOCAL_MEMORY_DEFAULTS,
@@ -25,6 +34,7 @@ from fcomp.models.lugre_family import FAMILY_SPECS, FEATURE_PARAMS
 from fcomp.parameters import ParamValues, make_params_class, spec
 
 if TYPE_CHECKING:
+    from fcomp.conditioning import Scales
     from fcomp.models.base import FrictionModel, Signals
 
 INF = math.inf
@@ -107,6 +117,19 @@ class Viscous(StructuralEffect):
     signature = "residual linear and odd in v, largest at high speed"
     experiment = "constant-speed runs at several speeds in both directions"
 
+    @classmethod
+    def diagnosis_config(cls, scales: Scales) -> dict[str, Any]:
+        """The exponent's reference speed: the record's speed scale."""
+        return {"v_ref": scales.speed}
+
+    def guess(self, view: RecordView, form: str | None = None) -> list[dict[str, float]]:
+        """The slope of the residual against ``v`` while moving (Newtonian and thinning)."""
+        m = view.moving
+        c = ls_slope(view.residual[m], view.signal("v")[m])
+        sc = view.scales
+        c = c if c > 0 else 0.05 * sc.force / sc.speed
+        return [{"sigma2": c}, {"sigma2": c, "p_visc": 0.6}]
+
 
     def new_values(self, model: FrictionModel) -> dict[str, float]:
         flat = self.params.flat()
@@ -141,6 +164,20 @@ class Stribeck(StructuralEffect):
     Params = StribeckEffectParams
     signature = "residual hump at low |v| decaying with speed; peaks after starts"
     experiment = "slow constant-speed runs (0.1-10 vs) in both directions"
+
+    def guess(self, view: RecordView, form: str | None = None) -> list[dict[str, float]]:
+        """The low-speed hump of the force (:func:`~fcomp.effects.record.stribeck_start`):
+        its speed and a factor of four either side; the fat-tailed rational form too."""
+        flat = view.params
+        v = view.signal("v")
+        m = view.train
+        Fc = flat.get("Fc", flat.get("Fc_pos", view.level))
+        B = flat.get("B", flat.get("sigma2", 0.0))
+        Fs, vs = stribeck_start(v[m], view.y[m], Fc, B, view.v_rest)
+        exc = max(Fs - Fc, 0.1 * Fc)
+        # the exponential form, and the fat-tailed rational one (its form has no gradient at 0)
+        return [{"Fs_excess": exc, "vs": vs}, {"Fs_excess": exc, "vs": 4 * vs},
+                {"Fs_excess": exc, "vs": vs / 4}, {"Fs_excess": exc, "vs": vs, "kappa_s": 0.7}]
 
 
     def new_values(self, model: FrictionModel) -> dict[str, float]:
@@ -178,6 +215,18 @@ class ViscousLead(StructuralEffect):
     Params = ViscousLeadParams
     signature = "residual proportional to acceleration while sliding fast"
     experiment = "sinusoidal velocity at two or more frequencies, same amplitude"
+    needs = ("a",)
+    dynamic = True
+
+    def guess(self, view: RecordView, form: str | None = None) -> list[dict[str, float]]:
+        """``T`` from the residual regressed on ``sigma2*a``."""
+        flat = view.params
+        visc = flat.get("sigma2", flat.get("B", flat.get("sigma2_pos", 0.0)))
+        a = view.signal("a")
+        m = view.train
+        sc = view.scales
+        T = ls_slope(view.residual[m], visc * a[m]) if visc > 0 else 0.0
+        return [{"T": T if T > 0 else 0.05 * sc.speed / sc.accel}]
 
 
 FrictionalLagParams = make_params_class("FrictionalLagParams", [
@@ -215,6 +264,7 @@ class FrictionalLag(StructuralEffect):
     Params = FrictionalLagParams
     signature = "residual loop against v: rising and falling |v| branches differ"
     experiment = "velocity sweeps up and down at several rates; dwell before restart"
+    dynamic = True
 
     def __init__(self, params: Any = None, **config: Any) -> None:
         super().__init__(params, **config)
@@ -225,6 +275,27 @@ class FrictionalLag(StructuralEffect):
     @property
     def form(self) -> str:
         return str(self.config.get("form", "film"))
+
+    @classmethod
+    def diagnosis_forms(cls) -> tuple[DiagnosisForm, ...]:
+        """Both forms, the film and the lagged speed."""
+        return tuple(DiagnosisForm(f, {"form": f}) for f in cls.FORMS)
+
+    def guess(self, view: RecordView, form: str | None = None) -> list[dict[str, float]]:
+        """A small grid of time constants: 10 and 50 ms (at least 5 and 25 samples); for the
+        film, its speed ``vb`` at one and four Stribeck speeds; for the lagged speed, the
+        whole lag and half of it."""
+        flat = view.params
+        vs = flat.get("vs", flat.get("vs_pos", 0.1 * view.scales.speed))
+        dt = view.scales.dt
+        taus = (max(5 * dt, 0.01), max(25 * dt, 0.05))
+        if (form or "film") == "speed-lag":
+            return [{"tau_L": tau, "w_L": w} for tau in (*taus, 0.2) for w in (1.0, 0.5)]
+        out = []
+        for vb in (vs, 4 * vs):
+            for tau in taus:
+                out.append({"vb": vb, "tau_hp": tau, "tau_hn": tau, "tau_h0": 1.0})
+        return out
 
     def applies_to(self, model: FrictionModel) -> bool:
         from fcomp.models.lugre_family import LuGreFamily
@@ -282,6 +353,14 @@ class Presliding(StructuralEffect):
     Params = PreslidingParams
     signature = "residual spikes at reversals that follow displacement since reversal"
     experiment = "small-amplitude displacement cycles (well below break-away)"
+    dynamic = True
+
+    def guess(self, view: RecordView, form: str | None = None) -> list[dict[str, float]]:
+        """The stiffness from the presliding length, a factor of four either side; the
+        bristle exponent stiffer and softer than LuGre's."""
+        s0 = view.level / view.d_pre
+        return [{"sigma0": s0}, {"sigma0": 4 * s0}, {"sigma0": s0 / 4},
+                {"sigma0": s0, "i_pre": 0.5}, {"sigma0": s0, "i_pre": 2.0}]
 
 
     def attach(self, model: FrictionModel) -> FrictionModel:
@@ -353,6 +432,43 @@ class PressureDependence(Effect):
         dD = sig.p1 - sig.p2 - P("d_ref")
         return scale_levels(L, 1.0 + P("kp", sig.s) * dS + P("kd") * dD + P("kq") * dS * dS)
 
+    def guess(self, view: RecordView, form: str | None = None) -> list[dict[str, float]]:
+        """The level change per pascal of ``p1 + p2`` by least squares; then with the
+        chambers weighed apart and a curvature too (the sign-corrected residual regressed
+        on ``|F_hat|*(dS, dD, dS^2)``)."""
+        m = view.moving
+        s = np.sign(view.signal("v"))
+        p1, p2 = view.signal("p1"), view.signal("p2")
+        d_ref = float(np.mean(p1 - p2))
+        dS = p1 + p2 - view.scales.p_mid
+        dD = p1 - p2 - d_ref
+        F = np.abs(view.F_hat)
+        rs = (s * view.residual)[m]
+        kp = ls_slope(rs, (F * dS)[m])
+        bound = 0.9 / max(float(np.max(np.abs(dS))), 1.0)
+        ref = {"p_ref": view.scales.p_mid, "d_ref": d_ref}
+        cols = np.column_stack([F * dS, F * dD, F * dS * dS])[m]
+        use = distinct_columns(cols)
+        coef = np.zeros(3)
+        coef[use], *_ = np.linalg.lstsq(cols[:, use], rs, rcond=None)
+        bd = 0.9 / max(float(np.max(np.abs(dD))), 1.0)
+        bq = 0.9 / max(float(np.max(dS * dS)), 1.0)
+        full = {"kp": float(np.clip(coef[0], -bound, bound)),
+                "kd": float(np.clip(coef[1], -bd, bd)),
+                "kq": float(np.clip(coef[2], -bq, bq))}
+        return [{"kp": float(np.clip(kp, -bound, bound)), **ref}, {**full, **ref}]
+
+    def held(self, view: RecordView) -> list[str]:
+        """The chamber weight ``kd`` and the curvature ``kq`` where the record cannot tell
+        them from the level change ``kp`` (one chamber vented: ``p1 - p2`` is ``p1 + p2``;
+        two pressure levels: the square is a line)."""
+        m = view.moving
+        p1, p2 = view.signal("p1"), view.signal("p2")
+        dS = (p1 + p2 - view.scales.p_mid)[m]
+        dD = (p1 - p2)[m] - float(np.mean((p1 - p2)[m]))
+        use = distinct_columns(np.column_stack([dS, dD, dS * dS - np.mean(dS * dS)]))
+        return [n for i, n in enumerate(("kp", "kd", "kq")) if i not in use]
+
 
 DirectionAsymmetryParams = make_params_class("DirectionAsymmetryParams", [
     spec("r_neg", "-", 1.0, 0.0, 10.0, "ratio of the v < 0 levels to the v > 0 levels",
@@ -393,6 +509,30 @@ class DirectionAsymmetry(Effect):
         if visc is None:  # no viscous term to differ between the directions
             return 0.0, 0.0
         return (P("rv_neg") - 1.0) * visc * be.fmin(sig.v, 0.0), 0.0
+
+    @classmethod
+    def diagnosis_forms(cls) -> tuple[DiagnosisForm, ...]:
+        """The levels alone (the viscous ratio held at 1), and levels with the viscous ratio."""
+        return (DiagnosisForm("levels", held=("rv_neg",)), DiagnosisForm("levels-viscous"))
+
+    def guess(self, view: RecordView, form: str | None = None) -> list[dict[str, float]]:
+        """The ratio of the median retracting to extending force; with the viscous ratio,
+        the slope of the residual while retracting relative to the viscous one."""
+        form = form or "levels-viscous"
+        m = view.moving
+        v, y = view.signal("v"), view.y
+        pos, neg = m & (v > 0), m & (v < 0)
+        if pos.sum() < 3 or neg.sum() < 3:
+            return [{"r_neg": 1.0}]
+        a, b = float(np.median(y[pos])), float(np.median(-y[neg]))
+        ratio = b / a if a > 0 and b > 0 else 1.0
+        starts = [{"r_neg": float(np.clip(ratio, 0.2, 5.0))}]
+        flat = view.params
+        visc = flat.get("sigma2", flat.get("B", 0.0))
+        if visc > 0 and form != "levels":
+            c = ls_slope(view.residual[neg], v[neg])
+            starts.append({"r_neg": 1.0, "rv_neg": float(np.clip(1.0 + c / visc, 0.1, 9.0))})
+        return starts
 
 
 PositionDependenceParams = make_params_class("PositionDependenceParams", [
@@ -451,6 +591,61 @@ class PositionDependence(Effect):
         return scale_levels(L, 1.0 + P("kx1") * xi + P("kx2") * p2 + P("kx3") * p3
                             + P("kb") * box)
 
+    @classmethod
+    def diagnosis_config(cls, scales: Scales) -> dict[str, Any]:
+        """The stroke's ends: the record's position range, padded by 2 % of the stroke."""
+        pad = 0.02 * scales.stroke
+        return {"x_min": scales.x_min - pad, "x_max": scales.x_max + pad}
+
+    def guess(self, view: RecordView, form: str | None = None) -> list[dict[str, float]]:
+        """Legendre coefficients by least squares, and a local box where the rest peaks.
+
+        The sign-corrected training residual of the moving samples is regressed on
+        ``|F_hat|*P_k(xi)`` (the smooth part); what remains, relative to
+        ``|F_hat|``, is averaged in bins of 0.5 % of the stroke and its largest
+        excursion (three bins smoothed) gives the box: centre, half-width (where it
+        stays above half the peak), amplitude. Starts: the smooth part alone, the
+        smooth part with the box, and the box alone.
+        """
+        m = view.moving
+        cfg = self.diagnosis_config(view.scales)
+        x = view.signal("x")
+        xi = 2.0 * (x - cfg["x_min"]) / (cfg["x_max"] - cfg["x_min"]) - 1.0
+        F = np.abs(view.F_hat)
+        cols = np.column_stack([F * xi, F * 0.5 * (3 * xi**2 - 1),
+                                F * 0.5 * (5 * xi**3 - 3 * xi)])
+        rs = np.sign(view.signal("v")) * view.residual
+        coef, *_ = np.linalg.lstsq(cols[m], rs[m], rcond=None)
+        coef = np.clip(coef, -0.9, 0.9)
+        smooth_part = {"kx1": float(coef[0]), "kx2": float(coef[1]), "kx3": float(coef[2]),
+                       "kb": 0.0}
+        sc = view.scales
+        rel = (rs - cols @ coef)[m] / np.maximum(F[m], 1e-3 * sc.force)
+        width = max(0.005 * sc.stroke, 2.0 * sc.resolution)
+        edges = np.arange(sc.x_min, sc.x_max + width, width)
+        k = np.clip(np.digitize(x[m], edges) - 1, 0, max(edges.size - 2, 0))
+        count = np.bincount(k, minlength=edges.size - 1)
+        if edges.size < 4 or (count >= 5).sum() < 4:
+            return [smooth_part]
+        mean = np.where(count >= 5, np.bincount(k, rel, minlength=edges.size - 1)
+                        / np.maximum(count, 1), 0.0)
+        sm = np.convolve(mean, np.ones(3) / 3.0, mode="same")
+        j = int(np.argmax(np.abs(sm)))
+        peak = float(sm[j])
+        lo = hi = j
+        while (lo > 0 and abs(sm[lo - 1]) > 0.5 * abs(peak)
+               and np.sign(sm[lo - 1]) == np.sign(peak)):
+            lo -= 1
+        while (hi < sm.size - 1 and abs(sm[hi + 1]) > 0.5 * abs(peak)
+               and np.sign(sm[hi + 1]) == np.sign(peak)):
+            hi += 1
+        box = {"kb": float(np.clip(peak, -0.9, 2.9)),
+               "xb": float(0.5 * (edges[lo] + edges[hi + 1])),
+               "wb": float(0.5 * (edges[hi + 1] - edges[lo])),
+               "eb": float(max(0.25 * width, sc.resolution))}
+        return [smooth_part, {**smooth_part, **box},
+                {"kx1": 0.0, "kx2": 0.0, "kx3": 0.0, **box}]
+
 
 DwellTimeParams = make_params_class("DwellTimeParams", [
     spec("dFs", "N", 0.0, 0.0, INF, "break-away increase after a long dwell"),
@@ -494,6 +689,7 @@ class DwellTime(Effect):
     fixed: ClassVar[tuple[str, ...]] = ("v_rest",)
     signature = "break-away spikes growing with the dwell time before the start"
     experiment = "starts after dwells of different lengths (0.1 s to 10 s)"
+    dynamic = True
 
     def modify_levels(self, be: Backend, L: dict, w: list[Any], sig: Signals,
                       P: ParamValues) -> dict:
@@ -512,6 +708,43 @@ class DwellTime(Effect):
         L, tau = P("L_dwell"), P("tau_dwell")
         rest = be.exp(-be.abs(sig.v) / P("v_rest"))
         return [L * rest / (L * rest + be.abs(sig.v) * tau)]
+
+    def unsuitable(self, view: RecordView) -> str | None:
+        """A record without a start after a dwell cannot show it."""
+        return None if view.dwell_starts else "the record has no start after a dwell"
+
+    def guess(self, view: RecordView, form: str | None = None) -> list[dict[str, float]]:
+        """Break-away peaks of the residual against the dwell time before each start."""
+        x, v = view.signal("x"), view.signal("v")
+        r = view.residual
+        zone = 3.0 * view.d_pre
+        dwells, peaks = [], []
+        for k, dw in view.dwell_starts:
+            j = k
+            s = math.copysign(1.0, v[k]) if v[k] != 0 else 1.0
+            while j < view.n and abs(x[j] - x[k]) < zone and j - k < 10_000:
+                j += 1
+            win = slice(k, max(j, k + 1))
+            sel = view.train[win]
+            if sel.any():
+                dwells.append(dw)
+                peaks.append(float(np.max(s * r[win][sel])))
+        level = view.level
+        if len(dwells) < 2:
+            return [{"dFs": 0.2 * level, "tau_dwell": 1.0, "L_dwell": 2 * view.d_pre}]
+        d, p = np.array(dwells), np.array(peaks)
+        best = None
+        for tau in np.geomspace(max(d.min(), 0.01), max(d.max(), 0.02), 5):
+            A = np.column_stack([np.ones_like(d), 1.0 - np.exp(-d / tau)])
+            coef, *_ = np.linalg.lstsq(A, p, rcond=None)
+            cost = float(np.sum((p - A @ coef) ** 2))
+            if best is None or cost < best[0]:
+                best = (cost, max(float(coef[1]), 0.05 * level), float(tau))
+        _, dFs, tau = best  # type: ignore[misc]
+        L = max(2 * view.d_pre, 20 * view.scales.resolution)
+        return [{"dFs": dFs, "tau_dwell": tau, "L_dwell": L},
+                {"dFs": dFs, "tau_dwell": tau, "L_dwell": 8 * L},
+                {"dFs": 1.5 * dFs, "tau_dwell": 0.3 * tau, "L_dwell": 2 * L, "k_dwell": 1.0}]
 
 
 InertiaErrorParams = make_params_class("InertiaErrorParams", [
@@ -533,9 +766,21 @@ class InertiaError(Effect):
     Params = InertiaErrorParams
     signature = "residual proportional to acceleration at all speeds"
     experiment = "the same motion with a known added mass"
+    needs = ("a",)
+    dynamic = True
 
     def extra_force(self, be: Backend, sig: Signals, P: ParamValues) -> tuple[Any, Any]:
         return 0.0, P("dm")
+
+    def unsuitable(self, view: RecordView) -> str | None:
+        """A fitted mass already holds any mass error."""
+        return ("the mass is already fitted (no rig.mass): a mass error is part of it"
+                if view.fits_mass else None)
+
+    def guess(self, view: RecordView, form: str | None = None) -> list[dict[str, float]]:
+        """The residual regressed on the acceleration."""
+        m = view.train
+        return [{"dm": ls_slope(view.residual[m], view.signal("a")[m])}]
 
 
 ForceOffsetParams = make_params_class("ForceOffsetParams", [
@@ -569,6 +814,10 @@ class ForceOffset(Effect):
 
     def extra_force(self, be: Backend, sig: Signals, P: ParamValues) -> tuple[Any, Any]:
         return P("offset"), 0.0
+
+    def guess(self, view: RecordView, form: str | None = None) -> list[dict[str, float]]:
+        """The mean training residual."""
+        return [{"offset": float(np.mean(view.residual[view.train]))}]
 
 
 NonlocalMemoryParams = make_params_class(
@@ -619,6 +868,7 @@ class NonlocalMemory(StructuralEffect):
     signature = ("small-displacement residual following travel since reversal; minor-loop "
                  "offsets erased past earlier reversal points")
     experiment = "small displacement cycles with nested minor loops (seed 000 Figs. 10, 16)"
+    dynamic = True
 
     def __init__(self, params: Any = None, **config: Any) -> None:
         super().__init__(params, **config)
@@ -629,6 +879,30 @@ class NonlocalMemory(StructuralEffect):
     @property
     def form(self) -> str:
         return str(self.config.get("form", "hysteresis"))
+
+    @classmethod
+    def diagnosis_config(cls, scales: Scales) -> dict[str, Any]:
+        """The form with continuous states and exact sensitivities."""
+        return {"form": "maxwell-slip"}
+
+    def guess(self, view: RecordView, form: str | None = None) -> list[dict[str, float]]:
+        """Maxwell-slip elements carrying most of the level, spread over one and two decades.
+
+        The slip displacement of the softest element starts at three presliding
+        lengths (the fitted bristle's ``Fc/sigma0``, else the record's); the
+        elements' stiffness either constant (GMS) or scaling with the slip level
+        (constant slip displacements), their shares equal. The bristle keeps its
+        fitted stiffness for the share it still carries.
+        """
+        flat = view.params
+        level = flat.get("Fc", flat.get("Fc_pos", view.level))
+        s0 = flat.get("sigma0", level / view.d_pre)
+        d_pre = level / s0 if s0 > 0 else view.d_pre
+        out = []
+        for spread, scaling in ((10.0, 0.0), (100.0, 0.0), (10.0, 1.0), (100.0, 1.0)):
+            out.append({"ms_share": 0.9, "ms_dmax": 3.0 * d_pre, "ms_spread": spread,
+                        "ms_shape": 0.0, "ms_scaling": scaling})
+        return out
 
     def applies_to(self, model: FrictionModel) -> bool:
         features = _features(model)

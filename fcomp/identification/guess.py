@@ -6,7 +6,8 @@
   inverse-model regression used for the EMPS benchmark (IDIM-LS, Janot et al.).
 * **Stribeck hump** -- ``Fs`` is the largest binned ``sign(v)*f - B*|v|`` at low
   speed (``f`` the friction estimate), ``vs`` the speed at which the excess
-  over ``Fc`` has decayed to ``1/e`` of its peak.
+  over ``Fc`` has decayed to ``1/e`` of its peak
+  (:func:`fcomp.effects.record.stribeck_start`).
 * **Bristle stiffness** -- after each velocity reversal the LuGre force moves
   from ``-g`` to ``+g`` along ``dF/dx = sigma0*(1 + F/g)`` (from
   ``dz/dt = v - sigma0*|v|*z/g`` at constant ``g``), so it crosses zero after a
@@ -26,6 +27,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+# the Stribeck hump lives with the effects, whose guesses read it too (re-exported here)
+from fcomp.effects.record import stribeck_start as stribeck_start
 from fcomp.identification.target import FitData
 
 
@@ -85,33 +88,6 @@ def linear_start(d: FitData, v_min: float, *, offset: bool, directional: bool,
     Fc = tuple(max(float(c), 1e-3 * scale) for c in Fc)  # type: ignore[assignment]
     B = tuple(max(float(b), 0.0) for b in B)  # type: ignore[assignment]
     return LinearStart(Fc, B, mass, off, fric)  # type: ignore[arg-type]
-
-
-def stribeck_start(v: np.ndarray, f: np.ndarray, Fc: float, B: float,
-                   v_min: float) -> tuple[float, float]:
-    """``(Fs, vs)`` from the low-speed hump of ``sign(v)*f - B*|v|`` (one direction's samples)."""
-    speed = np.abs(v)
-    m = speed >= v_min
-    if m.sum() < 10:
-        return 1.2 * Fc, max(v_min, 1e-6)
-    speed, level = speed[m], np.sign(v[m]) * f[m] - B * speed[m]
-    edges = np.geomspace(speed.min(), speed.max() * (1 + 1e-9), 16)
-    idx = np.clip(np.digitize(speed, edges) - 1, 0, edges.size - 2)
-    centres, means = [], []
-    for b in range(edges.size - 1):
-        sel = idx == b
-        if sel.sum() >= 3:
-            centres.append(math.sqrt(edges[b] * edges[b + 1]))
-            means.append(float(np.median(level[sel])))
-    if not centres:
-        return 1.2 * Fc, max(v_min, 1e-6)
-    c, mu = np.array(centres), np.array(means)
-    k = int(np.argmax(mu))
-    Fs = max(float(mu[k]), 1.05 * Fc)
-    target = Fc + (Fs - Fc) / math.e
-    after = np.nonzero((c > c[k]) & (mu <= target))[0]
-    vs = float(c[after[0]]) if after.size else float(c[min(k + 1, c.size - 1)])
-    return Fs, max(vs, v_min)
 
 
 def bristle_stiffness(x: np.ndarray, v: np.ndarray, f: np.ndarray, g: float) -> float | None:

@@ -26,7 +26,7 @@ import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 from matplotlib.figure import Figure
@@ -402,20 +402,25 @@ def fig_plant(comps: Any) -> Figure:
     return fig
 
 
+def _comparison_rows(obj: Comparison) -> tuple[str, list[list[Any]]]:
+    """A title and the key numbers of a comparison (for notebooks)."""
+    rows = [["model", obj.model.describe(), ""],
+            [f"RMS error ({obj.judged_label} samples)", f"{obj.rms:.4g}", "N"],
+            ["noise floor", f"{obj.noise_floor:.3g}", "N"]]
+    rows += [[f"regime {k}", "-" if v["rms"] is None else f"{v['rms']:.4g}",
+              f"N (n={v['n']})"] for k, v in obj.regimes.items()]
+    rows += [[f"plant {c.plant}, {k}", f"{v:.3g}", "m" if k == "x" else "Pa"]
+             for c in obj.plant for k, v in c.rms.items()]
+    top = obj.residual_features[:3]
+    rows.append(["residual follows", ", ".join(f"{f.feature} {f.strength:.2f}"
+                                               for f in top), "strength"])
+    return f"Comparison: {obj.model.describe()} on {', '.join(obj.data.labels[:3])}", rows
+
+
 def _summary_rows(obj: Diagnosis | Comparison) -> tuple[str, list[list[Any]]]:
     """A title and the key numbers of a diagnosis or a comparison (for notebooks)."""
     if hasattr(obj, "view"):  # a Comparison
-        rows = [["model", obj.model.describe(), ""],
-                [f"RMS error ({obj.judged_label} samples)", f"{obj.rms:.4g}", "N"],
-                ["noise floor", f"{obj.noise_floor:.3g}", "N"]]
-        rows += [[f"regime {k}", "-" if v["rms"] is None else f"{v['rms']:.4g}",
-                  f"N (n={v['n']})"] for k, v in obj.regimes.items()]
-        rows += [[f"plant {c.plant}, {k}", f"{v:.3g}", "m" if k == "x" else "Pa"]
-                 for c in obj.plant for k, v in c.rms.items()]
-        top = obj.residual_features[:3]
-        rows.append(["residual follows", ", ".join(f"{f.feature} {f.strength:.2f}"
-                                                   for f in top), "strength"])
-        return f"Comparison: {obj.model.describe()} on {', '.join(obj.data.labels[:3])}", rows
+        return _comparison_rows(cast("Comparison", obj))
     _check(obj)
     d = obj.to_dict()
     rows = [["baseline", d["baseline"], ""],

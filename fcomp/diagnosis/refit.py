@@ -73,6 +73,8 @@ CANDIDATE_SAMPLES = 15_000
 PRESLIDING_SPAN = 20.0
 #: Parameters held at their start values in the first stage of a fit.
 STAGED = ("n", "p_visc", "kappa_s", "i_pre")
+#: Half-width, in unit scales, of the box of a pressure level-law coefficient.
+LEVEL_LAW_SPAN = 2.0
 
 
 def unit_scale(unit: str, sc: Scales, d_pre: float) -> float:
@@ -108,7 +110,12 @@ def data_bounds(spec: ParamSpec, sc: Scales, d_pre: float) -> tuple[float, float
     speeds ``[1e-4 V, 100 V]``; lengths ``[0.2*resolution, stroke]``;
     time constants ``[dt/2, 10*duration]``; dimensionless numbers keep their
     spec box (an open lower bound becomes 1e-3). Signed quantities get
-    ``+-20`` unit scales. ``F``, ``V`` are the force and speed scales.
+    ``+-20`` unit scales, but the coefficients of a level law in the pressures
+    (``1/Pa``, ``1/Pa^2``) only ``+-2``: across the record's pressure span the
+    law may change the friction level by twice its mid value, no more (a
+    box twenty times wider let a refit wander where the law turns the level
+    negative at a pressure of the record). ``F``, ``V`` are the force and speed
+    scales.
     """
     u = spec.unit
     s = unit_scale(u, sc, d_pre)
@@ -129,7 +136,8 @@ def data_bounds(spec: ParamSpec, sc: Scales, d_pre: float) -> tuple[float, float
         if spec.lower_open and lo <= spec.lower:
             lo = spec.lower + (1e-3 if u == "-" else 1e-9 * s)
     else:
-        lo, hi = max(lo_s, -20.0 * s), min(hi_s, 20.0 * s)
+        k = LEVEL_LAW_SPAN if u in ("1/Pa", "1/Pa^2") else 20.0
+        lo, hi = max(lo_s, -k * s), min(hi_s, k * s)
     if spec.name == "n":
         lo = max(lo, 0.2)
         hi = min(hi, 6.0)

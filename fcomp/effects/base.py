@@ -220,8 +220,24 @@ class Effect(PlainValue):
         return f"<effect {self.name} {self.params}>"
 
 
-def scale_levels(L: dict, factor: Any, names: tuple[str, ...] = ("Fc", "Fs")) -> dict:
-    """``L`` with the named levels multiplied by ``factor``."""
+#: The least share of its reference level a level law may scale a friction level to
+#: (:func:`scale_levels` with a backend): a seal's friction stays positive whatever a
+#: fitted polynomial does outside the range where the record fixes it.
+LEVEL_FLOOR = 0.01
+
+
+def scale_levels(L: dict, factor: Any, names: tuple[str, ...] = ("Fc", "Fs"),
+                 be: Backend | None = None) -> dict:
+    """``L`` with the named levels multiplied by ``factor``.
+
+    With a backend ``be`` the factor is first floored at :data:`LEVEL_FLOOR`,
+    ``max(factor, 0.01)``: level laws that are polynomials (pressure, position)
+    can turn negative far from the data that fixed them, and a negative level
+    is no friction at all (a LuGre state divides by it). Where the factor is
+    above the floor the law is unchanged.
+    """
+    if be is not None:
+        factor = be.fmax(factor, LEVEL_FLOOR)
     out = dict(L)
     for n in names:
         if n in out:

@@ -407,7 +407,10 @@ class PressureDependence(Effect):
     law (a saturating seal: ``kq < 0``). A model without it leaves a residual
     whose magnitude follows the pressures: runs at high pressure sit above the
     fit, runs at low pressure below, with the same sign as the friction.
-    ``p_ref`` and ``d_ref`` are held fixed (not fitted).
+    ``p_ref`` and ``d_ref`` are held fixed (not fitted). The factor is floored at
+    1 % (:data:`~fcomp.effects.base.LEVEL_FLOOR`): a curvature fitted on a few
+    pressure levels must not make the level negative at a pressure the fit
+    never weighed.
     """
 
     name = "pressure-dependence"
@@ -430,7 +433,8 @@ class PressureDependence(Effect):
                       P: ParamValues) -> dict:
         dS = sig.p1 + sig.p2 - P("p_ref")
         dD = sig.p1 - sig.p2 - P("d_ref")
-        return scale_levels(L, 1.0 + P("kp", sig.s) * dS + P("kd") * dD + P("kq") * dS * dS)
+        return scale_levels(L, 1.0 + P("kp", sig.s) * dS + P("kd") * dD + P("kq") * dS * dS,
+                            be=be)
 
     def guess(self, view: RecordView, form: str | None = None) -> list[dict[str, float]]:
         """The level change per pascal of ``p1 + p2`` by least squares; then with the
@@ -566,7 +570,8 @@ class PositionDependence(Effect):
     ``xb``, half-width ``wb``, edge width ``eb`` (a narrow box with soft edges
     is a bump, a wide one reaching past the end of the stroke a step). A model
     without it leaves a residual that is a function of ``x``, repeated on every
-    stroke, of the friction's sign.
+    stroke, of the friction's sign. The scale is floored at 1 %
+    (:data:`~fcomp.effects.base.LEVEL_FLOOR`).
     """
 
     name = "position-dependence"
@@ -589,7 +594,7 @@ class PositionDependence(Effect):
         xb, wb, eb = P("xb"), P("wb"), P("eb")
         box = 0.5 * (be.tanh((sig.x - xb + wb) / eb) - be.tanh((sig.x - xb - wb) / eb))
         return scale_levels(L, 1.0 + P("kx1") * xi + P("kx2") * p2 + P("kx3") * p3
-                            + P("kb") * box)
+                            + P("kb") * box, be=be)
 
     @classmethod
     def diagnosis_config(cls, scales: Scales) -> dict[str, Any]:

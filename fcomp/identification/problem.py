@@ -20,6 +20,7 @@ The solve is :func:`scipy.optimize.least_squares` (trust-region reflective,
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 
@@ -242,8 +243,15 @@ def _solve(pv: ParameterVector, fun: ResidualFn, max_nfev: int, compress: bool,
             raise RuntimeError("the residual function returned no Jacobian")
         return J
 
-    out = least_squares(res, q0, jac=jac, bounds=(lo, hi), x_scale=sc, method="trf",
-                        max_nfev=max_nfev, ftol=1e-8, xtol=1e-8, gtol=1e-8)
+    # The solver's trial steps may leave floating-point range (an overflowing
+    # bristle state, a 0/0 in its own step-size algebra); it rejects them itself, and
+    # the solution it returns is checked for finite forces below. Those excursions are
+    # the search's business, not warnings for the user.
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"), \
+            warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        out = least_squares(res, q0, jac=jac, bounds=(lo, hi), x_scale=sc, method="trf",
+                            max_nfev=max_nfev, ftol=1e-8, xtol=1e-8, gtol=1e-8)
     theta = T @ out.x
     r, G = fun(theta, True)
     if G is None:

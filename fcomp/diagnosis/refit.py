@@ -49,11 +49,11 @@ import numpy as np
 from fcomp.conditioning import Scales
 from fcomp.diagnosis.data import DiagnosisData, Experiment
 from fcomp.diagnosis.split import Split
-from fcomp.errors import FcompError
 from fcomp.identification.dynamic import EXTRAS, TrajectoryProblem
 from fcomp.identification.estimator import ALWAYS_FIXED, EXTRA_SPECS, default_free
 from fcomp.identification.plausibility import FitWarning, RigContext, check_fit, correlations
 from fcomp.identification.problem import ParameterVector, base_name, solve
+from fcomp.identification.records import best_start
 from fcomp.identification.target import FitData
 from fcomp.identification.uncertainty import estimate
 from fcomp.models.base import FrictionModel
@@ -506,26 +506,13 @@ class Refit:
         # stage 1: shape exponents held at their start values (they open flat
         # valleys, e.g. n < 1 with a large viscous term, when few speeds are seen)
         first = [n for n in names if base_name(n) not in STAGED] or names
-        best = None
-        nfev = 0
         several = len(start_list) > 1
         budget = min(PROBE_NFEV, max_nfev) if several else max_nfev
         main = self._candidate_records if fast else self._records
         probe = self._probe_records if several else main
-        for st in start_list:
-            try:
-                sol, k = self._solve(model, self._pv(model, first, st, specs), budget,
-                                     records=probe)
-            except FcompError:
-                continue
-            nfev += k
-            cost = float(sol.residuals @ sol.residuals)
-            if best is None or cost < best[0]:
-                best = (cost, sol, st)
-        if best is None:
-            raise FcompError(f"fitting {model.describe()}: the model gives non-finite forces at "
-                             "every start")
-        cost, sol, st = best
+        cost, sol, st, nfev = best_start(
+            start_list, lambda st: self._solve(model, self._pv(model, first, st, specs), budget,
+                                               records=probe), model.describe())
         st = dict(st, **dict(zip(first, map(float, sol.theta), strict=True)))
         if reference is not None and several and cost > (1.0 - MIN_GAIN) * reference:
             values = {n: float(st[n]) for n in names}

@@ -247,21 +247,13 @@ def fit_records(
     nfev = 0
     chosen = start_list[0]
     if len(start_list) > 1 and probe_nfev:
-        best: tuple[float, Solution, dict[str, float]] | None = None
-        for st in start_list:
-            try:
-                sol, prob = solve_records(model, records, vector(st), max_nfev=probe_nfev,
-                                          substeps=substeps)
-            except FcompError:
-                continue
-            nfev += prob.evaluations
-            cost = float(sol.residuals @ sol.residuals)
-            if best is None or cost < best[0]:
-                best = (cost, sol, st)
-        if best is None:
-            raise FcompError(f"fitting {model.describe()}: the model gives non-finite forces "
-                             "at every start")
-        cost, sol, st = best
+        def probe(st: dict[str, float]) -> tuple[Solution, int]:
+            sol, prob = solve_records(model, records, vector(st), max_nfev=probe_nfev,
+                                      substeps=substeps)
+            return sol, prob.evaluations
+
+        cost, sol, st, k = best_start(start_list, probe, model.describe())
+        nfev += k
         chosen = dict(st, **dict(zip(names, map(float, sol.theta), strict=True)))
         if keep_going is not None and not keep_going(cost):
             return _result(model, names, chosen, st, sol, nfev, probed_only=True)
@@ -270,6 +262,38 @@ def fit_records(
     nfev += prob.evaluations
     return _result(model, names, dict(zip(names, map(float, sol.theta), strict=True)), chosen,
                    sol, nfev)
+
+
+
+def best_start(starts: Sequence[dict[str, float]],
+               solve_one: Callable[[dict[str, float]], tuple[Solution, int]],
+               what: str) -> tuple[float, Solution, dict[str, float], int]:
+    """The start whose (short) solve ends with the least sum of squares.
+
+    ``solve_one(start)`` returns the solution and its evaluation count, or raises
+    :class:`~fcomp.errors.FcompError` for a start where the model gives non-finite
+    forces (that start is skipped). Returns ``(cost, solution, start, evaluations)``,
+    the evaluations summed over every start tried.
+
+    Raises
+    ------
+    FcompError
+        When no start gives finite forces.
+    """
+    best: tuple[float, Solution, dict[str, float]] | None = None
+    nfev = 0
+    for st in starts:
+        try:
+            sol, k = solve_one(st)
+        except FcompError:
+            continue
+        nfev += k
+        cost = float(sol.residuals @ sol.residuals)
+        if best is None or cost < best[0]:
+            best = (cost, sol, st)
+    if best is None:
+        raise FcompError(f"fitting {what}: the model gives non-finite forces at every start")
+    return (*best, nfev)
 
 
 def _result(model: FrictionModel, names: Sequence[str], values: Mapping[str, float],

@@ -53,7 +53,10 @@ returns ``self``, results in ``*_`` attributes) runs the whole procedure:
 4. **Verdict.** The final residual is tested for structure left
    (:mod:`.features`): ``unexplained-structure`` when some feature explains
    at least :data:`STRUCTURE_MIN` of its held-out mean square *and* the part
-   it explains is at least half the noise floor (RMS), or when the final
+   it explains is at least half the noise floor (RMS), when the residual near
+   starts and reversals (weighted as the fits weigh it: :func:`.refit.sample_weights`)
+   repeats as a function of the time since the event (:func:`.features.event_structure`),
+   or when the final
    held-out RMS, without its largest 1 % of samples (isolated timing spikes,
    :func:`trimmed_rms`), is more than twice the noise floor; else ``explained``.
    The tool never accepts an effect that does not qualify just because
@@ -84,7 +87,7 @@ import fcomp.diagnosis.catalogue as catalogue
 from fcomp.diagnosis.data import DiagnosisData, prepare
 from fcomp.diagnosis.features import FeatureStrength, event_structure, residual_structure
 from fcomp.diagnosis.noise import NoiseFloor, effective_sample_size, noise_floor
-from fcomp.diagnosis.refit import FitResult, Refit
+from fcomp.diagnosis.refit import FitResult, Refit, sample_weights
 from fcomp.diagnosis.regimes import Segmentation, segment
 from fcomp.diagnosis.residuals import regime_errors
 from fcomp.diagnosis.split import Split, make_split
@@ -929,7 +932,13 @@ class Diagnosis:
         top = self.residual_features_[0] if self.residual_features_ else None
         structured = (top is not None and top.strength >= STRUCTURE_MIN
                       and self.rms_final_ * math.sqrt(top.strength) >= least)
-        ev = event_structure(self.fit_.residual, data, seg, split.train, split.test)
+        # after starts and reversals, where a jump of the law within the timing uncertainty
+        # of the event leaves spikes no model could place, the residual counts as the fits
+        # weigh it (a static map's full-level step one sample early is not a structure)
+        r_events = self.fit_.residual
+        if self.fit_.spread is not None:
+            r_events = r_events * np.sqrt(sample_weights(self.fit_.spread, nf))
+        ev = event_structure(r_events, data, seg, split.train, split.test)
         self.event_structure_ = ev
         event = ev is not None and ev.strength >= STRUCTURE_MIN and ev.rms >= least
         trimmed = trimmed_rms(self.fit_.residual[split.test])

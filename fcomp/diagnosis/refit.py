@@ -146,6 +146,15 @@ def data_bounds(spec: ParamSpec, sc: Scales, d_pre: float) -> tuple[float, float
     return float(lo), float(hi)
 
 
+
+def sample_weights(spread: np.ndarray, noise: float) -> np.ndarray:
+    """``w = 1/(1 + (spread/(2*noise))^2)``: how much a sample can tell, given the width
+    ``spread`` (N) of the band the model's prediction could take there and the noise floor
+    (:meth:`Refit.set_weights`)."""
+    ratio = np.minimum(np.asarray(spread) / (2.0 * max(noise, 1e-300)), 1e100)
+    return 1.0 / (1.0 + ratio**2)
+
+
 @dataclass
 class FitResult:
     """A model fitted on the training samples, and its prediction everywhere.
@@ -318,8 +327,7 @@ class Refit:
         otherwise dominate the squares (a static law's 500 N step one sample
         early). Fits after this weigh their residuals by ``sqrt(w)``.
         """
-        ratio = np.minimum(np.asarray(spread) / (2.0 * max(noise, 1e-300)), 1e100)
-        self._weights = 1.0 / (1.0 + ratio**2)
+        self._weights = sample_weights(spread, noise)
         self._record_weights = {}
 
     def _weights_of(self, records: list[tuple[FitData, np.ndarray]]

@@ -19,13 +19,13 @@ import time
 from collections.abc import Iterator
 from pathlib import Path
 
+import distributed  # noqa: F401  (the test extras install it: a missing one is a failure)
 import pytest
 
 from fcomp.cli.main import main
 
 pytestmark = pytest.mark.slow  # runs real scheduler and worker processes
 
-distributed = pytest.importorskip("distributed")
 ROOT = Path(__file__).resolve().parents[1]
 
 

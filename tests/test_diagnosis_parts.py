@@ -206,3 +206,27 @@ def test_plant_domain_comparison_starts_from_the_measured_gauge_state() -> None:
     with pytest.raises(FcompError, match="command column 'u'"):
         compare_plant(Measurement({k: run[k] for k in ("t", "x", "p1", "p2")}, run.meta),
                       "pneumatic", lugre)
+
+
+def test_noise_floor_of_short_runs_of_correlated_noise_matches_a_monte_carlo() -> None:
+    """Short steady runs of AR(1) noise with a quadratic removed: the naive pooled variance
+    (``n - 3`` degrees of freedom per run) is several times low; the correlated count is
+    close (within 25 %: with runs shorter than two correlation times, as here, the inverted
+    correlation errs high; 60 % low before)."""
+    from fcomp.diagnosis.noise import correlated_dof
+
+    rng = np.random.default_rng(7)
+    n, rho, runs = 40, 0.93, []
+    for _ in range(400):
+        e = np.empty(n)
+        e[0] = rng.standard_normal()
+        for t in range(1, n):
+            e[t] = rho * e[t - 1] + math.sqrt(1 - rho**2) * rng.standard_normal()
+        tt = np.linspace(-1.0, 1.0, n)
+        runs.append(e - np.polyval(np.polyfit(tt, e, 2), tt))
+    ss = sum(float(r @ r) for r in runs)
+    naive = ss / sum(r.size - 3 for r in runs)
+    assert naive < 0.4  # the bias this corrects (true variance 1)
+    assert ss / correlated_dof(runs, 2) == pytest.approx(1.0, rel=0.25)
+    white = [rng.standard_normal(n) for _ in range(50)]
+    assert correlated_dof(white, 2) == pytest.approx(sum(r.size - 3 for r in white), rel=0.05)

@@ -38,6 +38,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.signal import lfilter
 
 from fcomp.diagnosis.data import DiagnosisData
 from fcomp.diagnosis.regimes import SLIDING, Segmentation
@@ -122,12 +123,9 @@ def _pooled(t: np.ndarray, y: np.ndarray, runs: list[tuple[int, int]], degree: i
 def _exp_smooth(q: np.ndarray, rho: float) -> np.ndarray:
     """``C q`` for the AR(1) correlation matrix ``C[t, s] = rho^|t - s|`` (columns of ``q``),
     by a forward and a backward exponential filter: O(n)."""
-    f = np.array(q, dtype=float)
-    b = np.array(q, dtype=float)
-    for t in range(1, q.shape[0]):
-        f[t] += rho * f[t - 1]
-    for t in range(q.shape[0] - 2, -1, -1):
-        b[t] += rho * b[t + 1]
+    q = np.asarray(q, dtype=float)
+    f = lfilter([1.0], [1.0, -rho], q, axis=0)
+    b = lfilter([1.0], [1.0, -rho], q[::-1], axis=0)[::-1]
     return f + b - q
 
 

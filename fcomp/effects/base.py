@@ -139,6 +139,9 @@ class Effect(PlainValue):
     needs: ClassVar[tuple[str, ...]] = ()
     #: needs a motion (memory, acceleration): not a candidate for steady-state points
     dynamic: ClassVar[bool] = False
+    #: the laws the effect can take, chosen by the configuration ``form=``; the first is
+    #: the default (empty: one law, no ``form``)
+    FORMS: ClassVar[tuple[str, ...]] = ()
 
     def __init_subclass__(cls, **kwargs: Any) -> None:
         super().__init_subclass__(**kwargs)
@@ -153,6 +156,14 @@ class Effect(PlainValue):
             raise ValueError(f"effect {self.name}: expected {self.Params.__name__}")
         self.params: ParamSet = params
         self.config: dict[str, Any] = dict(config)
+        if self.FORMS and self.form not in self.FORMS:
+            raise ValueError(f"effect {self.name}: form must be one of "
+                             f"{', '.join(self.FORMS)}, got {self.form!r}")
+
+    @property
+    def form(self) -> str:
+        """The law chosen from :attr:`FORMS` (``config["form"]``, default the first)."""
+        return str(self.config.get("form", self.FORMS[0] if self.FORMS else ""))
 
     @classmethod
     def experiment_for(cls, kind: str) -> str:

@@ -266,16 +266,6 @@ class FrictionalLag(StructuralEffect):
     experiment = "velocity sweeps up and down at several rates; dwell before restart"
     dynamic = True
 
-    def __init__(self, params: Any = None, **config: Any) -> None:
-        super().__init__(params, **config)
-        if self.form not in self.FORMS:
-            raise ValueError(f"effect frictional-lag: form must be one of "
-                             f"{', '.join(self.FORMS)}, got {self.form!r}")
-
-    @property
-    def form(self) -> str:
-        return str(self.config.get("form", "film"))
-
     @classmethod
     def diagnosis_forms(cls) -> tuple[DiagnosisForm, ...]:
         """Both forms, the film and the lagged speed."""
@@ -874,16 +864,6 @@ class NonlocalMemory(StructuralEffect):
                  "offsets erased past earlier reversal points")
     experiment = "small displacement cycles with nested minor loops (seed 000 Figs. 10, 16)"
     dynamic = True
-
-    def __init__(self, params: Any = None, **config: Any) -> None:
-        super().__init__(params, **config)
-        if self.form not in self.FORMS:
-            raise ValueError(f"effect nonlocal-memory: form must be one of "
-                             f"{', '.join(self.FORMS)}, got {self.form!r}")
-
-    @property
-    def form(self) -> str:
-        return str(self.config.get("form", "hysteresis"))
 
     @classmethod
     def diagnosis_config(cls, scales: Scales) -> dict[str, Any]:

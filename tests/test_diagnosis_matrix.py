@@ -25,6 +25,8 @@ SLICE = [
     ("direction-asymmetry", "dynamic", "encoder-velocity", "hydraulic", 3),  # hydraulic scale
     ("dwell-time", "dynamic", "load-cell", "pneumatic", 3),     # a dwell-time rise alone
     ("ripple", "static", "drive-force", "pneumatic", 3),        # outside the catalogue
+    ("ringing", "static", "tacho", "hydraulic", 3),  # a rig mode rung at starts, phase jitters
+    ("drift", "static", "tacho", "pneumatic", 3),    # a drift a position law could stand in for
 ]
 
 

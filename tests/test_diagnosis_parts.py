@@ -12,7 +12,7 @@ from fcomp.conditioning import default_cutoff, position_noise
 from fcomp.diagnosis import Diagnosis
 from fcomp.diagnosis.data import prepare
 from fcomp.diagnosis.features import knn_predict, residual_structure, strength
-from fcomp.diagnosis.loop import fall_test, heldout_pieces
+from fcomp.diagnosis.loop import RING_CONCENTRATION, RING_NOISE, fall_test, heldout_pieces
 from fcomp.diagnosis.noise import effective_sample_size, noise_floor
 from fcomp.diagnosis.regimes import DWELL, PRESLIDING, REVERSAL, SLIDING, segment
 from fcomp.diagnosis.split import make_split
@@ -230,3 +230,127 @@ def test_noise_floor_of_short_runs_of_correlated_noise_matches_a_monte_carlo() -
     assert ss / correlated_dof(runs, 2) == pytest.approx(1.0, rel=0.25)
     white = [rng.standard_normal(n) for _ in range(50)]
     assert correlated_dof(white, 2) == pytest.approx(sum(r.size - 3 for r in white), rel=0.05)
+
+
+def test_events_are_reversals_and_starts_after_a_rest_not_stutters() -> None:
+    """A pause shorter than ``t_dwell`` in the same direction continues the run; a rest of a
+    second and a reversal are events, with the time since each."""
+    dt = 1e-3
+    parts = [np.zeros(300), np.full(800, 0.02), np.zeros(10), np.full(800, 0.02),
+             np.zeros(1000), np.full(800, 0.02), np.full(800, -0.02)]
+    v = np.concatenate(parts)
+    t = np.arange(v.size) * dt
+    x = 0.05 + np.concatenate([[0.0], np.cumsum(v[:-1] * dt)])
+    m = Measurement({"t": t, "x": np.round(x / 1e-7) * 1e-7, "v": v, "F": 30 * np.sign(v)},
+                    {"name": "events"})
+    data = prepare(m)
+    seg = segment(data)
+    since, kind = seg.events(data)
+    edges = np.cumsum([p.size for p in parts])  # 300 1100 1110 1910 2910 3710 4510
+    assert np.isinf(since[:290]).all()
+    assert kind[320] == 1 and abs(since[320] - 0.02) < 3e-3  # first start after a rest
+    assert since[1200] > 0.8  # the 10 ms pause did not restart the clock
+    assert kind[3000] == 1 and since[3000] < 0.1  # a start after a 1 s rest
+    assert kind[3800] == 2 and abs(since[3800] - (3800 - edges[5]) * dt) < 3e-3  # a reversal
+
+
+def _ring_record():
+    rng = np.random.default_rng(5)
+    dt, parts = 1e-3, []
+    for _ in range(40):  # starts after rests and reversals, both directions
+        parts += [np.zeros(300), np.full(400, 0.02), np.full(400, -0.02)]
+    v = np.concatenate(parts)
+    t = np.arange(v.size) * dt
+    x = 0.05 + np.concatenate([[0.0], np.cumsum(v[:-1] * dt)])
+    m = Measurement({"t": t, "x": np.round(x / 1e-7) * 1e-7, "v": v, "F": 30 * np.sign(v)},
+                    {"name": "ring"})
+    data = prepare(m)
+    seg = segment(data)
+    return rng, data, seg, make_split(data, seg.valid)
+
+
+def test_event_structure_sees_a_ring_whose_phase_wanders() -> None:
+    """A 75 Hz mode rung at every event, started 0-6 ms late at random (as a velocity shows
+    a start a few samples late), does not repeat in phase, but lifts the window's RMS far
+    above the noise; noise alone does not."""
+    from fcomp.diagnosis.features import event_structure
+    rng, data, seg, sp = _ring_record()
+    sigma = 0.2
+    noise = rng.normal(0.0, sigma, data.n)
+    t = data.signal("t")
+    ring = np.zeros(data.n)
+    w = 2 * np.pi * 75.0
+    for k, _, _ in seg.starts:
+        k0 = k + int(rng.integers(0, 7))
+        tau = t[k0:k0 + 150] - t[k0]
+        ring[k0:k0 + 150] += 3.0 * np.exp(-0.06 * w * tau) * np.sin(w * tau)
+    quiet = event_structure(noise, data, seg, sp.train, sp.test)
+    rung = event_structure(noise + ring, data, seg, sp.train, sp.test)
+    assert quiet is not None and rung is not None
+    assert quiet.local < 1.2 * sigma and quiet.strength < 0.1
+    assert rung.local > 4 * sigma
+
+
+def test_event_ring_finds_a_mode_below_the_noise_by_its_spectrum() -> None:
+    """A 75 Hz ring whose RMS after events is below the noise, phase scrambled per event,
+    is found at its frequency by the excess of its power over quiet stretches; noise alone
+    and a broadband misfit after events (a step placed late) are not narrow rings."""
+    from fcomp.diagnosis.features import event_ring
+    rng, data, seg, sp = _ring_record()
+    sigma = 1.0
+    noise = rng.normal(0.0, sigma, data.n)
+    t = data.signal("t")
+    ring, step = np.zeros(data.n), np.zeros(data.n)
+    w = 2 * np.pi * 75.0
+    since, _ = seg.events(data)
+    for k in np.flatnonzero(since == 0.0):
+        k0 = k + int(rng.integers(0, 7))
+        tau = t[k0:k0 + 150] - t[k0]
+        ring[k0:k0 + 150] += 1.0 * np.exp(-0.06 * w * tau) * np.sin(w * tau)
+        step[k:k + int(rng.integers(1, 8))] += 3.0  # a jump the prediction places late
+    found = event_ring(noise + ring, data, seg, sp.test)
+    assert found is not None and abs(found.frequency - 75.0) <= 10.0
+    assert found.concentration >= RING_CONCENTRATION
+    assert 0.2 < found.rms < 0.4  # the ring's RMS in those windows is 0.3
+    for r in (noise, noise + step):
+        other = event_ring(r, data, seg, sp.test)
+        assert other is None or other.concentration < RING_CONCENTRATION \
+            or other.rms < RING_NOISE * sigma  # below what the verdict counts
+
+
+def test_drift_probe_explains_a_drift_and_not_a_law_in_position() -> None:
+    """``drift_fall``: the held-out fall of levels drifting with time alone -- most of a
+    thermal drift's residual, little of a ripple along the stroke."""
+    from fcomp.diagnosis.features import drift_fall
+    rng, data, seg, sp = _ring_record()
+    t, x = data.signal("t"), data.signal("x")
+    F_hat = 30.0 * np.sign(data.signal("v"))
+    noise = rng.normal(0.0, 0.2, data.n)
+    tau = 2 * (t - t[0]) / (t[-1] - t[0]) - 1
+    drift = F_hat * 0.1 * tau + noise
+    ripple = F_hat * 0.1 * np.sin(2 * np.pi * x / 2e-3) + noise
+    rms = lambda r: float(np.sqrt(np.mean(r[sp.test] ** 2)))  # noqa: E731
+    fall = drift_fall(drift, F_hat, data, sp.train, sp.test)
+    assert fall > 0.9 * (rms(drift) - rms(noise))
+    assert drift_fall(ripple, F_hat, data, sp.train, sp.test) < 0.05 * (rms(ripple) - rms(noise))
+
+
+def test_baseline_check_runs_when_the_answer_is_doubtful() -> None:
+    """``check_baseline="auto"``: a clean answer skips the second diagnosis and says why;
+    structure left (a Stribeck hump the Coulomb map cannot follow, no candidate offered)
+    runs it; ``False`` never does."""
+    rec = generate(["stribeck"], duration=12.0, seed=4).measurement
+    doubtful = Diagnosis("coulomb-viscous", effects=["force-offset"], n_jobs=1).fit(rec)
+    assert doubtful.doubts()
+    assert doubtful.baseline_check_["ran"] and doubtful.other_ is not None
+    never = Diagnosis("coulomb-viscous", effects=["force-offset"], n_jobs=1,
+                      check_baseline=False).fit(rec)
+    assert never.baseline_check_ == {"ran": False, "why": "not asked for"}
+    assert never.other_ is None and never.to_dict()["baseline_check"]["ran"] is False
+    clean = Diagnosis("lugre", effects=["force-offset"], n_jobs=1).fit(
+        generate([], duration=12.0, seed=4).measurement)
+    if not clean.doubts():
+        assert clean.baseline_check_["ran"] is False and clean.other_ is None
+    else:
+        assert clean.baseline_check_["ran"] and clean.baseline_check_["why"] == "; ".join(
+            clean.doubts())

@@ -45,9 +45,10 @@ def test_emps_diagnosis_reports_the_baseline_check(tmp_path: Path) -> None:
                  str(rec)]) == 0
     out = tmp_path / "d.json"
     assert main(["diagnose", str(rec), "--baseline", "coulomb-viscous", "--no-progress",
-                 "--json", str(out)]) == 0
+                 "--baseline-check", "--json", str(out)]) == 0
     doc = json.loads(out.read_text())
     assert isinstance(doc["baseline_dependent"], bool)
+    assert doc["baseline_check"] == {"ran": True, "why": "asked for"}
     other = doc["other_baseline"]
     assert other["baseline"] == "lugre" and isinstance(other["added"], list)
     assert other["rms_final"] <= other["rms_baseline"] + 1e-12

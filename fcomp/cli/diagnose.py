@@ -58,9 +58,14 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="most effects the search adds (default 6)")
     p.add_argument("--jobs", type=int, default=None, metavar="N",
                    help="parallel refits (default: CPU count, at most 4)")
-    p.add_argument("--no-baseline-check", action="store_true",
-                   help="do not diagnose again from a baseline of the other kind (static <-> "
-                   "dynamic) to say whether the answer depends on the baseline")
+    check = p.add_mutually_exclusive_group()
+    check.add_argument("--baseline-check", action="store_true",
+                       help="always diagnose again from a baseline of the other kind (static "
+                       "<-> dynamic) to say whether the answer depends on the baseline (by "
+                       "default only when the answer is doubtful: a fit flagged, a tie, or "
+                       "structure left)")
+    check.add_argument("--no-baseline-check", action="store_true",
+                       help="never run that baseline check")
     p.add_argument("--scheduler", default=None, metavar="ADDRESS",
                    help="run the candidate refits on the Dask distributed scheduler at ADDRESS "
                    "(tcp://host:8786) instead of local processes (--jobs); the same results")
@@ -90,8 +95,12 @@ def summary(doc: dict) -> str:
     other = doc.get("other_baseline")
     if other:
         same = "the same effects" if not doc["baseline_dependent"] else "OTHER effects"
-        lines.append(f"baseline check: from {other['baseline']} the diagnosis finds {same} "
+        lines.append(f"baseline check ({doc['baseline_check']['why']}): from "
+                     f"{other['baseline']} the diagnosis finds {same} "
                      f"({', '.join(other['added']) or 'nothing'}; {other['verdict']})")
+    elif doc["baseline_check"]["why"] != "not asked for":
+        lines.append(f"baseline check not run: {doc['baseline_check']['why']} "
+                     "(--baseline-check runs it)")
     lines.append(f"verdict: {doc['verdict']} -- {doc['reason']}")
     for w in doc.get("warnings", []):
         lines.append(f"warning ({w['code']}): {w['message']}")
@@ -126,7 +135,8 @@ def run(args: argparse.Namespace) -> int:
                      max_steps=args.max_steps, n_jobs=args.jobs,
                      scheduler=check_scheduler(args.scheduler),
                      progress=not args.no_progress,
-                     check_baseline=not args.no_baseline_check)
+                     check_baseline=(True if args.baseline_check else
+                                     False if args.no_baseline_check else "auto"))
     diag.fit(data)
     doc = common.with_warnings(diag.to_dict())
     text = result_text(doc)

@@ -55,7 +55,9 @@ returns ``self``, results in ``*_`` attributes) runs the whole procedure:
    at least :data:`STRUCTURE_MIN` of its held-out mean square *and* the part
    it explains is at least half the noise floor (RMS), when the residual near
    starts and reversals (weighted as the fits weigh it: :func:`.refit.sample_weights`)
-   repeats as a function of the time since the event (:func:`.features.event_structure`),
+   repeats as a function of the time since the event (:func:`.features.event_structure`)
+   or, not in phase, lifts the RMS there above :data:`EVENT_EXCESS` noise floors
+   or rings there (a narrow band of power quiet stretches lack, :func:`.features.event_ring`),
    or when the final
    held-out RMS, without its largest 1 % of samples (isolated timing spikes,
    :func:`trimmed_rms`), is more than twice the noise floor; else ``explained``.
@@ -85,7 +87,15 @@ from scipy import stats
 
 import fcomp.diagnosis.catalogue as catalogue
 from fcomp.diagnosis.data import DiagnosisData, prepare
-from fcomp.diagnosis.features import FeatureStrength, event_structure, residual_structure
+from fcomp.diagnosis.features import (
+    TRIM,
+    FeatureStrength,
+    drift_fall,
+    event_ring,
+    event_structure,
+    residual_structure,
+    trimmed_rms,
+)
 from fcomp.diagnosis.noise import NoiseFloor, effective_sample_size, noise_floor
 from fcomp.diagnosis.refit import FitResult, Refit, sample_weights
 from fcomp.diagnosis.regimes import Segmentation, segment
@@ -120,13 +130,22 @@ STRUCTURE_MIN = 0.15
 STRUCTURE_RMS = 1.0
 #: ... and this share of the friction level (the record's force scale).
 STRUCTURE_LEVEL = 0.015
+#: Residual RMS (trimmed) after events above this many noise floors is structure after
+#: events even where it does not repeat in phase (a ring whose start the velocity jitters).
+EVENT_EXCESS = 3.0
+#: A ring after events (:func:`.features.event_ring`) counts when this share of its excess
+#: power lies in three adjacent bins (narrow: a mode, not a misplaced step) ...
+RING_CONCENTRATION = 0.6
+#: ... and it carries this many noise floors (RMS in the windows after events) ...
+RING_NOISE = 0.5
+#: ... and this share of the friction level: a mode is no law's shape left unmatched, so
+#: it counts below the noise that :data:`STRUCTURE_RMS` asks of other structure.
+RING_LEVEL = 0.005
 #: Residual RMS (trimmed, :func:`trimmed_rms`) above this many noise floors is
 #: unexplained structure whatever the features say.
 EXCESS_MAX = 2.0
 #: The baseline and each accepted model are refitted with this many times the budget.
 POLISH_NFEV = 4
-#: Share of the largest held-out residuals the excess test leaves out (isolated spikes).
-TRIM = 0.01
 VERDICTS = ("explained", "unexplained-structure")
 
 
@@ -182,20 +201,6 @@ class Step:
 
 def _rms(r: np.ndarray) -> float:
     return float(np.sqrt(np.mean(r**2))) if r.size else math.nan
-
-
-def trimmed_rms(r: np.ndarray, drop: float = TRIM) -> float:
-    """RMS of ``r`` without its largest ``drop`` share of ``|r|`` (N).
-
-    Isolated spikes -- a start or stop that the derived velocity places one
-    sample early or late, where a discontinuous friction law jumps by its
-    full level -- are timing jitter, not structure a missing effect could
-    explain; the verdict's excess test ignores them this way.
-    """
-    if not r.size:
-        return math.nan
-    keep = np.sort(np.abs(r))[: max(1, int(math.ceil((1.0 - drop) * r.size)))]
-    return float(np.sqrt(np.mean(keep**2)))
 
 
 def heldout_pieces(test: np.ndarray, starts: Sequence[int], dt: float) -> list[np.ndarray]:
@@ -334,7 +339,11 @@ class Diagnosis:
     check_baseline
         After the search, diagnose the record again from a baseline of the other
         kind (static <-> dynamic, :func:`other_baseline`) and say whether the
-        answer depends on the baseline (``baseline_dependent_``).
+        answer depends on the baseline (``baseline_dependent_``): ``True``
+        always, ``False`` never, ``"auto"`` (default) when the first answer is
+        doubtful (:meth:`doubts`: a fit flagged, a tie, or structure left) --
+        a second opinion costs a second diagnosis, and a clean answer from
+        well-determined fits does not need one.
 
     Attributes
     ----------
@@ -363,6 +372,8 @@ class Diagnosis:
         Whether a baseline of the other kind finds other effects (``check_baseline``).
     other_ : Diagnosis or None
         That other diagnosis.
+    baseline_check_ : dict
+        ``{"ran": bool, "why": str}``: whether the check ran, and why (or why not).
     warnings_ : list of FitWarning
         What a careful engineer would question: the plausibility of the baseline's
         and the final model's fits (:mod:`fcomp.identification.plausibility`) and
@@ -386,7 +397,7 @@ class Diagnosis:
         max_nfev: int = 60,
         max_samples: int = 40_000,
         progress: bool = False,
-        check_baseline: bool = True,
+        check_baseline: bool | str = "auto",
     ) -> None:
         self.baseline = baseline
         self.effects = effects
@@ -413,6 +424,8 @@ class Diagnosis:
         for n in [*names, *self.add]:
             EFFECTS.get(n if isinstance(n, str) else n.name)  # unknown names fail here
         self.baseline_name_ = self.baseline if isinstance(self.baseline, str) else model.describe()
+        self.__dict__.pop("baseline_check_", None)
+        self.baseline_dependent_ = False
         self.data_ = data if isinstance(data, DiagnosisData) else prepare(
             data, cutoff_hz=self.cutoff_hz)
         self.segmentation_ = segment(self.data_)
@@ -452,7 +465,6 @@ class Diagnosis:
             if self.search:
                 self._search(names)
                 self._backward()
-            self.other_ = self._other_baseline(model, names) if self.check_baseline else None
         finally:
             self._bar.close()
             self._fitting = False
@@ -461,7 +473,58 @@ class Diagnosis:
                 self._pool = None
             self._cluster.close()
         self._conclude()
+        self._check(model, names)
         return self
+
+    def doubts(self) -> list[str]:
+        """Why the answer might depend on the baseline (empty: a clean answer).
+
+        A fit of the baseline or the final model flagged (a parameter at a bound,
+        an interval through zero, an implausible mass, ...), a tie, or a verdict
+        of ``unexplained-structure``.
+        """
+        out = []
+        if self.verdict_ != "explained":
+            out.append(f"the verdict is {self.verdict_}")
+        fits = sorted({w.code for w in self.warnings_ if w.code != "heldout-coverage"})
+        if fits:
+            out.append(f"the fits are flagged ({', '.join(fits)})")
+        if self.ties_:
+            out.append("effects tie")
+        return out
+
+    def _check(self, model: FrictionModel, names: list[str]) -> None:
+        """Run the baseline check as ``check_baseline`` asks, and fold its answer in."""
+        self.other_ = None
+        if self.check_baseline not in (True, False, "auto"):
+            raise FcompError(f"check_baseline must be True, False or 'auto', got "
+                             f"{self.check_baseline!r}")
+        doubts = self.doubts()
+        if self.check_baseline is False:
+            self.baseline_check_ = {"ran": False, "why": "not asked for"}
+        elif self.check_baseline == "auto" and not doubts:
+            self.baseline_check_ = {"ran": False, "why": "a clean answer: fits not flagged, "
+                                    "no tie, explained to the noise"}
+        else:
+            why = "asked for" if self.check_baseline is True else "; ".join(doubts)
+            self._bar = _progress(self.progress)
+            try:
+                self.other_ = self._other_baseline(model, names)
+            finally:
+                self._bar.close()
+            self.baseline_check_ = {"ran": self.other_ is not None, "why": why if self.other_
+                                    is not None else "no baseline of the other kind fits "
+                                    "these data"}
+        self._fold_dependence()
+
+    def _fold_dependence(self) -> None:
+        """``baseline_dependent_``, and the other baseline's answer in the reason if it differs."""
+        dep = self.baseline_dependence()
+        self.baseline_dependent_ = bool(dep and dep["dependent"])
+        if dep and dep["dependent"]:
+            self.reason_ += (f"; the effects found depend on the baseline: from "
+                             f"{dep['baseline']} the diagnosis adds "
+                             f"{', '.join(dep['added']) or 'nothing'} ({dep['verdict']})")
 
     def _other_baseline(self, model: FrictionModel, names: list[str]) -> Diagnosis | None:
         """The same diagnosis from a baseline of the other kind, or None where none applies."""
@@ -721,10 +784,22 @@ class Diagnosis:
                            f"floor where it acts (< {100 * EXCESS_SHARE:.0f} %)")
         if not p <= ACCEPT_P:
             reasons.append(f"fall not significant (z = {z:.2g}, p = {p:.2g} > {ACCEPT_P:g})")
+        drift = self._drift(before)
+        if fall > 0 and drift >= (1.0 - TIE_SHARE) * fall:
+            reasons.append(f"confounded with time: a slow drift of the friction level alone "
+                           f"takes {drift:.3g} N off the held-out RMS (this effect "
+                           f"{fall:.3g} N)")
         if not dbic < 0:
             reasons.append(f"BIC does not agree (dBIC = {dbic:.3g})")
         return Candidate(name, res, res.rms_test, fall, z, p, dbic, not reasons,
                          "; ".join(reasons))
+
+    def _drift(self, fit: FitResult) -> float:
+        """:func:`.features.drift_fall` of ``fit`` (computed once per fit)."""
+        if getattr(self, "_drift_of", (None, 0.0))[0] is not fit:
+            self._drift_of = (fit, drift_fall(fit.residual, fit.F_hat, self.data_,
+                                              self.split_.train, self.split_.test))
+        return self._drift_of[1]
 
     def _search(self, names: list[str]) -> None:
         for step_no in range(self.max_steps):
@@ -941,16 +1016,43 @@ class Diagnosis:
         ev = event_structure(r_events, data, seg, split.train, split.test)
         self.event_structure_ = ev
         event = ev is not None and ev.strength >= STRUCTURE_MIN and ev.rms >= least
+        # a structure after events whose phase wanders from event to event lifts the
+        # window's RMS (trimmed, weighted) well above the noise all the same
+        ev_excess = 0.0 if ev is None else math.sqrt(max(ev.local**2 - nf**2, 0.0))
+        event_excess = (ev is not None and not event and ev.local > EVENT_EXCESS * nf
+                        and ev_excess >= least)
+        ring = event_ring(r_events, data, seg, split.test)
+        self.event_ring_ = ring
+        ringing = (ring is not None and not (event or event_excess)
+                   and ring.concentration >= RING_CONCENTRATION
+                   and ring.rms >= max(RING_NOISE * nf, RING_LEVEL * data.scales.force))
         trimmed = trimmed_rms(self.fit_.residual[split.test])
         excess = trimmed > max(EXCESS_MAX * nf, nf + STRUCTURE_LEVEL * data.scales.force)
-        self.verdict_ = ("unexplained-structure" if structured or event or excess
-                         else "explained")
+        self.verdict_ = ("unexplained-structure" if structured or event or event_excess
+                         or ringing or excess else "explained")
         if event and not structured:
             assert ev is not None
             self.reason_ = (f"structure after events: within {1e3 * ev.window:.0f} ms of every "
                             f"start and reversal the held-out residual repeats (strength "
                             f"{ev.strength:.2f} >= {STRUCTURE_MIN:g} of the time since the "
                             f"event; it carries {ev.rms:.3g} N RMS >= {least:.3g} N there)")
+        elif event_excess and not structured:
+            assert ev is not None
+            self.reason_ = (f"structure after events: within {1e3 * ev.window:.0f} ms of every "
+                            f"start and reversal the held-out residual (without its largest "
+                            f"{100 * TRIM:g} %) is {ev.local:.3g} N RMS, above {EVENT_EXCESS:g} "
+                            f"noise floors of {nf:.3g} N, with {ev_excess:.3g} N RMS above the "
+                            f"noise >= {least:.3g} N (it does not repeat in phase: "
+                            f"strength {ev.strength:.2f})")
+        elif ringing and not structured:
+            assert ring is not None
+            self.reason_ = (f"structure after events: a ring at {ring.frequency:.3g} Hz after "
+                            f"every start and reversal ({ring.events} held-out windows; "
+                            f"{100 * ring.concentration:.0f} % of the excess power within "
+                            f"three bins) carries {ring.rms:.3g} N RMS there, >= "
+                            f"{max(RING_NOISE * nf, RING_LEVEL * data.scales.force):.3g} N "
+                            f"({RING_NOISE:g} noise floor, {100 * RING_LEVEL:g} % of the "
+                            "friction level): a rig mode no friction law explains")
         elif structured:
             assert top is not None
             self.reason_ = (f"structure: the held-out residual still follows {top.feature} "
@@ -959,13 +1061,13 @@ class Diagnosis:
                             f"{least:.3g} N, a noise floor and {100 * STRUCTURE_LEVEL:g} % of "
                             "the friction level)")
         limit = max(EXCESS_MAX * nf, nf + STRUCTURE_LEVEL * data.scales.force)
-        if excess and not (structured or event):
+        if excess and not (structured or event or event_excess or ringing):
             self.reason_ = (f"excess: the held-out RMS without its largest {100 * TRIM:g} % "
                             f"({trimmed:.3g} N) is above {limit:.3g} N ({EXCESS_MAX:g} noise "
                             f"floors of {nf:.3g} N, and the floor plus "
                             f"{100 * STRUCTURE_LEVEL:g} % of the friction level), though no "
                             "single feature explains it")
-        elif not structured and not event:
+        elif not (structured or event or event_excess or ringing):
             self.reason_ = (f"at the noise: held-out RMS without its largest {100 * TRIM:g} % "
                             f"{trimmed:.3g} N within {limit:.3g} N (noise floor {nf:.3g} N), "
                             f"and no structure carries {least:.3g} N")
@@ -974,12 +1076,8 @@ class Diagnosis:
             "final": regime_errors(self.fit_.residual, seg, split.test),
         }
         self._collect_warnings()
-        dep = self.baseline_dependence()
-        self.baseline_dependent_ = bool(dep and dep["dependent"])
-        if dep and dep["dependent"]:
-            self.reason_ += (f"; the effects found depend on the baseline: from "
-                             f"{dep['baseline']} the diagnosis adds "
-                             f"{', '.join(dep['added']) or 'nothing'} ({dep['verdict']})")
+        if hasattr(self, "baseline_check_"):  # an effect added or removed after the check
+            self._fold_dependence()
 
     # ----------------------------------------------------------------- JSON
     def signals(self) -> dict[str, Any]:
@@ -1031,6 +1129,7 @@ class Diagnosis:
             "reason": self.reason_,
             "signals": self.signals(),
             "baseline_dependent": self.baseline_dependent_,
+            "baseline_check": dict(self.baseline_check_),
             "other_baseline": self.baseline_dependence(),
             "residual_features": [{"feature": f.feature, "strength": round(f.strength, 4)}
                                   for f in self.residual_features_],

@@ -96,6 +96,29 @@ class Segmentation:
     def counts(self) -> dict[str, int]:
         return {r: int(np.sum(self.regime == i)) for i, r in enumerate(REGIMES)}
 
+    def events(self, data: DiagnosisData) -> tuple[np.ndarray, np.ndarray]:
+        """Time since the last event (s) and its class, for every sample.
+
+        Events are the run starts that change the contact: a reversal (class 2)
+        and a start after a rest of at least ``t_dwell`` (class 1). A start after
+        a shorter pause in the same direction continues the run before it (near
+        rest a noisy velocity stutters, and every stutter would restart the
+        clock). Samples before their experiment's first event get ``inf`` and
+        class 0.
+        """
+        t = data.signal("t")
+        since = np.full(data.n, np.inf)
+        kind = np.zeros(data.n, dtype=int)
+        events = sorted((k, 2 if rev else 1) for k, dw, rev in self.starts
+                        if rev or dw >= self.t_dwell)
+        for e in data.experiments:
+            mine = [ev for ev in events if e.start <= ev[0] < e.stop]
+            for j, (k, cls) in enumerate(mine):
+                stop = mine[j + 1][0] if j + 1 < len(mine) else e.stop
+                since[k:stop] = t[k:stop] - t[k]
+                kind[k:stop] = cls
+        return since, kind
+
 
 def rest_speed(v: np.ndarray, speed_scale: float, resolution: float, dt: float) -> float:
     """``v_rest`` (m/s), see the module docstring."""

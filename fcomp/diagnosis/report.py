@@ -580,7 +580,11 @@ def build_report(diag: Diagnosis, *, command: str | None = None) -> Report:
                       f"(the other kind of baseline) {same} -- "
                       f"{', '.join('`' + e + '`' for e in other['added']) or 'nothing'} added, "
                       f"verdict `{other['verdict']}`, held-out RMS {other['rms_baseline']:.4g} "
-                      f"-> {other['rms_final']:.4g} N.")
+                      f"-> {other['rms_final']:.4g} N. It ran because "
+                      f"{d['baseline_check']['why']}.")
+    elif d["baseline_check"]["why"] != "not asked for":
+        rep.paragraph(f"Baseline check not run: {d['baseline_check']['why']} "
+                      "(`--baseline-check` runs it).")
     if d["warnings"]:
         rep.section("What a careful engineer would question", level=3)
         rep.table(["warning", "parameter", "what it means"],

@@ -170,7 +170,7 @@ def main() -> None:
 
         from fcomp.identification import FrictionFit
         from fcomp.identification.dynamic import EXTRAS
-        from fcomp.identification.guess import default_v_min
+        from fcomp.identification.engine import FitJob
         from fcomp.identification.target import fit_data
         from fcomp.measurement import Measurement
 
@@ -188,11 +188,12 @@ def main() -> None:
 
         # the baseline starts where fcomp's trajectory stage starts
         est = FrictionFit("nmlgm")
-        d = fit_data(meas)
-        start = est._start(est._base_model(), d, default_v_min(d.sig["v"]))
-        est._deps = []
+        model = est._base_model()
+        job = FitJob(est.settings(), model, fit_data(meas))
+        free0, _, start = job.prepare()
+        job.static_stage(model, free0, start, required=False, final=False)  # updates start
         free = [n for n in traj["parameters"] if n not in EXTRAS]
-        specs = est._base_model().param_specs()
+        specs = model.param_specs()
         lo = np.array([specs[n].lower + (1e-12 if specs[n].lower_open else 0.0) for n in free])
         hi = np.array([specs[n].upper for n in free])
         scale = np.array([abs(start[n]) or 0.01 for n in free])

@@ -16,11 +16,12 @@ CasADi function of ``(x, signals, dt, params)`` compiled to native code
 (:mod:`fcomp.compiled`); parameters are inputs, so one compiled function
 serves a whole identification.
 
-Everything per sample -- the side ``s``, the position when not given, the
-interval means, the step and the force -- runs in one native loop
-(:func:`~fcomp.models.stepping.motion_kernel`), with the same results as
-the numpy path it replaces (which still runs with ``compiled=False``,
-without a C compiler, and to name what is wrong with invalid signals).
+For models with states, everything per sample -- the side ``s``, the
+position when not given, the interval means, the step and the force -- runs
+in one native loop (:func:`~fcomp.models.stepping.motion_kernel`), with the
+same results as the numpy path it replaces (which still runs with
+``compiled=False``, without a C compiler, and to name what is wrong with
+invalid signals). Static maps are one vectorised numpy evaluation.
 
 A model whose memory is discrete says so (its
 :meth:`~fcomp.models.base.FrictionModel.discrete_memory`), and that memory
@@ -137,7 +138,7 @@ def friction_along_motion(
     if x0.shape != (model.n_states,):
         raise ValueError(f"state0 must have {model.n_states} entries {model.state_names}")
     memory = model.discrete_memory()
-    if compiled and memory is None:
+    if compiled and memory is None and model.n_states:
         run = _native_run(model, t, v, a, x, p1, p2, x0, flat, substeps)
         if run is not None:
             return run

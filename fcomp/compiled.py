@@ -74,6 +74,14 @@ int fcomp_loop(int n, const double* x0, const double* u, const double* dt,
 #: The standard headers come first: a hidden declaration of ``exp`` would not link.
 HIDDEN = ("#include <math.h>\n#include <stdio.h>\n#include <stdlib.h>\n#include <string.h>\n"
           "#if defined(__GNUC__)\n#pragma GCC visibility push(hidden)\n#endif\n")
+#: A prelude (after :data:`HIDDEN`) that computes ``fmax``/``fmin`` inline instead of calling
+#: the C library: ``x > y ? x : y`` with a NaN giving the other operand, which is what
+#: glibc's x86-64 ``fmax`` (``maxsd``) returns for every input, signed zeros included.
+MINMAX = ("#define fmax(x, y) fcomp_fmax(x, y)\n#define fmin(x, y) fcomp_fmin(x, y)\n"
+          "static inline double fcomp_fmax(double x, double y) "
+          "{ return (x > y || y != y) ? x : y; }\n"
+          "static inline double fcomp_fmin(double x, double y) "
+          "{ return (x < y || y != y) ? x : y; }\n")
 #: The attribute of a driver function called from Python when the prelude is :data:`HIDDEN`.
 EXPORT = ("#if defined(__GNUC__)\n#define FCOMP_EXPORT __attribute__((visibility(\"default\")))\n"
           "#else\n#define FCOMP_EXPORT\n#endif\n")

@@ -38,7 +38,7 @@ import casadi as ca
 import numpy as np
 
 from fcomp.backend import CASADI
-from fcomp.compiled import EXPORT, HIDDEN, Loop, load_library, stepping_loop
+from fcomp.compiled import EXPORT, HIDDEN, MINMAX, Loop, load_library, stepping_loop
 from fcomp.models.base import SIGNAL_NAMES, FrictionModel, Signals
 from fcomp.parameters import ParamValues
 
@@ -241,7 +241,7 @@ def _motion_kernel(key: tuple, substeps: int) -> MotionKernel | None:
     sizes = {"SZ_ARG": max(f.sz_arg() for f in fns), "SZ_RES": max(f.sz_res() for f in fns),
              "SZ_IW": max(f.sz_iw() for f in fns) + 1, "SZ_W": max(f.sz_w() for f in fns) + 1}
     macros = "".join(f"#define {k} {v}\n" for k, v in {**names, **sizes, "NX": nx}.items())
-    dll = load_library(fns, EXPORT + macros + _MOTION_DRIVER, prelude=HIDDEN)
+    dll = load_library(fns, EXPORT + macros + _MOTION_DRIVER, prelude=HIDDEN + MINMAX)
     if dll is None:
         return None
     fn = dll.fcomp_motion
@@ -259,7 +259,8 @@ def motion_kernel(model: FrictionModel, substeps: int = 1) -> MotionKernel | Non
     the force of :meth:`FrictionModel.force` at the samples, sample for sample.
     Each model function is generated twice, with the side ``s = +1`` and ``s =
     -1`` substituted (the side's parameter choices fold away), and inlined into
-    one C loop that never leaves native code. ``None`` without a C compiler or a
+    one C loop that never leaves native code (:data:`~fcomp.compiled.HIDDEN`,
+    :data:`~fcomp.compiled.MINMAX`). ``None`` without a C compiler or a
     usable compile cache (:mod:`fcomp.compiled`; callers then take the stepping
     loop and numpy).
     """

@@ -244,7 +244,8 @@ def main() -> None:
               f"wall, {base_cpu / warm_cpu:.0f}x CPU")
         print(f"goal (issue 15): cold <= 4 s -> {'met' if cold <= 4 else 'NOT met'}; the goal "
               f"was set against a 168 s baseline, i.e. baseline / cold >= 42x -> "
-              f"{'met' if base_cpu / cold_cpu >= 42 else 'NOT met'} ({base_cpu / cold_cpu:.0f}x CPU)")
+              f"{'met' if base_cpu / cold_cpu >= 42 else 'NOT met'} "
+              f"({base_cpu / cold_cpu:.0f}x CPU)")
         if args.json:
             Path(args.json).write_text(json.dumps({
                 "duration_s": duration, "cold_runs": colds, "cold_median_s": cold,

@@ -173,8 +173,8 @@ def _samples(value: Any, n: int, *, single: bool) -> np.ndarray | None:
 
 def _native_run(model: FrictionModel, t: Any, v: Any, a: Any, x: Any, p1: Any, p2: Any,
                 x0: np.ndarray, flat: Mapping[str, float], substeps: int) -> FrictionRun | None:
-    """:func:`friction_along_motion` in one native pass (:func:`~fcomp.models.stepping.motion_kernel`):
-    the same scheme, signals and force. ``None`` where the kernel does not apply (no
+    """:func:`friction_along_motion` in one native pass
+    (:func:`~fcomp.models.stepping.motion_kernel`): the same scheme, signals and force. ``None`` where the kernel does not apply (no
     compiler, signals that do not broadcast, invalid signals: the general path then runs,
     or says what is wrong)."""
     t = np.ascontiguousarray(t, dtype=float)

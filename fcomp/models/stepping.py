@@ -130,9 +130,9 @@ _MOTION_DRIVER = r"""
 #else
 #define FCOMP_FLATTEN
 #endif
-FCOMP_EXPORT FCOMP_FLATTEN int fcomp_motion(int n, const double* restrict t, const double* restrict v,
-    const double* restrict a, const double* restrict xs, const double* restrict p1,
-    const double* restrict p2, int xint, int stx, int st1, int st2,
+FCOMP_EXPORT FCOMP_FLATTEN int fcomp_motion(int n, const double* restrict t,
+    const double* restrict v, const double* restrict a, const double* restrict xs,
+    const double* restrict p1, const double* restrict p2, int xint, int stx, int st1, int st2,
     const double* restrict x0, const double* restrict p, double* restrict X,
     double* restrict F, double* restrict out) {
   const casadi_real* arg[SZ_ARG];

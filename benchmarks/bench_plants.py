@@ -41,7 +41,7 @@ from scipy.integrate import solve_ivp
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))  # the independent plain implementations
 
-import independent_plants as ip  # noqa: E402
+from helpers import independent_plants as ip  # noqa: E402
 
 from fcomp.models import make_model  # noqa: E402
 from plants import PLANTS  # noqa: E402

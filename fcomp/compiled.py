@@ -67,6 +67,26 @@ int fcomp_loop(int n, const double* x0, const double* u, const double* dt,
 }
 """
 
+#: A :func:`build_library` prelude that keeps CasADi's functions and helpers inside the
+#: library (hidden visibility): the compiler may then inline them into the driver, which
+#: marks the functions it exports with :data:`EXPORT`. Without it, a shared library must
+#: call even ``casadi_fabs`` through its symbol table (they could be interposed).
+#: The standard headers come first: a hidden declaration of ``exp`` would not link.
+HIDDEN = ("#include <math.h>\n#include <stdio.h>\n#include <stdlib.h>\n#include <string.h>\n"
+          "#if defined(__GNUC__)\n#pragma GCC visibility push(hidden)\n#endif\n")
+#: A prelude (after :data:`HIDDEN`) that computes ``fmax``/``fmin`` inline instead of calling
+#: the C library: ``x > y ? x : y`` with a NaN giving the other operand, which is what
+#: glibc's x86-64 ``fmax`` (``maxsd``) returns for every input, signed zeros included.
+MINMAX = ("#define fmax(x, y) fcomp_fmax(x, y)\n#define fmin(x, y) fcomp_fmin(x, y)\n"
+          "static inline double fcomp_fmax(double x, double y) "
+          "{ return (x > y || y != y) ? x : y; }\n"
+          "static inline double fcomp_fmin(double x, double y) "
+          "{ return (x < y || y != y) ? x : y; }\n")
+#: The attribute of a driver function called from Python when the prelude is :data:`HIDDEN`.
+EXPORT = ("#if defined(__GNUC__)\n#define FCOMP_EXPORT __attribute__((visibility(\"default\")))\n"
+          "#else\n#define FCOMP_EXPORT\n#endif\n")
+
+
 @dataclass(frozen=True)
 class Loop:
     """``loop(x0, U, dt, p) -> X``: a step applied sample by sample (:func:`stepping_loop`).
@@ -155,13 +175,14 @@ def _build(step: ca.Function, nx: int, nu: int) -> ctypes.CDLL | None:
 
 
 def build_library(fn: ca.Function | Sequence[ca.Function], driver: str, *,
-                  rebuild: bool = False) -> Path | None:
+                  rebuild: bool = False, prelude: str = "") -> Path | None:
     """Compile CasADi's C code of ``fn`` (one or several functions) followed by the C
     ``driver`` into a cached shared library (verified, see the module docstring).
 
     Returns the library path, or ``None`` without a working compiler or usable
     cache (callers then fall back to CasADi's virtual machine or a Python
     loop). ``rebuild`` compiles again even if the cache holds the library.
+    ``prelude`` is C placed before CasADi's code (e.g. :data:`HIDDEN`).
     """
     cc = compiler()
     if cc is None:
@@ -179,7 +200,7 @@ def build_library(fn: ca.Function | Sequence[ca.Function], driver: str, *,
         finally:
             os.chdir(cwd)
         src = Path(tmp) / f"{name}.c"
-        code = src.read_text() + driver
+        code = prelude + src.read_text() + driver
         key = hashlib.sha1((code + cc).encode()).hexdigest()[:16]
         cache = cache_dir()
         if cache is None:
@@ -209,11 +230,12 @@ def build_library(fn: ca.Function | Sequence[ca.Function], driver: str, *,
         return lib
 
 
-def load_library(fn: ca.Function | Sequence[ca.Function], driver: str) -> ctypes.CDLL | None:
+def load_library(fn: ca.Function | Sequence[ca.Function], driver: str, *,
+                 prelude: str = "") -> ctypes.CDLL | None:
     """:func:`build_library`, loaded with :mod:`ctypes`; a cached library that does not load
     (corrupted on disk) is rebuilt once. ``None``: use the virtual machine."""
     for rebuild in (False, True):
-        lib = build_library(fn, driver, rebuild=rebuild)
+        lib = build_library(fn, driver, rebuild=rebuild, prelude=prelude)
         if lib is None:
             return None
         try:

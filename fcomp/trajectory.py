@@ -16,6 +16,13 @@ CasADi function of ``(x, signals, dt, params)`` compiled to native code
 (:mod:`fcomp.compiled`); parameters are inputs, so one compiled function
 serves a whole identification.
 
+For models with states, everything per sample -- the side ``s``, the
+position when not given, the interval means, the step and the force -- runs
+in one native loop (:func:`~fcomp.models.stepping.motion_kernel`), with the
+same results as the numpy path it replaces (which still runs with
+``compiled=False``, without a C compiler, and to name what is wrong with
+invalid signals). Static maps are one vectorised numpy evaluation.
+
 A model whose memory is discrete says so (its
 :meth:`~fcomp.models.base.FrictionModel.discrete_memory`), and that memory
 integrates the motion its own way (``integrate_motion``: the turning-point
@@ -33,7 +40,7 @@ import numpy as np
 from fcomp.backend import NUMPY
 from fcomp.errors import FcompError
 from fcomp.models.base import FrictionModel, Signals, side_of
-from fcomp.models.stepping import friction_step, midpoint_signals, step_loop
+from fcomp.models.stepping import friction_step, midpoint_signals, motion_kernel, step_loop
 from fcomp.parameters import ParamValues
 
 __all__ = ["FrictionRun", "friction_along_motion", "friction_step", "midpoint_signals",
@@ -124,8 +131,6 @@ def friction_along_motion(
     """
     if substeps < 1:
         raise ValueError("substeps must be >= 1")
-    sig = prepare_signals(t, v, a, x, p1, p2)
-    n = sig["t"].size
     flat = dict(model.flat_params())
     if values:
         flat.update(values)
@@ -133,6 +138,12 @@ def friction_along_motion(
     if x0.shape != (model.n_states,):
         raise ValueError(f"state0 must have {model.n_states} entries {model.state_names}")
     memory = model.discrete_memory()
+    if compiled and memory is None and model.n_states:
+        run = _native_run(model, t, v, a, x, p1, p2, x0, flat, substeps)
+        if run is not None:
+            return run
+    sig = prepare_signals(t, v, a, x, p1, p2)
+    n = sig["t"].size
     if model.n_states == 0:
         X = np.zeros((n, 0))
     elif memory is not None:
@@ -147,3 +158,47 @@ def friction_along_motion(
     F = np.broadcast_to(F, (n,)).copy()
     return FrictionRun(t=sig["t"], v=sig["v"], a=sig["a"], x=sig["x"], p1=sig["p1"],
                        p2=sig["p2"], s=sig["s"], states=X, state_names=model.state_names, F=F)
+
+
+def _samples(value: Any, n: int, *, single: bool) -> np.ndarray | None:
+    """A signal as the native kernel reads it: contiguous float64 of ``n`` samples, or
+    (``single``) one value held; ``None`` when it does not broadcast to ``n`` samples."""
+    arr = np.asarray(value, dtype=float)
+    if arr.shape == (n,):
+        return np.ascontiguousarray(arr)
+    if arr.size == 1 and arr.ndim <= 1:
+        return arr.reshape(1).copy() if single else np.full(n, arr.reshape(-1)[0])
+    return None
+
+
+def _native_run(model: FrictionModel, t: Any, v: Any, a: Any, x: Any, p1: Any, p2: Any,
+                x0: np.ndarray, flat: Mapping[str, float], substeps: int) -> FrictionRun | None:
+    """:func:`friction_along_motion` in one native pass
+    (:func:`~fcomp.models.stepping.motion_kernel`): the same scheme, signals and force. ``None`` where the kernel does not apply (no
+    compiler, signals that do not broadcast, invalid signals: the general path then runs,
+    or says what is wrong)."""
+    t = np.ascontiguousarray(t, dtype=float)
+    if t.ndim != 1 or t.size < 2:
+        return None
+    n = t.size
+    vs = _samples(v, n, single=False)
+    if vs is None:
+        return None
+    if a is None:
+        with np.errstate(all="ignore"):  # invalid time is reported by the general path
+            a = np.gradient(vs, t)
+    acc = _samples(a, n, single=False)
+    pos = None if x is None else _samples(x, n, single=True)
+    q1, q2 = _samples(p1, n, single=True), _samples(p2, n, single=True)
+    if acc is None or q1 is None or q2 is None or (x is not None and pos is None):
+        return None
+    kernel = motion_kernel(model, substeps)
+    if kernel is None:
+        return None
+    pvec = np.array([flat[k] for k in model.flat_params()], dtype=float)
+    out = kernel(t, vs, acc, pos, q1, q2, np.ascontiguousarray(x0, dtype=float), pvec)
+    if out is None:
+        return None
+    X, F, S = out
+    return FrictionRun(t=t, v=S[0], a=S[1], x=S[2], p1=S[3], p2=S[4], s=S[5], states=X,
+                       state_names=model.state_names, F=F)

@@ -15,6 +15,16 @@ compiled to native code by :func:`fcomp.compiled.stepping_loop`; its input at
 interval ``k`` is the interval-mean signal vector (what the simulation uses)
 followed by the sample signals at ``k+1`` (what the force reads). Models
 without states (static maps) use the same loop with ``S`` empty.
+
+A fit evaluates one record many times: the loop keeps the prepared signals
+of the record it was last given, and a loop compiled for more parameters of
+the same model (at most :data:`WIDER` more) serves a narrower set -- the
+trajectory stage probes all free parameters, then fits those the record
+determines -- instead of compiling again. The last results (up to
+:data:`KEEP_BYTES`, read-only) are reused when the same record is asked for at
+the same parameters again: a fit asks for its start and its solution more
+than once (the probe and the solve's start; the solve's end, the final
+residuals and the prediction).
 """
 
 from __future__ import annotations
@@ -30,7 +40,48 @@ from fcomp.models.base import SIGNAL_NAMES, FrictionModel, Signals
 from fcomp.models.stepping import friction_step, midpoint_signals, structure_key
 from fcomp.parameters import ParamValues
 
-_LOOPS: dict[tuple, tuple[Loop, ca.Function]] = {}
+_LOOPS: dict[tuple, tuple[Loop, ca.Function, tuple[str, ...]]] = {}
+
+#: Extra parameters a compiled loop may carry to serve a narrower set (fraction of it, at
+#: least one): each costs ~1/len(free) of an evaluation, a new compilation ~10 evaluations.
+WIDER = 0.2
+
+
+#: Bytes of results kept for reuse (the module docstring).
+KEEP_BYTES = 64 * 2**20
+_KEPT: list[tuple[tuple, tuple, np.ndarray, np.ndarray]] = []  # (key, record, F, G), newest last
+
+
+def _same(a: tuple, b: tuple) -> bool:
+    """Whether two tuples hold the very same objects."""
+    return len(a) == len(b) and all(x is y for x, y in zip(a, b, strict=True))
+
+
+def _kept(key: tuple, record: tuple) -> tuple[np.ndarray, np.ndarray] | None:
+    for k, rec, F, G in _KEPT:
+        if k == key and _same(rec, record):
+            return F, G
+    return None
+
+
+def _keep(key: tuple, record: tuple, F: np.ndarray, G: np.ndarray) -> None:
+    F.setflags(write=False)
+    G.setflags(write=False)
+    _KEPT.append((key, record, F, G))
+    while _KEPT and sum(e[2].nbytes + e[3].nbytes for e in _KEPT) > KEEP_BYTES:
+        _KEPT.pop(0)
+
+
+def _wider(key: tuple) -> tuple[Loop, ca.Function, tuple[str, ...]] | None:
+    """A loop already built for the same model, substeps and mode whose parameters include
+    ``key``'s, with at most :data:`WIDER` more; ``None`` if there is none."""
+    structure, free, substeps, compiled = key
+    room = max(1, int(WIDER * len(free)))
+    for (s, f, n, c), entry in _LOOPS.items():
+        if (s, n, c) == (structure, substeps, compiled) and set(free) <= set(f) \
+                and len(f) <= len(free) + room:
+            return entry
+    return None
 
 
 def _build(model: FrictionModel, free: tuple[str, ...], substeps: int,
@@ -93,8 +144,24 @@ class SensitivityLoop:
         self.names = names
         key = (structure_key(model), self.free, int(substeps), bool(compiled))
         if key not in _LOOPS:
-            _LOOPS[key] = _build(model, self.free, int(substeps), bool(compiled))
-        self._loop, self._force = _LOOPS[key]
+            _LOOPS[key] = _wider(key) or (*_build(model, self.free, int(substeps),
+                                                  bool(compiled)), self.free)
+        self._loop, self._force, self._loop_free = _LOOPS[key]
+        self._cols = [self._loop_free.index(n) for n in self.free]
+        self._prep_refs: tuple = ()
+        self._prep: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+
+    def _prepared(self, sig: Mapping[str, np.ndarray]
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(U, dt, signals at sample 0)`` of ``sig``, kept for the signals last given (the
+        same mapping holding the same arrays: a fit's record, which it does not change)."""
+        refs = (sig, *(sig[k] for k in ("t", *SIGNAL_NAMES)))
+        if self._prep is None or not _same(refs, self._prep_refs):
+            M, dt = midpoint_signals(sig)
+            S = np.vstack([np.asarray(sig[k], dtype=float) for k in SIGNAL_NAMES])
+            U = np.ascontiguousarray(np.vstack([M, S[:, 1:]]).T)
+            self._prep, self._prep_refs = (U, dt, S[:, 0].copy()), refs
+        return self._prep
 
     def __call__(
         self,
@@ -103,21 +170,26 @@ class SensitivityLoop:
         state0: np.ndarray | None = None,
     ) -> tuple[np.ndarray, np.ndarray]:
         model = self.model
-        nx, nf = model.n_states, len(self.free)
+        nx, nf = model.n_states, len(self._loop_free)
         flat = dict(model.flat_params())
         flat.update(values)
         pvec = np.array([flat[n] for n in self.names], dtype=float)
-        M, dt = midpoint_signals(sig)
-        S = np.vstack([np.asarray(sig[k], dtype=float) for k in SIGNAL_NAMES])
-        U = np.vstack([M, S[:, 1:]]).T
+        U, dt, s0 = self._prepared(sig)
         x0 = model.initial_state() if state0 is None else np.asarray(state0, dtype=float)
-        w0 = np.zeros(nx + nx * nf + 1 + nf)
-        w0[:nx] = x0
-        W = self._loop(w0, U, dt, pvec)
-        u0 = np.concatenate([S[:, 0], S[:, 0]])
-        F0, _, G0 = self._force(x0, u0, pvec)
-        F = W[:, nx + nx * nf]
-        G = W[:, nx + nx * nf + 1 :]
-        F[0] = float(F0)
-        G[0] = np.asarray(G0, dtype=float).ravel()
+        key = (id(self._loop), pvec.tobytes(), x0.tobytes())
+        known = _kept(key, self._prep_refs)
+        if known is None:
+            w0 = np.zeros(nx + nx * nf + 1 + nf)
+            w0[:nx] = x0
+            W = self._loop(w0, U, dt, pvec)
+            F0, _, G0 = self._force(x0, np.concatenate([s0, s0]), pvec)
+            F = W[:, nx + nx * nf].copy()  # compact copies: W (with the states) is let go
+            G = np.ascontiguousarray(W[:, nx + nx * nf + 1 :])
+            F[0] = float(F0)
+            G[0] = np.asarray(G0, dtype=float).ravel()
+            _keep(key, self._prep_refs, F, G)
+        else:
+            F, G = known
+        if self._cols != list(range(nf)):  # a wider loop: the columns asked for
+            G = G[:, self._cols]
         return F, G

@@ -320,7 +320,7 @@ def event_ring(r: np.ndarray, data: DiagnosisData, seg: Segmentation, test: np.n
         n = int(round(w / dt))
         if n < 16:
             continue
-        ev = [k for k in starts if k + n <= data.n and test[k:k + n].all()
+        ev = [int(k) for k in starts if k + n <= data.n and test[k:k + n].all()
               and np.all(since[k:k + n] == t[k:k + n] - t[k])]
         quiet_ok = test & (since >= QUIET_AFTER) & np.isfinite(since)
         quiet = []

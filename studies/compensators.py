@@ -15,7 +15,9 @@ Outputs:
 * ``summary.json``: ``{"results": [{"plant", "controller", "task",
   "rms_error", "max_error", "steady_state_error", "solve_time_median",
   "solve_time_max", ...}, ...]}`` (errors in m, times in s), plus the
-  robustness distributions, the MPC timing and the verdict;
+  robustness distributions, how many draws and why (``robustness_draws``:
+  the stopping rule's decisions), the EKF and MPC step times (wall clock and
+  CPU, per closed loop) and the verdict;
 * the report: ranked tables (RMS error, ratio to ``pid``), tracking-error
   plots, friction estimate against the true friction, the Monte Carlo
   robustness sweep (friction mismatch and sensor noise, per-compensator

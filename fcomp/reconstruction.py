@@ -49,7 +49,6 @@ from functools import lru_cache
 from typing import Any
 
 import numpy as np
-from scipy.signal import butter, sosfiltfilt
 
 from fcomp.errors import FcompError
 from fcomp.measurement import ORIENTATIONS, G, Measurement
@@ -79,6 +78,8 @@ def _grid(t: np.ndarray, label: str) -> tuple[np.ndarray, bool]:
 
 @lru_cache(maxsize=256)
 def _butterworth(order: int, cutoff_hz: float, fs: float) -> np.ndarray:
+    from scipy.signal import butter  # here: importing it costs ~0.4 s at start
+
     return butter(order, cutoff_hz, fs=fs, output="sos")
 
 
@@ -111,6 +112,8 @@ def zero_phase_lowpass(y: np.ndarray, fs: float, cutoff_hz: float, order: int, *
                          f"sample rate ({0.5 * fs:g} Hz)")
     if y.size < 3:
         raise FcompError(f"{label}: at least three samples are needed to filter")
+    from scipy.signal import sosfiltfilt  # here: importing it costs ~0.4 s at start
+
     sos = butterworth_sos(order, float(cutoff_hz), float(fs))
     padlen = min(y.size - 1, int(math.ceil(3.0 * fs / cutoff_hz)))
     return sosfiltfilt(sos, y, padtype="odd", padlen=padlen)
@@ -143,6 +146,8 @@ def band_limit(t: np.ndarray, y: np.ndarray, cutoff_hz: float, *, order: int = 2
     if not same:
         return np.column_stack([smooth(t, y[:, j], cutoff_hz=fc, order=order,
                                        label="prediction") for j in range(y.shape[1])])
+    from scipy.signal import sosfiltfilt
+
     sos = butterworth_sos(order, float(fc), float(fs))
     padlen = min(y.shape[0] - 1, int(math.ceil(3.0 * fs / fc)))
     return sosfiltfilt(sos, y, axis=0, padtype="odd", padlen=padlen)

@@ -16,9 +16,18 @@ A run (:func:`run_closed_loop`) wires
   object, and by default its friction is wrong by the amounts of
   :data:`DEFAULT_MISMATCH`;
 
-samples at the controller's rate (``step`` timed with
-:func:`time.perf_counter`), applies the command (clipped to the valve range),
-advances the plant one sample and records everything. The true friction
+samples at the controller's rate, applies the command (clipped to the valve
+range), advances the plant one sample and records everything.
+
+Every ``step`` call is timed twice: wall clock (:func:`time.perf_counter`)
+and the CPU time of the calling thread (:func:`time.thread_time`). The
+second is what the step costs on a processor of its own; the wall clock
+also holds the time the operating system (or the hypervisor) gave the
+processor to another process -- on a shared machine whole scheduler ticks
+of 4 ms, the outliers of the wall-clock maximum. Python's cyclic garbage
+collector is held off during the loop (as a real-time control thread
+would: ``gc.disable``, collected after the run): a full collection in the
+middle of a step costs a millisecond the controller did not spend. The true friction
 force is the plant's output ``F`` at every sample, beside the controller's
 estimate.
 
@@ -30,6 +39,7 @@ every run starts from the same physical state, not from a settling load.
 
 from __future__ import annotations
 
+import gc
 import math
 import time
 from collections.abc import Mapping
@@ -114,6 +124,8 @@ class LoopResult:
         The plant's friction force and the controller's estimate (N).
     solve_times
         Wall-clock duration of every controller step (s).
+    solve_cpu
+        CPU time of the controller's thread in every step (s).
     fallbacks
         Per-sample flag: the controller used its fallback law.
     metrics
@@ -132,6 +144,7 @@ class LoopResult:
     F_true: np.ndarray
     F_hat: np.ndarray
     solve_times: np.ndarray
+    solve_cpu: np.ndarray
     fallbacks: np.ndarray
     metrics: Metrics
     description: str = ""
@@ -213,32 +226,41 @@ def run_closed_loop(controller: str, task: str, config: LoopConfig | None = None
     U = np.zeros(n + 1)
     F_hat = np.zeros(n + 1)
     times = np.zeros(n + 1)
+    cpu = np.zeros(n + 1)
     fb = np.zeros(n + 1, dtype=bool)
     state = stepper.reset()
     y0 = sensors.measure(state[meas_idx])
     ctrl.reset(0.0, y0, Reference(float(r[0]), float(dr[0]), float(ddr[0])))
     u_max = model.u_max
-    for k in range(n + 1):
-        X[k] = state
-        y = y0 if k == 0 else sensors.measure(state[meas_idx])
-        Y[k] = y
-        fut = tuple(r_pad[k + 1:k + 1 + preview]) if preview else ()
-        ref = Reference(float(r[k]), float(dr[k]), float(ddr[k]), fut)
-        start = time.perf_counter()
-        u = ctrl.step(float(t[k]), y, ref)
-        times[k] = time.perf_counter() - start
-        if not math.isfinite(u):
-            raise FcompError(f"controller {controller} returned a non-finite command at "
-                             f"t = {t[k]:.4f} s")
-        u = min(max(u, -u_max), u_max)
-        U[k] = u
-        F_hat[k] = ctrl.friction_estimate
-        fb[k] = ctrl.fallback_active
-        if k < n:
-            state = stepper.step(u)
+    collecting = gc.isenabled()
+    gc.disable()  # no collection inside a timed step (module docstring)
+    try:
+        for k in range(n + 1):
+            X[k] = state
+            y = y0 if k == 0 else sensors.measure(state[meas_idx])
+            Y[k] = y
+            fut = tuple(r_pad[k + 1:k + 1 + preview]) if preview else ()
+            ref = Reference(float(r[k]), float(dr[k]), float(ddr[k]), fut)
+            cpu0 = time.thread_time()
+            start = time.perf_counter()
+            u = ctrl.step(float(t[k]), y, ref)
+            times[k] = time.perf_counter() - start
+            cpu[k] = time.thread_time() - cpu0
+            if not math.isfinite(u):
+                raise FcompError(f"controller {controller} returned a non-finite command at "
+                                 f"t = {t[k]:.4f} s")
+            u = min(max(u, -u_max), u_max)
+            U[k] = u
+            F_hat[k] = ctrl.friction_estimate
+            fb[k] = ctrl.fallback_active
+            if k < n:
+                state = stepper.step(u)
+    finally:
+        if collecting:
+            gc.enable()
     outs = plant.evaluate_outputs(X, U.reshape(-1, 1))
     metrics = compute_metrics(
-        t, r, X[:, names.index("x")], U, times, u_max=u_max,
+        t, r, X[:, names.index("x")], U, times, cpu_times=cpu, u_max=u_max,
         settle=tk.windows(config.fast), reversals=tk.reversal_times(config.fast),
         reversal_window=tk.reversal_window, periodic=tk.kind == "periodic",
         fallbacks=int(fb.sum()),
@@ -246,7 +268,7 @@ def run_closed_loop(controller: str, task: str, config: LoopConfig | None = None
     return LoopResult(
         controller=controller, task=task, plant=config.plant, t=t, r=r,
         x=X[:, names.index("x")], v=X[:, names.index("v")], y=Y, u=U, F_true=outs["F"],
-        F_hat=F_hat, solve_times=times, fallbacks=fb, metrics=metrics,
+        F_hat=F_hat, solve_times=times, solve_cpu=cpu, fallbacks=fb, metrics=metrics,
         description=ctrl.describe(),
     )
 

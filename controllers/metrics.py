@@ -23,8 +23,14 @@ metric                            definition
 ``valve_activity`` (1/s)          total variation of the valve command per
                                   second, in units of the valve range:
                                   ``sum|du| / (u_max * duration)``
-``solve_time_median``, ``_max``   wall-clock time of the controller's
-(s)                               ``step`` call, median and maximum
+``solve_time_median``, ``_p99``,  wall-clock time of the controller's
+``_max`` (s)                      ``step`` call: median, 99th percentile, maximum
+``solve_time_cpu_median``,        CPU time of the controller's thread in the
+``_cpu_p99``, ``_cpu_max`` (s)    ``step`` call (what the step costs on a
+                                  processor of its own; ``nan`` if not measured)
+``solve_time_descheduled`` (-)    steps whose wall-clock time exceeds their CPU
+                                  time by more than :data:`DESCHEDULED` (the
+                                  processor was given to another process)
 ``fallbacks`` (-)                 steps where the controller could not apply its
                                   law and used its stated fallback (MPC solve
                                   failure): counted, never hidden
@@ -33,6 +39,7 @@ metric                            definition
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from typing import Any
@@ -40,6 +47,10 @@ from typing import Any
 import numpy as np
 
 from fcomp.errors import FcompError
+
+#: Wall-clock time beyond a step's CPU time (s) that counts it as descheduled: a step that
+#: waited for the processor (the scheduler's tick is 1-4 ms), not timer jitter (microseconds).
+DESCHEDULED = 0.5e-3
 
 
 @dataclass(frozen=True)
@@ -56,6 +67,11 @@ class Metrics:
     solve_time_max: float
     fallbacks: int
     steps: int
+    solve_time_p99: float = math.nan
+    solve_time_cpu_median: float = math.nan
+    solve_time_cpu_p99: float = math.nan
+    solve_time_cpu_max: float = math.nan
+    solve_time_descheduled: int = 0
 
     def as_dict(self) -> dict[str, Any]:
         return asdict(self)
@@ -78,6 +94,7 @@ def compute_metrics(
     reversal_window: float = 0.2,
     periodic: bool = False,
     fallbacks: int = 0,
+    cpu_times: np.ndarray | None = None,
 ) -> Metrics:
     """Metrics of a run sampled at ``t`` (s).
 
@@ -100,6 +117,8 @@ def compute_metrics(
         there is no hunting amplitude).
     fallbacks
         Number of fallback steps the controller reported.
+    cpu_times
+        CPU time of the controller's thread in each step (s), if measured.
     """
     t = np.asarray(t, dtype=float)
     e = np.asarray(r, dtype=float) - np.asarray(x, dtype=float)
@@ -128,6 +147,9 @@ def compute_metrics(
     u = np.asarray(u, dtype=float)
     activity = float(np.sum(np.abs(np.diff(u))) / (u_max * duration)) if u.size > 1 else 0.0
     st = np.asarray(solve_times, dtype=float)
+    ct = np.asarray(cpu_times if cpu_times is not None else [], dtype=float)
+    if ct.size and ct.shape != st.shape:
+        raise FcompError("metrics need one CPU time per step")
     return Metrics(
         rms_error=float(np.sqrt(np.mean(e**2))),
         max_error=float(np.max(np.abs(e))),
@@ -139,7 +161,16 @@ def compute_metrics(
         solve_time_max=float(np.max(st)) if st.size else 0.0,
         fallbacks=int(fallbacks),
         steps=int(st.size),
+        solve_time_p99=_quantile(st, 0.99),
+        solve_time_cpu_median=_quantile(ct, 0.5),
+        solve_time_cpu_p99=_quantile(ct, 0.99),
+        solve_time_cpu_max=_quantile(ct, 1.0),
+        solve_time_descheduled=int(np.sum(st - ct > DESCHEDULED)) if ct.size else 0,
     )
 
 
-__all__ = ["Metrics", "compute_metrics"]
+def _quantile(values: np.ndarray, q: float) -> float:
+    return float(np.quantile(values, q)) if values.size else math.nan
+
+
+__all__ = ["DESCHEDULED", "Metrics", "compute_metrics"]

@@ -121,13 +121,14 @@ class RTISolver:
         self.problem = problem
         N, nx = problem.horizon, model.nx
         ix, iv = model.index("x"), model.index("v")
-        step = model.step(problem.dt, problem.substeps, sensitivities=True)
+        step = model.step(problem.dt, problem.substeps, sensitivities=True, scale_input=True)
         x0 = ca.MX.sym("x0", nx)
         U = ca.MX.sym("U", N)
         u_prev = ca.MX.sym("u_prev")
         R = ca.MX.sym("R", N)
         V = ca.MX.sym("V", N)
         P = ca.MX.sym("p", model.p.size)
+        Sc = ca.MX.sym("s", nx)  # state scales: an input, as the parameters
         wx, wv = 1.0 / problem.position_tol, 1.0 / problem.velocity_tol
         wdu = 1.0 / (problem.du_tol * problem.u_max)
         xk = x0
@@ -135,7 +136,7 @@ class RTISolver:
         res, jac, xs = [], [], []
         E = np.eye(N)
         for k in range(N):
-            xk, A, B = step(xk, U[k], P)
+            xk, A, B = step(xk, U[k], P, Sc)
             Sk = ca.mtimes(A, Sk) + ca.mtimes(B, ca.DM(E[k:k + 1, :]))
             res += [wx * (xk[ix] - R[k]), wv * (xk[iv] - V[k])]
             jac += [wx * Sk[ix, :], wv * Sk[iv, :]]
@@ -147,10 +148,11 @@ class RTISolver:
         H = ca.mtimes(Jm.T, Jm)
         g = ca.mtimes(Jm.T, r)
         cost = 0.5 * ca.dot(r, r)
-        fn = ca.Function(f"mpc_rti_N{N}", [x0, U, u_prev, R, V, P],
-                         [H, g, cost, ca.vertcat(*xs)], ["x0", "U", "u_prev", "R", "V", "p"],
-                         ["H", "g", "cost", "X"])
+        fn = ca.Function(f"mpc_rti_N{N}", [x0, U, u_prev, R, V, P, Sc],
+                         [H, g, cost, ca.vertcat(*xs)],
+                         ["x0", "U", "u_prev", "R", "V", "p", "s"], ["H", "g", "cost", "X"])
         self.p = np.asarray(model.p, dtype=float)
+        self.scales = np.asarray(model.scales, dtype=float)
         self._lin = native(fn)
         self.D = D
         self.reg = 1e-10
@@ -170,7 +172,7 @@ class RTISolver:
     def iterate(self, x0: np.ndarray, u_prev: float, R: np.ndarray, V: np.ndarray) -> bool:
         """One Gauss-Newton step of the QP from the current ``U``; ``False`` if it failed."""
         p = self.problem
-        H, g, cost, _X = self._lin(x0, self.U, u_prev, R, V, self.p)
+        H, g, cost, _X = self._lin(x0, self.U, u_prev, R, V, self.p, self.scales)
         if not (np.all(np.isfinite(H)) and np.all(np.isfinite(g))):
             return False
         N = p.horizon

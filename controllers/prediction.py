@@ -78,7 +78,16 @@ class ContinuousModel:
     def index(self, name: str) -> int:
         return self.state_names.index(name)
 
-    def step(self, dt: float, substeps: int = 1, *, sensitivities: bool = False) -> ca.Function:
+    def step(self, dt: float, substeps: int = 1, *, sensitivities: bool = False,
+             scale_input: bool = False) -> ca.Function:
         """The prediction step ``(x, u, p) -> x_next`` over ``dt`` (s) (module docstring);
-        with ``sensitivities`` ``-> (x_next, A, B)``, its step Jacobians."""
-        return self.discrete(dt, substeps, scheme=PREDICTION_SCHEME, sensitivities=sensitivities)
+        with ``sensitivities`` ``-> (x_next, A, B)``, its step Jacobians; with
+        ``scale_input`` ``(x, u, p, s)``, the state scales (:attr:`scales`) an input.
+
+        The controllers compile their steps with the scales as an input: the
+        scale of a friction state follows the friction parameters (``z ~
+        g/sigma0``), so baked in as constants every parameter draw of a Monte
+        Carlo sweep would compile a kernel of its own.
+        """
+        return self.discrete(dt, substeps, scheme=PREDICTION_SCHEME, sensitivities=sensitivities,
+                             scale_input=scale_input)

@@ -18,6 +18,18 @@ executed by :func:`run_jobs`
   :class:`distributed.LocalCluster` or a cluster started with
   ``dask scheduler`` / ``dask worker`` on other machines.
 
+How many draws: :func:`run_sequential` draws in batches and stops by a
+:class:`StoppingRule` instead of a fixed count -- each compensator is run
+until the confidence interval of its median effect (its metric divided by
+the reference controller's on the same draw, ``pid``'s by default) excludes
+1, i.e. until the draws show whether it helps or harms, or until the most
+draws allowed (then reported as undecided). The interval is distribution-free
+(order statistics of the paired ratios, binomial coverage; Conover,
+*Practical Nonparametric Statistics*, 3rd ed., 1999, sec. 3.2), at the level
+``1 - (1 - confidence)/looks`` for the ``looks`` the rule may take
+(Bonferroni), so that stopping at the first decisive look keeps the stated
+confidence.
+
 A grid (:class:`Grid`) runs every combination of given mismatch factors and
 of the friction models the controllers are built with instead (``fcomp
 sweep --grid``). A run that fails (a plant integration that does not converge, a loop gone
@@ -148,13 +160,17 @@ class Sweep:
             out.append(({k: float(v) for k, v in zip(MISMATCH_PARAMS, f, strict=True)}, noise))
         return out
 
-    def jobs(self) -> list[Job]:
-        """One job per (sample, controller)."""
+    def jobs(self, samples: range | None = None,
+             controllers: Sequence[str] | None = None) -> list[Job]:
+        """One job per (sample, controller): every sample and controller, or those given
+        (sample ``i`` is the same draw whichever others are run)."""
+        draws = self.draws()
         out = []
-        for i, (mismatch, noise) in enumerate(self.draws()):
+        for i in samples if samples is not None else range(self.samples):
+            mismatch, noise = draws[i]
             cfg = replace(self.base, plant=self.plant, mismatch=mismatch, noise=noise,
                           seed=self.seed + i, fast=self.fast)
-            for c in self.controllers:
+            for c in controllers if controllers is not None else self.controllers:
                 out.append(Job(c, self.task, cfg, sample=i))
         return out
 
@@ -219,6 +235,151 @@ class Grid:
         return out
 
 
+def median_interval(values: Sequence[float] | np.ndarray, confidence: float
+                    ) -> tuple[float, float] | None:
+    """Distribution-free confidence interval of the median of ``values``.
+
+    The order statistics ``(x_(k), x_(n+1-k))`` with the largest ``k`` whose
+    coverage ``P(k <= B <= n - k)``, ``B ~ Binomial(n, 1/2)``, is at least
+    ``confidence`` (exact for any continuous distribution); ``None`` when even
+    the extremes do not reach it (fewer than 6 values at 95 %).
+    """
+    from scipy.stats import binom
+
+    v = np.sort(np.asarray(values, dtype=float))
+    n = v.size
+    best = 0
+    for k in range(1, n // 2 + 1):
+        if binom.cdf(n - k, n, 0.5) - binom.cdf(k - 1, n, 0.5) >= confidence:
+            best = k
+    return (float(v[best - 1]), float(v[n - best])) if best else None
+
+
+def paired_ratios(results: Sequence[Mapping[str, Any]], reference: str,
+                  metric: str = "rms_error") -> dict[str, np.ndarray]:
+    """Per controller, its ``metric`` divided by ``reference``'s on the same draw (the draws
+    where both ran and neither failed)."""
+    ref = {r["sample"]: float(r["metrics"][metric]) for r in results
+           if r["controller"] == reference and r["status"] == "ok"}
+    out: dict[str, list[float]] = {}
+    for r in results:
+        c = r["controller"]
+        if c == reference:
+            continue
+        out.setdefault(c, [])
+        if r["status"] == "ok" and r["sample"] in ref and ref[r["sample"]] > 0:
+            out[c].append(float(r["metrics"][metric]) / ref[r["sample"]])
+    return {c: np.asarray(v) for c, v in out.items()}
+
+
+@dataclass(frozen=True)
+class StoppingRule:
+    """When a Monte Carlo sweep has drawn enough (module docstring, "How many draws").
+
+    Attributes
+    ----------
+    confidence
+        Overall confidence of the decisions (each look uses ``1 - (1 - confidence)/looks``).
+    min_draws, max_draws, batch
+        Draws before the first look, the most draws, draws added per look.
+    reference
+        The controller the others are compared with (run as long as any is undecided).
+    metric
+        The metric compared (a key of :class:`controllers.metrics.Metrics`).
+    """
+
+    confidence: float = 0.95
+    min_draws: int = 8
+    max_draws: int = 20
+    batch: int = 4
+    reference: str = "pid"
+    metric: str = "rms_error"
+
+    def __post_init__(self) -> None:
+        if not 0 < self.confidence < 1:
+            raise FcompError(f"stopping rule: confidence must lie in (0, 1), "
+                             f"got {self.confidence}")
+        if not 1 <= self.min_draws <= self.max_draws or self.batch < 1:
+            raise FcompError("stopping rule: need 1 <= min_draws <= max_draws and batch >= 1")
+
+    @property
+    def looks(self) -> int:
+        """How many times the rule may look at the draws."""
+        return 1 + math.ceil((self.max_draws - self.min_draws) / self.batch)
+
+    @property
+    def level(self) -> float:
+        """Confidence level of each look's intervals (Bonferroni over :attr:`looks`)."""
+        return 1.0 - (1.0 - self.confidence) / self.looks
+
+    def decisions(self, results: Sequence[Mapping[str, Any]]) -> dict[str, dict[str, Any]]:
+        """Per compared controller: paired draws, median ratio, its interval, ``decided``
+        (the interval excludes 1) and ``verdict`` (``better``, ``worse``, ``undecided``)."""
+        out: dict[str, dict[str, Any]] = {}
+        for c, ratios in paired_ratios(results, self.reference, self.metric).items():
+            ci = median_interval(ratios, self.level)
+            decided = ci is not None and (ci[1] < 1.0 or ci[0] > 1.0)
+            verdict = "undecided" if not decided or ci is None else (
+                "better" if ci[1] < 1.0 else "worse")
+            out[c] = {"paired_draws": int(ratios.size),
+                      "median_ratio": float(np.median(ratios)) if ratios.size else math.nan,
+                      "interval": list(ci) if ci is not None else None,
+                      "level": self.level, "decided": decided, "verdict": verdict}
+        return out
+
+
+def run_sequential(sweeps: Mapping[str, Sweep], rule: StoppingRule,
+                   run: Callable[[list[Job]], list[dict[str, Any]]]
+                   ) -> dict[str, dict[str, Any]]:
+    """Run every sweep in batches of draws until ``rule`` is met (module docstring).
+
+    Each look runs the next batch of draws of every undecided controller (and
+    of the reference) of every sweep in one call of ``run`` (a list of jobs ->
+    their results, e.g. :func:`run_jobs` on a pool). A sweep's ``samples`` is
+    ignored; it draws at most ``rule.max_draws``.
+
+    Returns, per sweep key: ``results`` (every run), ``draws`` (how many were
+    drawn), ``decisions`` (:meth:`StoppingRule.decisions`) and ``stopped``
+    (``decided`` or ``max-draws``).
+    """
+    state: dict[str, dict[str, Any]] = {}
+    for key, sw in sweeps.items():
+        if rule.reference not in sw.controllers:
+            raise FcompError(f"stopping rule: the reference controller {rule.reference!r} is "
+                             f"not in the sweep ({', '.join(sw.controllers)})")
+        state[key] = {"sweep": replace(sw, samples=rule.max_draws), "results": [],
+                      "draws": 0, "open": list(sw.controllers)}
+    while True:
+        batch: list[Job] = []
+        parts: list[tuple[dict[str, Any], int, int]] = []  # whose jobs are batch[a:b]
+        for st in state.values():
+            if not st["open"]:
+                continue
+            stop = min(rule.max_draws, st["draws"] + (rule.batch if st["draws"]
+                                                      else rule.min_draws))
+            jobs = st["sweep"].jobs(range(st["draws"], stop), st["open"])
+            parts.append((st, len(batch), len(batch) + len(jobs)))
+            batch += jobs
+            st["draws"] = stop
+        if not batch:
+            break
+        results = run(batch)
+        for st, a, b in parts:
+            st["results"] += results[a:b]
+            dec = rule.decisions(st["results"])
+            undecided = [c for c in st["open"] if c != rule.reference
+                         and not dec.get(c, {}).get("decided", False)]
+            st["open"] = ([rule.reference, *undecided]
+                          if undecided and st["draws"] < rule.max_draws else [])
+    out = {}
+    for key, st in state.items():
+        dec = rule.decisions(st["results"])
+        out[key] = {"results": st["results"], "draws": st["draws"], "decisions": dec,
+                    "stopped": "decided" if all(d["decided"] for d in dec.values())
+                    else "max-draws"}
+    return out
+
+
 def distributions(results: Sequence[Mapping[str, Any]],
                   metrics: Sequence[str] = ("rms_error", "max_error", "steady_state_error")
                   ) -> dict[str, dict[str, Any]]:
@@ -274,5 +435,6 @@ def draw_distribution(ax: Any, dist: Mapping[str, Any], order: Sequence[str],
     return "box" if box else "points"
 
 
-__all__ = ["MIN_BOX_DRAWS", "MISMATCH_PARAMS", "Grid", "Job", "Sweep", "distributions",
-           "draw_distribution", "run_job", "run_jobs"]
+__all__ = ["MIN_BOX_DRAWS", "MISMATCH_PARAMS", "Grid", "Job", "StoppingRule", "Sweep",
+           "distributions", "draw_distribution", "median_interval", "paired_ratios", "run_job",
+           "run_jobs", "run_sequential"]

@@ -45,6 +45,7 @@ zero-phase filter so that every term of ``F`` has the same bandwidth.
 from __future__ import annotations
 
 import math
+from functools import lru_cache
 from typing import Any
 
 import numpy as np
@@ -75,6 +76,20 @@ def _grid(t: np.ndarray, label: str) -> tuple[np.ndarray, bool]:
     return t[0] + h * np.arange(m), False
 
 
+@lru_cache(maxsize=256)
+def _butterworth(order: int, cutoff_hz: float, fs: float) -> np.ndarray:
+    from scipy.signal import butter  # here: importing it costs ~0.4 s at start
+
+    return butter(order, cutoff_hz, fs=fs, output="sos")
+
+
+def butterworth_sos(order: int, cutoff_hz: float, fs: float) -> np.ndarray:
+    """Second-order sections of a Butterworth low-pass (``scipy.signal.butter``), designed once
+    per ``(order, cutoff, rate)``: a fit filters every prediction with the same design, and the
+    design (``zpk2sos``) costs more than the filtering of a short record."""
+    return _butterworth(order, cutoff_hz, fs).copy()
+
+
 def zero_phase_lowpass(y: np.ndarray, fs: float, cutoff_hz: float, order: int, *,
                        label: str = "signal") -> np.ndarray:
     """Butterworth low-pass run forward and backward (no phase lag), uniform samples.
@@ -97,9 +112,9 @@ def zero_phase_lowpass(y: np.ndarray, fs: float, cutoff_hz: float, order: int, *
                          f"sample rate ({0.5 * fs:g} Hz)")
     if y.size < 3:
         raise FcompError(f"{label}: at least three samples are needed to filter")
-    from scipy.signal import butter, sosfiltfilt  # here: importing it costs ~0.4 s at start
+    from scipy.signal import sosfiltfilt  # here: importing it costs ~0.4 s at start
 
-    sos = butter(order, cutoff_hz, fs=fs, output="sos")
+    sos = butterworth_sos(order, float(cutoff_hz), float(fs))
     padlen = min(y.size - 1, int(math.ceil(3.0 * fs / cutoff_hz)))
     return sosfiltfilt(sos, y, padtype="odd", padlen=padlen)
 
@@ -131,9 +146,9 @@ def band_limit(t: np.ndarray, y: np.ndarray, cutoff_hz: float, *, order: int = 2
     if not same:
         return np.column_stack([smooth(t, y[:, j], cutoff_hz=fc, order=order,
                                        label="prediction") for j in range(y.shape[1])])
-    from scipy.signal import butter, sosfiltfilt
+    from scipy.signal import sosfiltfilt
 
-    sos = butter(order, fc, fs=fs, output="sos")
+    sos = butterworth_sos(order, float(fc), float(fs))
     padlen = min(y.shape[0] - 1, int(math.ceil(3.0 * fs / fc)))
     return sosfiltfilt(sos, y, axis=0, padtype="odd", padlen=padlen)
 

@@ -215,8 +215,8 @@ def rosenbrock_step(
     return rosenbrock_stages(tab, x, h, rhs, lambda r: ca.solve(M, r))
 
 
-def linearly_implicit_euler(f: ca.Function, dt: float, scales: np.ndarray, substeps: int = 1,
-                            *, sensitivities: bool = False) -> ca.Function:
+def linearly_implicit_euler(f: ca.Function, dt: float, scales: np.ndarray | None,
+                            substeps: int = 1, *, sensitivities: bool = False) -> ca.Function:
     """``(x, u, p) -> x_next`` by ``substeps`` linearly implicit Euler steps over ``dt`` (s).
 
     Each step of ``h = dt/substeps`` is the one-stage Rosenbrock method
@@ -226,6 +226,11 @@ def linearly_implicit_euler(f: ca.Function, dt: float, scales: np.ndarray, subst
     1e-6 .. 1e12 and the symbolic solve loses the valve state to rounding;
     scaled it is close to the identity).
 
+    ``scales`` ``None`` makes the scales the function's fourth input ``s``
+    (``(x, u, p, s) -> ...``, the same arithmetic): the scales of a model
+    follow its parameters (a bristle state's scale is ``g/sigma0``), and as an
+    input they let one compiled function serve every parameter value.
+
     With ``sensitivities`` the function returns ``(x_next, A, B)``, the step's
     own Jacobians with the change of ``J`` along the step neglected (an
     inexact-Jacobian SQP's): ``A_1 = S*M^-1*S^-1/h``, ``M = I/h - S^-1 J S``,
@@ -234,15 +239,23 @@ def linearly_implicit_euler(f: ca.Function, dt: float, scales: np.ndarray, subst
     if substeps < 1:
         raise ValueError("substeps must be >= 1")
     nx = f.size1_in(0)
-    sc = np.asarray(scales, dtype=float).ravel()
-    if sc.size != nx or not np.all(sc > 0):
-        raise ValueError("scales must be one positive number per state")
     tab = LINEARLY_IMPLICIT_EULER
     x = ca.SX.sym("x", nx)
     u = ca.SX.sym("u", f.size1_in(1))
     p = ca.SX.sym("p", f.size1_in(2))
+    ins, names = [x, u, p], ["x", "u", "p"]
+    S: ca.SX | ca.DM
+    Si: ca.SX | ca.DM
+    if scales is None:
+        s = ca.SX.sym("s", nx)
+        S, Si = s, 1.0 / s
+        ins, names = [*ins, s], [*names, "s"]
+    else:
+        sc = np.asarray(scales, dtype=float).ravel()
+        if sc.size != nx or not np.all(sc > 0):
+            raise ValueError("scales must be one positive number per state")
+        S, Si = ca.DM(sc), ca.DM(1.0 / sc)
     h = dt / substeps
-    S, Si = ca.DM(sc), ca.DM(1.0 / sc)
     fx = f(x, u, p)
     M = ca.SX.eye(nx) / (h * tab.gamma) - ca.jacobian(fx, x) * (Si @ S.T)
 
@@ -252,22 +265,21 @@ def linearly_implicit_euler(f: ca.Function, dt: float, scales: np.ndarray, subst
     zero = ca.SX.zeros(nx)  # the stages give the scaled increment; x + S*increment
     if not sensitivities:
         dxi, _ = rosenbrock_stages(tab, zero, h, rhs, lambda r: ca.solve(M, r))
-        one = ca.Function("linearly_implicit_euler_step", [x, u, p], [ca.cse(x + S * dxi)])
+        one = ca.Function("linearly_implicit_euler_step", ins, [ca.cse(x + S * dxi)])
         xk = x
         for _ in range(substeps):
-            xk = one(xk, u, p)
-        return ca.Function("linearly_implicit_euler", [x, u, p], [ca.cse(xk)],
-                           ["x", "u", "p"], ["x_next"])
+            xk = one(xk, *ins[1:])
+        return ca.Function("linearly_implicit_euler", ins, [ca.cse(xk)], names, ["x_next"])
     Minv = ca.solve(M, ca.SX.eye(nx))
     dxi, _ = rosenbrock_stages(tab, zero, h, rhs, lambda r: ca.mtimes(Minv, r))
     A1 = ca.mtimes(ca.diag(S), ca.mtimes(Minv, ca.diag(Si))) / (h * tab.gamma)
-    one = ca.Function("linearly_implicit_euler_substep", [x, u, p],
+    one = ca.Function("linearly_implicit_euler_substep", ins,
                       [ca.cse(x + S * dxi), ca.cse(A1),
                        ca.cse(h * ca.mtimes(A1, ca.jacobian(fx, u)))])
-    x_next, A, B = one(x, u, p)
+    x_next, A, B = one(*ins)
     for _ in range(substeps - 1):
-        x_next, A2, B2 = one(x_next, u, p)
+        x_next, A2, B2 = one(x_next, *ins[1:])
         A, B = ca.mtimes(A2, A), ca.mtimes(A2, B) + B2
-    return ca.Function("linearly_implicit_euler_sens", [x, u, p],
-                       [ca.cse(x_next), ca.cse(A), ca.cse(B)], ["x", "u", "p"],
+    return ca.Function("linearly_implicit_euler_sens", ins,
+                       [ca.cse(x_next), ca.cse(A), ca.cse(B)], names,
                        ["x_next", "A", "B"])

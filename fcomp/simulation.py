@@ -193,7 +193,7 @@ class OdeModel:
         return ca.SX.sym("x", self.nx), ca.SX.sym("u", self.nu), ca.SX.sym("p", self.n_params)
 
     def discrete_step(self, dt: float, substeps: int = 1, *, scheme: str = "rodas4",
-                      sensitivities: bool = False) -> ca.Function:
+                      sensitivities: bool = False, scale_input: bool = False) -> ca.Function:
         """``step(x, u, p) -> x(t + dt)``: ``substeps`` fixed steps of ``scheme``, input held.
 
         The discrete-time model of the plant for predictions and filters:
@@ -202,7 +202,10 @@ class OdeModel:
         or ``"linearly-implicit-euler"`` (first order, L-stable and smooth: the
         prediction model of the EKF and the MPC,
         :func:`fcomp.rosenbrock.linearly_implicit_euler`); with
-        ``sensitivities`` the latter also returns its step Jacobians ``A``, ``B``.
+        ``sensitivities`` the latter also returns its step Jacobians ``A``, ``B``,
+        and with ``scale_input`` takes the state scales as a fourth input ``s``
+        (``step(x, u, p, s)``: one compiled function for every parameter value,
+        though the scales of the friction states follow the parameters).
         """
         if not (math.isfinite(dt) and dt > 0):
             raise FcompError(f"discrete step: dt must be a positive number of seconds, got {dt}")
@@ -214,11 +217,11 @@ class OdeModel:
         if scheme == "linearly-implicit-euler":
             x, u, p = self.symbols()
             f = ca.Function("f", [x, u, p], [self.rhs(x, u, p)])
-            return linearly_implicit_euler(f, dt, self.scales, substeps,
-                                           sensitivities=sensitivities)
-        if sensitivities:
-            raise FcompError("discrete step: step Jacobians are given for the "
-                             "linearly-implicit-euler scheme")
+            return linearly_implicit_euler(f, dt, None if scale_input else self.scales,
+                                           substeps, sensitivities=sensitivities)
+        if sensitivities or scale_input:
+            raise FcompError("discrete step: step Jacobians and scales as an input are given "
+                             "for the linearly-implicit-euler scheme")
         x, u, p = self.symbols()
         h = dt / substeps
         xk = x

@@ -377,12 +377,14 @@ class OdePlant(Plant):
         return self._ode
 
     def discrete_step(self, dt: float, substeps: int = 1, *, scheme: str = "rodas4",
-                      sensitivities: bool = False) -> ca.Function:
+                      sensitivities: bool = False, scale_input: bool = False) -> ca.Function:
         """CasADi ``step(x, u, p) -> x_next``: one sample of ``dt`` s with the input held
         (:meth:`fcomp.simulation.OdeModel.discrete_step`: ``scheme`` ``"rodas4"`` or
-        ``"linearly-implicit-euler"``, the controllers' prediction model)."""
+        ``"linearly-implicit-euler"``, the controllers' prediction model; ``scale_input``:
+        the state scales are a fourth input)."""
         return self.ode_model().discrete_step(dt, substeps, scheme=scheme,
-                                              sensitivities=sensitivities)
+                                              sensitivities=sensitivities,
+                                              scale_input=scale_input)
 
     def _scale_vector(self) -> np.ndarray:
         own = self.state_scales()

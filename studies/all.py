@@ -1,20 +1,82 @@
 """Study ``all``: run every registered study, each in ``DIR/NAME/``, and write ``DIR/index.html``.
 
 The index links each study's ``report.html`` and ``summary.json`` with its
-status, run time and headline result. A study that raises is recorded as
-failed (with the error line) and the others still run; the run then ends
-with :class:`studies.base.StudyError` naming the failed studies. A tqdm
-progress bar goes to stderr.
+status, run time (wall clock and CPU time of its processes) and headline
+result. A study that raises is recorded as failed (with the error line) and
+the others still run; the run then ends with :class:`studies.base.StudyError`
+naming the failed studies.
+
+The studies are independent: they run side by side on a local process pool
+(:meth:`studies.base.StudyConfig.local_workers` processes, 2 by default), the
+longest first (:attr:`studies.base.Study.cost`), each with its own parallel
+jobs inside; one worker runs them here in turn. Progress: a bar of finished
+studies on stderr and, on a terminal, each running study's own bar beneath it
+(:class:`fcomp.parallel.ProgressRelay`).
 """
 
 from __future__ import annotations
 
-import sys
+import resource
 import time
+from dataclasses import dataclass
 from typing import Any
 
+from fcomp.parallel import ProgressRelay, progress_bar, relay_progress, run_tasks, ticker
 from fcomp.report import Link
 from studies.base import Study, StudyConfig, StudyError, StudyOutput
+
+
+@dataclass(frozen=True)
+class StudyJob:
+    """One study of ``all`` as a picklable job (:func:`run_study`).
+
+    Attributes
+    ----------
+    name
+        The study's registered name.
+    study
+        The study.
+    config
+        Its configuration (output inside the staging folder of ``all``).
+    progress
+        Queue of the parent's :class:`fcomp.parallel.ProgressRelay`, or ``None``.
+    """
+
+    name: str
+    study: Study
+    config: StudyConfig
+    progress: Any = None
+
+
+def _cpu() -> float:
+    """CPU time (s) of this process and of its children that have finished."""
+    own = resource.getrusage(resource.RUSAGE_SELF)
+    kids = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return own.ru_utime + own.ru_stime + kids.ru_utime + kids.ru_stime
+
+
+def run_study(job: StudyJob) -> dict[str, Any]:
+    """Run one study; its status, headline or error, wall-clock and CPU seconds."""
+    relay_progress(job.progress)
+    start, cpu = time.perf_counter(), _cpu()
+    try:
+        results = job.study.main(job.config)
+        run: dict[str, Any] = {"status": "ok", "headline": job.study.headline(results),
+                               "error": None}
+    except Exception as exc:  # record and go on: one failing study must not hide others
+        line = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
+        run = {"status": "failed", "headline": job.study.summary,
+               "error": f"{type(exc).__name__}: {line}"}
+    finally:
+        relay_progress(None)
+    run.update({
+        "seconds": round(time.perf_counter() - start, 3),
+        "cpu_seconds": round(_cpu() - cpu, 3),
+        "report": f"{job.name}/report.html",
+        "summary": f"{job.name}/summary.json",
+        "title": job.study.title,
+    })
+    return run
 
 
 class AllStudies(Study):
@@ -26,35 +88,27 @@ class AllStudies(Study):
     report_files = ("index.html", "report.html")
 
     def build(self, out: StudyOutput, config: StudyConfig) -> dict[str, Any]:
-        from tqdm import tqdm
-
         from studies import STUDIES
 
         names = [n for n in STUDIES.names() if not isinstance(STUDIES.get(n), AllStudies)]
-        runs: dict[str, dict[str, Any]] = {}
-        bar = tqdm(names, desc="studies", unit="study", file=sys.stderr, dynamic_ncols=True)
-        for name in bar:
-            bar.set_postfix_str(name)
-            study = STUDIES.get(name)
-            sub = StudyConfig(out=config.out / name, workdir=out.directory / name,
-                              fast=config.fast, scheduler=config.scheduler,
-                              workers=config.workers, progress=config.progress,
-                              command=f"(part of) {config.command}" if config.command else None)
-            start = time.perf_counter()
+        order = sorted(names, key=lambda n: -STUDIES.get(n).cost)
+        workers = min(config.local_workers(), max(len(names), 1))
+        start = time.perf_counter()
+        bar = progress_bar("studies", len(names), unit="study", enabled=config.progress,
+                           tty_only=False)
+        with ProgressRelay(enabled=config.progress and workers > 1) as relay:
+            jobs = [StudyJob(n, STUDIES.get(n), StudyConfig(
+                out=config.out / n, workdir=out.directory / n, fast=config.fast,
+                scheduler=config.scheduler, workers=config.workers, progress=config.progress,
+                command=f"(part of) {config.command}" if config.command else None),
+                relay.queue) for n in order]
             try:
-                results = study.main(sub)
-                runs[name] = {"status": "ok", "headline": study.headline(results), "error": None}
-            except Exception as exc:  # record and go on: one failing study must not hide others
-                line = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
-                runs[name] = {"status": "failed", "headline": study.summary,
-                              "error": f"{type(exc).__name__}: {line}"}
-            runs[name].update({
-                "seconds": round(time.perf_counter() - start, 3),
-                "report": f"{name}/report.html",
-                "summary": f"{name}/summary.json",
-                "title": study.title,
-            })
-        bar.close()
+                done = run_tasks(run_study, jobs, workers=workers, progress=ticker(bar))
+            finally:
+                bar.close()
+        wall = time.perf_counter() - start
+        runs = {j.name: r for j, r in zip(jobs, done, strict=True)}
+        runs = {n: runs[n] for n in names}
         failed = [n for n, r in runs.items() if r["status"] != "ok"]
 
         rep = out.report
@@ -62,8 +116,10 @@ class AllStudies(Study):
         if not names:
             rep.note("No study is registered.", kind="warn")
         rep.paragraph(f"{len(names) - len(failed)} of {len(names)} studies ran "
-                      f"{'in fast mode' if config.fast else 'in full'}; each folder holds the "
-                      "study's `summary.json`, its figures and its `report.html`.")
+                      f"{'in fast mode' if config.fast else 'in full'}, {workers} at a time, in "
+                      f"{wall:.0f} s; each folder holds the study's `summary.json`, its figures "
+                      "and its `report.html`. Time: wall clock of each study (they overlap); "
+                      "CPU: the CPU time of its processes.")
         rows = []
         for n, r in runs.items():
             rows.append([
@@ -71,15 +127,17 @@ class AllStudies(Study):
                 r["title"],
                 r["status"] if r["status"] == "ok" else f"failed: {r['error']}",
                 r["seconds"],
+                r["cpu_seconds"],
                 r["headline"],
                 Link("summary.json", r["summary"]) if r["status"] == "ok" else "",
             ])
-        rep.table(["study", "title", "status", "time [s]", "result", "data"], rows,
+        rep.table(["study", "title", "status", "time [s]", "CPU [s]", "result", "data"], rows,
                   caption="Registered studies (links are relative to this page).",
-                  digits=[None, None, None, 1, None, None])
+                  digits=[None, None, None, 1, 1, None, None])
         if failed:
             rep.note(f"Failed: {', '.join(failed)}.", kind="bad")
-        return {"studies": runs, "failed": failed}
+        return {"studies": runs, "failed": failed, "workers": workers,
+                "seconds": round(wall, 3)}
 
     def main(self, config: Any) -> dict[str, Any]:
         summary = super().main(config)

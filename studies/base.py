@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import shutil
 from abc import ABC, abstractmethod
 from collections.abc import Mapping
@@ -105,6 +106,14 @@ class StudyConfig:
     def as_dict(self) -> dict[str, Any]:
         return {"out": str(self.out), "fast": self.fast, "command": self.command}
 
+    def local_workers(self) -> int:
+        """Local worker processes: :attr:`workers`, else ``FCOMP_WORKERS``, else up to 2
+        (the CPU count, at most 2)."""
+        if self.workers is not None:
+            return self.workers
+        raw = os.environ.get("FCOMP_WORKERS", "")
+        return int(raw) if raw.isdigit() and int(raw) > 0 else min(2, os.cpu_count() or 1)
+
 
 def to_jsonable(obj: Any) -> Any:
     """``obj`` with numpy scalars/arrays as Python numbers/lists and NaN/inf as ``None``."""
@@ -154,10 +163,11 @@ class StudyOutput:
         return plt.subplots(*args, **kwargs)
 
     def figure(self, fig: Any, name: str, caption: str, *, dpi: int = 110) -> Path:
-        """Write ``fig`` to ``DIR/fig-NAME.png`` and embed the same image in the report."""
+        """Write ``fig`` (a matplotlib figure, or PNG bytes rendered elsewhere) to
+        ``DIR/fig-NAME.png`` and embed the same image in the report."""
         if not name.replace("-", "").replace("_", "").isalnum():
             raise FcompError(f"figure name {name!r}: use letters, digits, '-' and '_'")
-        png = render_png(fig, dpi=dpi)
+        png = fig if isinstance(fig, bytes) else render_png(fig, dpi=dpi)
         path = self.directory / f"fig-{name}.png"
         write_files({path: png})
         self.figures.append(path)
@@ -179,6 +189,8 @@ class Study(ABC):
     figure_label: ClassVar[str] = "Figure"
     #: File names the report is written to inside the output directory.
     report_files: ClassVar[tuple[str, ...]] = ("report.html",)
+    #: Relative run time of a full run (about its CPU seconds): ``all`` starts the longest first.
+    cost: ClassVar[float] = 1.0
 
     def headline(self, results: dict[str, Any]) -> str:
         """One line of result for the index of ``fcomp study all`` (default: the summary)."""

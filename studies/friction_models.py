@@ -51,7 +51,6 @@ speed above which LuGre's bristle damping stops being dissipative,
 from __future__ import annotations
 
 import math
-import sys
 from dataclasses import dataclass
 from typing import Any
 
@@ -60,6 +59,7 @@ import numpy as np
 from fcomp.errors import FcompError
 from fcomp.measurement import Measurement
 from fcomp.models import FrictionModel, make_model
+from fcomp.parallel import progress_bar
 from fcomp.paramsets import get as get_paramset
 from fcomp.piston import chamber_volumes, piston_areas
 from studies.base import Study, StudyConfig, StudyOutput
@@ -223,13 +223,6 @@ class Runs:
     sweep: list[dict[str, Any]]
 
 
-def _progress(total: int, desc: str) -> Any:
-    from tqdm import tqdm
-
-    return tqdm(total=total, desc=desc, unit="run", file=sys.stderr, dynamic_ncols=True,
-                leave=False)
-
-
 def run_study(fast: bool) -> tuple[dict[str, Any], Runs]:
     """All simulations and measures; returns the results (summary) and the runs."""
     amp, freq = paper_input()
@@ -238,8 +231,8 @@ def run_study(fast: bool) -> tuple[dict[str, Any], Runs]:
     s1_grid = FAST_SIGMA1 if fast else SWEEP_SIGMA1
     grid_cases = [(amp, freq)] if fast else [(a, f) for f in GRID_FREQUENCIES
                                              for a in GRID_AMPLITUDES]
-    bar = _progress(len(MODEL_KEYS) * (len(grid_cases) + 1) + len(s0_grid) * len(s1_grid) * 2,
-                    "friction-models")
+    bar = progress_bar("friction-models",
+                       len(MODEL_KEYS) * (len(grid_cases) + 1) + len(s0_grid) * len(s1_grid) * 2)
     paper: dict[str, Measurement] = {}
     models: dict[str, dict[str, float]] = {}
     for k in MODEL_KEYS:
@@ -646,6 +639,7 @@ class FrictionModelsStudy(Study):
     """Seed 002 reproduced on the hydraulic plant: does LuGre oscillate where the NMLGM does not?"""
 
     name = "friction-models"
+    cost = 5.0
     title = "Seed 002 reproduced: friction models in an electrohydraulic servo simulation"
     summary = ("Steady-state, LuGre and NMLGM friction in the seed 002 hydraulic servo: "
                "high-frequency content, the paper's claim tested, and when it holds.")

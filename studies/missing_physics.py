@@ -32,12 +32,13 @@ All errors in newtons, on held-out data.
 
 from __future__ import annotations
 
-import sys
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 from fcomp.errors import FcompError
 from fcomp.measurement import Measurement
+from fcomp.parallel import progress_bar, run_tasks, ticker
 from fcomp.report import Link
 from studies.base import Study, StudyConfig, StudyOutput
 
@@ -81,6 +82,10 @@ REAL = (RealCase("zillen", "O-ring_3bar.csv", "coulomb-viscous"),
 #: Fast mode (CI): one generated case, one real file, a shorter search.
 FAST_GENERATED = (GeneratedCase("pressure-dependence"),)
 FAST_REAL = (RealCase("zillen", "O-ring_3bar.csv", "coulomb-viscous"),)
+#: Relative run time of the cases (CPU seconds of a full run), to start the longest first.
+CASE_COST = {"zillen-o-ring-3bar-coulomb-viscous": 48.0, "zillen-napn-3bar-coulomb-viscous": 35.0,
+             "generated-pressure-dependence": 31.0, "generated-dwell-time": 10.0,
+             "generated-ripple": 7.0, "generated-stribeck": 5.0}
 #: Diagnosis options: full run and fast mode.
 OPTIONS = {"max_steps": 4, "max_nfev": 60}
 FAST_OPTIONS = {"max_steps": 2, "max_nfev": 30}
@@ -172,10 +177,39 @@ def findings(res: dict[str, Any]) -> list[str]:
     return out
 
 
-def _case_section(out: StudyOutput, name: str, title: str, res: dict[str, Any],
-                  diag: Any, link: str) -> None:
-    from fcomp.diagnosis.report import fig_before_after, fig_error_fall
+@dataclass(frozen=True)
+class CaseJob:
+    """One case of the study as a picklable job (:func:`run_case`): the case, how to run it
+    and the folder its full diagnosis report goes to."""
 
+    case: GeneratedCase | RealCase
+    record: dict[str, Any]
+    options: dict[str, Any]
+    folder: Path
+    command: str
+
+
+def run_case(job: CaseJob) -> tuple[dict[str, Any], dict[str, bytes]]:
+    """Diagnose one case, write its full diagnosis report, render the study's figures of it.
+
+    Returns the case's results and its figures (PNG bytes by name): everything
+    the report needs, so the case can run in another process.
+    """
+    from fcomp.diagnosis.report import fig_before_after, fig_error_fall
+    from fcomp.diagnosis.report import write_report as write_diagnosis
+    from fcomp.report import render_png
+
+    if isinstance(job.case, GeneratedCase):
+        res, diag = run_generated(job.case, job.record, job.options)
+    else:
+        res, diag = run_real(job.case, job.options)
+    write_diagnosis(diag, job.folder, command=job.command)
+    return res, {"error-fall": render_png(fig_error_fall(diag)),
+                 "before-after": render_png(fig_before_after(diag))}
+
+
+def _case_section(out: StudyOutput, name: str, title: str, res: dict[str, Any],
+                  figures: dict[str, bytes], link: str) -> None:
     rep = out.report
     d = res["diagnosis"]
     rep.section(title, level=3)
@@ -189,24 +223,18 @@ def _case_section(out: StudyOutput, name: str, title: str, res: dict[str, Any],
                   [[c["effect"], c["rms_heldout"]] for c in d["candidates"][:6]],
                   caption="First step: the best candidates (all in the full report).",
                   digits=[None, 4])
-    out.figure(fig_error_fall(diag), f"{name}-error-fall",
+    out.figure(figures["error-fall"], f"{name}-error-fall",
                f"`{name}`: held-out RMS error after each accepted step; dashed: noise floor.")
-    out.figure(fig_before_after(diag), f"{name}-before-after",
+    out.figure(figures["before-after"], f"{name}-before-after",
                f"`{name}`: measured force, baseline and final model over a held-out stretch.")
     rep.bullets([Link(f"full diagnosis report of {name}", link)])
-
-
-def _progress(total: int) -> Any:
-    from tqdm import tqdm
-
-    return tqdm(total=total, desc="missing-physics", unit="case", file=sys.stderr,
-                dynamic_ncols=True, leave=False)
 
 
 class MissingPhysicsStudy(Study):
     """The diagnose loop end to end on generated and real data."""
 
     name = "missing-physics"
+    cost = 150.0
     title = "Missing physics: the diagnose loop on generated and real measurements"
     summary = ("Compare, find the missing effect, add it, watch the held-out error fall: on "
                "generated cases with a hidden effect and on the TU Delft seal-friction tests.")
@@ -222,31 +250,31 @@ class MissingPhysicsStudy(Study):
                     f"{x['diagnosis']['rms_final']:.2f} N" for x in r))
 
     def build(self, out: StudyOutput, config: StudyConfig) -> dict[str, Any]:
-        from fcomp.diagnosis.report import write_report as write_diagnosis
-
         gen = FAST_GENERATED if config.fast else GENERATED
         real = FAST_REAL if config.fast else REAL
         options = FAST_OPTIONS if config.fast else OPTIONS
         record = FAST_RECORD if config.fast else RECORD
-        # a cluster runs the candidate refits (the results are the same; not in the summary)
-        cluster = {"scheduler": config.scheduler} if config.scheduler else {}
-        bar = _progress(len(gen) + len(real))
-        results: dict[str, Any] = {"generated": [], "real": []}
-        diags: dict[str, Any] = {}
-        for case in gen:
-            bar.set_postfix_str(case.name)
-            res, diags[case.name] = run_generated(case, record, {**options, **cluster})
-            results["generated"].append(res)
-            bar.update()
-        for rcase in real:
-            bar.set_postfix_str(rcase.name)
-            res, diags[rcase.name] = run_real(rcase, {**options, **cluster})
-            results["real"].append(res)
-            bar.update()
-        bar.close()
-        for name, diag in diags.items():
-            sub = out.directory / f"diagnosis-{name}"
-            write_diagnosis(diag, sub, command=f"(part of) {config.command or 'fcomp study'}")
+        # the cases run side by side on local processes, each diagnosis in its own process
+        # (n_jobs 1: the same results, without a pool per diagnosis); with a cluster the
+        # cases run here in turn and the cluster runs their candidate refits
+        parallel = {"scheduler": config.scheduler} if config.scheduler else {"n_jobs": 1}
+        command = f"(part of) {config.command or 'fcomp study'}"
+        cases: list[GeneratedCase | RealCase] = [*gen, *real]
+        jobs = [CaseJob(c, record, {**options, **parallel},
+                        out.directory / f"diagnosis-{c.name}", command) for c in cases]
+        order = sorted(range(len(jobs)), key=lambda i: -CASE_COST.get(cases[i].name, 1.0))
+        bar = progress_bar("missing-physics", len(jobs), unit="case", enabled=config.progress)
+        try:
+            done = run_tasks(run_case, [jobs[i] for i in order],
+                             workers=1 if config.scheduler else config.local_workers(),
+                             progress=ticker(bar))
+        finally:
+            bar.close()
+        ran: dict[str, tuple[dict[str, Any], dict[str, bytes]]] = {
+            cases[i].name: r for i, r in zip(order, done, strict=True)}
+        results: dict[str, Any] = {"generated": [ran[c.name][0] for c in gen],
+                                   "real": [ran[c.name][0] for c in real]}
+        figures = {name: r[1] for name, r in ran.items()}
         results["settings"] = {"options": options, "record": record,
                                "units": {"rms": "N", "noise_floor": "N"}}
         results["findings"] = findings(results)
@@ -288,7 +316,7 @@ class MissingPhysicsStudy(Study):
                   caption="The loop against the hidden truth.",
                   digits=[None, None, None, None, 3, 3, 2, 3, None, None])
         for g in results["generated"]:
-            _case_section(out, g["case"], f"Hidden {g['hidden']}", g, diags[g["case"]],
+            _case_section(out, g["case"], f"Hidden {g['hidden']}", g, figures[g["case"]],
                           f"diagnosis-{g['case']}/report.html")
         rep.section("Real data: TU Delft seal-friction tests")
         rep.paragraph(
@@ -306,7 +334,7 @@ class MissingPhysicsStudy(Study):
                   caption="The loop on real measurements.", digits=[None, None, None, None, 3,
                                                                    3, 3, None])
         for r in results["real"]:
-            _case_section(out, r["case"], r["file"], r, diags[r["case"]],
+            _case_section(out, r["case"], r["file"], r, figures[r["case"]],
                           f"diagnosis-{r['case']}/report.html")
         rep.parameters({"diagnosis options": options, "synthetic record": record},
                        heading="Settings")

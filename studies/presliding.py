@@ -92,6 +92,7 @@ class PreslidingStudy(Study):
     """Seed 000 reproduced on the pre-sliding rig."""
 
     name = "presliding"
+    cost = 10.0
     title = "Seed 000 reproduced: pre-sliding friction of pneumatic cylinders"
     summary = ("Pressure cycles of seed 000 on the pre-sliding rig: force-displacement loops, "
                "the NMLGM's failure on nonlocal memory and the new model's success.")

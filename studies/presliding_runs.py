@@ -9,15 +9,14 @@ The study and its assumptions: :mod:`studies.presliding`.
 
 from __future__ import annotations
 
-import sys
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 
 from fcomp.backend import NUMPY
 from fcomp.errors import FcompError
 from fcomp.models import FrictionModel, make_model
+from fcomp.parallel import progress_bar
 from fcomp.piston import piston_areas
 from fcomp.trajectory import friction_along_motion
 from plants.mechanics import end_stop_force
@@ -205,13 +204,6 @@ def replay(model: FrictionModel, ref: RigRun, substeps: int = 4) -> np.ndarray:
 
 
 # -------------------------------------------------------------------- cases
-def _progress(total: int) -> Any:
-    from tqdm import tqdm
-
-    return tqdm(total=total, desc="presliding", unit="run", file=sys.stderr,
-                dynamic_ncols=True, leave=False)
-
-
 @dataclass
 class Case:
     """One pressure programme on one cylinder, with both models."""
@@ -239,7 +231,7 @@ def run_cases(fast: bool) -> list[Case]:
         if not fast:
             for p in FIG12B_P2:
                 plan.append((cyl, "fig12b", programme("fig12", FIG12B_P1, p).scaled(k)))
-    bar = _progress(len(plan))
+    bar = progress_bar("presliding", len(plan))
     cases = []
     cyls = sorted({p[0] for p in plan})
     rigs = {c: (rig_plant(c), rig_plant(c, new_model(c))) for c in cyls}

@@ -102,6 +102,26 @@ def test_metrics_on_signals_with_known_answers() -> None:
     assert m.fallbacks == 3 and m.solve_time_median == pytest.approx(1e-4)
 
 
+def test_step_times_wall_and_cpu_and_the_descheduled_steps() -> None:
+    t = np.linspace(0.0, 1.0, 1001)
+    wall = np.full(t.size, 1e-4)
+    cpu = np.full(t.size, 1e-4)
+    wall[[10, 500]] = 4.1e-3          # two steps that waited a scheduler tick
+    cpu[700] = wall[700] = 3e-4       # one step that computed longer
+    m = compute_metrics(t, np.zeros_like(t), np.zeros_like(t), np.zeros_like(t), wall,
+                        cpu_times=cpu, u_max=1.0, settle=((0.5, 1.0),))
+    assert m.solve_time_max == pytest.approx(4.1e-3) and m.solve_time_cpu_max == pytest.approx(3e-4)
+    assert m.solve_time_cpu_median == pytest.approx(1e-4)
+    assert m.solve_time_p99 == pytest.approx(1e-4)      # 3 of 1001 steps are above
+    assert m.solve_time_descheduled == 2
+    plain = compute_metrics(t, np.zeros_like(t), np.zeros_like(t), np.zeros_like(t), wall,
+                            u_max=1.0, settle=((0.5, 1.0),))
+    assert math.isnan(plain.solve_time_cpu_max) and plain.solve_time_descheduled == 0
+    with pytest.raises(FcompError, match="CPU time"):
+        compute_metrics(t, np.zeros_like(t), np.zeros_like(t), np.zeros_like(t), wall,
+                        cpu_times=cpu[:5], u_max=1.0, settle=((0.5, 1.0),))
+
+
 def test_metrics_refuse_an_unstable_run() -> None:
     t = np.linspace(0, 1, 11)
     x = np.full(11, np.nan)

@@ -63,17 +63,45 @@ def test_prediction_step_converges_to_an_accurate_integration(hyd: ControlModel)
     assert errs[1] < 0.6 * errs[0] and errs[2] < 0.6 * errs[1]   # first order: halves
 
 
+def test_prediction_step_with_scales_as_input_is_the_same_step(hyd: ControlModel) -> None:
+    pm = hyd.prediction
+    x0, u0 = equilibrium(hyd.plant, 0.15)
+    x0[1] = 0.01                                          # moving: the friction terms active
+    for sens in (False, True):
+        fixed = pm.step(2e-3, 2, sensitivities=sens)
+        free = pm.step(2e-3, 2, sensitivities=sens, scale_input=True)
+        for a, b in zip(fixed.call([x0, u0, pm.p]), free.call([x0, u0, pm.p, pm.scales]),
+                        strict=True):
+            assert np.allclose(np.asarray(a), np.asarray(b), rtol=1e-12, atol=0)
+
+
+def test_one_compiled_kernel_serves_every_parameter_draw() -> None:
+    """The EKF's and the MPC's functions do not depend on the friction parameters (scales
+    follow them, and are inputs too): a Monte Carlo draw compiles nothing new."""
+    from controllers.harness import LoopConfig, build_loop
+
+    fns = []
+    for factor in (0.5, 2.0):
+        cfg = LoopConfig(plant="hydraulic", mismatch={"sigma0": factor, "Fc": factor})
+        _plant, model, ctrl = build_loop("mpc", cfg)
+        assert model.prediction.scales[model.prediction.index("z")] > 0
+        fns.append([ctrl.solver._lin.fn, ctrl.ekf._predict.fn, ctrl.ekf._friction.fn])
+    for a, b in zip(*fns, strict=True):
+        assert a.serialize() == b.serialize(), a.name()
+
+
 def test_ekf_jacobian_is_the_derivative_of_its_step(hyd: ControlModel) -> None:
     ekf = make_ekf(hyd, 1e-3, {})
     x0, u0 = equilibrium(hyd.plant, 0.15)
     xi = x0 / ekf.scale
     xi[1] = 0.01 / ekf.scale[1]                          # moving: the friction terms active
-    xn, A = ekf._predict(xi, u0, ekf.p)
+    xn, A = ekf._predict(xi, u0, ekf.p, ekf.scale)
     for j in range(xi.size):
         h = 1e-6 * max(1.0, abs(xi[j]))
         d = np.zeros_like(xi)
         d[j] = h
-        fd = (ekf._predict(xi + d, u0, ekf.p)[0] - ekf._predict(xi - d, u0, ekf.p)[0]) / (2 * h)
+        fd = (ekf._predict(xi + d, u0, ekf.p, ekf.scale)[0]
+              - ekf._predict(xi - d, u0, ekf.p, ekf.scale)[0]) / (2 * h)
         assert np.allclose(A[:, j], fd, rtol=1e-4, atol=1e-6), hyd.prediction.state_names[j]
 
 

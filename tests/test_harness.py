@@ -14,7 +14,15 @@ from scipy.integrate import solve_ivp
 
 from controllers.harness import DEFAULT_MISMATCH, LoopConfig, build_loop, run_closed_loop
 from controllers.plant_model import equilibrium
-from controllers.robustness import Job, Sweep, distributions, run_jobs
+from controllers.robustness import (
+    Job,
+    StoppingRule,
+    Sweep,
+    distributions,
+    median_interval,
+    run_jobs,
+    run_sequential,
+)
 from fcomp.errors import FcompError, UnknownNameError
 
 CFG = LoopConfig(plant="hydraulic", fast=True)
@@ -47,6 +55,8 @@ def test_run_records_every_sample_at_the_controller_rate(pid_run) -> None:
     assert 0 < m.rms_error < m.max_error < 1e-3
     assert m.steps == r.t.size and m.fallbacks == 0
     assert np.all(np.abs(r.u) <= 0.010 + 1e-15)
+    assert r.solve_cpu.shape == r.solve_times.shape and np.all(r.solve_cpu >= 0)
+    assert 0 < m.solve_time_cpu_median <= m.solve_time_cpu_max
 
 
 def test_recorded_trajectory_replays_with_an_independent_integrator(pid_run) -> None:
@@ -95,6 +105,64 @@ def test_sweep_draws_are_reproducible_and_shared_by_the_controllers() -> None:
     assert np.all(factors > 0) and all(0.5 <= n <= 2.0 for _, n in sw.draws())
     with pytest.raises(FcompError, match="samples"):
         Sweep(samples=0)
+
+
+def test_median_interval_is_the_binomial_order_statistic_interval() -> None:
+    v = np.arange(1.0, 21.0)                    # n = 20: (x_(6), x_(15)) covers 95.9 %
+    assert median_interval(v[::-1], 0.95) == (6.0, 15.0)
+    assert median_interval(v[:6], 0.95) == (1.0, 6.0)      # 1 - 2/64 = 96.9 %
+    assert median_interval(v[:5], 0.95) is None            # 1 - 2/32 = 93.8 % < 95 %
+
+
+def _fake_runs(effects: dict[str, float]):
+    """A ``run`` for :func:`run_sequential` without simulations: RMS error of controller ``c``
+    on draw ``i`` is pid's (1 + i % 3) times ``effects[c]`` times a draw-dependent wobble."""
+    calls: list[list[Job]] = []
+
+    def run(jobs: list[Job]) -> list[dict]:
+        calls.append(jobs)
+        out = []
+        for j in jobs:
+            i = j.sample
+            base = 1.0 + i % 3
+            wobble = 1.0 if j.controller == "pid" else 1.0 + 0.8 * np.sin(1.7 * i + len(j.controller))
+            out.append({"controller": j.controller, "sample": i, "status": "ok",
+                        "metrics": {"rms_error": base * effects[j.controller] * wobble,
+                                    "max_error": 1.0, "steady_state_error": 0.0}})
+        return out
+
+    return run, calls
+
+
+def test_sequential_sweep_stops_each_compensator_once_decided() -> None:
+    effects = {"pid": 1.0, "ekf": 0.2, "pid-ff": 1.0}   # ekf clearly better; pid-ff a toss-up
+    sw = Sweep(plant="hydraulic", controllers=("pid", "ekf", "pid-ff"), samples=99)
+    rule = StoppingRule(min_draws=8, max_draws=16, batch=4)
+    assert rule.looks == 3 and rule.level == pytest.approx(1 - 0.05 / 3)
+    run, calls = _fake_runs(effects)
+    res = run_sequential({"h": sw}, rule, run)["h"]
+    assert [len(c) for c in calls] == [24, 8, 8]          # ekf decided at the first look
+    assert {j.controller for j in calls[1]} == {"pid", "pid-ff"}
+    assert res["draws"] == 16 and res["stopped"] == "max-draws"
+    d = res["decisions"]
+    assert d["ekf"]["verdict"] == "better" and d["ekf"]["paired_draws"] == 8
+    assert d["ekf"]["interval"][1] < 1.0
+    assert d["pid-ff"]["verdict"] == "undecided" and d["pid-ff"]["paired_draws"] == 16
+    lo, hi = d["pid-ff"]["interval"]
+    assert lo < 1.0 < hi
+    # the draws are those of the fixed-count sweep: common random numbers, reproducible
+    assert [j.config for j in calls[0][::3]] == [j.config for j in sw.jobs(range(8), ["pid"])]
+    dist = distributions(res["results"])
+    assert dist["pid"]["runs"] == 16 and dist["ekf"]["runs"] == 8
+
+
+def test_stopping_rule_refuses_nonsense() -> None:
+    with pytest.raises(FcompError, match="confidence"):
+        StoppingRule(confidence=1.0)
+    with pytest.raises(FcompError, match="min_draws"):
+        StoppingRule(min_draws=30, max_draws=20)
+    with pytest.raises(FcompError, match="reference"):
+        run_sequential({"h": Sweep(controllers=("ekf",))}, StoppingRule(), lambda jobs: [])
 
 
 def _physics(results: list[dict]) -> list[dict]:

@@ -7,6 +7,7 @@ computation (numpy / scipy / least squares written out here).
 
 from __future__ import annotations
 
+import io
 import json
 import math
 import re
@@ -363,6 +364,58 @@ def test_all_runs_every_registered_study_and_writes_an_index(tmp_path: Path, mon
     assert s["studies"]["tiny-test"]["status"] == "ok"
     assert "failed: RuntimeError: deliberate failure" in (tmp_path / "again" / "index.html"
                                                          ).read_text()
+
+
+def test_all_records_wall_and_cpu_time_in_turn_and_side_by_side(tmp_path: Path,
+                                                                monkeypatch) -> None:
+    items = {"all": STUDIES.get("all"), "tiny-test": _Tiny(), "tiny-b": _Tiny()}
+    monkeypatch.setattr(STUDIES, "_items", items)
+    for workers in (1, 2):
+        out = tmp_path / f"w{workers}"
+        s = STUDIES.get("all").main(StudyConfig(out=out, fast=True, workers=workers))
+        assert s["workers"] == workers and s["failed"] == []
+        for r in s["studies"].values():
+            assert r["seconds"] >= 0 and r["cpu_seconds"] >= 0
+        assert json.loads((out / "tiny-b" / "summary.json").read_text())["value"] == 1.5
+
+
+class _TTY(io.StringIO):
+    def isatty(self) -> bool:
+        return True
+
+
+def test_progress_of_a_worker_is_relayed_to_the_parent(monkeypatch) -> None:
+    import queue
+
+    from fcomp.parallel import ProgressRelay, progress_bar, relay_progress, ticker
+
+    q: queue.Queue = queue.Queue()
+    relay_progress(q)
+    try:
+        bar = progress_bar("work", 3, unit="case")
+        tick = ticker(bar)
+        for done in (1, 2, 3):
+            tick(done, 3)
+        bar.set_postfix_str("last")
+        bar.close()
+        hidden = progress_bar("hidden", 2, enabled=False)
+    finally:
+        relay_progress(None)
+    msgs = []
+    while not q.empty():
+        msgs.append(q.get())
+    assert msgs[0][0] == "open" and msgs[0][2:] == ("work", 3, "case")
+    assert [m[2] for m in msgs if m[0] == "update"] == [1, 1, 1]
+    assert msgs[-2] == ("postfix", msgs[0][1], "last") and msgs[-1][0] == "close"
+    assert hidden.disable                                   # a disabled bar is not relayed
+    screen = _TTY()
+    monkeypatch.setattr(sys, "stderr", screen)
+    with ProgressRelay() as relay:                           # the parent draws what arrives
+        for m in msgs:
+            relay.queue.put(m)
+    assert "work" in screen.getvalue() and "3/3" in screen.getvalue()
+    with ProgressRelay(enabled=False) as off:
+        assert off.queue is None
 
 
 def test_registry_holds_the_contract_names() -> None:

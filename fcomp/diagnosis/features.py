@@ -272,6 +272,9 @@ def _mean_periodogram(r: np.ndarray, starts: list[int], n: int) -> np.ndarray:
 
 #: Windows (s) after events whose spectra :func:`event_ring` compares with quiet ones.
 RING_WINDOWS: tuple[float, ...] = (0.1, 0.2)
+#: A ring shows at least this many cycles in a window (slower structure after events is
+#: the friction law's transient, judged by :func:`event_structure`).
+RING_CYCLES = 5.0
 #: Quiet windows start at least this long (s) after the last event.
 QUIET_AFTER = 0.4
 
@@ -301,8 +304,9 @@ def event_ring(r: np.ndarray, data: DiagnosisData, seg: Segmentation, test: np.n
     that start at least :data:`QUIET_AFTER` after an event. A bin counts when
     its event power exceeds the quiet power by more than three standard
     errors of the two averages (``1/sqrt(n)`` relative each, chi-square with 2
-    degrees of freedom per window); only bins of at least three cycles per
-    window are looked at (slower structure is the friction law's, judged by
+    degrees of freedom per window); only bins of at least :data:`RING_CYCLES`
+    cycles per window are looked at (slower structure is the friction law's
+    transient -- a memory's curve after a reversal -- judged by
     :func:`event_structure`). The excess power of the counting bins, as a
     share of the event windows' power times their mean square, gives the RMS
     the ring carries there; ``concentration`` is the share of that excess in
@@ -336,7 +340,7 @@ def event_ring(r: np.ndarray, data: DiagnosisData, seg: Segmentation, test: np.n
         p_ev, p_q = _mean_periodogram(r, ev, n), _mean_periodogram(r, quiet, n)
         f = np.fft.rfftfreq(n, dt)
         margin = 3.0 * np.sqrt(1.0 / len(ev) + 1.0 / len(quiet))
-        look = f >= 3.0 / w
+        look = f >= RING_CYCLES / w
         excess = np.where(look & (p_ev > p_q * (1.0 + margin)), p_ev - p_q, 0.0)
         total = float(np.sum(p_ev))
         if total <= 0 or not np.any(excess > 0):

@@ -232,19 +232,25 @@ def test_noise_floor_of_short_runs_of_correlated_noise_matches_a_monte_carlo() -
     assert correlated_dof(white, 2) == pytest.approx(sum(r.size - 3 for r in white), rel=0.05)
 
 
+def _designed(parts: list[np.ndarray], dt: float):
+    """A record of the velocity pieces ``parts`` (position quantised to 0.1 µm, a Coulomb
+    force of 30 N), prepared and segmented."""
+    v = np.concatenate(parts)
+    t = np.arange(v.size) * dt
+    x = 0.05 + np.concatenate([[0.0], np.cumsum(v[:-1] * dt)])
+    m = Measurement({"t": t, "x": np.round(x / 1e-7) * 1e-7, "v": v, "F": 30 * np.sign(v)},
+                    {"name": "designed"})
+    data = prepare(m)
+    return data, segment(data)
+
+
 def test_events_are_reversals_and_starts_after_a_rest_not_stutters() -> None:
     """A pause shorter than ``t_dwell`` in the same direction continues the run; a rest of a
     second and a reversal are events, with the time since each."""
     dt = 1e-3
     parts = [np.zeros(300), np.full(800, 0.02), np.zeros(10), np.full(800, 0.02),
              np.zeros(1000), np.full(800, 0.02), np.full(800, -0.02)]
-    v = np.concatenate(parts)
-    t = np.arange(v.size) * dt
-    x = 0.05 + np.concatenate([[0.0], np.cumsum(v[:-1] * dt)])
-    m = Measurement({"t": t, "x": np.round(x / 1e-7) * 1e-7, "v": v, "F": 30 * np.sign(v)},
-                    {"name": "events"})
-    data = prepare(m)
-    seg = segment(data)
+    data, seg = _designed(parts, dt)
     since, kind = seg.events(data)
     edges = np.cumsum([p.size for p in parts])  # 300 1100 1110 1910 2910 3710 4510
     assert np.isinf(since[:290]).all()
@@ -259,13 +265,7 @@ def _ring_record():
     dt, parts = 1e-3, []
     for _ in range(40):  # starts after rests and reversals, both directions
         parts += [np.zeros(300), np.full(400, 0.02), np.full(400, -0.02)]
-    v = np.concatenate(parts)
-    t = np.arange(v.size) * dt
-    x = 0.05 + np.concatenate([[0.0], np.cumsum(v[:-1] * dt)])
-    m = Measurement({"t": t, "x": np.round(x / 1e-7) * 1e-7, "v": v, "F": 30 * np.sign(v)},
-                    {"name": "ring"})
-    data = prepare(m)
-    seg = segment(data)
+    data, seg = _designed(parts, dt)
     return rng, data, seg, make_split(data, seg.valid)
 
 

@@ -62,8 +62,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     check.add_argument("--baseline-check", action="store_true",
                        help="always diagnose again from a baseline of the other kind (static "
                        "<-> dynamic) to say whether the answer depends on the baseline (by "
-                       "default only when the answer is doubtful: a fit flagged, a tie, or "
-                       "structure left)")
+                       "default only when the answer is doubtful: the final fit flagged, a "
+                       "tie, or structure left)")
     check.add_argument("--no-baseline-check", action="store_true",
                        help="never run that baseline check")
     p.add_argument("--scheduler", default=None, metavar="ADDRESS",

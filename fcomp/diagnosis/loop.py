@@ -341,7 +341,7 @@ class Diagnosis:
         kind (static <-> dynamic, :func:`other_baseline`) and say whether the
         answer depends on the baseline (``baseline_dependent_``): ``True``
         always, ``False`` never, ``"auto"`` (default) when the first answer is
-        doubtful (:meth:`doubts`: a fit flagged, a tie, or structure left) --
+        doubtful (:meth:`doubts`: the final fit flagged, a tie, or structure left) --
         a second opinion costs a second diagnosis, and a clean answer from
         well-determined fits does not need one.
 
@@ -479,16 +479,19 @@ class Diagnosis:
     def doubts(self) -> list[str]:
         """Why the answer might depend on the baseline (empty: a clean answer).
 
-        A fit of the baseline or the final model flagged (a parameter at a bound,
-        an interval through zero, an implausible mass, ...), a tie, or a verdict
-        of ``unexplained-structure``.
+        The final model's fit flagged (a parameter at a bound, an interval
+        through zero, an implausible mass, ...), a tie, or a verdict of
+        ``unexplained-structure``. The baseline's own flags do not count when
+        effects were added: a baseline that misses an effect is expected to
+        bend its parameters (the final model, once they are added, is what is
+        asserted).
         """
         out = []
         if self.verdict_ != "explained":
             out.append(f"the verdict is {self.verdict_}")
-        fits = sorted({w.code for w in self.warnings_ if w.code != "heldout-coverage"})
+        fits = sorted({w.code for w in self._final_warnings})
         if fits:
-            out.append(f"the fits are flagged ({', '.join(fits)})")
+            out.append(f"the final fit is flagged ({', '.join(fits)})")
         if self.ties_:
             out.append("effects tie")
         return out
@@ -503,7 +506,7 @@ class Diagnosis:
         if self.check_baseline is False:
             self.baseline_check_ = {"ran": False, "why": "not asked for"}
         elif self.check_baseline == "auto" and not doubts:
-            self.baseline_check_ = {"ran": False, "why": "a clean answer: fits not flagged, "
+            self.baseline_check_ = {"ran": False, "why": "a clean answer: final fit not flagged, "
                                     "no tie, explained to the noise"}
         else:
             why = "asked for" if self.check_baseline is True else "; ".join(doubts)
@@ -983,6 +986,7 @@ class Diagnosis:
     def _collect_warnings(self) -> None:
         """Fit warnings of the baseline, of every accepted step and of the final model."""
         out = self._fit_warnings(self.baseline_fit_, f"baseline {self.baseline_name_}")
+        self._final_warnings = list(out)
         for st in self.steps_:
             if st.accepted and st.fit is not None and st.fit is not self.fit_:
                 st.warnings = self._fit_warnings(st.fit, f"after + {st.effect}")
@@ -992,6 +996,7 @@ class Diagnosis:
                 if st.fit is self.fit_:
                     st.warnings = final
             out += final
+            self._final_warnings = final
         self.warnings_ = out + list(self.split_.warnings)
 
     def _conclude(self) -> None:

@@ -319,6 +319,10 @@ def event_ring(r: np.ndarray, data: DiagnosisData, seg: Segmentation, test: np.n
     t = data.signal("t")
     dt = data.scales.dt
     starts = np.flatnonzero(since == 0.0)
+    # quiet stretches, tiled by windows from the start of each run of quiet samples
+    quiet_ok = test & (since >= QUIET_AFTER) & np.isfinite(since)
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], quiet_ok.astype(int), [0]])))
+    runs = list(zip(edges[::2].tolist(), edges[1::2].tolist(), strict=True))
     best = None
     for w in RING_WINDOWS:
         n = int(round(w / dt))
@@ -326,15 +330,7 @@ def event_ring(r: np.ndarray, data: DiagnosisData, seg: Segmentation, test: np.n
             continue
         ev = [int(k) for k in starts if k + n <= data.n and test[k:k + n].all()
               and np.all(since[k:k + n] == t[k:k + n] - t[k])]
-        quiet_ok = test & (since >= QUIET_AFTER) & np.isfinite(since)
-        quiet = []
-        k = 0
-        while k + n <= data.n:
-            if quiet_ok[k] and quiet_ok[k:k + n].all():
-                quiet.append(k)
-                k += n
-            else:
-                k += 1
+        quiet = [int(k) for a, b in runs for k in range(a, b - n + 1, n)]
         if len(ev) < 8 or len(quiet) < 8:
             continue
         p_ev, p_q = _mean_periodogram(r, ev, n), _mean_periodogram(r, quiet, n)

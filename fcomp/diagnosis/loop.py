@@ -465,6 +465,7 @@ class Diagnosis:
             if self.search:
                 self._search(names)
                 self._backward()
+                self._swaps(names)
         finally:
             self._bar.close()
             self._fitting = False
@@ -882,8 +883,17 @@ class Diagnosis:
         """The baseline with the effects ``names`` (in order) refitted from the current values."""
         model = self.baseline_fit_.model
         for n in names:
-            model = (model.with_effects(self._instances[n]) if n in self._instances else
-                     catalogue.attach(model, n, self.data_, self._forms.get(n)))
+            if n in self._instances:
+                model = model.with_effects(self._instances[n])
+                continue
+            # configured with its current values: an effect at its defaults can be a no-op
+            # that attaches differently (presliding's rigid bristle is the static map, and
+            # nonlocal-memory then finds no bristle to replace)
+            own = set(EFFECTS.get(n).Params.from_flat({}).flat())
+            values = {k: v for k, v in self.fit_.values.items() if k in own}
+            model = model.with_effects(catalogue.configured(
+                n, self.data_, values or None,
+                **catalogue.form_of(n, self._forms.get(n)).config))
         flat = model.flat_params()
         start = {k: v for k, v in self.fit_.values.items() if k in flat or k == "mass"}
         # the parameters fitted now that remain (terms held for the record stay held)
@@ -924,6 +934,52 @@ class Diagnosis:
                 if st.effect == effect and st.accepted and not st.forced:
                     st.accepted = False
                     st.removed = verdict.reason
+
+    def _swaps(self, names: list[str]) -> None:
+        """Try each searched effect's confounded partners in its place; a tie where one fits
+        as well.
+
+        Some effects give the same force over the motions a record holds (an
+        offset of the force and a direction asymmetry of the levels, while
+        sliding: :attr:`Effect.confounded`). Which one the search takes first
+        can hinge on a few samples at rest. Once the search stops, each searched
+        effect with a partner not in the model is taken out, the rest refitted,
+        and the partner evaluated as a candidate in its place: if its held-out
+        RMS comes within :data:`TIE_SHARE` of the fall the effect brought, the
+        two are reported as a tie (with the experiment that separates them).
+        """
+        for step in [s for s in self.steps_ if s.accepted and not s.forced]:
+            effect = step.effect
+            partners = [p for p in EFFECTS.get(effect).confounded
+                        if p in names and p not in self.added_
+                        and not any(effect in t and p in t for t in self.ties_)]
+            if not partners or effect not in self.added_:
+                continue
+            others = [n for n in self.added_ if n != effect]
+            try:
+                reduced = self._rebuilt(others)
+            except (FcompError, ValueError):
+                continue
+            full = self.fit_
+            self.fit_ = reduced
+            try:
+                ctx = self._context()
+                fit_in = [p for p in partners if catalogue.applicability(p, ctx) is None]
+                cands = [c for c in self._evaluate(fit_in) if c.fit is not None] if fit_in else []
+            finally:
+                self.fit_ = full
+            self._tick(f"in place of {effect}")
+            fall = reduced.rms_test - full.rms_test
+            close = [c.effect for c in cands
+                     if fall > 0 and c.rms_heldout - full.rms_test <= TIE_SHARE * fall]
+            if not close:
+                continue
+            tie = next((t for t in self.ties_ if t[0] == effect), None)
+            if tie is None:
+                tie = [effect]
+                self.ties_.append(tie)
+            tie += [c for c in close if c not in tie]
+            step.tie = list(tie)
 
     def _reweighted(self, fit: FitResult) -> FitResult:
         """``fit`` polished again after the sample weights follow its own prediction.

@@ -16,6 +16,11 @@ An effect is a subclass of :class:`Effect` with
 ``experiment``
     one line: the experiment that isolates it (used for confounded ties),
     worded for any rig;
+``confounded``
+    optional, names of effects that give the same force over the motions most
+    records hold (an offset and a direction asymmetry of the levels, while
+    sliding): the diagnosis puts each in this effect's place at the end and
+    reports a tie when it fits as well;
 ``experiments``
     optional, rig kind (the sidecar's ``kind``: ``pneumatic-cylinder``,
     ``hydraulic-cylinder``, ``friction-rig``, ``electromechanical-axis``) ->
@@ -135,6 +140,8 @@ class Effect(PlainValue):
     experiment: ClassVar[str] = ""
     #: rig kind -> the experiment for such a rig, where it differs from ``experiment``
     experiments: ClassVar[Mapping[str, str]] = MappingProxyType({})
+    #: effects that give the same force over most motions (tried in its place: a tie)
+    confounded: ClassVar[tuple[str, ...]] = ()
     #: signals the effect reads besides v (diagnosis checks the data has them)
     needs: ClassVar[tuple[str, ...]] = ()
     #: needs a motion (memory, acceleration): not a candidate for steady-state points

@@ -486,6 +486,7 @@ class DirectionAsymmetry(Effect):
 
     name = "direction-asymmetry"
     Params = DirectionAsymmetryParams
+    confounded = ("force-offset",)
     signature = "residual even in v: same-sign offset in both directions, step at reversals"
     experiment = "the same speed profile in both directions of travel, with the force zero " \
         "known (see force-offset)"
@@ -794,6 +795,7 @@ class ForceOffset(Effect):
 
     name = "force-offset"
     Params = ForceOffsetParams
+    confounded = ("direction-asymmetry",)  # the same force while sliding: only rest tells
     signature = "residual with a constant non-zero mean in both directions"
     experiment = "a zero reading of the force measurement at rest with nothing driving or " \
         "loading the actuator"

@@ -11,7 +11,13 @@ import pytest
 from fcomp.conditioning import default_cutoff, position_noise
 from fcomp.diagnosis import Diagnosis
 from fcomp.diagnosis.data import prepare
-from fcomp.diagnosis.features import knn_predict, residual_structure, strength
+from fcomp.diagnosis.features import (
+    knn_predict,
+    paired_trimmed_rms,
+    residual_structure,
+    strength,
+    trimmed_rms,
+)
 from fcomp.diagnosis.loop import RING_CONCENTRATION, RING_NOISE, fall_test, heldout_pieces
 from fcomp.diagnosis.noise import effective_sample_size, noise_floor
 from fcomp.diagnosis.regimes import DWELL, PRESLIDING, REVERSAL, SLIDING, segment
@@ -354,3 +360,26 @@ def test_baseline_check_runs_when_the_answer_is_doubtful() -> None:
     else:
         assert clean.baseline_check_["ran"] and clean.baseline_check_["why"] == "; ".join(
             clean.doubts())
+
+
+def test_paired_trim_drops_the_spikes_both_carry_and_keeps_those_one_removes() -> None:
+    """A timing spike in both residuals is trimmed; a break-away spike that the
+    candidate removes is kept, so the fall it brings is seen (trimming each
+    residual by its own largest values would drop it from ``before`` only)."""
+    rng = np.random.default_rng(3)
+    n = 2000
+    before = rng.normal(0.0, 1.0, n)
+    after = before.copy()
+    both = rng.choice(n, 10, replace=False)  # 0.5 %: spikes in both
+    before[both] += 40.0
+    after[both] += 40.0
+    explained = np.setdiff1d(np.arange(0, n, 100), both)[:15]  # 0.75 %: the candidate's
+    before[explained] += 25.0
+    rb, ra = paired_trimmed_rms(before, after)
+    keep = np.setdiff1d(np.arange(n), both)
+    assert rb == pytest.approx(np.sqrt(np.mean(before[keep] ** 2)), rel=0.02)
+    assert ra == pytest.approx(np.sqrt(np.mean(after[keep] ** 2)), rel=0.05)
+    assert rb**2 - ra**2 > 0.8 * 25.0**2 * explained.size / n
+    # trimming each on its own hides most of the fall
+    own = trimmed_rms(before) ** 2 - trimmed_rms(after) ** 2
+    assert own < 0.5 * (rb**2 - ra**2)

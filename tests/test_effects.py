@@ -285,6 +285,39 @@ def test_dwell_time_adds_nothing_while_sliding() -> None:
     np.testing.assert_allclose(run.F[-1], friction_along_motion(base, t, v).F[-1], rtol=1e-9)
 
 
+def test_dwell_time_level_form_shifts_the_whole_curve() -> None:
+    """Form ``level``: the age raises ``Fc`` and ``Fs`` alike, so the excess ``dFs*w``
+    is there at any speed until slip erases it; form ``static`` raises the hump only,
+    which fades above the Stribeck speed (a stribeck map, ``vs`` = 1 mm/s here)."""
+    base = make_model("stribeck", params="canudas1995")
+    dFs, L = 0.5, 0.05  # a long erasure length: the age is nearly intact after 0.1 s at 20 mm/s
+    t = np.concatenate([np.linspace(0.0, 2.0, 20001), 2.0 + 1e-9 + np.linspace(0.0, 0.1, 1001)])
+    v = np.concatenate([np.zeros(20001), np.full(1001, 0.02)])
+    plain = friction_along_motion(base, t, v).F
+    for form in ("level", "static"):
+        model = base.with_effects(make_effect(
+            "dwell-time", {"dFs": dFs, "tau_dwell": 0.5, "L_dwell": L}, form=form))
+        run = friction_along_motion(model, t, v)
+        w = run.states[:, model.state_names.index("w")]
+        k = 20001 + 500  # 50 ms at 20 mm/s = 20 Stribeck speeds: the hump is gone
+        excess = run.F[k] - plain[k]
+        if form == "level":
+            assert excess == pytest.approx(dFs * w[k], rel=1e-6)
+            assert w[k] > 0.9
+        else:
+            assert abs(excess) < 1e-9
+
+
+def test_position_box_is_never_narrower_than_a_seal_band() -> None:
+    """A box narrower than a seal's contact band is not a property of the bore."""
+    from fcomp.effects.catalogue import SEAL_BAND, PositionDependenceParams
+
+    specs = {n: PositionDependenceParams.spec_of(n) for n in ("wb", "eb")}
+    assert specs["wb"].lower == 0.5 * SEAL_BAND and specs["eb"].lower == 0.2 * SEAL_BAND
+    with pytest.raises(ValueError):
+        make_effect("position-dependence", {"kb": 0.3, "xb": 0.15, "wb": 5e-5, "eb": 1e-3})
+
+
 def _maxwell_slip_reference(x: np.ndarray, shares: np.ndarray, slips: np.ndarray,
                             level: float) -> np.ndarray:
     """Classical Maxwell-slip, written out: spring ``k_i = level*share_i/slip_i``, deflection

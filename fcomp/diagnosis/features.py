@@ -170,6 +170,22 @@ def trimmed_rms(r: np.ndarray, drop: float = TRIM) -> float:
     return float(np.sqrt(np.mean(keep**2)))
 
 
+def paired_trimmed_rms(a: np.ndarray, b: np.ndarray, drop: float = TRIM) -> tuple[float, float]:
+    """RMS of two residuals of the same samples without the spikes both carry (N, N).
+
+    The samples dropped are the largest ``drop`` share of ``min(|a|, |b|)``: a
+    timing spike (see :func:`trimmed_rms`) is in both residuals and no effect
+    explains it, while a spike that one model removes -- a break-away excess
+    after a dwell -- is what tells the two apart, and is kept. Trimming each
+    residual by its own largest values would drop exactly those.
+    """
+    if not a.size:
+        return math.nan, math.nan
+    both = np.minimum(np.abs(a), np.abs(b))
+    keep = np.argsort(both, kind="stable")[: max(1, int(math.ceil((1.0 - drop) * a.size)))]
+    return float(np.sqrt(np.mean(a[keep] ** 2))), float(np.sqrt(np.mean(b[keep] ** 2)))
+
+
 #: Windows (s) after every start and reversal in which :func:`event_structure` looks.
 EVENT_WINDOWS: tuple[float, ...] = (0.05, 0.1, 0.2)
 

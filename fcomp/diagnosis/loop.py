@@ -22,7 +22,9 @@ returns ``self``, results in ``*_`` attributes) runs the whole procedure:
      least half the excess mean square over the noise floor there,
      ``rms_before^2 - rms_after^2 >= 0.5*(rms_before^2 - noise_floor^2)`` (a
      small dent in a large unexplained residual is not a found effect); both
-     RMS values without the largest 1 % of samples (:func:`trimmed_rms`).
+     RMS values without the 1 % of samples where both residuals are largest
+     (:func:`paired_trimmed_rms`: a spike both carry is timing, one the
+     candidate removes is what it explains).
      Judging the fall where the candidate acts lets an effect that shows only
      at break-aways or reversals be found in a record that is mostly sliding;
    * the fall is significant: a Diebold-Mariano test on the squared-error
@@ -93,6 +95,7 @@ from fcomp.diagnosis.features import (
     drift_fall,
     event_ring,
     event_structure,
+    paired_trimmed_rms,
     residual_structure,
     trimmed_rms,
 )
@@ -774,7 +777,7 @@ class Diagnosis:
                            f"{res.rms_test:.4g} N)")
         changed = np.concatenate(pieces) if pieces else np.zeros(0, dtype=int)
         if changed.size:  # isolated timing spikes are in both and no effect explains them
-            rb, ra = trimmed_rms(before.residual[changed]), trimmed_rms(res.residual[changed])
+            rb, ra = paired_trimmed_rms(before.residual[changed], res.residual[changed])
         else:
             rb = ra = before.rms_test
         need = max(FALL_NOISE * nf, FALL_RELATIVE * rb, FALL_NUMERIC * self.data_.scales.force)

@@ -530,6 +530,13 @@ class DirectionAsymmetry(Effect):
         return starts
 
 
+#: The shortest stretch of the bore over which seal friction can change (m): a seal's
+#: contact band is a millimetre or more and averages the bore over its width, so a
+#: local box is at least this wide (``wb >= SEAL_BAND/2``) and its edges at least a
+#: fifth of it (``eb``). A narrower box would not be a property of the bore but of
+#: the samples at one position -- a rest point, where break-aways happen.
+SEAL_BAND = 1e-3
+
 PositionDependenceParams = make_params_class("PositionDependenceParams", [
     spec("kx1", "-", 0.0, -1.0, 1.0, "linear Legendre coefficient", directional=False),
     spec("kx2", "-", 0.0, -1.0, 1.0, "quadratic Legendre coefficient", directional=False),
@@ -537,10 +544,10 @@ PositionDependenceParams = make_params_class("PositionDependenceParams", [
     spec("kb", "-", 0.0, -1.0, 3.0, "relative level change inside the local box (0: none)",
          directional=False),
     spec("xb", "m", 0.15, -INF, INF, "centre of the local box", directional=False),
-    spec("wb", "m", 0.01, 0.0, INF, "half-width of the local box", lower_open=True,
-         directional=False),
-    spec("eb", "m", 0.002, 0.0, INF, "edge width of the local box", lower_open=True,
-         directional=False),
+    spec("wb", "m", 0.01, 0.5 * SEAL_BAND, INF, "half-width of the local box (at least "
+         "half a seal's contact band)", directional=False),
+    spec("eb", "m", 0.002, 0.2 * SEAL_BAND, INF, "edge width of the local box (at least a "
+         "fifth of a seal's contact band)", directional=False),
 ], owner="effect position-dependence")
 
 
@@ -559,7 +566,8 @@ class PositionDependence(Effect):
     variation along the stroke, and a soft box for a local one,
     ``box(x) = (tanh((x - xb + wb)/eb) - tanh((x - xb - wb)/eb))/2``: centre
     ``xb``, half-width ``wb``, edge width ``eb`` (a narrow box with soft edges
-    is a bump, a wide one reaching past the end of the stroke a step). A model
+    is a bump, a wide one reaching past the end of the stroke a step; the box is
+    never narrower than a seal's contact band, :data:`SEAL_BAND`). A model
     without it leaves a residual that is a function of ``x``, repeated on every
     stroke, of the friction's sign. The scale is floored at 1 %
     (:data:`~fcomp.effects.base.LEVEL_FLOOR`).
@@ -637,8 +645,8 @@ class PositionDependence(Effect):
             hi += 1
         box = {"kb": float(np.clip(peak, -0.9, 2.9)),
                "xb": float(0.5 * (edges[lo] + edges[hi + 1])),
-               "wb": float(0.5 * (edges[hi + 1] - edges[lo])),
-               "eb": float(max(0.25 * width, sc.resolution))}
+               "wb": float(max(0.5 * (edges[hi + 1] - edges[lo]), 0.5 * SEAL_BAND)),
+               "eb": float(max(0.25 * width, sc.resolution, 0.2 * SEAL_BAND))}
         return [smooth_part, {**smooth_part, **box},
                 {"kx1": 0.0, "kx2": 0.0, "kx3": 0.0, **box}]
 
@@ -667,8 +675,19 @@ class DwellTime(Effect):
 
         dw/dt = r(v)*(1 - w)^(1 + k)/tau_dwell - w*|v|/L_dwell,   r(v) = exp(-|v|/v_rest)
 
-    and raises the static level, ``Fs -> Fs + dFs*w`` (``Fc`` for models
-    without ``Fs``). After a dwell ``t_d`` from ``w = 0`` the age is
+    and raises the friction level by ``dFs*w`` in one of two forms (``form=``):
+
+    ``"static"`` (the default)
+        the static level, ``Fs -> Fs + dFs*w``: the Stribeck hump grows and,
+        like it, fades above the Stribeck speed (the dwell-dependent static
+        friction of Armstrong-Helouvry's seven-parameter model);
+    ``"level"``
+        the whole curve, ``Fc -> Fc + dFs*w`` and ``Fs -> Fs + dFs*w``: the
+        excess is erased by the sliding distance alone, at any speed (the
+        state of rate-and-state friction).
+
+    The two are one law for models without ``Fs`` (``Fc -> Fc + dFs*w``).
+    After a dwell ``t_d`` from ``w = 0`` the age is
     ``1 - exp(-t_d/tau_dwell)`` for ``k = 0`` (Kato's exponential law) and
     ``1 - (1 + k*t_d/tau_dwell)^(-1/k)`` for ``k > 0``, which grows about
     logarithmically over the middle decades (Dieterich's log ageing); it is
@@ -679,6 +698,7 @@ class DwellTime(Effect):
     """
 
     name = "dwell-time"
+    FORMS: ClassVar[tuple[str, ...]] = ("static", "level")
     states = ("w",)
     initial = (0.0,)
     Params = DwellTimeParams
@@ -690,9 +710,16 @@ class DwellTime(Effect):
     def modify_levels(self, be: Backend, L: dict, w: list[Any], sig: Signals,
                       P: ParamValues) -> dict:
         out = dict(L)
-        key = "Fs" if "Fs" in out else "Fc"
-        out[key] = out[key] + P("dFs", sig.s) * w[0]
+        keys = ("Fs",) if "Fs" in out and self.form == "static" else ("Fc", "Fs")
+        for key in keys:
+            if key in out:
+                out[key] = out[key] + P("dFs", sig.s) * w[0]
         return out
+
+    @classmethod
+    def diagnosis_forms(cls) -> tuple[DiagnosisForm, ...]:
+        """Both forms: the hump grows, or the whole curve (the same for models without ``Fs``)."""
+        return tuple(DiagnosisForm(f, {"form": f}) for f in cls.FORMS)
 
     def rhs(self, be: Backend, w: list[Any], sig: Signals, P: ParamValues) -> list:
         rest = be.exp(-be.abs(sig.v) / P("v_rest"))

@@ -308,6 +308,25 @@ def test_dwell_time_level_form_shifts_the_whole_curve() -> None:
             assert abs(excess) < 1e-9
 
 
+def test_dwell_time_forms_are_one_law_without_a_static_level() -> None:
+    """A model without ``Fs`` gets the one law (not refitted twice); with it, both forms."""
+    from fcomp.effects import EFFECTS
+
+    cls = EFFECTS.get("dwell-time")
+    one = cls.forms_for(make_model("coulomb-viscous", params="canudas1995"))
+    both = cls.forms_for(make_model("stribeck", params="canudas1995"))
+    assert [f.name for f in one] == ["static"]
+    assert [f.name for f in both] == ["static", "level"]
+    # on the model without Fs the two forms give the same force
+    t = np.linspace(0.0, 1.2, 12001)
+    v = np.where(t < 1.0, 0.0, 0.02)
+    base = make_model("coulomb-viscous", params="canudas1995")
+    F = [friction_along_motion(base.with_effects(make_effect(
+        "dwell-time", {"dFs": 0.5, "tau_dwell": 0.3, "L_dwell": 0.01}, form=f)), t, v).F
+        for f in ("static", "level")]
+    np.testing.assert_array_equal(F[0], F[1])
+
+
 def test_position_box_is_never_narrower_than_a_seal_band() -> None:
     """A box narrower than a seal's contact band is not a property of the bore."""
     from fcomp.effects.catalogue import SEAL_BAND, PositionDependenceParams

@@ -172,8 +172,9 @@ def attach(model: FrictionModel, name: str, data: DiagnosisData, form: str | Non
 
 def propose_all(name: str, ctx: Context) -> list[Proposal]:
     """One :func:`propose` per form of the effect (its
-    :meth:`~fcomp.effects.Effect.diagnosis_forms`; one for most)."""
-    return [propose(name, ctx, form=f.name) for f in EFFECTS.get(name).diagnosis_forms()]
+    :meth:`~fcomp.effects.Effect.forms_for` the current model; one for most)."""
+    return [propose(name, ctx, form=f.name)
+            for f in EFFECTS.get(name).forms_for(ctx.current.model)]
 
 
 def propose(name: str, ctx: Context, form: str | None = None) -> Proposal:

@@ -1094,16 +1094,16 @@ class Diagnosis:
         excess = trimmed > max(EXCESS_MAX * nf, nf + STRUCTURE_LEVEL * data.scales.force)
         self.verdict_ = ("unexplained-structure" if structured or event or event_excess
                          or ringing or excess else "explained")
+        after = ("" if ev is None else f"structure after events: within "
+                 f"{1e3 * ev.window:.0f} ms of every start and reversal the held-out residual ")
         if event and not structured:
             assert ev is not None
-            self.reason_ = (f"structure after events: within {1e3 * ev.window:.0f} ms of every "
-                            f"start and reversal the held-out residual repeats (strength "
+            self.reason_ = (f"{after}repeats (strength "
                             f"{ev.strength:.2f} >= {STRUCTURE_MIN:g} of the time since the "
                             f"event; it carries {ev.rms:.3g} N RMS >= {least:.3g} N there)")
         elif event_excess and not structured:
             assert ev is not None
-            self.reason_ = (f"structure after events: within {1e3 * ev.window:.0f} ms of every "
-                            f"start and reversal the held-out residual (without its largest "
+            self.reason_ = (f"{after}(without its largest "
                             f"{100 * TRIM:g} %) is {ev.local:.3g} N RMS, above {EVENT_EXCESS:g} "
                             f"noise floors of {nf:.3g} N, with {ev_excess:.3g} N RMS above the "
                             f"noise >= {least:.3g} N (it does not repeat in phase: "

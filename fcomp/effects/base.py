@@ -67,6 +67,9 @@ starts after a dwell, whether the mass is fitted.
     diagnosis refits side by side, of which it keeps the one the information
     criterion prefers; each a label, a configuration and the parameters it
     holds at their no-op values (:class:`~fcomp.effects.record.DiagnosisForm`);
+:meth:`forms_for` ``(model) -> tuple[DiagnosisForm, ...]``
+    class method (default :meth:`diagnosis_forms`): those of the forms that are
+    different laws on ``model`` (two forms can coincide on a simpler model);
 :meth:`unsuitable` ``(view) -> str | None`` (default ``None``)
     why this record cannot show the effect (no start after a dwell; the mass
     already fitted), ``None`` if it can;
@@ -221,6 +224,13 @@ class Effect(PlainValue):
         from fcomp.effects.record import DiagnosisForm
 
         return (DiagnosisForm(),)
+
+    @classmethod
+    def forms_for(cls, model: FrictionModel) -> tuple[DiagnosisForm, ...]:
+        """The forms that are different laws on ``model`` (default: all of
+        :meth:`diagnosis_forms`); a form that coincides with an earlier one there
+        is left out rather than refitted twice."""
+        return cls.diagnosis_forms()
 
     def unsuitable(self, view: RecordView) -> str | None:
         """Why the record cannot show this effect, ``None`` if it can (default: it can)."""

@@ -718,8 +718,15 @@ class DwellTime(Effect):
 
     @classmethod
     def diagnosis_forms(cls) -> tuple[DiagnosisForm, ...]:
-        """Both forms: the hump grows, or the whole curve (the same for models without ``Fs``)."""
+        """Both forms: the hump grows, or the whole curve."""
         return tuple(DiagnosisForm(f, {"form": f}) for f in cls.FORMS)
+
+    @classmethod
+    def forms_for(cls, model: FrictionModel) -> tuple[DiagnosisForm, ...]:
+        """Both forms where the model has a static level ``Fs``; one law without it."""
+        forms = cls.diagnosis_forms()
+        flat = model.flat_params()
+        return forms if any(n == "Fs" or n.startswith("Fs_") for n in flat) else forms[:1]
 
     def rhs(self, be: Backend, w: list[Any], sig: Signals, P: ParamValues) -> list:
         rest = be.exp(-be.abs(sig.v) / P("v_rest"))

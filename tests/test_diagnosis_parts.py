@@ -383,3 +383,19 @@ def test_paired_trim_drops_the_spikes_both_carry_and_keeps_those_one_removes() -
     # trimming each on its own hides most of the fall
     own = trimmed_rms(before) ** 2 - trimmed_rms(after) ** 2
     assert own < 0.5 * (rb**2 - ra**2)
+
+
+def test_a_reduced_model_is_never_worse_than_the_same_structure_seen_before() -> None:
+    """The backward check and the swaps refit the model without one effect; a fit of that
+    structure from earlier in the search is a start and a floor. Taking out the last of two
+    forced effects gives back at most the training error of the step before it."""
+    rec = generate(["presliding", "direction-asymmetry"], base="stribeck", duration=9.0,
+                   seed=11).measurement
+    d = Diagnosis("stribeck", add=["presliding", "direction-asymmetry"], search=False,
+                  n_jobs=1, check_baseline=False).fit(rec)
+    before = d.steps_[0].fit
+    assert before is not None and before.model.describe() == "stribeck + presliding"
+    reduced = d._rebuilt(["presliding"])
+    assert reduced.model.describe() == "stribeck + presliding"
+    assert reduced.rms_train <= before.rms_train
+    assert d._rebuilt([]).rms_train <= d.baseline_fit_.rms_train

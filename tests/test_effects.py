@@ -505,3 +505,32 @@ def test_structural_effect_needs_its_base_term() -> None:
         make_model("coulomb").with_effects("frictional-lag")
     with pytest.raises(ValueError, match="needs viscous"):
         make_model("coulomb").with_effects("viscous-lead")
+
+
+@pytest.mark.parametrize(("B_pos", "B_neg", "B_start"), [
+    (1000.0, 1000.0, 1000.0), (1000.0, 1000.0, 600.0), (1000.0, 2000.0, 1000.0),
+    (2000.0, 800.0, 1000.0)])
+def test_stribeck_start_reads_the_hump_not_a_viscous_mismatch(B_pos: float, B_neg: float,
+                                                              B_start: float) -> None:
+    """A small Gaussian Stribeck hump under a viscous term the start does not know exactly.
+
+    ``F = s*(Fc + (Fs - Fc)*exp(-(|v|/vs)^2)) + B_s*v``, both directions, log-spaced
+    speeds 0.5 mm/s - 0.3 m/s, a 60 N hump on 350 N, noise 1 % of ``Fc``. The start
+    is given ``B_start``: low (a linear fit whose level took up the hump) or the
+    mean of coefficients that differ by side. The level left after ``B_start*|v|``
+    then rises with speed by more than the hump, and the largest bin was read as
+    the hump (``vs`` 0.24 m/s, 20 times too high). The hump is now fitted with its
+    own slope: ``vs`` within a factor of two, ``Fs - Fc`` within 30 %.
+    """
+    from fcomp.effects.record import stribeck_start
+
+    Fc, Fs, vs = 350.0, 410.0, 0.011
+    rng = np.random.default_rng(7)
+    speed = np.geomspace(5e-4, 0.3, 4000)
+    v = np.concatenate([speed, -speed])
+    B = np.where(v > 0, B_pos, B_neg)
+    F = np.sign(v) * (Fc + (Fs - Fc) * np.exp(-((np.abs(v) / vs) ** 2))) + B * v
+    F = F + rng.normal(0.0, 0.01 * Fc, v.size)
+    Fs_hat, vs_hat = stribeck_start(v, F, Fc, B_start, 2e-4)
+    assert 0.5 * vs <= vs_hat <= 2.0 * vs
+    assert Fs_hat - Fc == pytest.approx(Fs - Fc, rel=0.3)

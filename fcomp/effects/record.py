@@ -157,12 +157,23 @@ def distinct_columns(cols: np.ndarray, max_corr: float = 0.98) -> list[int]:
 
 def stribeck_start(v: np.ndarray, f: np.ndarray, Fc: float, B: float,
                    v_min: float) -> tuple[float, float]:
-    """``(Fs, vs)`` from the low-speed hump of ``sign(v)*f - B*|v|`` (one direction's samples)."""
+    """``(Fs, vs)`` from the low-speed hump of ``sign(v)*f`` (samples of one or both directions).
+
+    The level ``sign(v)*f`` is binned by speed (16 bins, geometric, medians) and
+    ``a + b*exp(-(|v|/vs)^2) + k*|v|`` fitted to the bins for each bin centre as
+    ``vs`` (linear least squares in ``a, b, k`` with ``b >= 0``); the ``vs`` with
+    the least squared error is taken and ``Fs = Fc + b``. The slope ``k`` is free
+    rather than the given ``B``: a viscous coefficient that differs between the
+    directions, or a shear-thinning term, leaves a level that still rises with
+    speed after ``B*|v|`` is taken off, and the largest bin would then be read as
+    the hump (a ``vs`` at the top speed). Without a hump (``b = 0`` everywhere):
+    the largest bin of ``sign(v)*f - B*|v|`` and its ``1/e`` point, as before.
+    """
     speed = np.abs(v)
     m = speed >= v_min
     if m.sum() < 10:
         return 1.2 * Fc, max(v_min, 1e-6)
-    speed, level = speed[m], np.sign(v[m]) * f[m] - B * speed[m]
+    speed, raw = speed[m], np.sign(v[m]) * f[m]
     edges = np.geomspace(speed.min(), speed.max() * (1 + 1e-9), 16)
     idx = np.clip(np.digitize(speed, edges) - 1, 0, edges.size - 2)
     centres, means = [], []
@@ -170,10 +181,23 @@ def stribeck_start(v: np.ndarray, f: np.ndarray, Fc: float, B: float,
         sel = idx == b
         if sel.sum() >= 3:
             centres.append(math.sqrt(edges[b] * edges[b + 1]))
-            means.append(float(np.median(level[sel])))
+            means.append(float(np.median(raw[sel])))
     if not centres:
         return 1.2 * Fc, max(v_min, 1e-6)
-    c, mu = np.array(centres), np.array(means)
+    c, level = np.array(centres), np.array(means)
+    best: tuple[float, float, float] | None = None  # (sse, b, vs)
+    if c.size >= 4:
+        for vs in c:
+            A = np.column_stack([np.ones_like(c), np.exp(-((c / vs) ** 2)), c])
+            coef, *_ = np.linalg.lstsq(A, level, rcond=None)
+            if not coef[1] > 0:
+                continue
+            sse = float(np.sum((A @ coef - level) ** 2))
+            if best is None or sse < best[0]:
+                best = (sse, float(coef[1]), float(vs))
+    if best is not None:
+        return max(Fc + best[1], 1.05 * Fc), max(best[2], v_min)
+    mu = level - B * c
     k = int(np.argmax(mu))
     Fs = max(float(mu[k]), 1.05 * Fc)
     target = Fc + (Fs - Fc) / math.e

@@ -522,7 +522,7 @@ def test_stribeck_start_reads_the_hump_not_a_viscous_mismatch(B_pos: float, B_ne
     the hump (``vs`` 0.24 m/s, 20 times too high). The hump is now fitted with its
     own slope: ``vs`` within a factor of two, ``Fs - Fc`` within 30 %.
     """
-    from fcomp.effects.record import stribeck_start
+    from fcomp.effects.record import stribeck_hump_start
 
     Fc, Fs, vs = 350.0, 410.0, 0.011
     rng = np.random.default_rng(7)
@@ -531,6 +531,6 @@ def test_stribeck_start_reads_the_hump_not_a_viscous_mismatch(B_pos: float, B_ne
     B = np.where(v > 0, B_pos, B_neg)
     F = np.sign(v) * (Fc + (Fs - Fc) * np.exp(-((np.abs(v) / vs) ** 2))) + B * v
     F = F + rng.normal(0.0, 0.01 * Fc, v.size)
-    Fs_hat, vs_hat = stribeck_start(v, F, Fc, B_start, 2e-4)
+    Fs_hat, vs_hat = stribeck_hump_start(v, F, Fc, B_start, 2e-4)
     assert 0.5 * vs <= vs_hat <= 2.0 * vs
     assert Fs_hat - Fc == pytest.approx(Fs - Fc, rel=0.3)

@@ -48,7 +48,7 @@ from fcomp.diagnosis.data import DiagnosisData
 from fcomp.diagnosis.refit import FitResult
 from fcomp.diagnosis.regimes import Segmentation
 from fcomp.effects import EFFECTS, Effect, make_effect
-from fcomp.effects.record import DiagnosisForm, RecordView, stribeck_start
+from fcomp.effects.record import DiagnosisForm, RecordView, stribeck_hump_start
 from fcomp.errors import FcompError
 from fcomp.models.base import FrictionModel
 
@@ -246,7 +246,7 @@ def baseline_starts(model: FrictionModel, data: DiagnosisData, seg: Segmentation
 
     Levels and the viscous coefficient by linear least squares on the sliding
     samples (:func:`fcomp.identification.guess.linear_start`), the Stribeck
-    hump (:func:`~fcomp.effects.record.stribeck_start`), then the
+    hump (:func:`~fcomp.effects.record.stribeck_hump_start`), then the
     steady-state map fitted to the steady sliding points (:func:`_static_stage`,
     seed 002's procedure), the bristle
     stiffness ``Fc/d_pre`` from the presliding length (three starts, a factor
@@ -286,7 +286,7 @@ def baseline_starts(model: FrictionModel, data: DiagnosisData, seg: Segmentation
     if ls.mass is not None:
         start["mass"] = ls.mass
     if "Fs" in names:
-        Fs, vs = stribeck_start(d.sig["v"], ls.friction, Fc, float(ls.B[0]), v_min)
+        Fs, vs = stribeck_hump_start(d.sig["v"], ls.friction, Fc, float(ls.B[0]), v_min)
         put("Fs", max(Fs, Fc))
         put("vs", vs)
     if "vb" in names:

@@ -22,7 +22,7 @@ from fcomp.effects.record import (
     RecordView,
     distinct_columns,
     ls_slope,
-    stribeck_start,
+    stribeck_hump_start,
 )
 from fcomp.models.hysteresis import (
     HYSTERESIS_CONSTRAINTS,
@@ -166,14 +166,14 @@ class Stribeck(StructuralEffect):
     experiment = "slow constant-speed runs (0.1-10 vs) in both directions"
 
     def guess(self, view: RecordView, form: str | None = None) -> list[dict[str, float]]:
-        """The low-speed hump of the force (:func:`~fcomp.effects.record.stribeck_start`):
+        """The low-speed hump of the force (:func:`~fcomp.effects.record.stribeck_hump_start`):
         its speed and a factor of four either side; the fat-tailed rational form too."""
         flat = view.params
         v = view.signal("v")
         m = view.train
         Fc = flat.get("Fc", flat.get("Fc_pos", view.level))
         B = flat.get("B", flat.get("sigma2", 0.0))
-        Fs, vs = stribeck_start(v[m], view.y[m], Fc, B, view.v_rest)
+        Fs, vs = stribeck_hump_start(v[m], view.y[m], Fc, B, view.v_rest)
         exc = max(Fs - Fc, 0.1 * Fc)
         # the exponential form, and the fat-tailed rational one (its form has no gradient at 0)
         return [{"Fs_excess": exc, "vs": vs}, {"Fs_excess": exc, "vs": 4 * vs},

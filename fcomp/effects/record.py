@@ -10,9 +10,10 @@ the effects layer needs nothing of the diagnosis (which sits above it).
 refits side by side.
 
 The estimates below are shared by the effects' guesses and by the fits
-above them (:func:`stribeck_start` also starts the baseline and the
-identification): a least-squares slope, the columns of a regression a
-record can tell apart, the Stribeck hump.
+above them: a least-squares slope, the columns of a regression a record can
+tell apart, the Stribeck hump (:func:`stribeck_start` starts the
+identification, :func:`stribeck_hump_start` the diagnosis's baseline and its
+``stribeck`` candidate).
 """
 
 from __future__ import annotations
@@ -155,9 +156,41 @@ def distinct_columns(cols: np.ndarray, max_corr: float = 0.98) -> list[int]:
     return kept
 
 
+def _speed_bins(speed: np.ndarray, level: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Centres and medians of ``level`` in 16 geometric speed bins (those with 3 samples)."""
+    edges = np.geomspace(speed.min(), speed.max() * (1 + 1e-9), 16)
+    idx = np.clip(np.digitize(speed, edges) - 1, 0, edges.size - 2)
+    centres, means = [], []
+    for b in range(edges.size - 1):
+        sel = idx == b
+        if sel.sum() >= 3:
+            centres.append(math.sqrt(edges[b] * edges[b + 1]))
+            means.append(float(np.median(level[sel])))
+    return np.array(centres), np.array(means)
+
+
 def stribeck_start(v: np.ndarray, f: np.ndarray, Fc: float, B: float,
                    v_min: float) -> tuple[float, float]:
-    """``(Fs, vs)`` from the low-speed hump of ``sign(v)*f`` (samples of one or both directions).
+    """``(Fs, vs)`` from the low-speed hump of ``sign(v)*f - B*|v|`` (one direction's samples)."""
+    speed = np.abs(v)
+    m = speed >= v_min
+    if m.sum() < 10:
+        return 1.2 * Fc, max(v_min, 1e-6)
+    speed = speed[m]
+    c, mu = _speed_bins(speed, np.sign(v[m]) * f[m] - B * speed)
+    if not c.size:
+        return 1.2 * Fc, max(v_min, 1e-6)
+    k = int(np.argmax(mu))
+    Fs = max(float(mu[k]), 1.05 * Fc)
+    target = Fc + (Fs - Fc) / math.e
+    after = np.nonzero((c > c[k]) & (mu <= target))[0]
+    vs = float(c[after[0]]) if after.size else float(c[min(k + 1, c.size - 1)])
+    return Fs, max(vs, v_min)
+
+
+def stribeck_hump_start(v: np.ndarray, f: np.ndarray, Fc: float, B: float,
+                        v_min: float) -> tuple[float, float]:
+    """``(Fs, vs)`` of the low-speed hump of ``sign(v)*f``, fitted with its own slope (diagnosis).
 
     The level ``sign(v)*f`` is binned by speed (16 bins, geometric, medians) and
     ``a + b*exp(-(|v|/vs)^2) + k*|v|`` fitted to the bins for each bin centre as
@@ -167,24 +200,12 @@ def stribeck_start(v: np.ndarray, f: np.ndarray, Fc: float, B: float,
     directions, or a shear-thinning term, leaves a level that still rises with
     speed after ``B*|v|`` is taken off, and the largest bin would then be read as
     the hump (a ``vs`` at the top speed). Without a hump (``b = 0`` everywhere):
-    the largest bin of ``sign(v)*f - B*|v|`` and its ``1/e`` point, as before.
+    :func:`stribeck_start`, which ``fcomp fit`` starts from.
     """
     speed = np.abs(v)
     m = speed >= v_min
-    if m.sum() < 10:
-        return 1.2 * Fc, max(v_min, 1e-6)
-    speed, raw = speed[m], np.sign(v[m]) * f[m]
-    edges = np.geomspace(speed.min(), speed.max() * (1 + 1e-9), 16)
-    idx = np.clip(np.digitize(speed, edges) - 1, 0, edges.size - 2)
-    centres, means = [], []
-    for b in range(edges.size - 1):
-        sel = idx == b
-        if sel.sum() >= 3:
-            centres.append(math.sqrt(edges[b] * edges[b + 1]))
-            means.append(float(np.median(raw[sel])))
-    if not centres:
-        return 1.2 * Fc, max(v_min, 1e-6)
-    c, level = np.array(centres), np.array(means)
+    c, level = _speed_bins(speed[m], np.sign(v[m]) * f[m]) if m.sum() >= 10 else (
+        np.zeros(0), np.zeros(0))
     best: tuple[float, float, float] | None = None  # (sse, b, vs)
     if c.size >= 4:
         for vs in c:
@@ -197,13 +218,8 @@ def stribeck_start(v: np.ndarray, f: np.ndarray, Fc: float, B: float,
                 best = (sse, float(coef[1]), float(vs))
     if best is not None:
         return max(Fc + best[1], 1.05 * Fc), max(best[2], v_min)
-    mu = level - B * c
-    k = int(np.argmax(mu))
-    Fs = max(float(mu[k]), 1.05 * Fc)
-    target = Fc + (Fs - Fc) / math.e
-    after = np.nonzero((c > c[k]) & (mu <= target))[0]
-    vs = float(c[after[0]]) if after.size else float(c[min(k + 1, c.size - 1)])
-    return Fs, max(vs, v_min)
+    return stribeck_start(v, f, Fc, B, v_min)
 
 
-__all__ = ["DiagnosisForm", "RecordView", "distinct_columns", "ls_slope", "stribeck_start"]
+__all__ = ["DiagnosisForm", "RecordView", "distinct_columns", "ls_slope", "stribeck_hump_start",
+           "stribeck_start"]

@@ -534,3 +534,33 @@ def test_stribeck_start_reads_the_hump_not_a_viscous_mismatch(B_pos: float, B_ne
     Fs_hat, vs_hat = stribeck_hump_start(v, F, Fc, B_start, 2e-4)
     assert 0.5 * vs <= vs_hat <= 2.0 * vs
     assert Fs_hat - Fc == pytest.approx(Fs - Fc, rel=0.3)
+
+
+def test_presliding_forms_and_the_elastic_unloading_of_the_elasto_plastic_bristle() -> None:
+    """Both forms on a static map, one on Dahl (it has its bristle). After a reversal the
+    elasto-plastic bristle unloads as a spring, ``dF/dx = sigma0``, down to ``-ba*Fc``,
+    whatever its break; LuGre's bristle (the ``bristle`` form) unloads faster than that."""
+    from fcomp.effects import EFFECTS
+
+    cls = EFFECTS.get("presliding")
+    assert [f.name for f in cls.forms_for(make_model("stribeck"))] == ["bristle",
+                                                                        "elasto-plastic"]
+    assert [f.name for f in cls.forms_for(make_model("dahl"))] == ["bristle"]
+    k, Fc, dt = 1e6, 50.0, 1e-4
+    t = np.arange(0.0, 0.12, dt)
+    v = np.where(t < 0.1, 5e-3, -1e-3)  # 0.5 mm forward (sliding), then back at 1 mm/s
+    back = t >= 0.1
+    for ba in (0.3, 0.6):
+        ep = make_model("coulomb").with_params(Fc=Fc).with_effects(make_effect(
+            "presliding", {"sigma0": k, "ba_pre": ba}, form="elasto-plastic"))
+        F = friction_along_motion(ep, t, v).F
+        assert F[np.flatnonzero(back)[0] - 1] == pytest.approx(Fc)
+        # elastic while F > -ba*Fc: the force falls by k*|dx| per step exactly
+        elastic = back & (F > -ba * Fc + k * 1e-3 * dt)
+        steps = np.diff(F)[elastic[1:] & elastic[:-1]]
+        np.testing.assert_allclose(steps, -k * 1e-3 * dt, rtol=1e-9)
+    lugre = make_model("coulomb").with_params(Fc=Fc).with_effects(make_effect(
+        "presliding", {"sigma0": k}))
+    F = friction_along_motion(lugre, t, v).F
+    i = np.flatnonzero(back)[0]
+    assert F[i + 1] - F[i] < -1.5 * k * 1e-3 * dt  # LuGre: dz/dx = 1 + |u| > 1 at first

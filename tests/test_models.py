@@ -605,3 +605,24 @@ def test_stiff_bristle_with_dahl_exponent_agrees_with_exact_solution(i_pre: floa
         z[k + 1] = s * g * (1.0 - u) / sigma0
     err = run.F - (sigma0 * z + visc * v)
     assert np.abs(err).max() < 1e-6 * Fs  # exact: both solve the same held-velocity steps
+
+
+@pytest.mark.parametrize("ba", [0.0, 0.5, 0.8])
+def test_elasto_plastic_bristle_agrees_with_the_independent_generator_law(ba: float) -> None:
+    """The break-away deflection ``ba_pre`` (Dupont et al. 2002's elasto-plastic bristle)
+    against :func:`fcomp.synthetic.dynamics.elasto_plastic`, written separately (phase by
+    phase in the slid distance), along slow reversing motions of a hydraulic bristle
+    (``sigma0 = 3.7e7 N/m``, 350 N) at 1 kHz: purely elastic below the break, the
+    transition above, and elastic again whenever ``z`` and ``v`` have opposite signs."""
+    from fcomp.synthetic.dynamics import elasto_plastic
+
+    Fc, k = 350.0, 3.7e7
+    model = make_model("coulomb").with_effects(make_effect("presliding", {
+        "sigma0": k, "sigma1": 0.0, "ba_pre": ba}, form="elasto-plastic")).with_params(Fc=Fc)
+    t = np.arange(0.0, 1.0, 1e-3)
+    v = 2e-4 * np.sin(2 * np.pi * 1.5 * t) + 3e-4 * np.sin(2 * np.pi * 0.4 * t)
+    run = friction_along_motion(model, t, v)
+    vm = 0.5 * (v[1:] + v[:-1])  # the interval means both hold
+    F_ref = elasto_plastic(vm, np.full(t.size, Fc), k, ba, 1e-3)
+    assert np.abs(run.F[:-1] - F_ref).max() < 1e-9 * Fc
+    assert np.abs(run.F).max() <= Fc * (1 + 1e-12)

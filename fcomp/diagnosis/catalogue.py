@@ -216,7 +216,11 @@ def propose(name: str, ctx: Context, form: str | None = None) -> Proposal:
         free = [n for n in default_free(models[0]) if n not in fixed and n not in held]
         if "mass" in ctx.current.values:
             free.append("mass")
-        noop = models[0].effects[-1].Params().flat() if models[0].effects else {}
+        # the effect's own defaults (a structural effect leaves no effect object behind:
+        # its terms are features of the family, and Dahl's exponent is a no-op at 1, not 0)
+        noop = dict(effect.Params().flat())
+        if models[0].effects:
+            noop.update(models[0].effects[-1].Params().flat())
         for st in starts:  # a held term stays at its no-op value
             st.update({n: noop.get(n, 0.0) for n in held})
     return Proposal(name, models[0], starts, free, form=form)

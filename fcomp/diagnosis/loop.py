@@ -273,13 +273,20 @@ def changed_pieces(r_before: np.ndarray, r_after: np.ndarray, blocks: Sequence[n
             if float(np.sqrt(np.mean((r_before[b] - r_after[b]) ** 2))) >= min_change]
 
 
-def delta_bic(before: FitResult, after: FitResult, train: np.ndarray) -> float:
-    """``n_eff*ln(RSS_after/RSS_before) + (k_after - k_before)*ln(n_eff)`` (training residuals)."""
+def delta_bic(before: FitResult, after: FitResult, train: np.ndarray,
+              n_eff: float | None = None) -> float:
+    """``n_eff*ln(RSS_after/RSS_before) + (k_after - k_before)*ln(n_eff)`` (training residuals).
+
+    ``n_eff`` defaults to the effective sample size of ``after``'s residual; fits
+    compared with each other against one ``before`` (the forms of an effect) must
+    share one, or the fit with the more correlated residual -- often the better
+    fit, whose error is left in a few places -- counts fewer samples and looks worse.
+    """
     ra, rb = after.residual[train], before.residual[train]
     rss_a, rss_b = float(ra @ ra), float(rb @ rb)
     if rss_b <= 0 or rss_a <= 0:
         return -math.inf if rss_a < rss_b else math.inf
-    n_eff = max(effective_sample_size(ra), 2.0)
+    n_eff = max(effective_sample_size(ra) if n_eff is None else n_eff, 2.0)
     return n_eff * math.log(rss_a / rss_b) + (after.n_params - before.n_params) * math.log(n_eff)
 
 
@@ -711,13 +718,16 @@ class Diagnosis:
         results = self._run(proposals)
         best: dict[int, tuple[FitResult | str, str | None]] = {}
         train = self.split_.train
+        n_eff = effective_sample_size(self.fit_.residual[train])
         for j, prop, res in zip(index, proposals, results, strict=True):
             # of an effect's forms, the one the information criterion prefers on the
-            # training samples (a richer form must earn its parameters)
+            # training samples (a richer form must earn its parameters), all counted
+            # with the current model's effective sample size
             prev = best.get(j, (None, None))[0]
             if prev is None or (isinstance(prev, str) and not isinstance(res, str)) or (
                     not isinstance(res, str) and not isinstance(prev, str)
-                    and delta_bic(self.fit_, res, train) < delta_bic(self.fit_, prev, train)):
+                    and delta_bic(self.fit_, res, train, n_eff)
+                    < delta_bic(self.fit_, prev, train, n_eff)):
                 best[j] = (res, prop.form)
         for j, (res, form) in best.items():
             name = names[j]

@@ -320,6 +320,7 @@ PreslidingParams = make_params_class("PreslidingParams", [
          lower_open=True, directional=False),
     spec("sigma1", "Ns/m", 0.0, 0.0, INF, "bristle damping", directional=False),
     FAMILY_SPECS["i_pre"],
+    FAMILY_SPECS["ba_pre"],
 ], owner="effect presliding")
 
 
@@ -334,10 +335,24 @@ class Presliding(StructuralEffect):
     ``sigma0 = inf`` is the rigid limit (the static map itself: a no-op).
     The bristle's approach to sliding is LuGre's exponential by default;
     Dahl's exponent ``i_pre`` (``bristle-exponent`` of
-    :mod:`fcomp.models.lugre_family`) makes it softer or stiffer.
+    :mod:`fcomp.models.lugre_family`) makes it softer or stiffer, and a
+    break-away deflection ``ba_pre`` (``bristle-break``: the elasto-plastic
+    bristle of Dupont et al. 2002) keeps it purely elastic up to that share of
+    its steady deflection. Two forms (configuration ``form``):
+
+    ``"bristle"`` (default)
+        the exponent, no break;
+    ``"elasto-plastic"``
+        the break as well: below it, and whenever ``z`` and ``v`` have opposite
+        signs, the bristle is a spring (it unloads elastically after a
+        reversal, where LuGre's bristle relaxes faster than a spring can).
+        ``ba_pre = 0`` is not LuGre: the unloading is elastic.
+
+    A diagnosis fits both, the elasto-plastic one with LuGre's exponent.
     """
 
     name = "presliding"
+    FORMS: ClassVar[tuple[str, ...]] = ("bristle", "elasto-plastic")
     adds = frozenset({"presliding", "damping", "bristle-exponent"})
     marks = frozenset({"presliding", "damping"})
     Params = PreslidingParams
@@ -345,10 +360,29 @@ class Presliding(StructuralEffect):
     experiment = "small-amplitude displacement cycles (well below break-away)"
     dynamic = True
 
+    @classmethod
+    def diagnosis_forms(cls) -> tuple[DiagnosisForm, ...]:
+        """Dahl's exponent without a break (``bristle``), and the elasto-plastic break with
+        LuGre's exponent (``elasto-plastic``): two published laws of the approach to sliding."""
+        return (DiagnosisForm("bristle", {"form": "bristle"}),
+                DiagnosisForm("elasto-plastic", {"form": "elasto-plastic"}, held=("i_pre",)))
+
+    @classmethod
+    def forms_for(cls, model: FrictionModel) -> tuple[DiagnosisForm, ...]:
+        """One form on a model with a bristle already (Dahl: only the damping is added)."""
+        features = _features(model)
+        has = features is not None and "presliding" in features
+        return cls.diagnosis_forms()[:1] if has else cls.diagnosis_forms()
+
     def guess(self, view: RecordView, form: str | None = None) -> list[dict[str, float]]:
         """The stiffness from the presliding length, a factor of four either side; the
-        bristle exponent stiffer and softer than LuGre's."""
+        bristle exponent stiffer and softer than LuGre's, or the break at a fifth, half
+        and four fifths of the steady deflection."""
         s0 = view.level / view.d_pre
+        if form == "elasto-plastic":
+            return [{"sigma0": s0, "ba_pre": 0.5}, {"sigma0": 4 * s0, "ba_pre": 0.5},
+                    {"sigma0": s0 / 4, "ba_pre": 0.5}, {"sigma0": s0, "ba_pre": 0.2},
+                    {"sigma0": s0, "ba_pre": 0.8}]
         return [{"sigma0": s0}, {"sigma0": 4 * s0}, {"sigma0": s0 / 4},
                 {"sigma0": s0, "i_pre": 0.5}, {"sigma0": s0, "i_pre": 2.0}]
 
@@ -365,7 +399,15 @@ class Presliding(StructuralEffect):
             if "presliding" in fam.features:
                 raise ValueError(f"model {fam.describe()!r} already has effect {self.name!r}")
             return Effect.attach(self, model)  # rigid bristles: the static map, unchanged
-        return super().attach(model)
+        if not self.applies_to(fam):
+            raise ValueError(f"model {fam.describe()!r} already has effect {self.name!r}")
+        features = set(self.adds) | ({"bristle-break"} if self.form == "elasto-plastic"
+                                     else set())
+        values = {k: v for k, v in self.params.flat().items()
+                  if k != "ba_pre" or "bristle-break" in features}
+        new = fam.with_features(features, values)
+        new.lineage = (*(fam.lineage or (fam.name,)), self.name)
+        return new
 
 
 # --------------------------------------------------------------------- add-ons

@@ -32,6 +32,11 @@ power``          (a shear-thinning or -thickening film), ``sigma2`` its slope at
 exponent``       ``u = sigma0*sign(v)*z/g`` (Dahl 1976; ``i = 1`` is LuGre's bristle,
                  ``i > 1`` a softer approach to sliding, ``i < 1`` stiffer until
                  close to it, towards the elasto-plastic bristle of Dupont et al. 2002)
+``bristle-       the elasto-plastic bristle (Dupont, Hayward, Armstrong & Altpeter
+break``          2002): below a break-away deflection ``u <= ba_pre`` (and whenever
+                 ``z`` and ``v`` have opposite signs) the bristle is purely elastic,
+                 ``dz/dt = v``; above, the bristle law acts on ``w = (u - ba)/(1 - ba)``
+                 in place of ``u``. ``ba_pre = 0`` is the bristle without a break.
 ==============  ==========================================================
 
 Maxwell-slip elements (``elements``, nonlocal memory). A share ``s =
@@ -114,6 +119,9 @@ FAMILY_SPECS: dict[str, ParamSpec] = {
              directional=False),
         spec("i_pre", "-", 1.0, 0.2, 4.0, "bristle exponent: 1 LuGre, > 1 softer (Dahl i), "
              "< 1 stiffer until near slip (elasto-plastic)", directional=False),
+        spec("ba_pre", "-", 0.0, 0.0, 0.95, "break-away deflection of the bristle as a share "
+             "of its steady one: purely elastic below (elasto-plastic, Dupont 2002; 0: none)",
+             directional=False),
         spec("ms_share", "-", 0.0, 0.0, 1.0, "Maxwell-slip elements: share of the level they "
              "carry (0: the bristle alone)", directional=False),
         spec("ms_dmax", "m", 1e-4, 0.0, INF, "Maxwell-slip elements: largest slip "
@@ -143,9 +151,11 @@ FEATURE_PARAMS: dict[str, tuple[str, ...]] = {
     "viscous-power": ("p_visc", "v_ref"),
     "speed-lag": ("tau_L", "w_L"),
     "bristle-exponent": ("i_pre",),
+    "bristle-break": ("ba_pre",),
 }
 FEATURE_ORDER = ("stribeck", "viscous", "presliding", "damping", "film", "film-lag", "lead",
-                 "elements", "stribeck-form", "bristle-exponent", "viscous-power", "speed-lag")
+                 "elements", "stribeck-form", "bristle-exponent", "viscous-power", "speed-lag",
+                 "bristle-break")
 
 
 #: Feature -> (the feature it builds on, the message when that is missing).
@@ -157,6 +167,8 @@ FEATURE_NEEDS: dict[str, tuple[str, str]] = {
     "stribeck-form": ("stribeck", "the Stribeck curve form needs the Stribeck term"),
     "viscous-power": ("viscous", "the viscous exponent needs the viscous term"),
     "bristle-exponent": ("presliding", "the bristle exponent needs the bristle (presliding)"),
+    "bristle-break": ("presliding", "the bristle's break-away deflection needs the bristle "
+                      "(presliding)"),
     "speed-lag": ("stribeck", "the lagged speed needs the Stribeck term it acts on"),
 }
 
@@ -339,9 +351,12 @@ class LuGreFamily(FrictionModel):
         z, deltas, _ = self._split(x)
         if z:
             g = self.g(be, self._curve_speed(be, x, v, P), h, P, L, sig.s)
-            if "bristle-exponent" in self.features:  # Dahl's exponent (Dahl 1976)
-                u = 1.0 - P("sigma0") * be.sign(v) * z[0] / g
-                out.append(v * be.sign(u) * be.power(be.fmax(be.abs(u), 1e-12), P("i_pre")))
+            if self.features & {"bristle-exponent", "bristle-break"}:
+                u = 1.0 - self._bristle_w(be, z[0], sig, P, g)
+                if "bristle-exponent" in self.features:  # Dahl's exponent (Dahl 1976)
+                    out.append(v * be.sign(u) * be.power(be.fmax(be.abs(u), 1e-12), P("i_pre")))
+                else:
+                    out.append(v * u)
             else:
                 out.append(v - P("sigma0") * be.abs(v) * z[0] / g)
             if deltas:
@@ -362,34 +377,70 @@ class LuGreFamily(FrictionModel):
             out.append((be.abs(v) - x[self.base_states.index("vL")]) / P("tau_L"))
         return out
 
+    def _bristle_w(self, be: Backend, z: Any, sig: Signals, P: ParamValues, g: Any) -> Any:
+        """``w``, what the bristle law acts on: ``u = sigma0*sign(v)*z/g``, or with a break-away
+        deflection ``(u - ba)/(1 - ba)`` above it and 0 below (purely elastic)."""
+        u = P("sigma0") * be.sign(sig.v) * z / g
+        if "bristle-break" not in self.features:
+            return u
+        ba = P("ba_pre")
+        return be.fmax(u - ba, 0.0) / (1.0 - ba)
+
     def base_step_lengths(self, be: Backend, x: list[Any], sig: Signals, P: ParamValues,
                           L: dict, h: Any) -> list[Any | None]:
-        """With Dahl's exponent, the bristle's closed-form step at held velocity.
+        """The bristle's closed-form step at held velocity (Dahl's exponent, a break-away).
 
-        ``dz/dt = v*|u|^i*sign(u)`` is ``c*(z_ss - z)`` with ``z_ss = s*g/sigma0`` and
-        ``c = sigma0*|v|/g*|u|^(i-1)``. In the slid distance ``xi = |v|*t``,
-        ``d|u|/dxi = -(sigma0/g)*|u|^i`` (``u`` keeps its sign), so ``|u|^(1-i)``
-        changes linearly: after the step ``|u_1| = |u_0|*q^(1/(1-i))``, ``q = 1 -
-        (1 - i)*c*h``; ``q <= 0`` (``i < 1``: ``z_ss`` is reached in finite slip) gives
-        ``u_1 = 0``, and ``i = 1`` (LuGre) ``exp(-c*h)``. The step ``z_1 = z_0 + tau*f``
-        is exact with ``tau = (1 - |u_1|/|u_0|)/c``. The tangent step (rate ``i*c``)
-        overshot ``z_ss`` by ``1/i - 1`` of the gap on a stiff step (hydraulic
-        bristles at 1 kHz), without bound below ``i = 1/2``.
+        With ``u = sigma0*s*z/g`` (``s = sign(v)``) and the slid distance ``xi = |v|*t``,
+        ``du/dxi = k*(1 - w)^i`` (signed power), ``k = sigma0/g``. Without a break
+        ``w = u``; with one, ``du/dxi = k`` (purely elastic) until ``u = ba`` -- a slid
+        distance ``(ba - u_0)/k`` -- and then ``w = (u - ba)/(1 - ba)`` with
+        ``dw/dxi = k/(1 - ba)*(1 - w)^i``. On the bristle law ``|1 - w|^(1-i)``
+        changes linearly in ``xi`` (``1 - w`` keeps its sign): after a slid distance
+        ``e``, ``|1 - w_1| = |1 - w_0|*q^(1/(1-i))``, ``q = 1 - (1 - i)*k'*e*|1 - w_0|^(i-1)``,
+        ``q <= 0`` (``i < 1``: the steady deflection is reached in finite slip)
+        giving ``w_1 = 1``, and ``exp(-k'*e)`` at ``i = 1`` (LuGre). The step
+        ``z_1 = z_0 + tau*f(z_0)`` lands there with ``tau = (z_1 - z_0)/f(z_0)``.
+        The tangent step overshot the steady deflection on a stiff step (hydraulic
+        bristles at 1 kHz: by ``1/i - 1`` of the gap, without bound below
+        ``i = 1/2``; past the break in one step, by the whole elastic stretch).
         """
         out: list[Any | None] = [None] * len(x)
         z, _, _ = self._split(x)
-        if z and "bristle-exponent" in self.features:
-            film = self._h(x, be, sig, P, L)
-            g = self.g(be, self._curve_speed(be, x, sig.v, P), film, P, L, sig.s)
-            u = 1.0 - P("sigma0") * be.sign(sig.v) * z[0] / g
-            i = P("i_pre")
-            c = P("sigma0") * be.abs(sig.v) / g * be.power(be.fmax(be.abs(u), 1e-12), i - 1.0)
-            ch = c * h
-            one = be.abs(1.0 - i) < 1e-6
-            safe = be.if_else(one, 1.0, 1.0 - i)
-            q = be.fmax(1.0 - safe * ch, 0.0)
-            ratio = be.if_else(one, be.exp(-ch), be.power(q, 1.0 / safe))
-            out[0] = be.if_else(ch < 1e-9, h, (1.0 - ratio) / be.fmax(c, 1e-300))
+        if not (z and self.features & {"bristle-exponent", "bristle-break"}):
+            return out
+        film = self._h(x, be, sig, P, L)
+        g = self.g(be, self._curve_speed(be, x, sig.v, P), film, P, L, sig.s)
+        s = be.sign(sig.v)
+        k = P("sigma0") / g
+        xi = be.abs(sig.v) * h
+        u0 = k * s * z[0]
+        i = P("i_pre") if "bristle-exponent" in self.features else 1.0
+        if "bristle-break" in self.features:
+            ba = P("ba_pre")
+            elastic = be.fmin(be.fmax((ba - u0) / k, 0.0), xi)
+            u_e = u0 + k * elastic
+            rest = xi - elastic
+            w0 = be.fmax(u_e - ba, 0.0) / (1.0 - ba)
+            kw = k / (1.0 - ba)
+        else:
+            ba, u_e, rest, w0, kw = 0.0, u0, xi, u0, k
+        r0 = 1.0 - w0
+        ar0 = be.fmax(be.abs(r0), 1e-12)
+        one = be.abs(1.0 - i) < 1e-6
+        safe = be.if_else(one, 1.0, 1.0 - i)
+        q = be.fmax(1.0 - safe * kw * rest * be.power(ar0, i - 1.0), 0.0)
+        ratio = be.if_else(one, be.exp(-kw * rest), be.power(q, 1.0 / safe))
+        w1 = 1.0 - r0 * ratio
+        u1 = ba + (1.0 - ba) * w1
+        if "bristle-break" in self.features:
+            u1 = be.if_else(u_e < ba, u_e, u1)
+        dz = s * (u1 - u0) / k
+        w_now = self._bristle_w(be, z[0], sig, P, g)
+        r_now = 1.0 - w_now
+        f0 = sig.v * (be.sign(r_now) * be.power(be.fmax(be.abs(r_now), 1e-12), i)
+                      if "bristle-exponent" in self.features else r_now)
+        small = be.abs(f0) < 1e-300
+        out[0] = be.if_else(small, h, dz / be.if_else(small, 1.0, f0))
         return out
 
     def base_project(self, be: Backend, x: list[Any], sig: Signals, P: ParamValues,

@@ -556,7 +556,7 @@ def test_presliding_forms_and_the_elastic_unloading_of_the_elasto_plastic_bristl
         F = friction_along_motion(ep, t, v).F
         assert F[np.flatnonzero(back)[0] - 1] == pytest.approx(Fc)
         # elastic while F > -ba*Fc: the force falls by k*|dx| per step exactly
-        elastic = back & (F > -ba * Fc + k * 1e-3 * dt)
+        elastic = back & (-ba * Fc + k * 1e-3 * dt < F)
         steps = np.diff(F)[elastic[1:] & elastic[:-1]]
         np.testing.assert_allclose(steps, -k * 1e-3 * dt, rtol=1e-9)
     lugre = make_model("coulomb").with_params(Fc=Fc).with_effects(make_effect(

@@ -917,9 +917,6 @@ class Diagnosis:
                 **catalogue.form_of(n, self._forms.get(n)).config))
         flat = model.flat_params()
         start = {k: v for k, v in self.fit_.values.items() if k in flat or k == "mass"}
-        # an earlier fit of the same structure (the model before a later effect was added)
-        # is a start too: refitted from the full model's values alone, the reduced model
-        # can settle in a worse optimum, and the effect taken out would look needed
         known = [f for f in self._known_fits(model) if set(f.values) == set(start)]
         # the parameters fitted now that remain (terms held for the record stay held)
         fit = self._polish(self._refit.fit(model, [start, *(f.values for f in known)],

@@ -73,6 +73,10 @@ class StructuralEffect(Effect):
         marks = self.adds if self.marks is None else self.marks
         return features is not None and not marks <= features
 
+    def added_features(self) -> set[str]:
+        """The features attaching this instance switches on (default :attr:`adds`)."""
+        return set(self.adds)
+
     def new_values(self, model: FrictionModel) -> dict[str, float]:
         """Parameter values of the added terms (from this effect's parameters)."""
         return dict(self.params.flat())
@@ -87,7 +91,7 @@ class StructuralEffect(Effect):
                 f"effect {self.name!r} needs {', '.join(sorted(missing))} in the model "
                 f"{fam.describe()!r} first"
             )
-        new = fam.with_features(set(self.adds), self.new_values(fam))
+        new = fam.with_features(self.added_features(), self.new_values(fam))
         new.lineage = (*(fam.lineage or (fam.name,)), self.name)
         return new
 
@@ -399,15 +403,16 @@ class Presliding(StructuralEffect):
             if "presliding" in fam.features:
                 raise ValueError(f"model {fam.describe()!r} already has effect {self.name!r}")
             return Effect.attach(self, model)  # rigid bristles: the static map, unchanged
-        if not self.applies_to(fam):
-            raise ValueError(f"model {fam.describe()!r} already has effect {self.name!r}")
-        features = set(self.adds) | ({"bristle-break"} if self.form == "elasto-plastic"
-                                     else set())
-        values = {k: v for k, v in self.params.flat().items()
-                  if k != "ba_pre" or "bristle-break" in features}
-        new = fam.with_features(features, values)
-        new.lineage = (*(fam.lineage or (fam.name,)), self.name)
-        return new
+        return super().attach(model)
+
+    def added_features(self) -> set[str]:
+        """The bristle, its damping and exponent; the break in the elasto-plastic form."""
+        return set(self.adds) | ({"bristle-break"} if self.form == "elasto-plastic" else set())
+
+    def new_values(self, model: FrictionModel) -> dict[str, float]:
+        """The bristle's values (the break's only where the form has it)."""
+        return {k: v for k, v in self.params.flat().items()
+                if k != "ba_pre" or self.form == "elasto-plastic"}
 
 
 # --------------------------------------------------------------------- add-ons

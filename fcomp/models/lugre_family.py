@@ -36,7 +36,8 @@ exponent``       ``u = sigma0*sign(v)*z/g`` (Dahl 1976; ``i = 1`` is LuGre's bri
 break``          2002): below a break-away deflection ``u <= ba_pre`` (and whenever
                  ``z`` and ``v`` have opposite signs) the bristle is purely elastic,
                  ``dz/dt = v``; above, the bristle law acts on ``w = (u - ba)/(1 - ba)``
-                 in place of ``u``. ``ba_pre = 0`` is the bristle without a break.
+                 in place of ``u``. Even at ``ba_pre = 0`` it unloads as a spring
+                 after a reversal (LuGre's bristle unloads faster).
 ==============  ==========================================================
 
 Maxwell-slip elements (``elements``, nonlocal memory). A share ``s =

@@ -272,18 +272,18 @@ class FrictionModel(PlainValue, ABC):
         """Time derivatives of the model's own states (none for static maps)."""
         return []
 
-    def base_step_lengths(self, be: Backend, x: list[Any], sig: Signals, P: ParamValues,
-                          L: dict, h: Any) -> list[Any | None]:
-        """How long the rates of the model's own states act over a sampled step of ``h`` s.
+    def base_exact_steps(self, be: Backend, x: list[Any], sig: Signals, P: ParamValues,
+                         L: dict, h: Any) -> list[Any | None]:
+        """The model's own states after a sampled step of ``h`` s, where known in closed form.
 
         The sampled step (:func:`fcomp.models.stepping.exponential_euler`) is
-        ``x_1 = x_0 + tau*f(x_0)`` with ``tau = h*phi1(h*J)`` and ``J`` the diagonal
-        of the exact Jacobian: exact where a state's equation is linear in it at
-        held signals (LuGre's bristle). A state whose equation is not, but whose
-        exact value after the step is known in closed form, can give here the
-        ``tau`` that lands on it (s); None (the default) keeps the exponential
-        Euler one. (Dahl's exponent ``i < 1``: the tangent step overshot the
-        steady deflection by ``1/i - 1`` of the gap, without bound below ``1/2``.)
+        ``x_1 = x_0 + h*phi1(h*J)*f(x_0)`` with ``J`` the diagonal of the exact
+        Jacobian: exact where a state's equation is linear in it at held signals
+        (LuGre's bristle). A state whose equation is not, but whose value after
+        the step at held signals has a closed form, gives it here; None (the
+        default) keeps the exponential Euler step. (Dahl's exponent ``i < 1``: the
+        tangent step overshot the steady deflection by ``1/i - 1`` of the gap,
+        without bound below ``1/2``.)
         """
         return [None] * len(self.base_states)
 
@@ -408,12 +408,12 @@ class FrictionModel(PlainValue, ABC):
             offset += k
         return dx
 
-    def step_lengths(self, be: Backend, x: Sequence[Any], sig: Signals, P: ParamValues,
-                     h: Any) -> list[Any | None]:
-        """:meth:`base_step_lengths` of all states (the effects' states: None)."""
+    def exact_steps(self, be: Backend, x: Sequence[Any], sig: Signals, P: ParamValues,
+                    h: Any) -> list[Any | None]:
+        """:meth:`base_exact_steps` of all states (the effects' states: None)."""
         x = list(x)
         nb = len(self.base_states)
-        out = list(self.base_step_lengths(be, x[:nb], sig, P, self.levels(be, x, sig, P), h))
+        out = list(self.base_exact_steps(be, x[:nb], sig, P, self.levels(be, x, sig, P), h))
         return out + [None] * (len(x) - nb)
 
     def base_project(self, be: Backend, x: list[Any], sig: Signals, P: ParamValues,

@@ -387,8 +387,8 @@ class LuGreFamily(FrictionModel):
         ba = P("ba_pre")
         return be.fmax(u - ba, 0.0) / (1.0 - ba)
 
-    def base_step_lengths(self, be: Backend, x: list[Any], sig: Signals, P: ParamValues,
-                          L: dict, h: Any) -> list[Any | None]:
+    def base_exact_steps(self, be: Backend, x: list[Any], sig: Signals, P: ParamValues,
+                         L: dict, h: Any) -> list[Any | None]:
         """The bristle's closed-form step at held velocity (Dahl's exponent, a break-away).
 
         With ``u = sigma0*s*z/g`` (``s = sign(v)``) and the slid distance ``xi = |v|*t``,
@@ -399,11 +399,10 @@ class LuGreFamily(FrictionModel):
         changes linearly in ``xi`` (``1 - w`` keeps its sign): after a slid distance
         ``e``, ``|1 - w_1| = |1 - w_0|*q^(1/(1-i))``, ``q = 1 - (1 - i)*k'*e*|1 - w_0|^(i-1)``,
         ``q <= 0`` (``i < 1``: the steady deflection is reached in finite slip)
-        giving ``w_1 = 1``, and ``exp(-k'*e)`` at ``i = 1`` (LuGre). The step
-        ``z_1 = z_0 + tau*f(z_0)`` lands there with ``tau = (z_1 - z_0)/f(z_0)``.
-        The tangent step overshot the steady deflection on a stiff step (hydraulic
-        bristles at 1 kHz: by ``1/i - 1`` of the gap, without bound below
-        ``i = 1/2``; past the break in one step, by the whole elastic stretch).
+        giving ``w_1 = 1``, and ``exp(-k'*e)`` at ``i = 1`` (LuGre). The tangent step
+        overshot the steady deflection on a stiff step (hydraulic bristles at 1 kHz:
+        by ``1/i - 1`` of the gap, without bound below ``i = 1/2``; past the break
+        in one step, by the whole elastic stretch).
         """
         out: list[Any | None] = [None] * len(x)
         z, _, _ = self._split(x)
@@ -435,13 +434,7 @@ class LuGreFamily(FrictionModel):
         u1 = ba + (1.0 - ba) * w1
         if "bristle-break" in self.features:
             u1 = be.if_else(u_e < ba, u_e, u1)
-        dz = s * (u1 - u0) / k
-        w_now = self._bristle_w(be, z[0], sig, P, g)
-        r_now = 1.0 - w_now
-        f0 = sig.v * (be.sign(r_now) * be.power(be.fmax(be.abs(r_now), 1e-12), i)
-                      if "bristle-exponent" in self.features else r_now)
-        small = be.abs(f0) < 1e-300
-        out[0] = be.if_else(small, h, dz / be.if_else(small, 1.0, f0))
+        out[0] = z[0] + s * (u1 - u0) / k  # at rest (xi = 0) u1 = u0: z is held
         return out
 
     def base_project(self, be: Backend, x: list[Any], sig: Signals, P: ParamValues,

@@ -48,19 +48,19 @@ def phi1(y: Any) -> Any:
     return ca.if_else(ca.fabs(y) < 1e-8, 1.0 + 0.5 * y, ca.expm1(y) / y)
 
 
-def exponential_euler(f: Any, x: Any, h: Any, lengths: list[Any | None] | None = None) -> Any:
+def exponential_euler(f: Any, x: Any, h: Any, exact: list[Any | None] | None = None) -> Any:
     """One exponential Rosenbrock-Euler step ``x + h*phi1(h*J)*f`` of ``dx/dt = f(x)``.
 
     ``f`` is the right-hand side as a CasADi expression of the symbol ``x``;
-    ``J`` the diagonal of its Jacobian. Where ``lengths`` gives a state's own
-    step length ``tau`` (:meth:`~fcomp.models.base.FrictionModel.base_step_lengths`,
-    the closed-form step of an equation not linear in its state) the state moves
-    by ``tau*f`` instead. Returns the new state (expression of ``x``).
+    ``J`` the diagonal of its Jacobian. Where ``exact`` gives a state's value
+    after the step in closed form
+    (:meth:`~fcomp.models.base.FrictionModel.base_exact_steps`), that is taken
+    instead. Returns the new state (expression of ``x``).
     """
-    tau = h * phi1(h * ca.diag(ca.jacobian(f, x)))
-    if lengths is not None and any(t is not None for t in lengths):
-        tau = ca.vertcat(*[tau[i] if t is None else t for i, t in enumerate(lengths)])
-    return x + tau * f
+    step = x + h * phi1(h * ca.diag(ca.jacobian(f, x))) * f
+    if exact is not None and any(e is not None for e in exact):
+        step = ca.vertcat(*[step[i] if e is None else e for i, e in enumerate(exact)])
+    return step
 
 
 def structure_key(model: FrictionModel) -> tuple:
@@ -89,7 +89,7 @@ def friction_step(model: FrictionModel, substeps: int = 1) -> ca.Function:
     h = dt / substeps
     xl = [x[i] for i in range(nx)]
     one = exponential_euler(ca.vertcat(*model.rhs(CASADI, xl, sig, P)), x, h,
-                            model.step_lengths(CASADI, xl, sig, P, h))
+                            model.exact_steps(CASADI, xl, sig, P, h))
     proj = ca.vertcat(*model.project(CASADI, xl, sig, P))
     xk = x
     for _ in range(substeps):

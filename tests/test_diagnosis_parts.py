@@ -57,21 +57,22 @@ def test_cutoff_follows_the_position_noise() -> None:
     assert fc_noisy < 0.5 * fc_clean  # a noisy sensor is filtered harder
 
 
-def test_regimes_of_a_designed_motion() -> None:
-    """Rest, a long slide, a reversal, small loops: each gets its regime."""
-    dt = 1e-3
-    parts = [np.zeros(500), np.full(1000, 0.02), np.full(1000, -0.02), np.zeros(300),
-             5e-5 * 2 * np.pi * 2 * np.sin(2 * np.pi * 2 * np.arange(1000) * dt)]
-    v = np.concatenate(parts)
+def _dahl_record(v: np.ndarray, dt: float, name: str) -> Measurement:
     t = np.arange(v.size) * dt
     x = 0.05 + np.concatenate([[0.0], np.cumsum(v[:-1] * dt)])
     F = np.zeros(v.size)  # Dahl: dF/dx = k*(1 - F*sign(v)/Fc), presliding length 0.1 mm
     for i in range(1, v.size):
         dx = x[i] - x[i - 1]
         F[i] = F[i - 1] + 3e5 * dx * (1.0 - F[i - 1] * np.sign(dx) / 30.0)
-    m = Measurement({"t": t, "x": np.round(x / 1e-7) * 1e-7, "v": v, "F": F},
-                    {"name": "designed"})
-    data = prepare(m)
+    return Measurement({"t": t, "x": np.round(x / 1e-7) * 1e-7, "v": v, "F": F}, {"name": name})
+
+
+def test_regimes_of_a_designed_motion() -> None:
+    """Rest, a long slide, a reversal, small loops: each gets its regime."""
+    dt = 1e-3
+    parts = [np.zeros(500), np.full(1000, 0.02), np.full(1000, -0.02), np.zeros(300),
+             5e-5 * 2 * np.pi * 2 * np.sin(2 * np.pi * 2 * np.arange(1000) * dt)]
+    data = prepare(_dahl_record(np.concatenate(parts), dt, "designed"))
     seg = segment(data)
     assert np.all(seg.regime[100:450] == DWELL)
     assert np.all(seg.regime[1100:1450] == SLIDING)
@@ -80,6 +81,40 @@ def test_regimes_of_a_designed_motion() -> None:
     assert not seg.valid[:1400].any() and seg.valid[1600:].all()  # warm-up: the first run
     starts = [k for k, _, rev in seg.starts if rev]
     assert any(abs(k - 1500) < 5 for k in starts)
+
+
+def test_warm_up_lasts_until_the_contact_age_is_slid_off() -> None:
+    """A record that starts at rest and creeps before it slides: the first break-away's
+    dwell is unknown and the contact age lasts until the seal has slid a distance (1 % of
+    the 0.2 m stroke, 2 mm), not just to the end of the first run of six presliding
+    lengths (the first 0.8 mm creep)."""
+    dt = 1e-3
+    creep = 3.2e-3 * np.sign(np.sin(2 * np.pi * 2.0 * np.arange(2000) * dt + 1e-9))
+    stroke = np.concatenate([np.full(4000, 0.05), np.zeros(200), np.full(4000, -0.05),
+                             np.zeros(200)])
+    v = np.concatenate([np.zeros(500), creep, np.tile(stroke, 2)])
+    seg = segment(prepare(_dahl_record(v, dt, "creep")))
+    assert 6 * seg.d_pre <= 0.8e-3  # the first creep run ends the old warm-up
+    slid = np.concatenate([[0.0], np.cumsum(np.abs(v[:-1]) * dt)])
+    reached = int(np.searchsorted(slid, 2e-3))  # in the third creep run
+    assert 500 + 500 < reached < 500 + 750
+    first = int(np.flatnonzero(~seg.valid).max()) + 1
+    assert not seg.valid[:first].any() and seg.valid[first:].all()
+    assert abs(first - reached) < 5
+
+
+def test_warm_up_stops_at_its_share_of_the_record() -> None:
+    """A first run of 1 mm, then 20 s of creep that slides 0.4 mm, then the 0.2 m strokes:
+    the warm-up distance (2 mm) is reached only in the strokes, so the warm-up stops a
+    tenth of the record after the first run of six presliding lengths."""
+    dt = 1e-3
+    creep = 2e-5 * np.sign(np.sin(2 * np.pi * 1.0 * np.arange(20000) * dt + 1e-9))
+    v = np.concatenate([np.zeros(500), np.full(100, 0.01), creep, np.full(4000, 0.05),
+                        np.full(4000, -0.05)])
+    seg = segment(prepare(_dahl_record(v, dt, "creep-only")))
+    first = int(np.flatnonzero(~seg.valid).max()) + 1
+    assert not seg.valid[:first].any() and seg.valid[first:].all()
+    assert abs(first - (600 + 0.1 * v.size)) < 20
 
 
 def test_splits_are_contiguous_never_shuffled(record) -> None:

@@ -26,10 +26,16 @@ Per sample, with the *run* the maximal stretch of motion in one direction:
 * otherwise ``sliding``.
 
 Samples up to the end of the first run that travels ``6*d_pre`` in an
-experiment are the *warm-up*: the model's friction states (bristle, film,
-contact age) start from rest while the real seal carries an unknown history
-(how long it rested, where it stopped), so they are left out of every fit
-and score.
+experiment, and on until the piston has slid :data:`WARMUP_SLIDE` of the
+stroke since it first moved, are the *warm-up*: the model's friction states
+(bristle, film, contact age) start from rest while the real seal carries an
+unknown history (how long it rested, where it stopped), so they are left out
+of every fit and score. The bristle forgets within a few presliding lengths;
+the contact age of a seal that rested before the record began is erased only
+by sliding a distance no record states (0.1-1 mm for elastomer seals), and
+the first break-away's dwell is unknown (at least the rest the record shows).
+The warm-up never takes more than :data:`WARMUP_SHARE` of an experiment
+beyond the first long run.
 """
 
 from __future__ import annotations
@@ -48,6 +54,10 @@ PRESLIDING, REVERSAL, SLIDING, DWELL = range(4)
 TRANSITION = 3.0
 #: Warm-up excursion at the start of each experiment, in presliding lengths.
 WARMUP = 6.0
+#: Warm-up sliding distance since the first motion, as a share of the stroke.
+WARMUP_SLIDE = 0.01
+#: Longest warm-up beyond the first long run, as a share of the experiment's samples.
+WARMUP_SHARE = 0.1
 #: A held rest whose force swings by more than this many noise levels ...
 UNRESOLVED_NOISE = 10.0
 #: ... and this share of the friction level holds motion the position misses.
@@ -164,7 +174,7 @@ def segment(data: DiagnosisData) -> Segmentation:
         s = e.data.sig
         sl = slice(e.start, e.stop)
         r, ok, a, b, c, st = _segment_one(s["t"], s["x"], s["v"], v_rest, zone, t_dwell,
-                                          WARMUP * d_pre)
+                                          WARMUP * d_pre, WARMUP_SLIDE * sc.stroke)
         regime[sl], valid[sl], tsr[sl], dsr[sl], dwell[sl] = r, ok, a, b, c
         starts += [(e.start + k, dw, rev) for k, dw, rev in st]
     unresolved = unresolved_rests(data)
@@ -211,7 +221,7 @@ def unresolved_rests(data: DiagnosisData) -> np.ndarray:
 
 
 def _segment_one(t: np.ndarray, x: np.ndarray, v: np.ndarray, v_rest: float, zone: float,
-                 t_dwell: float, warmup: float):
+                 t_dwell: float, warmup: float, slide: float):
     n = t.size
     direction = np.where(v > v_rest, 1, np.where(v < -v_rest, -1, 0))
     regime = np.full(n, SLIDING, dtype=int)
@@ -255,8 +265,13 @@ def _segment_one(t: np.ndarray, x: np.ndarray, v: np.ndarray, v_rest: float, zon
         rest_len = 0.0
         last_dir = d
     valid = np.ones(n, dtype=bool)
+    end = n
     for a, b in zip(bounds[:-1], bounds[1:], strict=True):  # warm-up: to the end of the
-        valid[a:b] = False                                  # first run of >= `warmup`
-        if direction[a] != 0 and float(np.ptp(x[a:b])) >= warmup:
+        if direction[a] != 0 and float(np.ptp(x[a:b])) >= warmup:  # first run of >= `warmup`
+            end = b
             break
+    # ... and on until the piston has slid `slide` since it first moved
+    slid = np.concatenate([[0.0], np.cumsum(np.abs(np.diff(x)) * (direction[1:] != 0))])
+    far = int(np.searchsorted(slid, slide))
+    valid[:min(max(end, far), max(end, end + int(WARMUP_SHARE * n)))] = False
     return regime, valid, tsr, dsr, dwell, starts

@@ -625,7 +625,55 @@ def motion_ensemble(t: np.ndarray, x: np.ndarray, cond: Conditioning, k: int = E
             xj = x_s + rng.normal(0.0, cond.x_noise, x_s.size)
         (mo,), _ = condition_motion([(t, xj, None)], cutoff_hz=cond.cutoff_hz)
         out.append(mo)
+    (own,), _ = condition_motion([(t, x, None)], cutoff_hz=cond.cutoff_hz)
+    turned = through_turns(t, x, own, REST_NOISE_BAND * cond.x_noise if white > 0.2 * q else q)
+    if turned is not None:
+        out.append(turned)
     return out
+
+
+#: A held stretch between opposite directions is a turn the position cannot tell from a
+#: stop while the speeds around it, held over its length, stay within this many bands.
+TURN_BANDS = 2.0
+
+
+def through_turns(t: np.ndarray, x: np.ndarray, mo: Motion, band: float) -> Motion | None:
+    """The motion ``mo`` with its unresolved turns passed through, not held; None if it has none.
+
+    A slow reversal keeps the position within one encoder step ``band`` for
+    ``T = 2*sqrt(2*band/a)`` at a deceleration ``a``, so it is read as a rest
+    (:func:`position_rest`) although the piston never stopped. A held stretch of
+    length ``T`` between motion in opposite directions is such a turn when the
+    mean speeds over ``T`` before and after it, ``v_in`` and ``v_out``, are what
+    a turn at constant deceleration gives (``v*T = 8*band``), within a factor
+    :data:`TURN_BANDS`: ``v*T <= 8*TURN_BANDS*band``. A piston that arrives fast
+    and stays has stopped. In the motion returned, the velocity of a turn
+    goes linearly from the speed before it to the speed after it (through
+    zero, at the deceleration between them): a model with a state that ages at
+    rest (contact age) sees no rest there, and the prediction's range over the
+    motions (:func:`motion_ensemble`) holds both readings.
+    """
+    held = mo.rest
+    if not held.any():
+        return None
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], held.astype(int), [0]])))
+    v, a = mo.v.copy(), mo.a.copy()
+    n, found = v.size, False
+    for i, j in zip(edges[::2], edges[1::2], strict=True):
+        lo, hi = i - 1 - (j - i), j + (j - i)  # as long as the hold, before and after it
+        if lo < 0 or hi >= n or v[i - 1] * v[j] >= 0.0:
+            continue
+        before = abs(float(x[i - 1] - x[lo])) / float(t[i - 1] - t[lo])
+        after = abs(float(x[hi] - x[j])) / float(t[hi] - t[j])
+        if max(before, after) * float(t[j] - t[i - 1]) > 8.0 * TURN_BANDS * band:
+            continue
+        w = (t[i:j] - t[i - 1]) / (t[j] - t[i - 1])
+        v[i:j] = v[i - 1] + w * (v[j] - v[i - 1])
+        a[i:j] = (v[j] - v[i - 1]) / (t[j] - t[i - 1])
+        found = True
+    if not found:
+        return None
+    return Motion(v, a, held & (v == 0.0))
 
 
 # ------------------------------------------------------------------ force band

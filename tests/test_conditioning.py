@@ -23,6 +23,7 @@ from fcomp.conditioning import (
     position_noise,
     quiet_runs,
     sample_rate,
+    through_turns,
 )
 from fcomp.reconstruction import differentiate
 
@@ -196,3 +197,29 @@ def test_a_slow_creep_across_encoder_steps_is_not_rest() -> None:
     # the displacement of the creep is kept (the integral of v follows the position)
     moved = np.sum(0.5 * (m.v[1:] + m.v[:-1]) * np.diff(t))
     assert moved == pytest.approx(5e-5, abs=2 * Q)
+
+
+def test_a_slow_turn_is_passed_through_and_a_stop_is_held() -> None:
+    """A slow loop (16 um, 3 Hz) turns within one 1 um step for about 20 ms: the position
+    reads it as a rest, and :func:`through_turns` passes it through zero along the true
+    velocity (the turn's deceleration). A reversal after a 0.2 s stop stays a stop."""
+    t = np.arange(3000) / FS
+    w = 2 * np.pi * 3.0
+    x_true = 0.05 + 16e-6 * (1 - np.cos(w * t)) + 0.3 * Q
+    v_true = 16e-6 * w * np.sin(w * t)
+    x = _encoder(x_true)
+    (m,), _ = condition_motion([(t, x, None)])
+    turn = (np.abs(t - 1.5 / 3.0) < 0.004)  # the top of the second loop
+    assert m.rest[turn].all()  # held by the position
+    alt = through_turns(t, x, m, Q)
+    assert alt is not None and not alt.rest[turn].any()
+    near = np.abs(t - 1.5 / 3.0) < 0.015
+    slope = 16e-6 * w * w  # the true deceleration at the turn
+    assert np.max(np.abs(alt.v[near] - v_true[near])) < 0.3 * slope * 0.015
+    # out at 20 mm/s, a 0.2 s stop, back: a stop, not a turn
+    v = np.concatenate([np.full(500, 0.02), np.zeros(200), np.full(500, -0.02)])
+    ts = np.arange(v.size) / FS
+    xs = _encoder(0.05 + np.concatenate([[0.0], np.cumsum(v[:-1]) / FS]))
+    (ms,), _ = condition_motion([(ts, xs, None)])
+    assert ms.rest[550:650].all()
+    assert through_turns(ts, xs, ms, Q) is None

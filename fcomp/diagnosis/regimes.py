@@ -273,5 +273,5 @@ def _segment_one(t: np.ndarray, x: np.ndarray, v: np.ndarray, v_rest: float, zon
     # ... and on until the piston has slid `slide` since it first moved
     slid = np.concatenate([[0.0], np.cumsum(np.abs(np.diff(x)) * (direction[1:] != 0))])
     far = int(np.searchsorted(slid, slide))
-    valid[:min(max(end, far), max(end, end + int(WARMUP_SHARE * n)))] = False
+    valid[:min(max(end, far), end + int(WARMUP_SHARE * n))] = False
     return regime, valid, tsr, dsr, dwell, starts

@@ -3,6 +3,7 @@ the acceptance statistics."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -24,7 +25,7 @@ from fcomp.diagnosis.regimes import DWELL, PRESLIDING, REVERSAL, SLIDING, segmen
 from fcomp.diagnosis.split import make_split
 from fcomp.errors import FcompError
 from fcomp.measurement import Measurement
-from fcomp.synthetic import generate
+from fcomp.synthetic import SCALES, generate
 
 
 @pytest.fixture(scope="module")
@@ -434,3 +435,15 @@ def test_a_reduced_model_is_never_worse_than_the_same_structure_seen_before() ->
     assert reduced.model.describe() == "stribeck + presliding"
     assert reduced.rms_train <= before.rms_train
     assert d._rebuilt([]).rms_train <= d.baseline_fit_.rms_train
+
+
+def test_baseline_finds_a_stribeck_speed_below_every_sliding_speed() -> None:
+    """A Stribeck speed of 3 mm/s on a rig whose strokes all slide faster leaves no
+    hump in the sliding samples, only at break-away: the baseline fit must still find
+    the hump (it once settled on the flat curve, ``Fs = Fc`` at ``vs`` ~ 15 m/s)."""
+    truth = dataclasses.replace(SCALES["pneumatic"].params, vs=0.003)
+    rec = generate([], base="lugre", params=truth, duration=20.0, seed=2)
+    fit = Diagnosis("lugre", search=False, check_baseline=False, n_jobs=1,
+                    progress=False).fit(rec.measurement).baseline_fit_
+    assert fit.values["vs"] == pytest.approx(truth.vs, rel=0.25)
+    assert fit.values["Fs"] == pytest.approx(truth.Fs, rel=0.15)

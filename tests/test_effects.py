@@ -564,3 +564,25 @@ def test_presliding_forms_and_the_elastic_unloading_of_the_elasto_plastic_bristl
     F = friction_along_motion(lugre, t, v).F
     i = np.flatnonzero(back)[0]
     assert F[i + 1] - F[i] < -1.5 * k * 1e-3 * dt  # LuGre: dz/dx = 1 + |u| > 1 at first
+
+
+def test_stribeck_hump_start_weighs_bins_by_their_samples() -> None:
+    """A long creep at the full hump, a few samples crossing the low speeds during
+    accelerations (below the hump: the inertia estimate lags there), and thousands on
+    a long-tailed (Lorentzian, Hess & Soom 1990) hump at the stroke speeds. Unweighted,
+    the median of a hundred transit samples weighs as much as that of thousands, and
+    the hump was read as a spike at the creep speed (``vs`` 50 times too low)."""
+    from fcomp.effects.record import stribeck_hump_start
+
+    Fc, dF, vs, B = 350.0, 180.0, 0.012, 900.0
+    rng = np.random.default_rng(3)
+    creep = np.full(1200, 2e-4)
+    transit = np.geomspace(3e-4, 2.5e-3, 150)
+    stroke = np.geomspace(3e-3, 0.13, 20000)
+    speed = np.concatenate([creep, transit, stroke])
+    F = Fc + dF / (1.0 + (speed / vs) ** 2) + B * speed
+    F[creep.size:creep.size + transit.size] = Fc - 50.0
+    F = F + rng.normal(0.0, 3.0, speed.size)
+    Fs_hat, vs_hat = stribeck_hump_start(speed, F, Fc, B, 1.5e-4)
+    assert 0.5 * vs <= vs_hat <= 2.0 * vs
+    assert Fs_hat - Fc == pytest.approx(dF, rel=0.3)

@@ -250,11 +250,13 @@ def baseline_starts(model: FrictionModel, data: DiagnosisData, seg: Segmentation
 
     Levels and the viscous coefficient by linear least squares on the sliding
     samples (:func:`fcomp.identification.guess.linear_start`), the Stribeck
-    hump (:func:`~fcomp.effects.record.stribeck_hump_start`), then the
-    steady-state map fitted to the steady sliding points (:func:`_static_stage`,
-    seed 002's procedure), the bristle
-    stiffness ``Fc/d_pre`` from the presliding length (three starts, a factor
-    of four apart), a small bristle damping (its term a tenth of ``Fc`` at the
+    hump (:func:`~fcomp.effects.record.stribeck_hump_start`, and once more with
+    ``vs`` at the lowest sliding speed ``v_min``: a Stribeck speed below every
+    speed the record slides at leaves no hump in the sliding samples, only at
+    break-away), then the steady-state map fitted to the steady sliding points
+    (:func:`_static_stage`, seed 002's procedure), the bristle stiffness
+    ``Fc/d_pre`` from the presliding length (two starts, a factor of four
+    apart), a small bristle damping (its term a tenth of ``Fc`` at the
     median speed), the film speed ``vb`` ten times the speed scale (almost the
     classical curve); everything else from the model's defaults.
     """
@@ -301,6 +303,10 @@ def baseline_starts(model: FrictionModel, data: DiagnosisData, seg: Segmentation
         put("sigma1", 0.1 * Fc / med)
     static = _static_stage(model, data, seg, train, start, v_min)
     variants = [dict(start, **static), start] if static else [start]
+    if start.get("vs", start.get("vs_pos", 0.0)) > 2.0 * v_min:
+        # a hump below every sliding speed of the record shows only at break-away
+        variants.append({k: v_min if k in ("vs", "vs_pos", "vs_neg") else v
+                         for k, v in start.items()})
     if "sigma0" not in names:
         return variants
     out = []

@@ -156,17 +156,20 @@ def distinct_columns(cols: np.ndarray, max_corr: float = 0.98) -> list[int]:
     return kept
 
 
-def _speed_bins(speed: np.ndarray, level: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Centres and medians of ``level`` in 16 geometric speed bins (those with 3 samples)."""
+def _speed_bins(speed: np.ndarray, level: np.ndarray
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Centres, medians of ``level`` and sample counts in 16 geometric speed bins
+    (those with 3 samples)."""
     edges = np.geomspace(speed.min(), speed.max() * (1 + 1e-9), 16)
     idx = np.clip(np.digitize(speed, edges) - 1, 0, edges.size - 2)
-    centres, means = [], []
+    centres, medians, counts = [], [], []
     for b in range(edges.size - 1):
         sel = idx == b
         if sel.sum() >= 3:
             centres.append(math.sqrt(edges[b] * edges[b + 1]))
-            means.append(float(np.median(level[sel])))
-    return np.array(centres), np.array(means)
+            medians.append(float(np.median(level[sel])))
+            counts.append(float(sel.sum()))
+    return np.array(centres), np.array(medians), np.array(counts)
 
 
 def stribeck_start(v: np.ndarray, f: np.ndarray, Fc: float, B: float,
@@ -177,7 +180,7 @@ def stribeck_start(v: np.ndarray, f: np.ndarray, Fc: float, B: float,
     if m.sum() < 10:
         return 1.2 * Fc, max(v_min, 1e-6)
     speed = speed[m]
-    c, mu = _speed_bins(speed, np.sign(v[m]) * f[m] - B * speed)
+    c, mu, _ = _speed_bins(speed, np.sign(v[m]) * f[m] - B * speed)
     if not c.size:
         return 1.2 * Fc, max(v_min, 1e-6)
     k = int(np.argmax(mu))
@@ -194,7 +197,10 @@ def stribeck_hump_start(v: np.ndarray, f: np.ndarray, Fc: float, B: float,
 
     The level ``sign(v)*f`` is binned by speed (16 bins, geometric, medians) and
     ``a + b*exp(-(|v|/vs)^2) + k*|v|`` fitted to the bins for each bin centre as
-    ``vs`` (linear least squares in ``a, b, k`` with ``b >= 0``); the ``vs`` with
+    ``vs`` (linear least squares in ``a, b, k`` with ``b >= 0``, each bin weighted
+    by the square root of its samples: the few samples passing through the low
+    speeds during an acceleration must not outweigh thousands at a creep or a
+    stroke speed); the ``vs`` with
     the least squared error is taken and ``Fs = Fc + b``. The slope ``k`` is free
     rather than the given ``B``: a viscous coefficient that differs between the
     directions, or a shear-thinning term, leaves a level that still rises with
@@ -204,16 +210,17 @@ def stribeck_hump_start(v: np.ndarray, f: np.ndarray, Fc: float, B: float,
     """
     speed = np.abs(v)
     m = speed >= v_min
-    c, level = _speed_bins(speed[m], np.sign(v[m]) * f[m]) if m.sum() >= 10 else (
-        np.zeros(0), np.zeros(0))
+    c, level, count = _speed_bins(speed[m], np.sign(v[m]) * f[m]) if m.sum() >= 10 else (
+        np.zeros(0), np.zeros(0), np.zeros(0))
+    w = np.sqrt(count)  # a bin's median is known to ~1/sqrt(its samples)
     best: tuple[float, float, float] | None = None  # (sse, b, vs)
     if c.size >= 4:
         for vs in c:
             A = np.column_stack([np.ones_like(c), np.exp(-((c / vs) ** 2)), c])
-            coef, *_ = np.linalg.lstsq(A, level, rcond=None)
+            coef, *_ = np.linalg.lstsq(A * w[:, None], level * w, rcond=None)
             if not coef[1] > 0:
                 continue
-            sse = float(np.sum((A @ coef - level) ** 2))
+            sse = float(np.sum((w * (A @ coef - level)) ** 2))
             if best is None or sse < best[0]:
                 best = (sse, float(coef[1]), float(vs))
     if best is not None:

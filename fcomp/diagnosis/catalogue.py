@@ -45,7 +45,7 @@ from typing import Any
 import numpy as np
 
 from fcomp.diagnosis.data import DiagnosisData
-from fcomp.diagnosis.refit import FitResult
+from fcomp.diagnosis.refit import RIG_EXTRAS, FitResult
 from fcomp.diagnosis.regimes import Segmentation
 from fcomp.effects import EFFECTS, Effect, make_effect
 from fcomp.effects.record import DiagnosisForm, RecordView, stribeck_hump_start
@@ -203,9 +203,9 @@ def propose(name: str, ctx: Context, form: str | None = None) -> Proposal:
     for st in starts:
         st.update({k: fresh[k] for k in _at_bound(ctx, st) if k in fresh})
     starts.append({**starts[0], **fresh})
-    if "mass" in ctx.current.values:
-        for s in starts:
-            s["mass"] = ctx.current.values["mass"]
+    rig = {k: ctx.current.values[k] for k in RIG_EXTRAS if k in ctx.current.values}
+    for s in starts:
+        s.update(rig)
     held = [*effect.held(ctx.view), *shape.held]
     free = None
     if held:
@@ -214,8 +214,7 @@ def propose(name: str, ctx: Context, form: str | None = None) -> Proposal:
 
         fixed = fixed_names(models[0])
         free = [n for n in default_free(models[0]) if n not in fixed and n not in held]
-        if "mass" in ctx.current.values:
-            free.append("mass")
+        free += [k for k in RIG_EXTRAS if k in ctx.current.values]
         # the effect's own defaults (a structural effect leaves no effect object behind:
         # its terms are features of the family, and Dahl's exponent is a no-op at 1, not 0)
         noop = dict(effect.Params().flat())

@@ -33,7 +33,7 @@ from fcomp.diagnosis.data import DiagnosisData, prepare
 from fcomp.diagnosis.features import FeatureStrength, residual_structure
 from fcomp.diagnosis.loop import Diagnosis
 from fcomp.diagnosis.noise import noise_floor
-from fcomp.diagnosis.refit import FitResult, Refit
+from fcomp.diagnosis.refit import RIG_EXTRAS, FitResult, Refit
 from fcomp.diagnosis.regimes import Segmentation, segment
 from fcomp.diagnosis.report import (
     Series,
@@ -199,6 +199,7 @@ def model_from_fit(doc: Mapping[str, Any], model: FrictionModel | None = None,
             raise FcompError(f"{source}: params.{k} = {v!r} is not a number") from None
     mass = values.pop("mass", None)
     offset = values.pop("offset", None)
+    values.pop("lag", None)  # a diagnosis's lag of the record's force channel, not the model's
     if any(k not in mdl.flat_params() for k in values):
         directional = directional_model(mdl)
         if all(k in directional.flat_params() for k in values):
@@ -267,7 +268,7 @@ def compare(model: str | FrictionModel, data: Measurement | Sequence[Measurement
         d, seg, sp, res = diag.data_, diag.segmentation_, diag.split_, diag.fit_
         judged, label, floor = sp.test, "held-out", diag.noise_floor_.value
         warnings = list(diag.warnings_)
-        values = {k: v for k, v in res.values.items() if k == "mass"}
+        values = {k: v for k, v in res.values.items() if k in RIG_EXTRAS}
     else:
         d = data if isinstance(data, DiagnosisData) else prepare(data, cutoff_hz=cutoff_hz)
         seg = segment(d)

@@ -126,6 +126,12 @@ class DiagnosisData:
         """Whether the mass is fitted (driving-force data without a known mass)."""
         return self.experiments[0].data.inertia is not None
 
+    @property
+    def fits_lag(self) -> bool:
+        """Whether the lag of the force channel is fitted: every record's force is a
+        driving force (pressures, ``F_ext``) through the parallel filtering."""
+        return all(e.data.drive_rate is not None for e in self.experiments)
+
     def signal(self, name: str) -> np.ndarray:
         """A signal (``t``, ``v``, ``a``, ``x``, ``p1``, ``p2``, ``s``) concatenated over experiments."""
         return np.concatenate([e.data.sig[name] for e in self.experiments])

@@ -100,7 +100,7 @@ from fcomp.diagnosis.features import (
     trimmed_rms,
 )
 from fcomp.diagnosis.noise import NoiseFloor, effective_sample_size, noise_floor
-from fcomp.diagnosis.refit import FitResult, Refit, sample_weights
+from fcomp.diagnosis.refit import RIG_EXTRAS, FitResult, Refit, sample_weights
 from fcomp.diagnosis.regimes import Segmentation, segment
 from fcomp.diagnosis.residuals import regime_errors
 from fcomp.diagnosis.split import Split, make_split
@@ -672,7 +672,7 @@ class Diagnosis:
         """Refit ``current + effect`` (a configured instance) and judge it."""
         model = self.fit_.model.with_effects(effect)
         flat = model.flat_params()
-        start = {**flat, **{k: v for k, v in self.fit_.values.items() if k in flat or k == "mass"}}
+        start = {**flat, **{k: v for k, v in self.fit_.values.items() if k in flat or k in RIG_EXTRAS}}
         res = self._run([catalogue.Proposal(effect.name, model, [start])])[0]
         if isinstance(res, str):
             return [Candidate(effect.name, None, math.nan, reason=res)]
@@ -916,7 +916,7 @@ class Diagnosis:
                 n, self.data_, values or None,
                 **catalogue.form_of(n, self._forms.get(n)).config))
         flat = model.flat_params()
-        start = {k: v for k, v in self.fit_.values.items() if k in flat or k == "mass"}
+        start = {k: v for k, v in self.fit_.values.items() if k in flat or k in RIG_EXTRAS}
         known = [f for f in self._known_fits(model) if set(f.values) == set(start)]
         # the parameters fitted now that remain (terms held for the record stay held)
         fit = self._polish(self._refit.fit(model, [start, *(f.values for f in known)],
@@ -1178,16 +1178,22 @@ class Diagnosis:
         ``velocity`` (``"x"``, ``"v"``, ``"fused"``, or ``"mixed"`` when records
         differ), ``force`` and ``reason`` summarise; ``unresolved_samples``
         counts the samples left out because the position missed motion there
-        (:func:`fcomp.diagnosis.regimes.unresolved_rests`); ``records`` holds
-        the full conditioning of every file (:class:`fcomp.conditioning.Conditioning`).
+        (:func:`fcomp.diagnosis.regimes.unresolved_rests`); ``force_lag_s`` is the
+        lag of a driving force's channel fitted with the final model (s; None for
+        a load cell): pressure transducers and their lines lag, and a force
+        reconstructed from them misses ``lag*dD/dt`` where ``D`` changes fast;
+        ``records`` holds the full conditioning of every file
+        (:class:`fcomp.conditioning.Conditioning`).
         """
         recs = [c.to_dict() for c in self.data_.signals]
         if not recs:
             return {"velocity": "v", "force": self.data_.source, "records": [],
                     "reason": "steady-state points: the velocity of each point as given"}
         kinds = {r["velocity"] for r in recs}
+        lag = self.fit_.values.get("lag")
         return {"velocity": kinds.pop() if len(kinds) == 1 else "mixed",
                 "force": self.data_.source,
+                "force_lag_s": None if lag is None else float(lag),
                 "unresolved_samples": self.segmentation_.unresolved,
                 "reason": "; ".join(dict.fromkeys(f"{r['label']}: {r['reason']}" for r in recs)),
                 "records": recs}

@@ -47,7 +47,7 @@ from typing import Any
 import numpy as np
 
 from fcomp.conditioning import Scales
-from fcomp.diagnosis.data import DiagnosisData, Experiment
+from fcomp.diagnosis.data import DiagnosisData
 from fcomp.diagnosis.split import Split
 from fcomp.identification.dynamic import EXTRAS, TrajectoryProblem
 from fcomp.identification.estimator import ALWAYS_FIXED, EXTRA_SPECS, default_free
@@ -75,6 +75,9 @@ PRESLIDING_SPAN = 20.0
 STAGED = ("n", "p_visc", "kappa_s", "i_pre")
 #: Half-width, in unit scales, of the box of a pressure level-law coefficient.
 LEVEL_LAW_SPAN = 2.0
+#: Fitted terms of the record, not of the model, carried from fit to fit: the moving mass
+#: of a driving force and the lag of its channel (:mod:`fcomp.identification.dynamic`).
+RIG_EXTRAS = ("mass", "lag")
 
 
 def unit_scale(unit: str, sc: Scales, d_pre: float) -> float:
@@ -367,8 +370,9 @@ class Refit:
 
                 sig["s"] = side_of(sig["v"])
                 inertia = None if d.inertia is None else _block_mean(d.inertia, q)
+                rate = None if d.drive_rate is None else _block_mean(d.drive_rate, q)
                 d = FitData(sig, _block_mean(d.y, q), inertia, d.source, d.mass, d.label,
-                            d.band_hz)
+                            d.band_hz, rate)
                 train = _block_mean(train.astype(float), q) > 0.999
             out.append((d, train))
         return out
@@ -383,15 +387,15 @@ class Refit:
                      alternatives: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``(F_hat, lo, hi)``: the prediction and its range along the alternative motions."""
         vals = dict(values or {})
-        mass = vals.pop("mass", None)
+        rig = {k: vals.pop(k) for k in RIG_EXTRAS if k in vals}
         out, lo, hi = [], [], []
         for e in self.data.experiments:
-            F = self._predict_one(model, e, vals, mass, e.data.sig)
+            F = self._predict_one(model, e.data, vals, rig, e.data.sig)
             f_lo, f_hi = F.copy(), F.copy()
             if alternatives:
                 for alt in e.alternatives:
                     sig = dict(e.data.sig, v=alt.v, a=alt.a)
-                    Fa = self._predict_one(model, e, vals, mass, sig)
+                    Fa = self._predict_one(model, e.data, vals, rig, sig)
                     np.minimum(f_lo, Fa, out=f_lo)
                     np.maximum(f_hi, Fa, out=f_hi)
             out.append(F)
@@ -399,13 +403,18 @@ class Refit:
             hi.append(f_hi)
         return np.concatenate(out), np.concatenate(lo), np.concatenate(hi)
 
-    def _predict_one(self, model: FrictionModel, e: Experiment, vals: Mapping[str, float],
-                     mass: float | None, s: Mapping[str, np.ndarray]) -> np.ndarray:
-        F = e.data.band_limited(friction_along_motion(
+    @staticmethod
+    def _predict_one(model: FrictionModel, d: FitData, vals: Mapping[str, float],
+                     rig: Mapping[str, float], s: Mapping[str, np.ndarray]) -> np.ndarray:
+        """The prediction along the motion ``s`` of the record ``d``, with its
+        :data:`RIG_EXTRAS` (as :class:`~fcomp.identification.dynamic.TrajectoryProblem`)."""
+        F = d.band_limited(friction_along_motion(
             model, s["t"], s["v"], a=s["a"], x=s["x"], p1=s["p1"], p2=s["p2"],
             values=vals or None).F)
-        if mass is not None and e.data.inertia is not None:
-            F = F + mass * e.data.inertia
+        if "mass" in rig and d.inertia is not None:
+            F = F + rig["mass"] * d.inertia
+        if "lag" in rig and d.drive_rate is not None:
+            F = F - rig["lag"] * d.drive_rate
         return F
 
     def result(self, model: FrictionModel, values: Mapping[str, float], n_params: int,
@@ -416,9 +425,9 @@ class Refit:
         prediction's range along the record's alternative motions, widened by
         the timing windows.
         """
-        model_vals = {k: v for k, v in values.items() if k != "mass"}
+        model_vals = {k: v for k, v in values.items() if k not in RIG_EXTRAS}
         fitted = model.with_params(**model_vals) if model_vals else model
-        extras = {"mass": values["mass"]} if "mass" in values else {}
+        extras = {k: values[k] for k in RIG_EXTRAS if k in values}
         F_hat, lo, hi = self._predictions(fitted, extras, alternatives=True)
         r, spread = tolerant_residual(self.data.y, lo, hi,
                                       [e.start for e in self.data.experiments], self.windows)
@@ -432,6 +441,8 @@ class Refit:
         names = [n for n in default_free(model) if n not in fixed]
         if self.data.fits_mass:
             names.append("mass")
+        if self.data.fits_lag:
+            names.append("lag")
         return names
 
     def specs(self, model: FrictionModel, names: Sequence[str]) -> dict[str, ParamSpec]:
@@ -453,7 +464,8 @@ class Refit:
         out = {}
         for n in names:
             v = abs(float(start[n]))
-            floor = 0.01 * unit_scale(specs[n].unit, self.data.scales, self.d_pre)
+            floor = self.data.scales.dt if n == "lag" else \
+                0.01 * unit_scale(specs[n].unit, self.data.scales, self.d_pre)
             out[n] = max(v, floor) if math.isfinite(v) else 10.0 * floor
         return out
 
@@ -463,19 +475,13 @@ class Refit:
         The measure the probes of :meth:`fit` minimise (plain residuals on the
         block-averaged records), so a candidate's probes can be compared with it.
         """
-        vals = {k: v for k, v in values.items() if k != "mass"}
-        mass = values.get("mass")
+        vals = {k: v for k, v in values.items() if k not in RIG_EXTRAS}
+        rig = {k: values[k] for k in RIG_EXTRAS if k in values}
         total = 0.0
         recs = self._probe_records
         weights = self._weights_of(recs)
         for (d, m), w in zip(recs, weights, strict=True):
-            s = d.sig
-            F = d.band_limited(friction_along_motion(
-                model, s["t"], s["v"], a=s["a"], x=s["x"], p1=s["p1"], p2=s["p2"],
-                values=vals or None).F)
-            if mass is not None and d.inertia is not None:
-                F = F + mass * d.inertia
-            r = (d.y - F)[m]
+            r = (d.y - self._predict_one(model, d, vals, rig, d.sig))[m]
             if w is not None:
                 r = r * w
             total += float(r @ r)
@@ -507,8 +513,9 @@ class Refit:
         if clash:
             model = model.with_params(**clash)
         base = dict(model.flat_params())
-        if "mass" in names:
-            base["mass"] = 0.0
+        for extra in RIG_EXTRAS:
+            if extra in names:
+                base[extra] = 0.0
         start_list = [dict(base, **s) for s in starts] or [base]
         specs = self.specs(model, names)
         # stage 1: shape exponents held at their start values (they open flat

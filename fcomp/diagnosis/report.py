@@ -602,6 +602,8 @@ def build_report(diag: Diagnosis, *, command: str | None = None) -> Report:
         ["held-out split", diag.split_.description, ""],
         ["experiments", str(len(diag.data_.experiments)), ""],
         ["force from", diag.data_.source, ""],
+        *([["lag of the force channel (fitted)", 1e3 * sig["force_lag_s"], "ms"]]
+          if sig.get("force_lag_s") is not None else []),
         ["rest speed / presliding length", f"{diag.segmentation_.v_rest:.3g} m/s / "
          f"{diag.segmentation_.d_pre:.3g} m", ""],
     ], caption="The diagnosis at a glance (errors on held-out samples).", digits=4)

@@ -2,12 +2,16 @@
 
 The prediction at sample ``k`` is
 
-    F_hat_k = F_model_k(theta) + mass*(a_k + g*s_o) + offset,
+    F_hat_k = F_model_k(theta) + mass*(a_k + g*s_o) + offset - lag*dD/dt_k,
 
 where ``F_model`` is the friction model integrated along the measured
 velocity exactly as :func:`fcomp.trajectory.friction_along_motion` does
 (interval-mean signals, exponential Rosenbrock-Euler step, states starting
-at rest), and the ``mass`` and ``offset`` terms are present only when fitted.
+at rest), and the ``mass``, ``offset`` and ``lag`` terms are present only
+when fitted. ``lag`` is the first-order lag (s) of the force channel of a
+driving force ``D`` (pressure transducers and their lines): the target
+``D_meas - m*a`` then misses ``lag*dD/dt`` wherever ``D`` changes fast, and
+the prediction carries it instead.
 The residual is ``r = y - F_hat`` (target ``y`` from :mod:`.target`), over
 all samples or a ``mask``. Where the target was low-passed (parallel
 filtering, :attr:`~.target.FitData.band_hz`) the model force and its
@@ -21,8 +25,9 @@ continuous states (the forward sensitivities of
 gives the force and all its derivatives), :class:`FiniteDifferences` for
 models with discrete memory (forward differences of the numeric simulation,
 step ``1e-6`` of each parameter's scale, one extra simulation per parameter).
-Everything else of the fit is the same path for every model. The ``mass`` and
-``offset`` columns are ``a + g*s_o`` and ``1``.
+Everything else of the fit is the same path for every model. The ``mass``,
+``offset`` and ``lag`` columns are ``a + g*s_o``, ``1`` and ``-dD/dt``
+(:attr:`~.target.FitData.drive_rate`).
 """
 
 from __future__ import annotations
@@ -40,7 +45,7 @@ from fcomp.identification.target import FitData
 from fcomp.models.base import FrictionModel
 from fcomp.trajectory import friction_along_motion
 
-EXTRAS = ("mass", "offset")
+EXTRAS = ("mass", "offset", "lag")
 
 
 @dataclass(frozen=True)
@@ -182,6 +187,8 @@ class TrajectoryProblem:
         self.model_free = [n for n in pv.names if n not in EXTRAS]
         if "mass" in pv.names and data.inertia is None:
             raise ValueError("the mass can only be fitted to driving-force data")
+        if "lag" in pv.names and data.drive_rate is None:
+            raise ValueError("a force-channel lag can only be fitted to a driving force")
         self.mask = np.ones(data.n, dtype=bool) if mask is None else np.asarray(mask, bool)
         self.all_samples = bool(self.mask.all())
         self.substeps = substeps
@@ -239,6 +246,9 @@ class TrajectoryProblem:
             if name == "mass":
                 F += vals["mass"] * self.data.inertia  # type: ignore[operator]
                 G[:, j] = self.data.inertia  # type: ignore[index]
+            elif name == "lag":
+                F -= vals["lag"] * self.data.drive_rate  # type: ignore[operator]
+                G[:, j] = -self.data.drive_rate  # type: ignore[operator]
             else:
                 F += vals["offset"]
                 G[:, j] = 1.0

@@ -40,6 +40,9 @@ EXTRA_SPECS: dict[str, ParamSpec] = {
     "mass": spec("mass", "kg", 0.0, 0.0, np.inf, "moving mass", directional=False),
     "offset": spec("offset", "N", 0.0, -np.inf, np.inf, "constant force offset",
                    directional=False),
+    "lag": spec("lag", "s", 0.0, -0.02, 0.02, "first-order lag of the driving force's "
+                "channel (pressure transducers and lines; negative: it leads)",
+                directional=False),
 }
 
 

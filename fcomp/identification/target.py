@@ -59,6 +59,10 @@ class FitData:
         ("parallel filtering"): a prediction must pass through the same filter
         (:func:`fcomp.reconstruction.band_limit`) before it is compared; None:
         the target is unfiltered.
+    drive_rate
+        ``dD/dt`` of the band-limited driving force (N/s) when the target comes
+        from one (pressures, ``F_ext``) through the parallel filtering: the
+        column of a fitted force-channel lag (:mod:`.dynamic`); else None.
     """
 
     sig: dict[str, np.ndarray]
@@ -68,6 +72,7 @@ class FitData:
     mass: float | None
     label: str
     band_hz: float | None = None
+    drive_rate: np.ndarray | None = None
 
     @property
     def n(self) -> int:
@@ -77,8 +82,9 @@ class FitData:
         """The samples where ``mask`` is true (a contiguous slice keeps time increasing)."""
         sig = {k: v[mask] for k, v in self.sig.items()}
         inertia = None if self.inertia is None else self.inertia[mask]
+        rate = None if self.drive_rate is None else self.drive_rate[mask]
         return FitData(sig, self.y[mask], inertia, self.source, self.mass, self.label,
-                       self.band_hz)
+                       self.band_hz, rate)
 
     def band_limited(self, F: np.ndarray) -> np.ndarray:
         """A prediction ``F`` (or sensitivity columns) through the target's filter, if any."""
@@ -178,16 +184,18 @@ def fit_data(
                          "F_ext and/or p1, p2 columns")
     inertia = sig["a"] + G * s_o
     band = None
+    rate = None
     if force_cutoff_hz is not None:
         from fcomp.reconstruction import band_limit
 
         band = float(force_cutoff_hz)
         D = band_limit(meas.t, D, band)
         inertia = band_limit(meas.t, inertia, band)
+        rate = np.gradient(D, meas.t)
     if estimate_mass:
-        return FitData(sig, D, inertia, "driving-force", None, label, band)
+        return FitData(sig, D, inertia, "driving-force", None, label, band, rate)
     if known is None:
         raise FcompError(f"{label}: sidecar key rig.mass is missing (needed to reconstruct the "
                          "friction force; or let the mass be estimated)")
     return FitData(sig, D - float(known) * inertia, None, "reconstructed", float(known), label,
-                   band)
+                   band, rate)

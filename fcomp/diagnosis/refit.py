@@ -411,10 +411,10 @@ class Refit:
         F = d.band_limited(friction_along_motion(
             model, s["t"], s["v"], a=s["a"], x=s["x"], p1=s["p1"], p2=s["p2"],
             values=vals or None).F)
-        if "mass" in rig and d.inertia is not None:
-            F = F + rig["mass"] * d.inertia
-        if "lag" in rig and d.drive_rate is not None:
-            F = F - rig["lag"] * d.drive_rate
+        for name, value in rig.items():
+            col = d.extra_column(name)
+            if col is not None:
+                F = F + value * col
         return F
 
     def result(self, model: FrictionModel, values: Mapping[str, float], n_params: int,

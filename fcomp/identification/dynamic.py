@@ -27,7 +27,7 @@ models with discrete memory (forward differences of the numeric simulation,
 step ``1e-6`` of each parameter's scale, one extra simulation per parameter).
 Everything else of the fit is the same path for every model. The ``mass``,
 ``offset`` and ``lag`` columns are ``a + g*s_o``, ``1`` and ``-dD/dt``
-(:attr:`~.target.FitData.drive_rate`).
+(:meth:`~.target.FitData.extra_column`).
 """
 
 from __future__ import annotations
@@ -185,10 +185,9 @@ class TrajectoryProblem:
         self.data = data
         self.pv = pv
         self.model_free = [n for n in pv.names if n not in EXTRAS]
-        if "mass" in pv.names and data.inertia is None:
-            raise ValueError("the mass can only be fitted to driving-force data")
-        if "lag" in pv.names and data.drive_rate is None:
-            raise ValueError("a force-channel lag can only be fitted to a driving force")
+        for name in EXTRAS:
+            if name in pv.names and data.extra_column(name) is None:
+                raise ValueError(f"the {name} can only be fitted to driving-force data")
         self.mask = np.ones(data.n, dtype=bool) if mask is None else np.asarray(mask, bool)
         self.all_samples = bool(self.mask.all())
         self.substeps = substeps
@@ -242,16 +241,9 @@ class TrajectoryProblem:
         for name in EXTRAS:
             if name not in vals:
                 continue
-            j = self.pv.index(name)
-            if name == "mass":
-                F += vals["mass"] * self.data.inertia  # type: ignore[operator]
-                G[:, j] = self.data.inertia  # type: ignore[index]
-            elif name == "lag":
-                F -= vals["lag"] * self.data.drive_rate  # type: ignore[operator]
-                G[:, j] = -self.data.drive_rate  # type: ignore[operator]
-            else:
-                F += vals["offset"]
-                G[:, j] = 1.0
+            col = self.data.extra_column(name)
+            F += vals[name] * col  # type: ignore[operator]
+            G[:, self.pv.index(name)] = col  # type: ignore[call-overload]
         return F, G
 
     def __call__(self, theta: np.ndarray,

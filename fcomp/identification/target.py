@@ -86,6 +86,18 @@ class FitData:
         return FitData(sig, self.y[mask], inertia, self.source, self.mass, self.label,
                        self.band_hz, rate)
 
+    def extra_column(self, name: str) -> np.ndarray | None:
+        """``dF_hat/d(name)`` of a fitted extra of :mod:`.dynamic` (``mass``: the
+        inertia ``a + g*s_o``; ``offset``: ones; ``lag``: ``-dD/dt``), None where
+        this target has no such column."""
+        if name == "mass":
+            return self.inertia
+        if name == "lag":
+            return None if self.drive_rate is None else -self.drive_rate
+        if name == "offset":
+            return np.ones(self.n)
+        raise KeyError(f"no fitted extra {name!r}")
+
     def band_limited(self, F: np.ndarray) -> np.ndarray:
         """A prediction ``F`` (or sensitivity columns) through the target's filter, if any."""
         if self.band_hz is None:

@@ -109,6 +109,17 @@ def position_noise(x: np.ndarray) -> float:
     return max(q / math.sqrt(12.0), white)
 
 
+def analog_noise(sigma_x: float, q: float) -> float:
+    """The white (analog) part of a position noise ``sigma_x`` of resolution ``q`` (m).
+
+    ``sqrt(sigma_x^2 - q^2/12)`` when it is above a fifth of ``q`` (a potentiometer,
+    an LVDT, an eddy-current sensor: noise beyond the quantisation), else 0 (an
+    encoder, whose position is its count).
+    """
+    white = math.sqrt(max(sigma_x**2 - q * q / 12.0, 0.0))
+    return white if white > 0.2 * q else 0.0
+
+
 def derived_velocity_noise(sigma_x: float, fc: float, fs: float) -> float:
     """Noise (m/s, std) of ``dx/dt`` from white position noise through an ideal low-pass at ``fc``.
 
@@ -615,21 +626,65 @@ def motion_ensemble(t: np.ndarray, x: np.ndarray, cond: Conditioning, k: int = E
         return []
     rng = np.random.default_rng(seed)
     q = cond.x_resolution
-    white = math.sqrt(max(cond.x_noise**2 - q * q / 12.0, 0.0))
+    white = analog_noise(cond.x_noise, q)
     x_s = smooth(t, x, cutoff_hz=cond.cutoff_hz, label="x")
     out = []
     for j in range(k):
         phi = (j + 0.5) / k * q
         xj = np.round((x_s + phi) / q) * q - phi
-        if white > 0.2 * q:
+        if white > 0:
             xj = x_s + rng.normal(0.0, cond.x_noise, x_s.size)
         (mo,), _ = condition_motion([(t, xj, None)], cutoff_hz=cond.cutoff_hz)
-        out.append(mo)
+        counted = count_timing(t, xj, mo, cond.cutoff_hz) if white == 0 else None
+        out.append(mo if counted is None else counted)
     (own,), _ = condition_motion([(t, x, None)], cutoff_hz=cond.cutoff_hz)
-    turned = through_turns(t, x, own, REST_NOISE_BAND * cond.x_noise if white > 0.2 * q else q)
+    turned = through_turns(t, x, own, REST_NOISE_BAND * cond.x_noise if white > 0 else q)
     if turned is not None:
         out.append(turned)
+    if white == 0:
+        counted = count_timing(t, x, own, cond.cutoff_hz)
+        if counted is not None:
+            out.append(counted)
     return out
+
+
+def count_timing(t: np.ndarray, x: np.ndarray, mo: Motion, fc: float) -> Motion | None:
+    """The motion ``mo`` with its slow creeps read off the times the count changes.
+
+    Between two changes of an encoder's count in the same direction, ``t_i`` and
+    ``t_j``, a piston slower than one count per ``1/fc`` moved ``x_j - x_i`` in
+    ``t_j - t_i`` (the "1/T" velocity of encoder practice). The derivative of
+    the staircase through the zero-phase filter (:func:`condition_motion`)
+    instead rings between the counts and changes sign (a 0.1 mm/s creep at a
+    2 um count read -0.03 mm/s between counts), and a law that jumps with the
+    sign of the speed jumps with it. In the motion returned, such stretches
+    (not held at rest) move at the count-timing velocity, constant between
+    counts; elsewhere ``mo`` is kept. One more of the motions consistent with
+    the position (:func:`motion_ensemble`); None if there is no such stretch.
+    """
+    changes = np.flatnonzero(np.diff(x) != 0.0) + 1
+    if changes.size < 2:
+        return None
+    step = np.sign(x[changes] - x[changes - 1])
+    i, j = changes[:-1], changes[1:]
+    gap = t[j] - t[i]
+    speed = np.abs(x[j] - x[i]) / gap
+    q = float(np.min(np.abs(x[changes] - x[changes - 1])))
+    slow = (step[:-1] == step[1:]) & (speed < q * fc) & (j - i > 1)
+    if not slow.any():
+        return None
+    v, a = mo.v.copy(), mo.a.copy()
+    found = False
+    for a_k, b_k, s_k, u_k in zip(i[slow], j[slow], step[1:][slow], speed[slow], strict=True):
+        if mo.rest[a_k:b_k].any():  # a stop between the counts: not a creep
+            continue
+        v[a_k:b_k] = s_k * u_k
+        found = True
+    if not found:
+        return None
+    changed = v != mo.v
+    a[changed] = np.gradient(v, t)[changed]
+    return Motion(v, a, mo.rest & ~changed)
 
 
 #: A held stretch between opposite directions is a turn the position cannot tell from a

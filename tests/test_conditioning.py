@@ -17,6 +17,7 @@ import pytest
 
 from fcomp.conditioning import (
     condition_motion,
+    count_timing,
     derived_acceleration_noise,
     derived_velocity_noise,
     force_cutoff,
@@ -223,3 +224,24 @@ def test_a_slow_turn_is_passed_through_and_a_stop_is_held() -> None:
     (ms,), _ = condition_motion([(ts, xs, None)])
     assert ms.rest[550:650].all()
     assert through_turns(ts, xs, ms, Q) is None
+
+
+def test_a_creep_between_counts_is_timed_by_the_counts_and_a_dwell_is_not() -> None:
+    """A 0.1 mm/s creep across 2 um counts (one every 20 ms): the filtered derivative of the
+    staircase rings between the counts and changes sign; the count-timing motion moves
+    at the creep's speed, never backwards. A 2 s stop between two slides in the same
+    direction stays a stop."""
+    t = np.arange(4000) / FS
+    q = 2e-6
+    x_true = 0.1 + np.where(t < 2.0, 1e-4 * t, 2e-4 + 0.02 * np.clip(t - 3.5, 0.0, None))
+    x = np.round(x_true / q) * q + 0.0
+    (m,), cond = condition_motion([(t, x, None)], cutoff_hz=125.0)  # the heavy rig's band
+    creep = (t > 0.2) & (t < 1.8)
+    assert np.min(m.v[creep]) < -1e-5  # the staircase's derivative rings backwards
+    alt = count_timing(t, x, m, cond.cutoff_hz)
+    assert alt is not None
+    moving = creep & ~alt.rest
+    assert np.mean(moving[creep]) > 0.9
+    assert np.min(alt.v[moving]) > 0.0
+    assert np.median(alt.v[moving]) == pytest.approx(1e-4, rel=0.05)
+    assert alt.rest[(t > 2.2) & (t < 3.4)].all() and m.rest[(t > 2.2) & (t < 3.4)].all()

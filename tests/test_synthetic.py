@@ -167,7 +167,7 @@ def _sine_motion(t_end: float, V: float, f: float, dt: float) -> tuple:
     return t, V * np.sin(w * tm), V * w * np.cos(w * tm), V / w * (1 - np.cos(w * t))
 
 
-@pytest.mark.parametrize("scale", ["pneumatic", "hydraulic"])
+@pytest.mark.parametrize("scale", list(syn.SCALES))
 def test_truth_lugre_matches_an_independent_stiff_integration(scale: str) -> None:
     """LuGre along v = V*sin(w t) against solve_ivp (Radau, rtol 1e-10): models.md 1.3."""
     P = syn.SCALES[scale].params
@@ -200,7 +200,7 @@ def _alpha_ep(zeta: float, ba: float) -> float:
     return 1.0
 
 
-@pytest.mark.parametrize("scale", ["pneumatic", "hydraulic"])
+@pytest.mark.parametrize("scale", list(syn.SCALES))
 @pytest.mark.parametrize("shape", ["bristle", "dahl", "elasto-plastic"])
 def test_presliding_shapes_match_an_independent_integration(scale: str, shape: str) -> None:
     """Presliding on a Coulomb base (constant level) against solve_ivp on the ODE itself."""
@@ -440,10 +440,12 @@ STYLE_COLUMNS = {
     "pressures-tacho": ["t", "x", "v", "p1", "p2", "experiment"],
     "coarse-encoder": ["t", "x", "p1", "p2", "F", "experiment"],
     "drive-force": ["t", "x", "F_ext", "experiment"],
+    "potentiometer": ["t", "x", "p1", "p2", "F", "experiment"],
+    "potentiometer-pressures": ["t", "x", "p1", "p2", "experiment"],
 }
 
 
-@pytest.mark.parametrize("scale", ["pneumatic", "hydraulic"])
+@pytest.mark.parametrize("scale", list(syn.SCALES))
 @pytest.mark.parametrize("style", list(STYLE_COLUMNS))
 def test_each_style_writes_what_a_real_rig_would(tmp_path: Path, style: str, scale: str
                                                  ) -> None:
@@ -452,7 +454,7 @@ def test_each_style_writes_what_a_real_rig_would(tmp_path: Path, style: str, sca
     rec = syn.generate(hidden, duration=2.0, seed=3, scale=scale, style=style, name="run-7")
     m = rec.measurement
     assert list(m.columns) == STYLE_COLUMNS[style] == list(syn.STYLES[style].columns)
-    cylinder = "hydraulic-cylinder" if scale == "hydraulic" else "pneumatic-cylinder"
+    cylinder = "hydraulic-cylinder" if scale.endswith("hydraulic") else "pneumatic-cylinder"
     assert m.meta["kind"] == ("friction-rig" if style == "drive-force" else cylinder)
     rig = m.meta["rig"]
     assert rig["mass"] == pytest.approx(rec.truth.params.mass - rec.truth.hidden[
@@ -465,7 +467,7 @@ def test_each_style_writes_what_a_real_rig_would(tmp_path: Path, style: str, sca
     assert Measurement.read(csv).columns.keys() == m.columns.keys()
 
 
-@pytest.mark.parametrize("scale", ["pneumatic", "hydraulic"])
+@pytest.mark.parametrize("scale", list(syn.SCALES))
 @pytest.mark.parametrize("style", ["pressures", "pressures-tacho", "drive-force"])
 def test_force_balance_gives_the_recorded_force(style: str, scale: str) -> None:
     """Without sensor noise and lag, ``p1*A1 - p2*A2 - m*a`` (or ``F_ext - m*a``) with the
@@ -488,7 +490,7 @@ def test_force_balance_gives_the_recorded_force(style: str, scale: str) -> None:
     assert np.allclose(F, tr.F, atol=1e-9 * np.max(np.abs(tr.F)))
 
 
-@pytest.mark.parametrize("scale", ["pneumatic", "hydraulic"])
+@pytest.mark.parametrize("scale", list(syn.SCALES))
 def test_pressure_sensor_noise_and_lag(scale: str) -> None:
     sc = syn.SCALES[scale]
     rec = syn.generate([], duration=6.0, seed=6, scale=scale, style="pressures")
@@ -586,6 +588,23 @@ def test_coarse_encoder_and_drive_force() -> None:
     assert np.std(tr.noise) == pytest.approx(0.4, rel=0.1)
 
 
+def test_an_analog_position_is_noisy_and_read_by_a_16_bit_converter() -> None:
+    """The potentiometer styles: white noise of ``analog_noise`` on the position, then a
+    converter step of stroke/2^16 (3 um on 200 mm); the sidecar gives that step."""
+    exact = replace(syn.SCALES["pneumatic"].sensors, analog_noise=0.0)
+    clean = syn.generate([], duration=4.0, seed=2, style="potentiometer", sensors=exact)
+    rec = syn.generate([], duration=4.0, seed=2, style="potentiometer")
+    q = 0.2 / 2**16
+    assert np.allclose(clean.measurement["x"] / q, np.round(clean.measurement["x"] / q))
+    assert rec.measurement.meta["synthetic"]["position_resolution"] == q
+    d = rec.measurement["x"] - clean.measurement["x"]  # noise, and two roundings
+    assert np.std(d) == pytest.approx(math.sqrt(2e-6**2 + q * q / 6), rel=0.1)
+    assert np.all(np.isfinite(syn.generate([], duration=2.0, seed=2,
+                                           style="potentiometer-pressures").measurement["x"]))
+    drawn = syn.generate([], duration=1.0, seed=4, style="potentiometer", vary=True).truth
+    assert drawn.sensors is not None and 1e-6 <= drawn.sensors.analog_noise <= 4e-6
+
+
 def test_position_quantised_and_pressures_balance_the_force() -> None:
     rec = syn.generate([], duration=4.0, seed=2, pressure_noise=0.0, noise_std=0.0)
     m, tr, P = rec.measurement, rec.truth, rec.truth.params
@@ -605,7 +624,7 @@ def test_coloured_noise_statistics() -> None:
     assert rho == pytest.approx(math.exp(-0.002 / 0.005), abs=0.01)
 
 
-@pytest.mark.parametrize("scale", ["pneumatic", "hydraulic"])
+@pytest.mark.parametrize("scale", list(syn.SCALES))
 def test_motion_is_realistic(scale: str) -> None:
     """Slides at many speeds, reversals with and without stops, dwells, small loops."""
     rec = syn.generate([], duration=12.0, seed=3, scale=scale)
@@ -646,10 +665,13 @@ def test_hydraulic_scale_is_in_range() -> None:
         syn.HIDDEN_DEFAULTS["pressure-dependence"]["c_p"] * 3e5)
 
 
-@pytest.mark.parametrize("scale", ["pneumatic", "hydraulic"])
+@pytest.mark.parametrize("scale", list(syn.SCALES))
 def test_every_hidden_effect_is_visible_above_the_noise(scale: str) -> None:
     """At least 4 noise standard deviations where it acts, for the load cell and for the
-    (larger, at the hydraulic scale) pressure-reconstructed force; not dominant."""
+    (larger, at the hydraulic scale) pressure-reconstructed force; not dominant: the
+    effect's RMS within 1.6 times the base force's. (Presliding on a static base comes
+    nearest: the base force is zero at rest where presliding holds its force, and the
+    short stroke of ``small-pneumatic`` rests 67 % of the time: 1.51.)"""
     P = syn.SCALES[scale].params
     A1, A2 = P.areas
     sigma = max(syn.SCALES[scale].sensors.noise_std,
@@ -663,7 +685,7 @@ def test_every_hidden_effect_is_visible_above_the_noise(scale: str) -> None:
         d = syn.generate([f"{effect}:{shape}"], base=base, duration=12.0, seed=1,
                          scale=scale).truth.F - b.F
         assert np.sum(np.abs(d) > 4 * sigma) >= 10, (effect, shape, np.max(np.abs(d)) / sigma)
-        assert np.sqrt(np.mean(d**2)) < 1.5 * np.sqrt(np.mean(b.F**2)), (effect, shape)
+        assert np.sqrt(np.mean(d**2)) < 1.6 * np.sqrt(np.mean(b.F**2)), (effect, shape)
 
 
 def test_ringing_is_outside_any_law_of_the_motion() -> None:
@@ -727,7 +749,7 @@ def test_every_effect_shape_style_and_scale_generates() -> None:
                 assert np.all(np.isfinite(rec.truth.F))
                 assert rec.truth.shapes == {effect: shape}
                 n += 1
-    assert n == 2 * len(syn.STYLES) * len(syn.effect_shapes())
+    assert n == len(syn.SCALES) * len(syn.STYLES) * len(syn.effect_shapes())
 
 
 def test_a_minute_at_one_kilohertz_generates_in_seconds() -> None:

@@ -99,7 +99,12 @@ from fcomp.diagnosis.features import (
     residual_structure,
     trimmed_rms,
 )
-from fcomp.diagnosis.noise import NoiseFloor, effective_sample_size, noise_floor
+from fcomp.diagnosis.noise import (
+    NoiseFloor,
+    effective_sample_size,
+    noise_floor,
+    tolerant_noise_share,
+)
 from fcomp.diagnosis.refit import RIG_EXTRAS, FitResult, Refit, sample_weights
 from fcomp.diagnosis.regimes import Segmentation, segment
 from fcomp.diagnosis.residuals import regime_errors
@@ -456,6 +461,9 @@ class Diagnosis:
             starts = catalogue.baseline_starts(model, self.data_, self.segmentation_,
                                                self.split_.train)
             first = self._refit.fit(model, starts)
+            # the channel lag is the record's: fixed by this unweighted fit, then held
+            if "lag" in first.values:
+                self._refit.hold("lag", first.values["lag"])
             # the fits from here on weigh samples by how well the motion fixes the prediction
             if first.spread is not None:
                 self._refit.set_weights(first.spread, self.noise_floor_.value)
@@ -794,7 +802,10 @@ class Diagnosis:
         if fall > 0 and rb - ra < need:
             reasons.append(f"where it changes the prediction the held-out RMS falls by "
                            f"{rb - ra:.3g} N < {need:.3g} N")
-        excess = rb**2 - nf**2
+        # the floor of the tolerant residual there: less than nf where the band is wide
+        floor2 = nf**2 * (tolerant_noise_share(before.spread[changed], nf)
+                          if changed.size and before.spread is not None else 1.0)
+        excess = rb**2 - floor2
         share = (rb**2 - ra**2) / excess if excess > 0 else 0.0
         if fall > 0 and rb - ra >= need and share < EXCESS_SHARE:
             reasons.append(f"explains only {100 * share:.0f} % of the excess over the noise "
@@ -1018,8 +1029,12 @@ class Diagnosis:
         The weights (:meth:`Refit.set_weights`) come from the uncertainty of the
         current model's prediction; a model accepted with another structure (a
         bristle where a static map jumped) changes where that is, so it is
-        refitted with its own weights before the next step starts from it.
+        refitted with its own weights before the next step starts from it. A
+        held channel lag is first estimated again for it (:meth:`Refit.refit_held`).
         """
+        if "lag" in self._refit.held:  # the channel lag, estimated again for this model
+            self._refit.refit_held("lag", fit)
+            fit = self._refit.rescore(fit)
         if fit.spread is None:
             return fit
         self._refit.set_weights(fit.spread, self.noise_floor_.value)
@@ -1179,8 +1194,9 @@ class Diagnosis:
         differ), ``force`` and ``reason`` summarise; ``unresolved_samples``
         counts the samples left out because the position missed motion there
         (:func:`fcomp.diagnosis.regimes.unresolved_rests`); ``force_lag_s`` is the
-        lag of a driving force's channel fitted with the final model (s; None for
-        a load cell): pressure transducers and their lines lag, and a force
+        lag of a driving force's channel, fitted with the first (unweighted) baseline
+        fit, held in the weighted fits and estimated again (alone, unweighted) for
+        every model accepted (s; None for a load cell): pressure transducers and their lines lag, and a force
         reconstructed from them misses ``lag*dD/dt`` where ``D`` changes fast;
         ``records`` holds the full conditioning of every file
         (:class:`fcomp.conditioning.Conditioning`).

@@ -236,6 +236,31 @@ def noise_floor(data: DiagnosisData, seg: Segmentation) -> NoiseFloor:
     return NoiseFloor(float(np.std(d) / math.sqrt(2.0)), "difference", int(d.size), 1, dt)
 
 
+def tolerant_noise_share(width: np.ndarray, sigma: float) -> float:
+    """Mean share of the noise variance the tolerant residual keeps across a band (-).
+
+    The tolerant residual (:func:`fcomp.diagnosis.refit.tolerant_residual`) is
+    the distance of the measurement from the band ``width`` the model could be
+    expected to predict, so where the band is wide even pure noise leaves less
+    than ``sigma``. For a measurement ``c + e``, ``e ~ N(0, sigma^2)``, ``c`` at the
+    centre of a band of half-width ``h = k*sigma``:
+
+    ``E[r^2]/sigma^2 = 2*((1 + k^2)*Q(k) - k*phi(k))``
+
+    (``Q`` the upper normal tail, ``phi`` the normal density; 1 at ``k = 0``).
+    The floor a tolerant residual is compared with is ``sigma`` times the square
+    root of this share's mean over its samples.
+    """
+    from scipy.special import ndtr
+
+    if width.size == 0 or not sigma > 0:
+        return 1.0
+    k = 0.5 * np.maximum(width, 0.0) / sigma
+    phi = np.exp(-0.5 * k**2) / math.sqrt(2.0 * math.pi)
+    share = 2.0 * ((1.0 + k**2) * ndtr(-k) - k * phi)
+    return float(np.clip(np.mean(share), 0.0, 1.0))
+
+
 def _repeat_groups(data: DiagnosisData) -> list[np.ndarray]:
     """Steady-state points measured repeatedly at the same ``(v, x, p1, p2)``."""
     keys = np.column_stack([data.signal(k) for k in ("v", "x", "p1", "p2")])

@@ -65,7 +65,14 @@ from fcomp.synthetic.laws import recording_errors
 from fcomp.synthetic.motion import plan_record
 from fcomp.synthetic.records import SyntheticRecord, SyntheticTruth
 from fcomp.synthetic.scales import SCALES, Scale, Sensors, TruthParams, get_scale
-from fcomp.synthetic.sensors import STYLES, FineSignals, Style, get_style, measure
+from fcomp.synthetic.sensors import (
+    STYLES,
+    FineSignals,
+    Style,
+    get_style,
+    measure,
+    position_step,
+)
 
 __all__ = [
     "BASES", "CATALOGUE", "DIMENSIONS", "HIDDEN_DEFAULTS", "OUTSIDE", "SCALES", "SHAPES",
@@ -131,7 +138,8 @@ def generate(
     fine
         Integration sub-steps per sample interval.
     scale
-        Rig scale: ``"pneumatic"`` or ``"hydraulic"`` (:data:`SCALES`).
+        Rig scale: ``"pneumatic"``, ``"hydraulic"``, ``"small-pneumatic"`` or
+        ``"heavy-hydraulic"`` (:data:`SCALES`).
     style
         Measurement style (:data:`STYLES`).
     vary
@@ -161,6 +169,8 @@ def generate(
             P, drawn = nuisance.vary_params(P, sc, rng_vary)
         if sensors is None:
             sens = nuisance.vary_sensors(sens, sc, rng_vary)
+            if st.analog:
+                sens = nuisance.vary_analog(sens, np.random.default_rng([seed, 3]))
         if rate is None:
             rate = float(rng_vary.choice(nuisance.RATES))
         laws, factors = nuisance.vary_laws(laws, rng_vary)
@@ -196,8 +206,7 @@ def generate(
                       physical=phys, dt=dt, idx=np.arange(0, motion.t.size, fine))
     rec = measure(st, sens, sig, P, mass_sidecar, rate, include_velocity, rng,
                   np.random.default_rng([seed, 2]))
-    meta = _sidecar(st, sc, P, mass_sidecar, laws, name, seed, rate,
-                    sens.resolution * (sens.coarse if st.coarse else 1.0))
+    meta = _sidecar(st, sc, P, mass_sidecar, laws, name, seed, rate, position_step(st, sens, P))
     idx = sig.idx
     truth = SyntheticTruth(
         F=recorded[idx], friction=fric[idx], v=vn[idx], a=an[idx], noise=rec.noise, base=base,

@@ -14,7 +14,8 @@ record may get its own:
 * force noise times U(0.6, 1.6), its correlation time log-uniform x0.5-2; pressure
   noise log-uniform in the scale's range, pressure-sensor lag 0.5-2 ms;
 * tachometer: noise times U(0.6, 1.6), bias log-uniform 2e-5-2e-4 m/s (x2 at the
-  hydraulic scale) of random sign, gain error U(-1.5 %, 1.5 %), lag 1-3 ms.
+  hydraulic scale) of random sign, gain error U(-1.5 %, 1.5 %), lag 1-3 ms;
+* analog position sensor: noise times log-uniform x0.5-2 (:func:`vary_analog`).
 
 Arguments given explicitly to :func:`fcomp.synthetic.generate` are kept as
 given. Every drawn value is returned for the truth
@@ -58,7 +59,7 @@ def vary_params(P: TruthParams, scale: Scale, rng: np.random.Generator
 
 def vary_sensors(sens: Sensors, scale: Scale, rng: np.random.Generator) -> Sensors:
     """Sensor characteristics drawn around the scale's (see the module docstring)."""
-    big = 2.0 if scale.name == "hydraulic" else 1.0
+    big = 2.0 if scale.kind == "hydraulic-cylinder" else 1.0
     noise = float(rng.uniform(0.6, 1.6))
     tacho = float(rng.uniform(0.6, 1.6))
     return replace(
@@ -77,6 +78,12 @@ def vary_sensors(sens: Sensors, scale: Scale, rng: np.random.Generator) -> Senso
         encoder_window=int(rng.choice((1, 2, 4))),
         coarse=float(rng.uniform(10.0, 20.0)),
     )
+
+
+def vary_analog(sens: Sensors, rng: np.random.Generator) -> Sensors:
+    """An analog position sensor's noise times log-uniform x0.5-2 (its own stream, so the
+    records of the other styles stay those of their seed)."""
+    return replace(sens, analog_noise=sens.analog_noise * _log_uniform(rng, 0.5, 2.0))
 
 
 def vary_laws(laws: dict[str, Law], rng: np.random.Generator) -> tuple[dict[str, Law],

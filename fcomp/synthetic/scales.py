@@ -1,6 +1,7 @@
 """Rig scales: the base friction, the rig, its sensors and the sizes of the hidden effects.
 
-Two presets (:data:`SCALES`):
+Four presets (:data:`SCALES`); the diagnosis matrix uses the first two by default,
+the other two check magnitudes it was not tuned on:
 
 ``pneumatic`` (the default; the original generator's numbers)
     32/12 mm cylinder, 200 mm stroke, 1.2 kg moving mass, LuGre base with
@@ -13,6 +14,13 @@ Two presets (:data:`SCALES`):
     6-24 MPa (chamber pressures ~2-14 MPa gauge), load-cell noise 3 N, pressure
     noise 5 kPa (a pressure-reconstructed force noise of ~7.7 N), 0.5 um
     encoder, accelerations up to 10 m/s^2, presliding loops of 3-80 um.
+``small-pneumatic``
+    10/4 mm cylinder, 80 mm stroke, 0.15 kg, ``Fc = 3 N``, ``Fs = 4.5 N``,
+    ``sigma0 = 6e4 N/m`` (presliding ~50 um), load-cell noise 0.04 N.
+``heavy-hydraulic``
+    100/56 mm cylinder, 600 mm stroke, 150 kg, ``Fc = 2 kN``, ``Fs = 2.8 kN``,
+    ``sigma0 = 2e8 N/m`` (presliding ~10 um), pressure sums 6-28 MPa, load-cell
+    noise 15 N, pressure noise 4 kPa (a reconstructed force noise of ~40 N).
 
 Effect sizes are carried from the pneumatic defaults by the physical
 dimension of each parameter (:data:`fcomp.synthetic.catalogue.DIMENSIONS`):
@@ -104,6 +112,8 @@ class Sensors:
         ``encoder-velocity`` style: near a count edge the count flickers even at rest.
     coarse : -
         Resolution multiplier of the ``coarse-encoder`` style.
+    analog_noise : m
+        White noise of an analog position sensor (``potentiometer`` styles).
     """
 
     noise_std: float
@@ -120,6 +130,7 @@ class Sensors:
     encoder_window: int = 1
     encoder_jitter: float = 1.5e-7
     coarse: float = 15.0
+    analog_noise: float = 2e-6
 
 
 @dataclass(frozen=True)
@@ -183,7 +194,7 @@ HYDRAULIC = Scale(
     sensors=Sensors(noise_std=3.0, noise_tau=0.003, resolution=5e-7, pressure_noise=5e3,
                     pressure_lag=1e-3, tacho_white=3e-4, tacho_coloured=1.5e-4, tacho_tau=0.02,
                     tacho_bias=1.5e-4, tacho_gain=0.01, tacho_lag=1.5e-3,
-                    encoder_jitter=7.5e-8),
+                    encoder_jitter=7.5e-8, analog_noise=1.5e-6),
     a_max=10.0, loop_amplitude=(3e-6, 8e-5),
     factors={"force": _FORCE, "damping": _FORCE, "stiffness": _FORCE / _LENGTH,
              "presliding-length": _LENGTH, "slide-length": 0.4,
@@ -193,8 +204,50 @@ HYDRAULIC = Scale(
     pressure_noise_range=(4e3, 1e4),
 )
 
+#: A miniature pneumatic cylinder (10/4 mm, 80 mm stroke, 0.15 kg): friction a tenth of
+#: the pneumatic preset's, presliding a third, a finer load cell. Not in the matrix's
+#: default scales: a check of magnitudes the diagnosis was not tuned on.
+_SF, _SL = 0.1, 1.0 / 3.0
+SMALL_PNEUMATIC = Scale(
+    name="small-pneumatic", kind="pneumatic-cylinder",
+    params=TruthParams(Fc=3.0, Fs=4.5, vs=0.015, sigma0=6.0e4, sigma1=50.0, sigma2=6.0,
+                       mass=0.15, bore=0.010, rod=0.004, stroke=0.08),
+    pressures=(1.5e5, 3.0e5, 5.0e5),
+    sensors=Sensors(noise_std=0.04, noise_tau=0.005, resolution=1e-6, pressure_noise=300.0,
+                    pressure_lag=1e-3, tacho_white=1e-4, tacho_coloured=5e-5, tacho_tau=0.02,
+                    tacho_bias=8e-5, tacho_gain=0.01, tacho_lag=2e-3, analog_noise=1e-6),
+    a_max=4.0, loop_amplitude=(1e-5, 1e-4),
+    factors={"force": _SF, "damping": _SF, "stiffness": _SF / _SL,
+             "presliding-length": _SL, "slide-length": 0.5,
+             "per-pressure": 1.0, "pressure": 1.0, "mass-error": 0.125, "frequency": 1.6},
+    mass_range=(0.08, 0.3), resolutions=(5e-7, 1e-6, 2e-6),
+    pressure_noise_range=(150.0, 600.0),
+)
+
+#: A heavy hydraulic cylinder (100/56 mm, 0.6 m stroke, 150 kg): friction about 70 times
+#: the pneumatic preset's and presliding of 10 um. Not in the matrix's default scales.
+_HF, _HL = 2000.0 / 30.0, 1.0 / 15.0
+HEAVY_HYDRAULIC = Scale(
+    name="heavy-hydraulic", kind="hydraulic-cylinder",
+    params=TruthParams(Fc=2000.0, Fs=2800.0, vs=0.008, sigma0=2.0e8, sigma1=5.0e4,
+                       sigma2=6.0e3, mass=150.0, bore=0.1, rod=0.056, stroke=0.6),
+    pressures=(6.0e6, 1.4e7, 2.8e7),
+    sensors=Sensors(noise_std=15.0, noise_tau=0.003, resolution=1e-6, pressure_noise=4e3,
+                    pressure_lag=1e-3, tacho_white=3e-4, tacho_coloured=1.5e-4, tacho_tau=0.02,
+                    tacho_bias=1.5e-4, tacho_gain=0.01, tacho_lag=1.5e-3,
+                    encoder_jitter=7.5e-8, analog_noise=3e-6),
+    a_max=5.0, loop_amplitude=(4e-6, 1e-4),
+    factors={"force": _HF, "damping": _HF, "stiffness": _HF / _HL,
+             "presliding-length": _HL, "slide-length": 0.4,
+             "per-pressure": 1.0 / _PRESSURE, "pressure": _PRESSURE,
+             "mass-error": 60.0, "frequency": 1.5},
+    mass_range=(80.0, 300.0), resolutions=(5e-7, 1e-6, 2e-6),
+    pressure_noise_range=(2e3, 8e3),
+)
+
 #: The rig scales by name.
-SCALES: dict[str, Scale] = {s.name: s for s in (PNEUMATIC, HYDRAULIC)}
+SCALES: dict[str, Scale] = {s.name: s for s in (PNEUMATIC, HYDRAULIC, SMALL_PNEUMATIC,
+                                                HEAVY_HYDRAULIC)}
 
 
 def get_scale(name: str) -> Scale:

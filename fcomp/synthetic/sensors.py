@@ -17,7 +17,17 @@ style                  columns (besides ``t``, ``experiment``) and sensors
 ``drive-force``        ``x``, ``F_ext``: a friction rig; the rod is driven and a load
                        cell measures the drive force, ``F = F_ext - m*a`` (horizontal,
                        no pressures); mass in the sidecar, no bore
+``potentiometer``      ``load-cell`` with an analog position sensor instead of the
+                       encoder (linear potentiometer, LVDT, eddy-current sensor):
+                       white noise :attr:`Sensors.analog_noise` read by a 16-bit
+                       converter over the stroke (seed 001's rig)
+``potentiometer-       ``pressures`` with that analog position (seed 000's rig)
+pressures``
 =====================  ==============================================================
+
+The two analog styles are not in the diagnosis matrix's default styles
+(:data:`fcomp.synthetic.matrix.MATRIX_STYLES`): they check a sensor it was not
+tuned on.
 
 Every style writes the sidecar a real user would: ``kind`` (the scale's
 cylinder, or ``friction-rig``), ``pressure = "gauge"``, ``[rig]`` with the
@@ -54,12 +64,16 @@ class Style:
         ``None``, ``"tacho"`` or ``"encoder"``: the ``v`` column's sensor.
     coarse
         Position quantised :attr:`Sensors.coarse` times coarser.
+    analog
+        Position from an analog sensor: white noise :attr:`Sensors.analog_noise`,
+        then a converter of :data:`ANALOG_BITS` bits over the stroke.
     """
 
     name: str
     force: str
     velocity: str | None = None
     coarse: bool = False
+    analog: bool = False
 
     @property
     def columns(self) -> tuple[str, ...]:
@@ -85,7 +99,11 @@ STYLES: dict[str, Style] = {s.name: s for s in (
     Style("pressures-tacho", "pressures", "tacho"),
     Style("coarse-encoder", "load-cell", coarse=True),
     Style("drive-force", "drive"),
+    Style("potentiometer", "load-cell", analog=True),
+    Style("potentiometer-pressures", "pressures", analog=True),
 )}
+#: Bits of the converter that reads an analog position sensor over the stroke.
+ANALOG_BITS = 16
 
 
 def get_style(name: str, include_velocity: bool = False) -> Style:
@@ -166,6 +184,15 @@ def lag(sig: FineSignals, u: np.ndarray, tau: float) -> np.ndarray:
     return out
 
 
+def position_step(style: Style, sens: Sensors, P: TruthParams) -> float:
+    """The quantum (m) of the position ``style`` records: the encoder's resolution
+    (:attr:`Sensors.coarse` times it for ``coarse``), or the converter's step over the
+    stroke for an analog sensor."""
+    if style.analog:
+        return P.stroke / 2**ANALOG_BITS
+    return sens.resolution * (sens.coarse if style.coarse else 1.0)
+
+
 def quantise(x: np.ndarray, resolution: float) -> np.ndarray:
     """Encoder reading: ``x`` rounded to the nearest multiple of ``resolution`` (m)."""
     return np.round(x / resolution) * resolution if resolution > 0 else x
@@ -216,9 +243,11 @@ def measure(style: Style, sens: Sensors, sig: FineSignals, P: TruthParams, mass_
     A1, A2 = P.areas
     cols: dict[str, np.ndarray] = {"t": t_s - t_s[0]}
     x_true = sig.x[idx]
-    resolution = sens.resolution * (sens.coarse if style.coarse else 1.0)
+    resolution = position_step(style, sens, P)
     if style.velocity == "encoder" and sens.encoder_jitter > 0:
         x_true = x_true + rng_extra.normal(0.0, sens.encoder_jitter, n)
+    if style.analog:
+        x_true = x_true + rng_extra.normal(0.0, sens.analog_noise, n)
     cols["x"] = quantise(x_true, resolution)
     if include_velocity:
         cols["v"] = sig.v[idx]

@@ -39,6 +39,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.signal import lfilter
+from scipy.special import ndtr
 
 from fcomp.diagnosis.data import DiagnosisData
 from fcomp.diagnosis.regimes import SLIDING, Segmentation
@@ -251,8 +252,6 @@ def tolerant_noise_share(width: np.ndarray, sigma: float) -> float:
     The floor a tolerant residual is compared with is ``sigma`` times the square
     root of this share's mean over its samples.
     """
-    from scipy.special import ndtr
-
     if width.size == 0 or not sigma > 0:
         return 1.0
     k = 0.5 * np.maximum(width, 0.0) / sigma

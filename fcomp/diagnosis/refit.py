@@ -408,12 +408,8 @@ class Refit:
             if not train.any():
                 continue
             d = e.data
-            for name, value in self.held.items():
-                col = d.extra_column(name)
-                if col is not None:  # the held term moved to the target: y - value*col
-                    d = dataclasses.replace(d, y=d.y - value * col)
-                    if name == "lag":  # no lag left to fit
-                        d = dataclasses.replace(d, drive_rate=None)
+            for name, value in self.held.items():  # the held terms moved to the target
+                d = d.holding(name, value)
             if q > 1:
                 sig = {k: _block_mean(v, q) for k, v in d.sig.items() if k != "s"}
                 from fcomp.models.base import side_of

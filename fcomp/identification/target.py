@@ -26,6 +26,7 @@ acceleration's attenuated peaks bias the mass upwards (on the EMPS record,
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -85,6 +86,19 @@ class FitData:
         rate = None if self.drive_rate is None else self.drive_rate[mask]
         return FitData(sig, self.y[mask], inertia, self.source, self.mass, self.label,
                        self.band_hz, rate)
+
+    def holding(self, name: str, value: float) -> FitData:
+        """This target with the fitted extra ``name`` held at ``value``: ``y - value*column``
+        and no column left to fit (unchanged where this target has no such column)."""
+        col = self.extra_column(name)
+        if col is None:
+            return self
+        held = dataclasses.replace(self, y=self.y - value * col)
+        if name == "mass":
+            return dataclasses.replace(held, inertia=None)
+        if name == "lag":
+            return dataclasses.replace(held, drive_rate=None)
+        return held
 
     def extra_column(self, name: str) -> np.ndarray | None:
         """``dF_hat/d(name)`` of a fitted extra of :mod:`.dynamic` (``mass``: the

@@ -10,14 +10,25 @@ the public JSON contract (:mod:`fcomp.synthetic.matrix`): the added set right
 (in order where it matters), the verdict right, and the held-out error at
 most 0.6 of the baseline's where something was to be found.
 
+Conditions (``--conditions``, :data:`fcomp.synthetic.matrix.CONDITIONS`) cross
+the cases with loggers, sensors and rigs the diagnosis was not built on:
+irregular or gapped stamps, pink force noise, a vertical rig, a pump's
+pulsation (which must be reported as a disturbance, the record then not
+explained), a presliding-dominated motion on a soft seal. The default is
+``plain``, the original records; ``--rows all`` adds the rows outside the
+default selection (two effects hidden with the dynamic baseline too).
+
 Prints the confusion matrix (hidden effect vs added effects), the share
-right per row, style, scale and baseline kind, the rows that fall short and
-why, and the time per case.
+right per row, style, scale, baseline kind and condition, the rows that fall
+short and why, and the time per case.
 
     python benchmarks/bench_diagnosis_matrix.py                 # the whole matrix
     python benchmarks/bench_diagnosis_matrix.py --seeds 1 --rows dwell-time,nothing
     python benchmarks/bench_diagnosis_matrix.py --json matrix.json
     python benchmarks/bench_diagnosis_matrix.py --seed-list 4,5 --sample 120   # a seeded draw
+    python benchmarks/bench_diagnosis_matrix.py --seed-list 4 --sample 60 \
+        --conditions pulsation,vertical,pink-noise --rows all       # other rigs and loggers
+    python benchmarks/bench_diagnosis_matrix.py --conditions soft-presliding --list
 """
 
 from __future__ import annotations
@@ -29,10 +40,11 @@ import sys
 import time
 from collections import Counter, defaultdict
 from concurrent.futures import ProcessPoolExecutor, as_completed
+from typing import Any
 
 import numpy as np
 
-from fcomp.synthetic.matrix import CASE_FIELDS, Case, cases, judge, record
+from fcomp.synthetic.matrix import CASE_FIELDS, CONDITIONS, Case, cases, judge, record
 
 
 def run_case(case: Case) -> dict:
@@ -42,7 +54,7 @@ def run_case(case: Case) -> dict:
     t0 = time.perf_counter()
     rec = record(case)
     t1 = time.perf_counter()
-    out = {"case": case.as_dict()}
+    out: dict[str, Any] = {"case": case.as_dict()}
     try:
         # the matrix judges the added effects and the verdict; the baseline check
         # (a second diagnosis from the other kind of baseline) changes neither
@@ -62,6 +74,8 @@ def run_case(case: Case) -> dict:
                            for c in doc.get("candidates") or []],
                steps=[(s["effect"], s["rms_after"], s["accepted"]) for s in doc.get("steps") or []],
                velocity=(doc.get("signals") or {}).get("velocity"),
+               disturbances=[(d.get("frequency_hz"), d.get("amplitude"))
+                             for d in doc.get("disturbances") or []],
                error=doc.get("error"))
     return out
 
@@ -82,7 +96,8 @@ def report(results: list[dict]) -> str:
     lines.append(f"overall: {right}/{n} right ({100 * right / max(n, 1):.1f} %)")
     for title, key in (("row", lambda r: r["case"]["row"]), ("style", lambda r: r["case"]["style"]),
                        ("scale", lambda r: r["case"]["scale"]),
-                       ("baseline kind", lambda r: r["case"]["kind"])):
+                       ("baseline kind", lambda r: r["case"]["kind"]),
+                       ("condition", lambda r: r["case"].get("condition", "plain"))):
         lines.append(f"\nshare right per {title}:")
         for k, (a, b) in _share(results, key).items():
             flag = "   <-- below 2/3" if title == "row" and a < 2 * b / 3 else ""
@@ -105,11 +120,11 @@ def report(results: list[dict]) -> str:
         lines.append(f"  {row:32s} " + ", ".join(f"{k} {v}" for k, v in c.most_common()))
     wrong = [r for r in results if not r["right"]]
     if wrong:
-        lines.append("\nwrong cases (row / kind / style / scale / seed: why):")
+        lines.append("\nwrong cases (row / kind / style / scale / seed [shape] condition: why):")
         for r in wrong:
             c = r["case"]
             lines.append(f"  {c['row']} / {c['kind']} / {c['style']} / {c['scale']} / "
-                         f"{c['seed']} [{c['shape']}]: {r['why']}")
+                         f"{c['seed']} [{c['shape']}] {c.get('condition', 'plain')}: {r['why']}")
     ts = np.array([r["diagnose_s"] for r in results])
     gs = np.array([r["generate_s"] for r in results])
     lines.append(f"\ntime per case: diagnose median {np.median(ts):.1f} s, max {ts.max():.1f} s; "
@@ -123,7 +138,11 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seed-list", default=None, help="comma-separated seeds (instead of --seeds)")
     ap.add_argument("--jobs", type=int, default=min(os.cpu_count() or 1, 2))
     for f in ("rows", "styles", "scales", "kinds"):
-        ap.add_argument(f"--{f}", default=None, help=f"comma-separated subset of {f}")
+        ap.add_argument(f"--{f}", default=None, help=f"comma-separated subset of {f}"
+                        + (" ('all': the rows outside the default selection too)"
+                           if f == "rows" else ""))
+    ap.add_argument("--conditions", default=None,
+                    help=f"comma-separated conditions (default plain): {', '.join(CONDITIONS)}")
     ap.add_argument("--duration", type=float, default=40.0)
     ap.add_argument("--rate", type=float, default=1000.0)
     ap.add_argument("--json", default=None, help="write every case's result here")
@@ -132,7 +151,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--list", action="store_true", help="list the cases and stop")
     args = ap.parse_args(argv)
     pick = {f: (getattr(args, f).split(",") if getattr(args, f) else None)
-            for f in ("rows", "styles", "scales", "kinds")}
+            for f in ("rows", "styles", "scales", "kinds", "conditions")}
     seeds = ([int(x) for x in args.seed_list.split(",")] if args.seed_list
              else list(range(1, args.seeds + 1)))
     todo = cases(seeds=seeds, duration=args.duration, rate=args.rate, **pick)
@@ -154,7 +173,7 @@ def main(argv: list[str] | None = None) -> int:
             results.append(r)
             c = r["case"]
             print(f"[{k}/{len(todo)}] {'ok ' if r['right'] else 'BAD'} {c['row']} / {c['kind']} / "
-                  f"{c['style']} / {c['scale']} / {c['seed']}: {r['why']} "
+                  f"{c['style']} / {c['scale']} / {c['seed']} / {c['condition']}: {r['why']} "
                   f"({r['diagnose_s']:.1f} s)", file=sys.stderr, flush=True)
     wall = time.perf_counter() - t0
     print(report(results))

@@ -41,6 +41,7 @@ VALUES: dict[str, dict[str, float]] = {
     "viscous-lead": {"T": 0.01},
     "inertia-error": {"dm": 0.3},
     "force-offset": {"offset": 0.2},
+    "area-error": {"dA1": 5e-6, "dA2": -3e-6},
     "nonlocal-memory": {"c1": 0.2, "k1": 3e5, "z1": 5e-5, "z3": 6e-5, "z5": 8e-5, "z2": 3e-5,
                         "z4": 7e-5},
 }

@@ -75,7 +75,8 @@ def summary(doc: dict[str, Any]) -> str:
     """The printed summary of a comparison's JSON."""
     lines = [f"model {doc['description']} ({'fitted on the training samples' if doc['fitted'] else 'as given'}): "
              f"RMS {doc['rms']:.4g} N over the {doc['judged']} samples "
-             f"(noise floor {doc['noise_floor']:.3g} N)"]
+             f"(scored: a prediction band the motion leaves costs; plain y - F "
+             f"{doc['rms_plain']:.4g} N; noise floor {doc['noise_floor']:.3g} N)"]
     for name, r in doc["regimes"].items():
         rms = "-" if r["rms"] is None else f"{r['rms']:.4g} N"
         lines.append(f"  {name:18s} {rms:>12s}  ({r['n']} samples)")

@@ -74,14 +74,16 @@ def record_view(ctx: Context) -> RecordView:
     names = data.experiments[0].data.sig.keys()
     return RecordView(
         signals=MappingProxyType({k: data.signal(k) for k in names}),
-        y=data.y, F_hat=current.F_hat, residual=current.residual, train=ctx.train,
+        y=data.y, F_hat=current.F_hat, train=ctx.train,
+        residual=current.tolerant if current.tolerant is not None else current.residual,
         params=MappingProxyType(dict(current.model.flat_params())),
         values=MappingProxyType(dict(current.values)),
         scales=data.scales, v_rest=seg.v_rest, d_pre=seg.d_pre, t_dwell=seg.t_dwell,
         dwell_starts=tuple((k, dw) for k, dw, _ in seg.starts if dw >= seg.t_dwell),
         fits_mass=data.fits_mass, steady_state=data.steady_state,
         available=MappingProxyType(dict(data.available)),
-        reasons=MappingProxyType(dict(data.reasons)))
+        reasons=MappingProxyType(dict(data.reasons)), source=data.source,
+        force_channels=data.force_channels)
 
 
 @dataclass(frozen=True)

@@ -62,7 +62,13 @@ class Comparison:
     model
         The model compared (with the values it was compared with).
     rms
-        RMS error over the judged samples.
+        RMS error over the judged samples: the scored residual
+        (:func:`~fcomp.diagnosis.refit.scored_residual`, the logarithmic score of
+        the model's prediction band with the noise floor, in N), which equals the
+        plain error where the motion fixes the prediction and charges a band the
+        model cannot place. The same measure decides in :mod:`.loop`.
+    rms_plain
+        RMS of the plain residual ``y - F_model`` over the same samples.
     regimes
         Per regime and ``"all"``: ``{"rms", "n"}`` over the judged samples.
     worst
@@ -109,6 +115,7 @@ class Comparison:
     warnings: list[FitWarning] = field(default_factory=list)
     plant: list[Any] = field(default_factory=list)
     values: dict[str, float] = field(default_factory=dict)
+    rms_plain: float = math.nan
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON of ``fcomp compare``: ``{"model", "rms", "regimes", "residual_features",
@@ -124,6 +131,7 @@ class Comparison:
             "fitted": self.fitted,
             "judged": self.judged_label,
             "rms": num(self.rms),
+            "rms_plain": num(self.rms_plain),
             "noise_floor": num(self.noise_floor),
             "regimes": {k: {"rms": num(v["rms"]), "n": v["n"]}  # type: ignore[arg-type]
                         for k, v in self.regimes.items()},
@@ -281,15 +289,18 @@ def compare(model: str | FrictionModel, data: Measurement | Sequence[Measurement
                                  "and no rig.mass, so the friction force depends on the moving "
                                  "mass: give it (mass, a fit's params.mass) or fit the model")
             values["mass"] = float(mass)
-        refit = Refit(d, sp, seg.d_pre, max_samples=COMPARE_SAMPLES)
+        refit = Refit(d, sp, seg.d_pre, max_samples=COMPARE_SAMPLES, noise=floor)
         res = refit.result(mdl, values, 0)
         judged, label = seg.valid, "usable"
-    r = res.residual
+    r = res.residual  # scored (:func:`.refit.scored_residual`): what decides
+    plain = res.plain if res.plain is not None else r
+    located = res.tolerant if res.tolerant is not None else r
     rms = float(np.sqrt(np.mean(r[judged] ** 2))) if judged.any() else math.nan
     width = max(10, int(round(0.25 / d.scales.dt)))
     bounds = [e.start for e in d.experiments[1:]]
-    features = residual_structure(r, d, seg, sp.train, sp.test)
+    features = residual_structure(located, d, seg, sp.train, sp.test)
     return Comparison(res.model, rms, regime_errors(r, seg, judged),
-                      worst_segments(r, judged, width, 3, bounds), d.y, res.F_hat,
+                      worst_segments(plain, judged, width, 3, bounds), d.y, res.F_hat,
                       sp.description, d, seg, sp, res, judged, label, features, fit, floor,
-                      warnings, [], values)
+                      warnings, [], values,
+                      float(np.sqrt(np.mean(plain[judged] ** 2))) if judged.any() else math.nan)

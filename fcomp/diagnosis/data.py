@@ -28,6 +28,7 @@ to one rig.
 from __future__ import annotations
 
 import dataclasses
+import hashlib
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -104,6 +105,10 @@ class DiagnosisData:
     kind
         The rig kind of the (first) record's sidecar (``""`` if not given): it words
         the experiments advised (:func:`fcomp.effects.experiment_for`).
+    force_channels
+        The measured columns the force to match is made of, in every record:
+        ``("F",)`` for a force column, else those of ``p1``, ``p2``, ``F_ext``
+        (:func:`fcomp.reconstruction.driving_force`).
     """
 
     experiments: list[Experiment]
@@ -116,6 +121,7 @@ class DiagnosisData:
     signals: list[Conditioning] = field(default_factory=list)
     kind: str = ""
     rig: RigContext = field(default_factory=RigContext)
+    force_channels: tuple[str, ...] = ()
 
     @property
     def n(self) -> int:
@@ -214,6 +220,52 @@ def _steady_state(meas: Measurement) -> bool:
     return mode == STEADY_STATE
 
 
+def _force_channels(meas: Measurement) -> set[str]:
+    """The measured columns the force to match is made of (:attr:`DiagnosisData.force_channels`)."""
+    if "F" in meas:
+        return {"F"}
+    return {k for k in ("p1", "p2", "F_ext") if k in meas}
+
+
+def _canonical_key(meas: Measurement) -> tuple[str, str]:
+    """A key that orders records by name, and records of one name by their content."""
+    digest = hashlib.sha1(usedforsecurity=False)
+    digest.update(np.ascontiguousarray(meas.t, dtype=float).tobytes())
+    for name in sorted(meas.columns):
+        digest.update(name.encode())
+        digest.update(np.ascontiguousarray(meas[name], dtype=float).tobytes())
+    return meas.label, digest.hexdigest()
+
+
+def sessions(data: DiagnosisData) -> list[list[int]]:
+    """The experiments of ``data`` grouped into sessions that share one clock.
+
+    Files are separate experiments unless their stamps say otherwise: an
+    experiment continues a session when its first stamp comes after the
+    session's last one (the pieces of one file cut at logger pauses, or files
+    of one logger whose clock runs on). Of several sessions it could continue,
+    the one that ended last (ties by label); experiments whose stamps overlap
+    (files that each start at zero) are sessions of their own. The grouping
+    depends on the stamps and labels alone, never on the order the files were
+    given. Returns lists of experiment indices, each in time order.
+    """
+    t = data.signal("t")
+    spans = sorted(((float(t[e.start]), float(t[e.stop - 1]), e.label, i)
+                    for i, e in enumerate(data.experiments)))
+    groups: list[list[int]] = []
+    ends: list[tuple[float, str]] = []
+    for t0, t1, label, i in spans:
+        open_ = [g for g, (end, _) in enumerate(ends) if end < t0]
+        if open_:
+            g = max(open_, key=lambda k: ends[k])
+            groups[g].append(i)
+            ends[g] = (t1, label)
+        else:
+            groups.append([i])
+            ends.append((t1, label))
+    return groups
+
+
 def prepare(
     measurements: Measurement | Sequence[Measurement],
     *,
@@ -230,6 +282,9 @@ def prepare(
     meas_list = [measurements] if isinstance(measurements, Measurement) else list(measurements)
     if not meas_list:
         raise FcompError("no measurement to diagnose")
+    # the order the files are named in is no information: every answer is the same in any
+    # order (a clock, where one is needed, comes from the stamps, :func:`sessions`)
+    meas_list.sort(key=_canonical_key)
     modes = {_steady_state(m) for m in meas_list}
     if len(modes) > 1:
         raise FcompError("the records mix steady-state points and motion records; "
@@ -270,7 +325,8 @@ def prepare(
     data = DiagnosisData(experiments, {}, {}, _scales(experiments), steady, sources.pop(),
                          [e.label for e in experiments], signals,
                          str(meas_list[0].meta.get("kind", "")),
-                         RigContext.from_meta(meas_list[0].meta))
+                         RigContext.from_meta(meas_list[0].meta),
+                         tuple(sorted(set.intersection(*map(_force_channels, meas_list)))))
     _availability(data, x_measured, p_measured)
     return data
 

@@ -40,7 +40,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fcomp.diagnosis.data import DiagnosisData
+from fcomp.diagnosis.data import DiagnosisData, sessions
 from fcomp.diagnosis.regimes import Segmentation
 
 FEATURES: tuple[str, ...] = ("t", "v", "a", "x", "p1+p2", "time_since_reversal",
@@ -246,35 +246,44 @@ def drift_fall(r: np.ndarray, F_hat: np.ndarray, data: DiagnosisData, train: np.
     """Held-out RMS fall (N) of the residual ``r`` by a slow drift of the friction level alone.
 
     A rival explanation of any law in a slow signal: friction levels changing
-    over the record (temperature, run-in), ``F_hat*(1 + d(tau))``, ``d`` a cubic
-    (Legendre ``P1..P3``) in the normalised time ``tau`` (-1 to 1 over the record). Linearised about the current
-    prediction, the residual it explains is ``F_hat*d(tau)``. The clock runs on
-    through the experiments in the order given (pieces of one session, files
-    recorded one after the other). The coefficients
-    are fitted by least squares on the moving training samples and the fall
-    is the held-out RMS before minus after. Linearised, this is a lower bound
-    of what a refit with the drift would achieve. When the motion wanders
-    along the stroke over the record, a law in the position (or a pressure)
-    can stand in for such a drift; a candidate whose fall this matches is
-    confounded with time.
+    over a session (temperature, run-in), ``F_hat*(1 + d(tau))``, ``d`` a cubic
+    (Legendre ``P1..P3``, no constant) in the normalised time ``tau`` (-1 to 1
+    over the session). Linearised about the current prediction, the residual it
+    explains is ``F_hat*d(tau)``. The clock is the stamps': each session of
+    :func:`fcomp.diagnosis.data.sessions` (one file, or files whose stamps run on)
+    has its own cubic, so separate files are separate experiments, never a
+    clock in the order they were named (four files at four pressures in
+    pressure order would otherwise make a drift over "time" a copy of a
+    pressure law). The coefficients are fitted by least squares on the moving
+    training samples and the fall is the held-out RMS before minus after.
+    Linearised, this is a lower bound of what a refit with the drift would
+    achieve. When the motion wanders along the stroke over a session, a law in
+    the position (or a pressure) can stand in for such a drift; a candidate
+    whose fall this matches is confounded with time.
     """
-    clock = np.zeros(data.n)
-    elapsed = 0.0
-    for e in data.experiments:
-        t = data.signal("t")[e.start:e.stop]
-        clock[e.start:e.stop] = elapsed + (t - t[0])
-        elapsed += float(t[-1] - t[0]) + (float(t[1] - t[0]) if t.size > 1 else 0.0)
-    if elapsed <= 0.0:
+    t = data.signal("t")
+    cols = []
+    for group in sessions(data):
+        idx = np.concatenate([np.arange(data.experiments[i].start, data.experiments[i].stop)
+                              for i in group])
+        t0, t1 = float(t[idx].min()), float(t[idx].max())
+        if t1 <= t0:
+            continue
+        tau = np.zeros(data.n)
+        inside = np.zeros(data.n, dtype=bool)
+        inside[idx] = True
+        tau[idx] = 2.0 * (t[idx] - t0) / (t1 - t0) - 1.0
+        for poly in (tau, 0.5 * (3.0 * tau**2 - 1.0), 0.5 * (5.0 * tau**3 - 3.0 * tau)):
+            cols.append(np.where(inside, F_hat * poly, 0.0))
+    if not cols:
         return 0.0
-    tau = 2.0 * clock / elapsed - 1.0
     moving = data.signal("v") != 0.0
-    cols = np.column_stack([F_hat * tau, F_hat * 0.5 * (3.0 * tau**2 - 1.0),
-                            F_hat * 0.5 * (5.0 * tau**3 - 3.0 * tau)])
+    X = np.column_stack(cols)
     fit = train & moving
     if fit.sum() < 50 or not np.any(test):
         return 0.0
-    coef, *_ = np.linalg.lstsq(cols[fit], r[fit], rcond=None)
-    pred = np.where(moving, cols @ coef, 0.0)
+    coef, *_ = np.linalg.lstsq(X[fit], r[fit], rcond=None)
+    pred = np.where(moving, X @ coef, 0.0)
     before = float(np.sqrt(np.mean(r[test] ** 2)))
     after = float(np.sqrt(np.mean((r - pred)[test] ** 2)))
     return before - after

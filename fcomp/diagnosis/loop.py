@@ -88,6 +88,7 @@ import numpy as np
 from scipy import stats
 
 import fcomp.diagnosis.catalogue as catalogue
+import fcomp.diagnosis.disturbance as disturbance
 from fcomp.diagnosis.data import DiagnosisData, prepare
 from fcomp.diagnosis.features import (
     TRIM,
@@ -99,13 +100,14 @@ from fcomp.diagnosis.features import (
     residual_structure,
     trimmed_rms,
 )
-from fcomp.diagnosis.noise import (
-    NoiseFloor,
-    effective_sample_size,
-    noise_floor,
-    tolerant_noise_share,
+from fcomp.diagnosis.noise import NoiseFloor, effective_sample_size, noise_floor
+from fcomp.diagnosis.refit import (
+    RIG_EXTRAS,
+    FitResult,
+    Refit,
+    sample_weights,
+    score_noise_share,
 )
-from fcomp.diagnosis.refit import RIG_EXTRAS, FitResult, Refit, sample_weights
 from fcomp.diagnosis.regimes import Segmentation, segment
 from fcomp.diagnosis.residuals import regime_errors
 from fcomp.diagnosis.split import Split, make_split
@@ -448,7 +450,8 @@ class Diagnosis:
         self.split_ = make_split(self.data_, self.segmentation_.valid, self.split)
         self.noise_floor_ = noise_floor(self.data_, self.segmentation_)
         self._refit = Refit(self.data_, self.split_, self.segmentation_.d_pre,
-                            max_nfev=self.max_nfev, max_samples=self.max_samples)
+                            max_nfev=self.max_nfev, max_samples=self.max_samples,
+                            noise=self.noise_floor_.value)
         self._blocks = [np.array([k]) for k in np.flatnonzero(self.split_.test)] \
             if self.data_.steady_state else \
             heldout_pieces(self.split_.test, [e.start for e in self.data_.experiments],
@@ -461,6 +464,7 @@ class Diagnosis:
             starts = catalogue.baseline_starts(model, self.data_, self.segmentation_,
                                                self.split_.train)
             first = self._refit.fit(model, starts)
+            first = self._disturbances(model, first, starts)
             # the channel lag is the record's: fixed by this unweighted fit, then held
             if "lag" in first.values:
                 self._refit.hold("lag", first.values["lag"])
@@ -494,6 +498,35 @@ class Diagnosis:
         self._conclude()
         self._check(model, names)
         return self
+
+    def _disturbances(self, model: FrictionModel, first: FitResult,
+                      starts: list[dict[str, float]]) -> FitResult:
+        """Find periodic disturbances in the first fit's residual (:mod:`.disturbance`); take
+        them off the force, estimate the noise floor again and refit the baseline."""
+        self.disturbances_: list[disturbance.Disturbance] = []
+        assert first.plain is not None
+        lines = disturbance.find(first.plain, first.F_hat, self.data_)
+        if not lines:
+            return first
+        cleaned = disturbance.without(self.data_, [w for _, _, w in lines])
+        floor = noise_floor(cleaned, self.segmentation_).value
+        # sized in the force as matched (a band-limited force attenuates a line), reported
+        # at the sensor
+        keep = [(ln, disturbance.describe(*ln, self.data_)) for ln in lines
+                if disturbance.describe(*ln).rms >= disturbance.MIN_SHARE * floor]
+        if not keep:
+            return first
+        self.data_ = disturbance.without(self.data_, [ln[2] for ln, _ in keep])
+        self.noise_floor_ = noise_floor(self.data_, self.segmentation_)
+        self.disturbances_ = [d for _, d in keep]
+        held = dict(self._refit.held)
+        self._refit = Refit(self.data_, self.split_, self.segmentation_.d_pre,
+                            max_nfev=self.max_nfev, max_samples=self.max_samples,
+                            noise=self.noise_floor_.value)
+        for name, value in held.items():
+            self._refit.hold(name, value)
+        self._tick("periodic disturbance removed")
+        return self._refit.fit(model, [first.values, *starts])
 
     def doubts(self) -> list[str]:
         """Why the answer might depend on the baseline (empty: a clean answer).
@@ -577,7 +610,7 @@ class Diagnosis:
             return None
         mine = _comparable(self.added_, self.ties_, other.baseline_fit_.model)
         theirs = _comparable(other.added_, other.ties_, self.baseline_fit_.model)
-        return {"dependent": mine != theirs, "baseline": other.baseline_name_,
+        return {"dependent": not _same_findings(mine, theirs), "baseline": other.baseline_name_,
                 "added": list(other.added_), "verdict": other.verdict_,
                 "rms_baseline": other.rms_baseline_, "rms_final": other.rms_final_}
 
@@ -764,10 +797,13 @@ class Diagnosis:
                 i = futures[fut]
                 results[i] = fut.result()
                 self._tick(proposals[i].effect)
-            return results
-        for i, prop in enumerate(proposals):
-            results[i] = refit_candidate(self._refit, prop, self.fit_)
-            self._tick(prop.effect)
+        else:
+            for i, prop in enumerate(proposals):
+                results[i] = refit_candidate(self._refit, prop, self.fit_)
+                self._tick(prop.effect)
+        for res in results:  # a box a worker's fit had to widen holds here too
+            if isinstance(res, FitResult):
+                self._refit.adopt_boxes(res)
         return results
 
     def _workers(self, jobs: int) -> Executor | None:
@@ -802,10 +838,10 @@ class Diagnosis:
         if fall > 0 and rb - ra < need:
             reasons.append(f"where it changes the prediction the held-out RMS falls by "
                            f"{rb - ra:.3g} N < {need:.3g} N")
-        # the floor of the tolerant residual there: less than nf where the band is wide
-        floor2 = nf**2 * (tolerant_noise_share(before.spread[changed], nf)
-                          if changed.size and before.spread is not None else 1.0)
-        excess = rb**2 - floor2
+        # the floor of the scored residual where the candidate acts: the noise, and what the
+        # right model would score within the timing windows of the events there (never the
+        # band of the motions a model chose to depend on)
+        excess = rb**2 - nf**2 * _timing_share(before, changed, nf)
         share = (rb**2 - ra**2) / excess if excess > 0 else 0.0
         if fall > 0 and rb - ra >= need and share < EXCESS_SHARE:
             reasons.append(f"explains only {100 * share:.0f} % of the excess over the noise "
@@ -1105,7 +1141,10 @@ class Diagnosis:
         data, seg, split = self.data_, self.segmentation_, self.split_
         self.rms_baseline_ = self.baseline_fit_.rms_test
         self.rms_final_ = self.fit_.rms_test
-        self.residual_features_ = residual_structure(self.fit_.residual, data, seg,
+        # where structure is left: the tolerant residual (a shape the model could place);
+        # how large the error is: the scored residual (:func:`.refit.scored_residual`)
+        located = _located(self.fit_)
+        self.residual_features_ = residual_structure(located, data, seg,
                                                      split.train, split.test)
         nf = self.noise_floor_.value
         # what counts: a structure as large as the noise and as a small share of the
@@ -1117,7 +1156,7 @@ class Diagnosis:
         # after starts and reversals, where a jump of the law within the timing uncertainty
         # of the event leaves spikes no model could place, the residual counts as the fits
         # weigh it (a static map's full-level step one sample early is not a structure)
-        r_events = self.fit_.residual
+        r_events = located
         if self.fit_.spread is not None:
             r_events = r_events * np.sqrt(sample_weights(self.fit_.spread, nf))
         ev = event_structure(r_events, data, seg, split.train, split.test)
@@ -1134,9 +1173,14 @@ class Diagnosis:
                    and ring.concentration >= RING_CONCENTRATION
                    and ring.rms >= max(RING_NOISE * nf, RING_LEVEL * data.scales.force))
         trimmed = trimmed_rms(self.fit_.residual[split.test])
-        excess = trimmed > max(EXCESS_MAX * nf, nf + STRUCTURE_LEVEL * data.scales.force)
+        # the right model's score within the timing windows of the events (a static law's
+        # jump is placed only within them): the floor the scored error is held against
+        nf_t = nf * math.sqrt(_timing_share(self.fit_, np.flatnonzero(split.test), nf))
+        limit = max(EXCESS_MAX * nf_t, nf_t + STRUCTURE_LEVEL * data.scales.force)
+        excess = trimmed > limit
+        lines = getattr(self, "disturbances_", [])
         self.verdict_ = ("unexplained-structure" if structured or event or event_excess
-                         or ringing or excess else "explained")
+                         or ringing or excess or lines else "explained")
         after = ("" if ev is None else f"structure after events: within "
                  f"{1e3 * ev.window:.0f} ms of every start and reversal the held-out residual ")
         if event and not structured:
@@ -1167,17 +1211,26 @@ class Diagnosis:
                             f"{self.rms_final_ * math.sqrt(top.strength):.3g} N RMS >= "
                             f"{least:.3g} N, a noise floor and {100 * STRUCTURE_LEVEL:g} % of "
                             "the friction level)")
-        limit = max(EXCESS_MAX * nf, nf + STRUCTURE_LEVEL * data.scales.force)
+        floor_words = (f"{nf:.3g} N" if nf_t <= 1.0005 * nf else
+                       f"{nf_t:.3g} N: {nf:.3g} N of noise and what the right model scores "
+                       "within the events' timing windows")
         if excess and not (structured or event or event_excess or ringing):
             self.reason_ = (f"excess: the held-out RMS without its largest {100 * TRIM:g} % "
                             f"({trimmed:.3g} N) is above {limit:.3g} N ({EXCESS_MAX:g} noise "
-                            f"floors of {nf:.3g} N, and the floor plus "
+                            f"floors of {floor_words}, and the floor plus "
                             f"{100 * STRUCTURE_LEVEL:g} % of the friction level), though no "
                             "single feature explains it")
         elif not (structured or event or event_excess or ringing):
             self.reason_ = (f"at the noise: held-out RMS without its largest {100 * TRIM:g} % "
-                            f"{trimmed:.3g} N within {limit:.3g} N (noise floor {nf:.3g} N), "
-                            f"and no structure carries {least:.3g} N")
+                            f"{trimmed:.3g} N within {limit:.3g} N (noise floor "
+                            f"{floor_words}), and no structure carries {least:.3g} N")
+        if lines:
+            what = ", ".join(f"{d.frequency_hz:.4g} Hz ({d.amplitude:.3g} N amplitude)"
+                             for d in lines)
+            self.reason_ = (f"periodic disturbance: a narrow line in the residual that follows "
+                            f"no motion feature at {what}, taken off the force before the "
+                            f"diagnosis (no friction law explains it: look for a pump, a fan, "
+                            f"mains hum, a valve dither); the rest: {self.reason_}")
         self.regimes_ = {
             "baseline": regime_errors(self.baseline_fit_.residual, seg, split.test),
             "final": regime_errors(self.fit_.residual, seg, split.test),
@@ -1222,6 +1275,18 @@ class Diagnosis:
         def num(x: float) -> float | None:
             return float(x) if math.isfinite(x) else None
 
+        def candidate(c: Candidate) -> dict[str, Any]:
+            return {"effect": c.effect, "form": c.form, "rms_heldout": num(c.rms_heldout),
+                    "qualifies": c.qualifies, "z": num(c.z), "p": num(c.p),
+                    "delta_bic": num(c.delta_bic),
+                    "reason": c.reason or "qualifies by the acceptance rule"}
+
+        test = self.split_.test
+
+        def plain(fit: FitResult) -> float | None:
+            r = fit.plain if fit.plain is not None else fit.residual
+            return num(_rms(r[test]))
+
         return {
             "baseline": self.baseline_name_,
             "rms_baseline": self.rms_baseline_,
@@ -1229,15 +1294,19 @@ class Diagnosis:
             "steps": [{"effect": s.effect, "rms_before": s.rms_before, "rms_after":
                        num(s.rms_after), "accepted": bool(s.accepted), "forced": s.forced,
                        "removed": bool(s.removed),
+                       "removed_because": s.removed or None,
+                       "candidates": [candidate(c) for c in s.candidates],
                        "warnings": [w.to_dict() for w in s.warnings]}
                       for s in self.steps_],
-            "candidates": [{"effect": c.effect, "rms_heldout": num(c.rms_heldout),
-                            "qualifies": c.qualifies, "z": num(c.z), "p": num(c.p),
-                            "delta_bic": num(c.delta_bic), "reason": c.reason}
-                           for c in self.candidates_],
+            "candidates": [candidate(c) for c in self.candidates_],
             "ties": [list(t) for t in self.ties_],
             "removed": list(self.removed_),
             "rms_final": self.rms_final_,
+            "rms_plain": {"baseline": plain(self.baseline_fit_), "final": plain(self.fit_)},
+            "error_measure": ("held-out RMS of the scored residual: the logarithmic score of "
+                              "the model's prediction band with the noise floor, in N (equal "
+                              "to the plain residual where the motion fixes the prediction; "
+                              "a wider band costs); rms_plain: y - F_hat"),
             "noise_floor": self.noise_floor_.value,
             "verdict": self.verdict_,
             "reason": self.reason_,
@@ -1249,12 +1318,14 @@ class Diagnosis:
                                   for f in self.residual_features_],
             "model": self.fit_.model.describe(),
             "params": {k: num(v) for k, v in self.fit_.values.items()},
+            "model_params": {k: num(float(v)) for k, v in self.fit_.model.flat_params().items()},
             "regimes": self.regimes_,
             "tie_experiments": {t[0]: {e: EFFECTS.get(e).experiment_for(self.data_.kind) for e in t}
                                 for t in self.ties_},
             "skipped": dict(self.skipped_),
             "split": self.split_.description,
             "noise_method": self.noise_floor_.method,
+            "disturbances": [d.to_dict() for d in getattr(self, "disturbances_", [])],
             "units": "N",
             "warnings": [w.to_dict() for w in self.warnings_],
         }
@@ -1293,6 +1364,20 @@ def _comparable(added: Sequence[str], ties: Sequence[Sequence[str]],
     return frozenset(out)
 
 
+def _same_findings(mine: frozenset[frozenset[str]], theirs: frozenset[frozenset[str]]) -> bool:
+    """Whether two diagnoses found the same effects, a tie on either side matching any member.
+
+    Each finding is its tie group (one name when there is no tie); a finding of
+    one side is matched by a finding of the other that shares a member, and the
+    two agree when every finding on each side is matched (a tie reported on one
+    side only is no disagreement).
+    """
+    def covered(a: frozenset[frozenset[str]], b: frozenset[frozenset[str]]) -> bool:
+        return all(any(g & h for h in b) for g in a)
+
+    return covered(mine, theirs) and covered(theirs, mine)
+
+
 def _instance_applicability(effect: Effect, model: FrictionModel, data: DiagnosisData
                             ) -> str | None:
     """Why a configured effect cannot be added to ``model`` on ``data`` (None if it can)."""
@@ -1302,6 +1387,18 @@ def _instance_applicability(effect: Effect, model: FrictionModel, data: Diagnosi
         if not data.available.get(sig, False):
             return f"needs {sig}: {data.reasons.get(sig, 'not available')}"
     return None
+
+
+def _timing_share(fit: FitResult, where: np.ndarray, nf: float) -> float:
+    """:func:`.refit.score_noise_share` of ``fit``'s timing band at the samples ``where``."""
+    if fit.timing_spread is None or not where.size:
+        return 1.0
+    return score_noise_share(fit.timing_spread[where], nf)
+
+
+def _located(fit: FitResult) -> np.ndarray:
+    """The residual that locates structure: the tolerant one where the fit carries it."""
+    return fit.tolerant if fit.tolerant is not None else fit.residual
 
 
 class _NoBar:

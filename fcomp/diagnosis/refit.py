@@ -42,9 +42,12 @@ import dataclasses
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from functools import lru_cache
 from typing import Any
 
 import numpy as np
+from scipy.integrate import trapezoid
+from scipy.special import log_ndtr
 
 from fcomp.conditioning import Scales
 from fcomp.diagnosis.data import DiagnosisData
@@ -75,6 +78,16 @@ PRESLIDING_SPAN = 20.0
 STAGED = ("n", "p_visc", "kappa_s", "i_pre")
 #: Half-width, in unit scales, of the box of a pressure level-law coefficient.
 LEVEL_LAW_SPAN = 2.0
+#: A fit pinned at a data-box edge is retried with that edge this many times farther out
+#: (:meth:`Refit.widen`) ...
+WIDEN_FACTOR = 10.0
+#: ... at most this many times per parameter and side.
+WIDEN_TRIES = 2
+#: Units whose data boxes come from the record's scale alone, and widen.
+WIDENED_UNITS = ("N", "Ns/m", "N/m", "m/s", "m", "s", "kg")
+#: Parameters whose box is a physical rule (a Stribeck exponent's range, a passive bristle
+#: damping): never widened.
+UNWIDENED = ("n", "sigma1", "lag")
 #: Fitted terms of the record, not of the model, carried from fit to fit: the moving mass
 #: of a driving force and the lag of its channel (:mod:`fcomp.identification.dynamic`).
 RIG_EXTRAS = ("mass", "lag")
@@ -94,6 +107,7 @@ def unit_scale(unit: str, sc: Scales, d_pre: float) -> float:
         "1/Pa^2": 1.0 / max(sc.p_span, abs(sc.p_mid), 1.0) ** 2,
         "kg": sc.force / sc.accel,
         "Pa": max(sc.p_span, abs(sc.p_mid), 1.0),
+        "m^2": sc.force / max(sc.p_span, abs(sc.p_mid), 1.0),
     }
     return float(table.get(unit, 1.0))
 
@@ -181,6 +195,27 @@ class FitResult:
         Width of the band the model could be expected to predict at each sample
         (:func:`tolerant_residual`): the uncertainty of its prediction that the
         measured motion leaves.
+    tolerant : (N,) N or None
+        The tolerant residual (:func:`tolerant_residual`): the distance of the
+        measurement from that band. It shows *where* structure is left (the
+        verdict's features, the effects' guesses) but never decides: a wider band
+        would lower it.
+    plain : (N,) N or None
+        ``y - F_hat``, the plain residual (reported beside the deciding one).
+    boxes : dict or None
+        The boxes of parameters widened beyond their data box (:meth:`Refit.widen`).
+    timing_spread : (N,) N or None
+        Width of the band from the timing windows alone (the prediction along the
+        measured motion, widened by :func:`timing_windows`): the part of ``spread``
+        no choice of the model's makes wider (:func:`score_noise_share`).
+
+    Notes
+    -----
+    ``residual`` -- and so ``rms_train``/``rms_test`` -- is the *scored*
+    residual (:func:`scored_residual`): the logarithmic score of the prediction
+    band with the noise floor, in newtons. It equals the plain residual where
+    the band is a point, and a wider band always costs, so no model can win by
+    being uncertain.
     """
 
     model: FrictionModel
@@ -193,6 +228,10 @@ class FitResult:
     converged: bool
     nfev: int
     spread: np.ndarray | None = dataclasses.field(default=None, repr=False)
+    tolerant: np.ndarray | None = dataclasses.field(default=None, repr=False)
+    plain: np.ndarray | None = dataclasses.field(default=None, repr=False)
+    boxes: dict[str, tuple[float, float]] | None = None
+    timing_spread: np.ndarray | None = dataclasses.field(default=None, repr=False)
 
 
 #: Largest timing tolerance (s) of :func:`tolerant_residual`.
@@ -215,9 +254,9 @@ def timing_windows(v: np.ndarray, dt: float, resolution: float) -> np.ndarray:
     return np.clip(w, 1, w_max).astype(int)
 
 
-def tolerant_residual(y: np.ndarray, lo: np.ndarray, hi: np.ndarray, starts: Sequence[int],
-                      windows: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """The distance of ``y`` from what the model could be expected to predict there (N).
+def prediction_band(lo: np.ndarray, hi: np.ndarray, starts: Sequence[int],
+                    windows: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """The band ``[low, high]`` (N) the model could be expected to predict at each sample.
 
     The model runs along a motion reconstructed from sampled, quantised
     positions, so what it predicts at a sample is known only within
@@ -232,11 +271,7 @@ def tolerant_residual(y: np.ndarray, lo: np.ndarray, hi: np.ndarray, starts: Seq
       placed only to within that time,
 
     so the range is widened to the lowest and highest value within ``w_k``
-    samples (in the experiment; ``starts`` are its first samples). The residual
-    is ``y`` minus its projection onto that band. Where the motion is well
-    measured and the prediction smooth the band is narrower than the noise and
-    this is the plain residual; a structure the model predicts nowhere near
-    is never hidden. Returns the residual and the band's width (N).
+    samples (in the experiment; ``starts`` are its first samples).
     """
     from scipy.ndimage import maximum_filter1d, minimum_filter1d
 
@@ -252,7 +287,115 @@ def tolerant_residual(y: np.ndarray, lo: np.ndarray, hi: np.ndarray, starts: Seq
             size = 2 * int(k) + 1
             low[a:b][sel] = minimum_filter1d(lo[a:b], size, mode="nearest")[sel]
             high[a:b][sel] = maximum_filter1d(hi[a:b], size, mode="nearest")[sel]
+    return low, high
+
+
+def tolerant_residual(y: np.ndarray, lo: np.ndarray, hi: np.ndarray, starts: Sequence[int],
+                      windows: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """The distance of ``y`` from the band the model could be expected to predict (N).
+
+    ``y`` minus its projection onto :func:`prediction_band`. Where the motion is
+    well measured and the prediction smooth the band is narrower than the noise
+    and this is the plain residual. It locates structure a model could place
+    (the verdict's features) but it is *not* an error measure to rank models
+    by: a wider band lowers it (a mass relabelled as a lead term, whose band
+    along the motion ensemble is 27 N wide, scored 0.33 N against a plain
+    4.1 N). :func:`scored_residual` is. Returns the residual and the band's width (N).
+    """
+    low, high = prediction_band(lo, hi, starts, windows)
     return y - np.clip(y, low, high), high - low
+
+
+#: Log of the peak density of a unit normal, ``ln(1/sqrt(2*pi))``.
+_LOG_PEAK = -0.5 * math.log(2.0 * math.pi)
+
+
+def scored_residual(y: np.ndarray, F_hat: np.ndarray, low: np.ndarray, high: np.ndarray,
+                    sigma: float) -> np.ndarray:
+    """The logarithmic score of the prediction band, as a residual in newtons.
+
+    The model predicts "somewhere in ``[low, high]``" (:func:`prediction_band`)
+    and the measurement adds noise of standard deviation ``sigma`` (the noise
+    floor), so its predictive density of ``y`` is the uniform band convolved
+    with that noise,
+
+    ``p(y) = [Phi((high - y)/sigma) - Phi((low - y)/sigma)] / (high - low)``
+
+    (the normal density ``phi((y - F_hat)/sigma)/sigma`` for a point band). The
+    logarithmic score ``-ln p(y)`` is a *strictly proper* scoring rule
+    (Gneiting & Raftery 2007, J. Am. Stat. Assoc. 102:359, sect. 4.1): a
+    forecaster cannot improve its expected score by widening or shifting its
+    band away from what it believes. Expressed against the best possible score,
+    that of a point prediction hitting ``y`` (``p = 1/(sigma*sqrt(2*pi))``),
+
+    ``e^2 = -2*sigma^2*ln(p(y)*sigma*sqrt(2*pi))  >= 0``,
+
+    ``e = sign(y - F_hat)*sqrt(e^2)`` is the plain residual ``y - F_hat`` where
+    the band is a point, and a band of width ``W`` around the measurement costs
+    ``e^2 ~ 2*sigma^2*ln(W/(sigma*sqrt(2*pi)))``: a static law's 40 N jump placed
+    within its timing window costs about three noise floors instead of 40 N,
+    while a 27 N band where a point prediction would do costs what it is. The
+    RMS of ``e`` is the diagnosis's deciding error; its mean square is twice
+    ``sigma^2`` times the mean log-score excess, so comparing two models' RMS
+    compares their mean log scores.
+    """
+    y = np.asarray(y, dtype=float)
+    s = max(float(sigma), 1e-300)
+    width = high - low
+    a = (high - y) / s
+    b = (low - y) / s  # a >= b
+    # Phi(a) - Phi(b) in the tail where it is accurate: Phi(-b) - Phi(-a) above the centre
+    flip = a + b > 0
+    upper, lower = np.where(flip, -b, a), np.where(flip, -a, b)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        lu, ll = log_ndtr(upper), log_ndtr(lower)
+        log_mass = lu + np.log1p(-np.exp(np.minimum(ll - lu, 0.0)))
+        e2 = -2.0 * (log_mass - np.log(width / s) - _LOG_PEAK)
+    narrow = ~(width > 1e-6 * s) | ~np.isfinite(e2)
+    if narrow.any():  # a point band (or a mass lost to rounding): the normal density
+        centre = 0.5 * (low + high)
+        e2 = np.where(narrow, ((y - np.where(width > 1e-6 * s, np.clip(y, low, high), centre))
+                               / s) ** 2, e2)
+    sign = np.where(y >= F_hat, 1.0, -1.0)
+    return sign * s * np.sqrt(np.maximum(e2, 0.0))
+
+
+@lru_cache(maxsize=1)
+def _score_share_table() -> tuple[np.ndarray, np.ndarray]:
+    """``(k, g(k))`` on a log grid: :func:`score_noise_share` of one band, by quadrature."""
+    ks = np.concatenate([[0.0], np.geomspace(1e-2, 1e5, 141)])
+    gs = np.ones(ks.size)
+    for i, k in enumerate(ks[1:], start=1):
+        y = np.linspace(-0.5 * k - 12.0, 0.5 * k + 12.0, 20_001)
+        lo, hi = np.full(y.size, -0.5 * k), np.full(y.size, 0.5 * k)
+        e2 = scored_residual(y, np.zeros(y.size), lo, hi, 1.0) ** 2
+        dens = np.exp(-0.5 * e2) / math.sqrt(2.0 * math.pi)  # p(y) itself, from e^2
+        gs[i] = float(trapezoid(dens * e2, y) / trapezoid(dens, y))
+    return ks, gs
+
+
+def score_noise_share(width: np.ndarray, sigma: float) -> float:
+    """Mean ``E[e^2]/sigma^2`` of the scored residual of a *right* model over bands ``width``.
+
+    Where a model's prediction is known only within a band of width
+    ``W = k*sigma`` (an event placed within its timing window), even the right
+    model scores more than the noise: for the truth anywhere in the band
+    (uniform) and normal noise, ``g(k) = E[e^2]/sigma^2`` is twice the
+    differential entropy of the predictive density in units of ``sigma``, less
+    ``ln(2*pi)`` (1 at ``k = 0``, ``2*ln(k) - ln(2*pi)`` for a wide band), computed
+    once by quadrature on a grid of ``k`` and interpolated in ``ln k``. The verdict
+    compares a final error with ``sigma*sqrt`` of this share over the *timing*
+    band alone (:attr:`FitResult.timing_spread`), never over the band of the
+    motions a model chose to depend on, so a wide band is never excused.
+    """
+    if width.size == 0 or not sigma > 0:
+        return 1.0
+    ks, gs = _score_share_table()
+    k = np.clip(np.asarray(width, dtype=float) / sigma, 0.0, ks[-1])
+    small = k < ks[1]
+    g = np.interp(np.log(np.maximum(k, ks[1])), np.log(ks[1:]), gs[1:])
+    g = np.where(small, 1.0 + (gs[1] - 1.0) * (k / ks[1]) ** 2, g)
+    return float(np.mean(g))
 
 
 def fixed_names(model: FrictionModel) -> set[str]:
@@ -284,18 +427,27 @@ class Refit:
         Evaluation budget of each fit.
     max_samples
         Largest number of samples a fit runs on (longer records are block-averaged).
+    noise
+        The record's noise floor (N, RMS): the measurement noise of the scored
+        residual (:func:`scored_residual`). ``None`` scores the plain residual
+        (each prediction taken as a point).
     """
 
     def __init__(self, data: DiagnosisData, split: Split, d_pre: float, *,
-                 max_nfev: int = 60, max_samples: int = 40_000) -> None:
+                 max_nfev: int = 60, max_samples: int = 40_000,
+                 noise: float | None = None) -> None:
         self.data = data
         self.split = split
         self.d_pre = d_pre
+        self.noise = noise
         self.max_nfev = max_nfev
         self.q = max(1, math.ceil(data.n / max_samples))
         self.windows = timing_windows(data.signal("v"), data.scales.dt, data.scales.resolution)
         #: :data:`RIG_EXTRAS` estimated once and held from then on (:meth:`hold`)
         self.held: dict[str, float] = {}
+        #: data boxes widened because a fit was pinned at their edge (:meth:`widen`)
+        self.wide: dict[str, tuple[float, float]] = {}
+        self._widened: dict[tuple[str, int], int] = {}
         self._build_records()
 
     def _build_records(self) -> None:
@@ -467,20 +619,34 @@ class Refit:
                converged: bool = True, nfev: int = 0) -> FitResult:
         """The :class:`FitResult` of ``model`` with ``values`` (scored on the full record).
 
-        The residual is the tolerant one (:func:`tolerant_residual`): the
-        prediction's range along the record's alternative motions, widened by
-        the timing windows.
+        The residual that decides is the scored one (:func:`scored_residual`)
+        of the prediction's band (:func:`prediction_band`: its range along the
+        record's alternative motions, widened by the timing windows) with the
+        noise floor; the tolerant and the plain residual ride along.
         """
         values = {**values, **self.held}
         model_vals = {k: v for k, v in values.items() if k not in RIG_EXTRAS}
         fitted = model.with_params(**model_vals) if model_vals else model
         extras = {k: values[k] for k in RIG_EXTRAS if k in values}
         F_hat, lo, hi = self._predictions(fitted, extras, alternatives=True)
-        r, spread = tolerant_residual(self.data.y, lo, hi,
-                                      [e.start for e in self.data.experiments], self.windows)
+        y = self.data.y
+        low, high = prediction_band(lo, hi, [e.start for e in self.data.experiments],
+                                    self.windows)
+        tolerant = y - np.clip(y, low, high)
+        plain = y - F_hat
+        t_low, t_high = prediction_band(F_hat, F_hat, [e.start for e in self.data.experiments],
+                                        self.windows)
+        sigma = self.noise if self.noise is not None and self.noise > 0 else None
+        if sigma is None:
+            r = plain
+        else:  # a floor of zero (an exact table): a band still costs, at rounding scale
+            r = scored_residual(y, F_hat, low, high,
+                                max(sigma, 1e-12 * self.data.scales.force))
         tr, te = self.split.train, self.split.test
         return FitResult(fitted, dict(values), F_hat, r, _rms(r[tr]), _rms(r[te]), n_params,
-                         converged, nfev, spread)
+                         converged, nfev, high - low, tolerant, plain,
+                         {k: v for k, v in self.wide.items() if k in values} or None,
+                         t_high - t_low)
 
     # ---------------------------------------------------------------- fit
     def free_names(self, model: FrictionModel) -> list[str]:
@@ -497,11 +663,54 @@ class Refit:
         all_specs = dict(model.param_specs())
         all_specs.update(EXTRA_SPECS)
         out = {}
+        wide = getattr(self, "wide", {})
         for n in names:
             sp = all_specs[n]
-            lo, hi = data_bounds(sp, self.data.scales, self.d_pre)
+            lo, hi = wide.get(n) or data_bounds(sp, self.data.scales, self.d_pre)
             out[n] = dataclasses.replace(sp, lower=lo, upper=hi, lower_open=False)
         return out
+
+    def widen(self, model: FrictionModel, name: str, side: int) -> bool:
+        """Widen the data box of ``name`` on ``side`` (-1 lower, +1 upper); False if it cannot.
+
+        The data boxes (:func:`data_bounds`) come from the record's scales, and a
+        scale is an estimate: a soft pneumatic seal's bristle (1.5e4 N/m) lay below
+        a stiffness box set by a presliding length read off a record of small
+        loops. A fit pinned at a data-box edge is therefore retried in a box
+        :data:`WIDEN_FACTOR` times wider on that side (within the spec's own
+        bounds), at most :data:`WIDEN_TRIES` times per parameter. Only the boxes
+        of positive quantities set by the record's scale widen; the boxes that
+        encode a physical rule (``n``, the passive ``sigma1``, the level laws'
+        coefficients, a channel lag) do not. The widened box holds for every later
+        fit of the record, so models stay compared on the same boxes.
+        """
+        specs = dict(model.param_specs())
+        specs.update(EXTRA_SPECS)
+        sp = specs.get(name)
+        if sp is None or sp.lower < 0 or name in UNWIDENED or sp.unit not in WIDENED_UNITS:
+            return False
+        lo, hi = self.wide.get(name) or data_bounds(sp, self.data.scales, self.d_pre)
+        count = self._widened.get((name, side), 0)
+        if count >= WIDEN_TRIES:
+            return False
+        if side < 0:
+            new_lo = max(sp.lower, lo / WIDEN_FACTOR) if lo > 0 else lo
+            if not new_lo < lo:
+                return False
+            self.wide[name] = (new_lo, hi)
+        else:
+            new_hi = min(sp.upper, hi * WIDEN_FACTOR)
+            if not new_hi > hi:
+                return False
+            self.wide[name] = (lo, new_hi)
+        self._widened[(name, side)] = count + 1
+        return True
+
+    def adopt_boxes(self, fit: FitResult) -> None:
+        """Take over the boxes a fit elsewhere (a worker process) widened."""
+        for name, box in (fit.boxes or {}).items():
+            lo, hi = self.wide.get(name, box)
+            self.wide[name] = (min(lo, box[0]), max(hi, box[1]))
 
     def scales(self, model: FrictionModel, names: Sequence[str], start: Mapping[str, float]
                ) -> dict[str, float]:
@@ -591,6 +800,17 @@ class Refit:
                                  records=main)
             nfev += k
         values = dict(zip(names, map(float, sol.theta), strict=True))
+        # pinned at an edge of a box the record's scale set: try the wider box first
+        while True:
+            pinned = [(n, -1 if values[n] <= 0.5 * (specs[n].lower + specs[n].upper) else 1)
+                      for n, at in zip(names, sol.at_bound, strict=True) if at]
+            if not [self.widen(model, n, side) for n, side in pinned].count(True):
+                break
+            specs = self.specs(model, names)
+            sol, k = self._solve(model, self._pv(model, names, values, specs), max_nfev,
+                                 records=main)
+            nfev += k
+            values = dict(zip(names, map(float, sol.theta), strict=True))
         return self.result(model, values, len(names), sol.converged, nfev)
 
     def plausibility(self, fit: FitResult, context: RigContext | None = None
@@ -600,11 +820,24 @@ class Refit:
         Standard errors, intervals and correlations from the Jacobian at the
         estimate over the training samples (batch-means HAC,
         :func:`fcomp.identification.uncertainty.estimate`); bounds are the
-        data boxes the fit searched (:func:`data_bounds`).
+        data boxes the fit searched (:func:`data_bounds`). The extras held from an
+        earlier fit (:meth:`hold`, the channel ``lag``) are checked against their
+        boxes too (:func:`fcomp.identification.plausibility.check_held`: at a bound,
+        a negative lag), after the fitted parameters.
         """
+        from fcomp.identification.plausibility import check_held
+
+        held_names = [n for n in self.held if n in fit.values]
+        held: list[FitWarning] = []
+        if held_names:
+            hs = self.specs(fit.model, held_names)
+            held = check_held({n: float(fit.values[n]) for n in held_names},
+                              {n: (hs[n].lower, hs[n].upper) for n in held_names},
+                              units={n: hs[n].unit for n in held_names},
+                              dt=self.q * self.data.scales.dt)
         names = [n for n in fit.values if n not in self.held]
         if not names:
-            return []
+            return held
         base = fit.model
         specs = self.specs(base, names)
         pv = self._pv(base, names, fit.values, specs)
@@ -626,7 +859,7 @@ class Refit:
         bounds = {n: (specs[n].lower, specs[n].upper) for n in names}
         units = {n: specs[n].unit for n in names}
         return check_fit(fit.values, stderr, ci, bounds, correlations(names, unc.cov),
-                         fit.converged, context, units=units)
+                         fit.converged, context, units=units) + held
 
     def _pv(self, model: FrictionModel, names: Sequence[str], start: Mapping[str, float],
             specs: Mapping[str, ParamSpec]) -> ParameterVector:

@@ -168,6 +168,12 @@ def _binned(f: np.ndarray, r: np.ndarray) -> tuple[list[float], list[float]]:
     return [a for a, _ in pairs], [b for _, b in pairs]
 
 
+def _plain(fit: Any) -> np.ndarray:
+    """The plain residual ``y - F_hat`` a person reads off a figure (the scored one where a
+    fit carries no plain one)."""
+    return fit.plain if getattr(fit, "plain", None) is not None else fit.residual
+
+
 def fig_residuals(obj: Diagnosis | Comparison | View) -> Figure:
     """Judged residual against each feature (every model drawn), with binned means; each
     panel is titled with its feature and how strongly the last model's residual follows it."""
@@ -182,7 +188,7 @@ def fig_residuals(obj: Diagnosis | Comparison | View) -> Figure:
         ax = fig.add_subplot(rows, cols, i + 1)
         shown = f[te] * _SHOWN_SCALE.get(name, 1.0)
         for s in vw.series:
-            r = s.fit.residual[te]
+            r = _plain(s.fit)[te]
             ax.plot(shown, r, ".", ms=1.5, alpha=0.35, color=_COLORS[s.colour])
             cx, cy = _binned(shown, r)
             ax.plot(cx, cy, "-", color=_COLORS[s.colour], lw=1.5, label=s.label.split(":")[0])
@@ -242,7 +248,7 @@ def worst_windows(obj: Diagnosis | Comparison | View, count: int = 3
     vw = view(obj)
     width = max(10, int(round(0.25 / vw.data.scales.dt)))
     bounds = [e.start for e in vw.data.experiments[1:]]
-    segs = worst_segments(vw.first.fit.residual, vw.judged, width, count, bounds)
+    segs = worst_segments(_plain(vw.first.fit), vw.judged, width, count, bounds)
     return [(s.start, s.stop, s.rms) for s in segs]
 
 
@@ -591,13 +597,25 @@ def build_report(diag: Diagnosis, *, command: str | None = None) -> Report:
                   [[w["code"], w["parameter"] or "", w["message"]] for w in d["warnings"]],
                   caption="Plausibility of the fits (baseline, each accepted step, final model) "
                   "and what the held-out samples cannot judge.")
+    if d.get("disturbances"):
+        rep.section("Periodic disturbances", level=3)
+        rep.table(["frequency (Hz)", "amplitude (N)", "RMS (N)", "over the background",
+                   "experiments"],
+                  [[x["frequency_hz"], x["amplitude"], x["rms"], x["prominence"],
+                    x["experiments"]] for x in d["disturbances"]],
+                  caption="Narrow lines in the residual that follow no motion feature (a "
+                  "pump's pulsation, a fan, mains hum, a valve dither): fitted as sinusoids "
+                  "and taken off the force before the diagnosis, so they are neither in the "
+                  "noise floor nor explained by an effect.", digits=[3, 3, 3, 1, 0])
     sig = d["signals"]
     rep.table(["quantity", "value", "unit"], [
         ["velocity driving the friction states", f"{sig['velocity']} -- {sig['reason']}", ""],
         ["samples left out (motion the position misses)",
          str(sig.get("unresolved_samples", 0)), ""],
-        ["held-out RMS, baseline", d["rms_baseline"], "N"],
-        ["held-out RMS, final", d["rms_final"], "N"],
+        ["held-out RMS, baseline (scored: a prediction band costs)", d["rms_baseline"], "N"],
+        ["held-out RMS, final (scored)", d["rms_final"], "N"],
+        ["held-out RMS of y - F, baseline / final",
+         f"{d['rms_plain']['baseline']:.4g} / {d['rms_plain']['final']:.4g}", "N"],
         ["noise floor (" + nf.method + f", {nf.n_samples} samples)", nf.value, "N"],
         ["held-out split", diag.split_.description, ""],
         ["experiments", str(len(diag.data_.experiments)), ""],

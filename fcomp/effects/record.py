@@ -70,6 +70,13 @@ class RecordView:
         Whether the samples are independent steady-state points (no motion).
     available, reasons
         Signal name -> whether it is measured and informative; -> why not.
+    source
+        Where the force to match came from: ``"F"`` (a force column, a load cell
+        on the friction), ``"reconstructed"`` (``p1*A1 - p2*A2 - m*a`` with the rig's
+        mass) or ``"driving-force"`` (the same, the mass fitted); ``""`` unknown.
+    force_channels
+        The measured columns that force is made of: ``("F",)``, or those of
+        ``p1``, ``p2``, ``F_ext`` (a driving force).
     """
 
     signals: Mapping[str, np.ndarray]
@@ -88,6 +95,8 @@ class RecordView:
     steady_state: bool = False
     available: Mapping[str, bool] = field(default_factory=lambda: MappingProxyType({}))
     reasons: Mapping[str, str] = field(default_factory=lambda: MappingProxyType({}))
+    source: str = ""
+    force_channels: tuple[str, ...] = ()
 
     @property
     def n(self) -> int:

@@ -16,8 +16,15 @@ way. Each finding is a :class:`FitWarning` (docs/identification.md, "Warnings"):
     reaches zero or below: the record does not establish the term.
 ``mass-implausible``
     A fitted moving mass off by more than :data:`MASS_RATIO` from the
-    sidecar's ``rig.mass``, or, without it, outside what the piston geometry
-    allows (:func:`mass_range`).
+    sidecar's ``rig.mass`` (outside ``[0.5, 2]`` times it), or, without it,
+    outside what the piston geometry allows (:func:`mass_range`: below half an
+    aluminium piston ``0.2*D`` long, 3.3 g for a 25 mm bore, "the record does
+    not determine the moving mass"), or above :data:`LOAD_FACTOR` (10) times
+    a solid steel piston and rod (:func:`steel_piston_mass`: 7850 kg/m^3, a
+    piston of the bore's area one bore long plus a rod of ``rig.rod`` over
+    ``rig.stroke``; 0.096 kg for a bare 25 mm bore, so a flag above 0.96 kg):
+    a load that heavy must be stated (``rig.mass``, ``--mass``), a fitted one
+    is usually a mass trading off with other terms.
 ``not-identified``
     An infinite standard error (a parameter the record does not determine,
     held), a standard error above :data:`HUGE_RELATIVE_ERROR` times a positive
@@ -30,6 +37,18 @@ way. Each finding is a :class:`FitWarning` (docs/identification.md, "Warnings"):
 A parameter gets at most one of ``at-bound``, ``not-identified`` (by its own
 standard error) and ``interval-crosses-zero``, in that order: a value at a
 bound has no meaningful error, and a huge error implies the interval.
+
+Rig terms a fit estimated once and then held for the fits that follow (the
+diagnosis's driving-force channel ``lag``, :meth:`fcomp.diagnosis.refit.Refit.hold`)
+have no standard error of their own; :func:`check_held` checks their values
+(:data:`HELD_CODES`):
+
+``at-bound``
+    As above: the held value is at a bound of its box (``lag``: +-20 ms).
+``lag-negative``
+    A channel lag below ``-LEAD_SAMPLES`` sample intervals: the force leads the
+    motion, which no sensor or line lag does -- a timing offset between the
+    channels (separate clocks, a delayed motion signal) or a wrong sign.
 """
 
 from __future__ import annotations
@@ -74,6 +93,16 @@ CEILING_FACTOR = 1000.0
 #: Without a bore: no moving part weighs less than a gram, and no servo positions 100 t.
 MIN_MASS = 1e-3
 MAX_MASS = 1e5
+#: Without a stated ``rig.mass``, a fitted mass above this many times a solid steel piston
+#: and rod (:func:`steel_piston_mass`) is flagged: a bare cylinder's piston, rod and carriage
+#: weigh less; a heavier load is possible (seed 002's servo: 118 kg on a 30/16 mm cylinder)
+#: but must be stated, a fitted one is usually a mass trading off with other terms (the
+#: 34, 3.9 and 1.87 kg fitted on the 25 mm Zillen piston, limit 0.96 kg).
+LOAD_FACTOR = 10.0
+#: Codes of :func:`check_held`.
+HELD_CODES = ("at-bound", "lag-negative")
+#: A held channel lag below minus this many sample intervals is a lead, not rounding.
+LEAD_SAMPLES = 1.0
 
 
 @dataclass(frozen=True)
@@ -143,7 +172,9 @@ def mass_range(context: RigContext) -> tuple[float, float, str]:
     :data:`FLOOR_FRACTION` of an aluminium piston ``PISTON_LENGTH_MIN*D`` long
     plus an aluminium rod of length ``L``; at most :data:`CEILING_FACTOR` times
     a steel piston ``PISTON_LENGTH_MAX*D`` long plus a steel rod of length
-    ``L + D``. Without a bore: :data:`MIN_MASS` to :data:`MAX_MASS`.
+    ``L + D``. Without a bore: :data:`MIN_MASS` to :data:`MAX_MASS`. This is
+    what a rig can carry at all; :func:`check_fit` also flags a fitted mass above
+    :data:`LOAD_FACTOR` times :func:`steel_piston_mass` that ``rig.mass`` does not state.
     """
     if context.bore is None:
         return MIN_MASS, MAX_MASS, "any moving part of a rig"
@@ -160,6 +191,22 @@ def mass_range(context: RigContext) -> tuple[float, float, str]:
     high = CEILING_FACTOR * RHO_STEEL * parts(PISTON_LENGTH_MAX * D, L + D)
     rod = f", rod {1e3 * d:.3g} mm, stroke {1e3 * L:.3g} mm" if d and L else ""
     return low, high, f"the piston of the {1e3 * D:.3g} mm bore{rod}"
+
+
+def steel_piston_mass(context: RigContext) -> float | None:
+    """Mass (kg) of a solid steel piston and rod of the rig's geometry, ``None`` without a bore.
+
+    Density :data:`RHO_STEEL` (7850 kg/m^3); a piston of the bore's area
+    ``PISTON_LENGTH_MAX*D`` (one bore) long plus a rod of diameter ``rig.rod``
+    and length ``rig.stroke`` (none where not given): 0.096 kg for a bare
+    25 mm bore. :data:`LOAD_FACTOR` times it is the largest fitted mass
+    believed without a stated ``rig.mass``.
+    """
+    if context.bore is None:
+        return None
+    D = context.bore
+    A1, A2 = piston_areas(D, context.rod or 0.0)
+    return RHO_STEEL * (A1 * PISTON_LENGTH_MAX * D + (A1 - A2) * (context.stroke or 0.0))
 
 
 def correlations(names: Sequence[str], cov: np.ndarray) -> dict[tuple[str, str], float]:
@@ -254,6 +301,59 @@ def check_fit(
     return out
 
 
+def check_held(
+    values: Mapping[str, float],
+    bounds: Mapping[str, tuple[float, float]],
+    *,
+    units: Mapping[str, str] | None = None,
+    dt: float = 0.0,
+) -> list[FitWarning]:
+    """The warnings of rig terms estimated once and held for the fits that follow.
+
+    Parameters
+    ----------
+    values
+        Flat name -> held value (SI), e.g. the driving-force channel ``lag`` (s).
+    bounds
+        Flat name -> ``(lower, upper)`` of the box it was estimated in.
+    units
+        Flat name -> unit, for the messages.
+    dt
+        Sample interval (s) of the record it was estimated on: a ``lag`` above
+        ``-LEAD_SAMPLES*dt`` is zero within the timing of the samples.
+
+    Returns
+    -------
+    list of FitWarning
+        Per name (order of ``values``): ``at-bound`` (within :data:`BOUND_HAIR`
+        of a bound), then for ``lag`` ``lag-negative`` (see the module docstring).
+    """
+    unit = dict(units or {})
+    out: list[FitWarning] = []
+    for name, value in values.items():
+        u = unit.get(name, "")
+        box = bounds.get(name)
+        if box is not None:
+            for side, bound in (("lower", box[0]), ("upper", box[1])):
+                if math.isfinite(bound) and \
+                        abs(value - bound) <= BOUND_HAIR * max(abs(bound), abs(value)):
+                    out.append(FitWarning("at-bound", name, (
+                        f"{name} = {_q(value, u)}, estimated once and held for the fits that "
+                        f"follow, is at its {side} bound {_q(bound, u)}: the data push it "
+                        "beyond the allowed range (a missing effect, or a record that does "
+                        "not determine it), and every later fit carries that value")))
+                    break
+        if name == "lag" and value < -LEAD_SAMPLES * max(dt, 0.0) and value < 0.0:
+            out.append(FitWarning("lag-negative", name, (
+                f"lag = {_q(value, u or 's')}: the driving force leads the motion by "
+                f"{_q(-value, u or 's')}, which no sensor or line lag does; it is a timing "
+                "offset between the channels (separate clocks or a delayed motion signal) "
+                "or a wrong sign of the force, not a transducer lag; align the channels' "
+                "time stamps (or check the force's sign) before trusting the friction "
+                "values")))
+    return out
+
+
 def _q(value: float, unit: str) -> str:
     """A value with its unit, for messages."""
     return f"{value:.4g} {unit}".rstrip() if unit not in ("", "-") else f"{value:.4g}"
@@ -323,13 +423,22 @@ def _mass_warning(name: str, value: float, se: float | None,
             f"{what}{spread} is {total / ctx.mass:.3g} times the sidecar's rig.mass "
             f"{ctx.mass:.4g} kg: check the sidecar (a load not counted?) and the fit"))
     low, high, basis = mass_range(ctx)
-    if low <= total <= high:
-        return None
     if total < low:
         return FitWarning("mass-implausible", name, (
             f"{what}{spread} is below {low:.3g} kg, the least that {basis} can weigh: the "
             "record does not determine the moving mass (too little acceleration); give "
             "rig.mass in the sidecar or --mass"))
+    if total > high:
+        return FitWarning("mass-implausible", name, (
+            f"{what}{spread} is above {high:.3g} kg, more than {basis} can plausibly carry: "
+            "the mass trades off with other terms; give rig.mass in the sidecar or --mass"))
+    steel = steel_piston_mass(ctx)
+    if steel is None or total <= LOAD_FACTOR * steel:
+        return None
     return FitWarning("mass-implausible", name, (
-        f"{what}{spread} is above {high:.3g} kg, more than {basis} can plausibly carry: "
-        "the mass trades off with other terms; give rig.mass in the sidecar or --mass"))
+        f"{what}{spread} is {total / steel:.3g} times the {steel:.3g} kg of a solid steel "
+        f"piston one bore long and rod over the stroke ({basis}), above the "
+        f"{LOAD_FACTOR * steel:.3g} kg ({LOAD_FACTOR:g} times) a piston, rod and carriage "
+        "weigh: a load that heavy is not stated, and a fitted one usually trades off with "
+        "other terms (a record with little acceleration does not weigh it); give rig.mass in "
+        "the sidecar or --mass"))

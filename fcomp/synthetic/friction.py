@@ -87,7 +87,8 @@ def chamber_pressures(P: TruthParams, S: np.ndarray, F_net: np.ndarray
 
 def truth_friction(P: TruthParams, base: str, hidden: Mapping[str, Law | Mapping[str, float]],
                    t: np.ndarray, v: np.ndarray, a: np.ndarray, x: np.ndarray, S: np.ndarray,
-                   dt: float, S_mid: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+                   dt: float, S_mid: float, weight: float = 0.0
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The truth friction along a fine-grid motion; returns ``(F, v_node, a_node)`` (SI).
 
     Parameters
@@ -105,6 +106,10 @@ def truth_friction(P: TruthParams, base: str, hidden: Mapping[str, Law | Mapping
         Fine step.
     S_mid : Pa
         Reference pressure sum of the pressure laws.
+    weight : N
+        ``m*g*s`` of a vertical rig (``s = +1`` extending upward): the chambers carry it
+        (the reference chambers at ``S_mid`` too, so the pressure laws' factor is one there
+        at rest); 0 horizontal.
 
     States (bristle, lagged speed, film, dwell age, Maxwell-slip deflections)
     advance interval by interval; the force is evaluated at the nodes with
@@ -123,12 +128,15 @@ def truth_friction(P: TruthParams, base: str, hidden: Mapping[str, Law | Mapping
     pressure = laws.get("pressure-dependence")
     if pressure is None or pressure.shape.name != "chamber-weighted":
         return _friction(P, base, laws, ctx, v, vn, an, dt), vn, an
-    p1m, p2m = chamber_pressures(P, np.array([S_mid]), np.zeros(1))
-    p1, p2 = chamber_pressures(P, S, P.mass * an)
+    p1m, p2m = chamber_pressures(P, np.array([S_mid]), np.full(1, weight))
+    inertial = P.mass * an
+    if weight != 0.0:
+        inertial = inertial + weight
+    p1, p2 = chamber_pressures(P, S, inertial)
     for _ in range(CHAMBER_ITERATIONS):
         c = replace(ctx, chambers=(p1, p2, float(p1m[0]), float(p2m[0])))
         F = _friction(P, base, laws, c, v, vn, an, dt)
-        p1, p2 = chamber_pressures(P, S, F + P.mass * an)
+        p1, p2 = chamber_pressures(P, S, F + inertial)
     return F, vn, an
 
 

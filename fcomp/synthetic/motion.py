@@ -5,6 +5,13 @@ reversals with and without a stop, dwells from 0.05 s to 3 s, small
 displacement loops (presliding), sinusoidal sweeps, and a change of the
 pressure-sum level half way. Every move has raised-cosine speed ramps, so
 velocity and acceleration are known exactly (no differentiation).
+
+Two plans (:data:`MOTIONS`, :func:`plan_record`'s ``motion``): ``"standard"``
+(:func:`schedule`, the original generator's) and ``"presliding"``
+(:func:`schedule_presliding`): many small displacement cycles at several
+frequencies, and only a few slides of about 20 mm -- a record dominated by
+presliding, as a positioning rig holding a load or a valve spool dithering
+around a set point produces.
 """
 
 from __future__ import annotations
@@ -14,6 +21,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
+
+from fcomp.errors import FcompError
 
 
 @dataclass
@@ -147,6 +156,62 @@ def schedule(plan: Plan, rng: np.random.Generator, duration: float, levels: Sequ
             plan.dwell(0.1)
 
 
+#: Motion plans (:func:`plan_record`'s ``motion``).
+MOTIONS = ("standard", "presliding")
+#: Loop frequencies (Hz) of the presliding-dominated motion, cycled through.
+PRESLIDING_FREQUENCIES = (0.5, 1.0, 2.0, 4.0, 8.0)
+#: Length (m) and speed range (m/s) of its few slides.
+PRESLIDING_SLIDE = 0.02
+PRESLIDING_SPEEDS = (0.01, 0.06)
+#: Slides per experiment of the presliding-dominated motion.
+PRESLIDING_SLIDES = 2
+
+
+def schedule_presliding(plan: Plan, rng: np.random.Generator, duration: float,
+                        levels: Sequence[float], a_max: float,
+                        amplitude: tuple[float, float] = (1e-5, 2.5e-4)) -> None:
+    """Fill ``plan`` with a presliding-dominated motion of about ``duration`` seconds.
+
+    Blocks of small displacement cycles ``x0 + A*(1 - cos(2*pi*f*t))`` (1-4 cycles of at
+    most 2 s, ``A`` log-uniform in ``amplitude``, ``f`` cycling through
+    :data:`PRESLIDING_FREQUENCIES` from a random start), each followed by a rest of
+    0.05-0.5 s (log-uniform); :data:`PRESLIDING_SLIDES` slides of
+    ``PRESLIDING_SLIDE`` x U(0.75, 1.25) (towards mid-stroke, at most 30 % of it) at a
+    speed log-uniform in :data:`PRESLIDING_SPEEDS`, each after a third of the time
+    between them and followed by a rest of 0.2-1 s; the pressure level changes once,
+    half way. About four fifths of the moving samples are in loops, a fifth of the
+    record at rest.
+    """
+    L = plan.stroke
+    plan.level = float(levels[0])
+    plan.dwell(0.3)
+    changed = len(levels) < 2
+    slides_at = [duration * (k + 1) / (PRESLIDING_SLIDES + 1) for k in range(PRESLIDING_SLIDES)]
+    k_f = int(rng.integers(len(PRESLIDING_FREQUENCIES)))
+
+    def log_uniform(lo: float, hi: float) -> float:
+        return float(np.exp(rng.uniform(np.log(lo), np.log(hi))))
+
+    while plan.duration < duration:
+        if not changed and plan.duration > 0.5 * duration:
+            plan.pressure(float(levels[1]))
+            changed = True
+        if slides_at and plan.duration >= slides_at[0]:
+            slides_at.pop(0)
+            V = log_uniform(*PRESLIDING_SPEEDS)
+            t_ramp = max(0.01, V / a_max * rng.uniform(1.0, 2.5))
+            towards = 1.0 if plan.x < 0.5 * L else -1.0
+            plan.move(towards * min(PRESLIDING_SLIDE * rng.uniform(0.75, 1.25), 0.3 * L),
+                      V, t_ramp)
+            plan.dwell(log_uniform(0.2, 1.0))
+            continue
+        f = PRESLIDING_FREQUENCIES[k_f % len(PRESLIDING_FREQUENCIES)]
+        k_f += 1
+        cycles = max(1, min(int(rng.integers(1, 5)), int(2.0 * f)))
+        plan.loops(log_uniform(*amplitude), f, cycles)
+        plan.dwell(log_uniform(0.05, 0.5))
+
+
 @dataclass(frozen=True)
 class Motion:
     """The whole record's motion on the fine grid (all experiments, one after the other).
@@ -177,19 +242,29 @@ class Motion:
 
 def plan_record(rng: np.random.Generator, *, experiments: int, duration: float, dt: float,
                 stroke: float, levels: Sequence[float], a_max: float,
-                loop_amplitude: tuple[float, float]) -> Motion:
+                loop_amplitude: tuple[float, float], motion: str = "standard",
+                presliding_amplitude: tuple[float, float] = (1e-5, 2.5e-4)) -> Motion:
     """Schedule ``experiments`` experiments sharing ``duration`` seconds; the fine-grid motion.
 
     Experiment ``e`` runs at the pressure levels ``levels[e]`` then
     ``levels[e + 1]`` (cyclically); it starts where the previous one ended.
+    ``motion`` picks the plan (:data:`MOTIONS`): :func:`schedule` with loops of
+    ``loop_amplitude``, or :func:`schedule_presliding` with loops of
+    ``presliding_amplitude``.
     """
+    if motion not in MOTIONS:
+        raise FcompError(f"unknown motion {motion!r}; known: {', '.join(MOTIONS)}")
     parts: dict[str, list[np.ndarray]] = {k: [] for k in ("t", "v", "a", "x", "S", "e")}
     t_start = 0.0
     x0 = 0.5 * stroke
     for e in range(experiments):
         plan = Plan(dt=dt, x0=x0, stroke=stroke)
         lv = [levels[(e + k) % len(levels)] for k in range(2)]
-        schedule(plan, rng, duration / experiments, lv, a_max, loop_amplitude)
+        if motion == "presliding":
+            schedule_presliding(plan, rng, duration / experiments, lv, a_max,
+                                presliding_amplitude)
+        else:
+            schedule(plan, rng, duration / experiments, lv, a_max, loop_amplitude)
         n_keep = int(round(duration / experiments / dt))  # the record ends where it ends
         v = np.concatenate(plan.v)[:n_keep]
         x = x0 + np.concatenate([[0.0], np.cumsum(v[:-1] * dt)])

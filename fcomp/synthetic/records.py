@@ -45,6 +45,10 @@ class SyntheticTruth:
         Sensor characteristics used.
     nuisance : dict
         Values drawn by ``vary`` (empty without it).
+    orientation : str
+        How the cylinder is mounted (``horizontal``, ``vertical-up``, ``vertical-down``).
+    motion : str
+        The motion plan (``standard``, ``presliding``).
     """
 
     F: np.ndarray
@@ -62,6 +66,8 @@ class SyntheticTruth:
     rate: float = 500.0
     sensors: Sensors | None = None
     nuisance: dict[str, float] = field(default_factory=dict)
+    orientation: str = "horizontal"
+    motion: str = "standard"
 
     @property
     def effects(self) -> list[str]:
@@ -72,12 +78,14 @@ class SyntheticTruth:
         """A flat summary for benchmark tables.
 
         Keys: ``scale``, ``style``, ``base``, ``rate``, ``noise_std``, ``hidden`` (the
-        ``effect:shape`` list joined by ``", "``), ``law.EFFECT.PARAM`` for every law
-        parameter, ``base.NAME`` for the base parameters, ``sensors.NAME``, and
-        every value drawn by ``vary`` under its own key.
+        ``effect:shape`` list joined by ``", "``), ``orientation``, ``motion``,
+        ``law.EFFECT.PARAM`` for every law parameter, ``base.NAME`` for the base
+        parameters, ``sensors.NAME`` (numbers, and ``sensors.noise_color``), and every
+        value drawn by ``vary`` under its own key.
         """
         out: dict[str, Any] = {
             "scale": self.scale, "style": self.style, "base": self.base,
+            "orientation": self.orientation, "motion": self.motion,
             "rate": float(self.rate), "noise_std": float(self.noise_std),
             "hidden": ", ".join(self.effects) or "-",
         }
@@ -86,8 +94,9 @@ class SyntheticTruth:
         out.update({f"base.{f.name}": float(getattr(self.params, f.name))
                     for f in fields(self.params)})
         if self.sensors is not None:
-            out.update({f"sensors.{f.name}": float(getattr(self.sensors, f.name))
-                        for f in fields(self.sensors)})
+            out.update({f"sensors.{f.name}": (value if isinstance(value, str) else float(value))
+                        for f in fields(self.sensors)
+                        for value in [getattr(self.sensors, f.name)]})
         out.update(self.nuisance)
         return out
 

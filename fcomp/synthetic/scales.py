@@ -114,6 +114,12 @@ class Sensors:
         Resolution multiplier of the ``coarse-encoder`` style.
     analog_noise : m
         White noise of an analog position sensor (``potentiometer`` styles).
+    noise_color : str
+        Spectrum of the force-channel noise (:data:`fcomp.synthetic.sensors.NOISE_COLORS`):
+        ``"ar1"`` (the original generator's AR(1) of correlation time ``noise_tau``) or
+        ``"pink"`` (1/f noise of the same standard deviation, on the load cell and, where
+        the force comes from the pressures, on both pressure transducers;
+        :func:`fcomp.synthetic.sensors.pink`).
     """
 
     noise_std: float
@@ -131,6 +137,7 @@ class Sensors:
     encoder_jitter: float = 1.5e-7
     coarse: float = 15.0
     analog_noise: float = 2e-6
+    noise_color: str = "ar1"
 
 
 @dataclass(frozen=True)
@@ -151,6 +158,9 @@ class Scale:
         Acceleration scale of the motion plans.
     loop_amplitude : m
         Range of the small displacement loops (presliding) of the motion plans.
+    presliding_amplitude : m
+        Range of the loop amplitudes of the presliding-dominated motion
+        (``motion="presliding"``, :func:`fcomp.synthetic.motion.schedule_presliding`).
     factors
         Physical dimension -> factor on the effect defaults (pneumatic = 1).
     mass_range : kg
@@ -172,6 +182,7 @@ class Scale:
     mass_range: tuple[float, float] = (0.6, 2.5)
     resolutions: tuple[float, ...] = (5e-7, 1e-6, 2e-6, 5e-6)
     pressure_noise_range: tuple[float, float] = (150.0, 600.0)
+    presliding_amplitude: tuple[float, float] = (1e-5, 2.5e-4)
 
 
 PNEUMATIC = Scale(
@@ -201,7 +212,7 @@ HYDRAULIC = Scale(
              "per-pressure": 1.0 / _PRESSURE, "pressure": _PRESSURE,
              "mass-error": 8.0, "frequency": 2.5},
     mass_range=(10.0, 40.0), resolutions=(2.5e-7, 5e-7, 1e-6),
-    pressure_noise_range=(4e3, 1e4),
+    pressure_noise_range=(4e3, 1e4), presliding_amplitude=(2.5e-6, 6e-5),
 )
 
 #: A miniature pneumatic cylinder (10/4 mm, 80 mm stroke, 0.15 kg): friction a tenth of
@@ -221,7 +232,7 @@ SMALL_PNEUMATIC = Scale(
              "presliding-length": _SL, "slide-length": 0.5,
              "per-pressure": 1.0, "pressure": 1.0, "mass-error": 0.125, "frequency": 1.6},
     mass_range=(0.08, 0.3), resolutions=(5e-7, 1e-6, 2e-6),
-    pressure_noise_range=(150.0, 600.0),
+    pressure_noise_range=(150.0, 600.0), presliding_amplitude=(4e-6, 8e-5),
 )
 
 #: A heavy hydraulic cylinder (100/56 mm, 0.6 m stroke, 150 kg): friction about 70 times
@@ -242,7 +253,7 @@ HEAVY_HYDRAULIC = Scale(
              "per-pressure": 1.0 / _PRESSURE, "pressure": _PRESSURE,
              "mass-error": 60.0, "frequency": 1.5},
     mass_range=(80.0, 300.0), resolutions=(5e-7, 1e-6, 2e-6),
-    pressure_noise_range=(2e3, 8e3),
+    pressure_noise_range=(2e3, 8e3), presliding_amplitude=(4e-6, 1e-4),
 )
 
 #: The rig scales by name.

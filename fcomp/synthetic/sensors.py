@@ -25,6 +25,12 @@ style                  columns (besides ``t``, ``experiment``) and sensors
 pressures``
 =====================  ==============================================================
 
+The force noise of a load cell is AR(1) (:attr:`Sensors.noise_color` ``"ar1"``) or
+1/f (``"pink"``, :func:`pink`, then on the pressure transducers of the
+``pressures`` styles too, whose noise is otherwise white). On a vertical rig
+(:func:`measure`'s ``gravity``) the chamber pressures and the drive force carry
+the weight of the moving mass; a load cell does not.
+
 The two analog styles are not in the diagnosis matrix's default styles
 (:data:`fcomp.synthetic.matrix.MATRIX_STYLES`): they check a sensor it was not
 tuned on.
@@ -131,6 +137,43 @@ def ar1(rng: np.random.Generator, n: int, std: float, tau: float, dt: float) -> 
     return np.asarray(y)
 
 
+#: Spectra of the force-channel noise (:attr:`Sensors.noise_color`).
+NOISE_COLORS = ("ar1", "pink")
+
+
+def pink(rng: np.random.Generator, n: int, std: float) -> np.ndarray:
+    """1/f ("pink") noise of standard deviation ``std`` over ``n`` samples.
+
+    Spectral shaping of white noise: ``n`` standard normal values are
+    transformed (real FFT), every bin ``k >= 1`` is divided by ``sqrt(k)`` (a power
+    spectral density ``~ 1/f`` from the lowest frequency of the record, ``1/(n*dt)``,
+    up to the Nyquist frequency), the mean (bin 0) is set to zero, and the inverse
+    transform is scaled to the sample standard deviation ``std``. Equal power per
+    decade: the record wanders slowly by about ``std`` as well as jittering from sample
+    to sample; the ends join smoothly (circular). Fewer than four samples: white.
+    """
+    w = rng.normal(0.0, 1.0, n)
+    if n < 4 or std == 0:
+        return std * w
+    W = np.fft.rfft(w)
+    W[0] = 0.0
+    W[1:] /= np.sqrt(np.arange(1, W.size))
+    y = np.fft.irfft(W, n)
+    return y * (std / float(np.std(y)))
+
+
+def force_noise(rng: np.random.Generator, n: int, std: float, sens: Sensors, dt: float
+                ) -> np.ndarray:
+    """Noise of the force channel in the colour :attr:`Sensors.noise_color` (``dt``: the
+    nominal sample interval of the AR(1) law)."""
+    if sens.noise_color == "ar1":
+        return ar1(rng, n, std, sens.noise_tau, dt)
+    if sens.noise_color == "pink":
+        return pink(rng, n, std)
+    raise FcompError(f"unknown noise colour {sens.noise_color!r}; known: "
+                     f"{', '.join(NOISE_COLORS)}")
+
+
 @dataclass(frozen=True)
 class FineSignals:
     """The truth on the fine grid, as the sensors see it (SI).
@@ -228,11 +271,17 @@ def tacho(sig: FineSignals, sens: Sensors, rng: np.random.Generator) -> np.ndarr
 
 def measure(style: Style, sens: Sensors, sig: FineSignals, P: TruthParams, mass_sidecar: float,
             rate: float, include_velocity: bool, rng: np.random.Generator,
-            rng_extra: np.random.Generator) -> Recorded:
+            rng_extra: np.random.Generator, gravity: float = 0.0) -> Recorded:
     """Record ``sig`` as the rig of ``style`` would (columns of :attr:`Style.columns`).
 
     ``rng`` draws the force and pressure noise (in the original generator's
     order), ``rng_extra`` the sensors the original generator did not have.
+    ``gravity`` is ``g*s`` (m/s^2; ``s = +1`` for a cylinder extending upward, ``-1``
+    downward, ``0`` horizontal): the weight ``m*g*s`` of the moving mass opposes
+    extension, so the chamber pressures and the drive force carry it; a load cell
+    between rod and seal does not (its ``F`` is the friction, as on a horizontal rig).
+    The sidecar's mass carries the part the tool subtracts, ``sig.recorded`` the rest
+    (``dm*g*s`` of an ``inertia-error``, added by :func:`fcomp.synthetic.generate`).
     """
     idx = sig.idx
     t_s = sig.t[idx]
@@ -259,20 +308,30 @@ def measure(style: Style, sens: Sensors, sig: FineSignals, P: TruthParams, mass_
     noise_std = 0.0
     if style.force != "pressures":  # a load cell: on the friction, or on the drive
         if sens.noise_std > 0:
-            noise = ar1(rng, n, sens.noise_std, sens.noise_tau, dt_s)
+            noise = force_noise(rng, n, sens.noise_std, sens, dt_s)
         noise_std = sens.noise_std
     if style.force == "load-cell":
         F_net = sig.friction[idx]
         if sig.physical is not None:
             F_net = F_net + sig.physical[idx]
-        p1, p2 = chamber_pressures(P, sig.S[idx], F_net + P.mass * a_s)
+        F_net = F_net + P.mass * a_s
+        if gravity != 0.0:
+            F_net = F_net + P.mass * gravity
+        p1, p2 = chamber_pressures(P, sig.S[idx], F_net)
     elif style.force == "pressures":  # the tool's balance must give the recorded force
-        p1f, p2f = chamber_pressures(P, sig.S, sig.recorded + mass_sidecar * sig.a)
+        F_net = sig.recorded + mass_sidecar * sig.a
+        if gravity != 0.0:
+            F_net = F_net + mass_sidecar * gravity
+        p1f, p2f = chamber_pressures(P, sig.S, F_net)
         p1 = lag(sig, p1f, sens.pressure_lag)[idx]
         p2 = lag(sig, p2f, sens.pressure_lag)[idx]
     if style.force != "drive":
-        n1 = rng.normal(0.0, sens.pressure_noise, n)
-        n2 = rng.normal(0.0, sens.pressure_noise, n)
+        if style.force == "pressures" and sens.noise_color != "ar1":
+            n1 = force_noise(rng, n, sens.pressure_noise, sens, dt_s)
+            n2 = force_noise(rng, n, sens.pressure_noise, sens, dt_s)
+        else:  # white (the original generator's transducers)
+            n1 = rng.normal(0.0, sens.pressure_noise, n)
+            n2 = rng.normal(0.0, sens.pressure_noise, n)
         cols["p1"] = p1 + n1
         cols["p2"] = p2 + n2
     if style.force == "load-cell":
@@ -281,6 +340,9 @@ def measure(style: Style, sens: Sensors, sig: FineSignals, P: TruthParams, mass_
         noise = n1 * A1 - n2 * A2
         noise_std = sens.pressure_noise * math.hypot(A1, A2)
     else:
-        cols["F_ext"] = recorded + mass_sidecar * a_s + noise
+        drive = recorded + mass_sidecar * a_s
+        if gravity != 0.0:
+            drive = drive + mass_sidecar * gravity
+        cols["F_ext"] = drive + noise
     cols["experiment"] = sig.experiment[idx]
     return Recorded(cols, noise, float(noise_std))

@@ -1,0 +1,330 @@
+"""Periodic disturbances: narrow spectral lines in the residual that follow no motion.
+
+A pump's pulsation, a fan, mains hum on an unscreened load cell, a valve's
+dither: forces that act on (or in) the force channel at their own frequency,
+whatever the piston does. No friction law explains them, so they are not a
+missing effect; left in the record they would be folded into the noise floor
+(a 0.8 N line at 37 Hz on 0.2 N of sensor noise reads as a 0.61 N floor) and
+a record still carrying them would be called explained. They are found, and
+taken out, before the search:
+
+1. **Lines.** The residual of the first baseline fit (plain, ``y - F_hat``)
+   of every experiment of at least :data:`MIN_SECONDS` is resampled onto its
+   median interval where the stamps are not uniform, and its Welch spectrum
+   (Hann windows of about :data:`WINDOW_SECONDS`, half overlap) is divided by
+   its running median over :data:`BACKGROUND_HZ` on either side (the local
+   background of a smooth spectrum). A bin is a line when that ratio exceeds
+   the level a chi-square spectrum with ``2K`` degrees of freedom (``K``
+   windows) passes with probability :data:`FALSE_ALARM` over all the bins
+   searched (:data:`MIN_HZ` to :data:`MAX_SHARE` of the Nyquist frequency), and
+   it is the largest within two bins.
+2. **Not the motion's.** A line is the motion's -- a friction law's error
+   repeating with a periodic motion, its harmonics -- when the motion shows a
+   line there too: the spectra of ``v``, ``sign(v)``, ``|v|``, ``x`` and the
+   model's prediction are tested the same way, at half the threshold, within
+   two bins. A line must also be there at low and at high speed alike
+   (:func:`_same_at_all_speeds`: a ripple along the bore is a line in time
+   only at one speed), and keep its phase in time from window to window
+   (:func:`_phase_consistency`: a source on its own clock does, a structure met
+   at varying positions and speeds does not). Only lines that pass all three are
+   disturbances.
+3. **Size.** The line's frequency is refined on a grid a tenth of a bin
+   fine (the periodogram summed over the experiments, each with its own phase),
+   and a sinusoid at that frequency is fitted by least squares in each
+   experiment on the actual stamps. It is reported when its RMS is at least
+   :data:`MIN_SHARE` of the noise floor left once all lines are removed.
+
+The diagnosis subtracts the fitted sinusoids from the force it matches,
+estimates the noise floor again on what is left, reports each line in the
+JSON (``disturbances``) and the report, and does not call such a record
+``explained`` (:mod:`.loop`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from scipy import stats
+from scipy.ndimage import median_filter
+from scipy.signal import welch
+
+from fcomp.diagnosis.data import DiagnosisData
+
+#: Shortest experiment (s) whose spectrum is searched.
+MIN_SECONDS = 2.0
+#: Length (s) of the spectral windows (frequency resolution about its inverse).
+WINDOW_SECONDS = 2.0
+#: Fewest windows an experiment's spectrum averages.
+MIN_WINDOWS = 3
+#: Width (Hz) of the running median on either side of a bin (the local background) ...
+BACKGROUND_HZ = 3.0
+#: ... and at least this many bins.
+BACKGROUND_BINS = 8
+#: Chance that a spectrum without a line shows one anywhere in the band searched.
+FALSE_ALARM = 1e-3
+#: Lowest frequency searched (Hz): below it the residual's slow structure is a law's.
+MIN_HZ = 2.0
+#: Highest frequency searched, as a share of the Nyquist frequency (the anti-alias filter's
+#: roll-off and the spectrum's edge lie above).
+MAX_SHARE = 0.8
+#: A line is reported when its RMS is at least this share of the noise floor left.
+MIN_SHARE = 0.5
+#: Least steadiness of the line's phase in time (:func:`_phase_consistency`) ...
+PHASE_CONSISTENCY = 0.7
+#: ... over windows of this length (s).
+PHASE_WINDOW = 1.0
+#: Least gain of the line's sinusoid in the slower and in the faster half of the samples.
+SPEED_GAIN = 0.5
+#: Most lines reported.
+MAX_LINES = 5
+
+
+@dataclass(frozen=True)
+class Disturbance:
+    """A narrow line in the residual that follows no motion feature.
+
+    Attributes
+    ----------
+    frequency_hz
+        Its frequency (Hz).
+    amplitude
+        Amplitude of the fitted sinusoid (N), the RMS-weighted mean over the
+        experiments that show it.
+    rms
+        Its RMS over the record (N).
+    prominence
+        Its power over the local background of the spectrum (-).
+    experiments
+        In how many experiments it was fitted.
+    """
+
+    frequency_hz: float
+    amplitude: float
+    rms: float
+    prominence: float
+    experiments: int
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"frequency_hz": self.frequency_hz, "amplitude": self.amplitude,
+                "rms": self.rms, "prominence": self.prominence,
+                "experiments": self.experiments, "units": {"frequency_hz": "Hz",
+                                                           "amplitude": "N", "rms": "N"}}
+
+
+def _uniform(t: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, float]:
+    """``y`` on a uniform grid of the median interval (itself when already uniform)."""
+    dt = float(np.median(np.diff(t)))
+    if np.allclose(np.diff(t), dt, rtol=1e-3, atol=0.0):
+        return y, dt
+    grid = t[0] + dt * np.arange(int(math.floor((t[-1] - t[0]) / dt)) + 1)
+    return np.interp(grid, t, y), dt
+
+
+def _spectrum(t: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray, int] | None:
+    """``(f, P, K)``: Welch spectrum of ``y(t)`` and its number of windows (None: too short)."""
+    yu, dt = _uniform(t, y)
+    fs = 1.0 / dt
+    nper = int(round(WINDOW_SECONDS * fs))
+    if yu.size < nper or nper < 16:
+        return None
+    k = 1 + (yu.size - nper) // (nper // 2)
+    if k < MIN_WINDOWS:
+        return None
+    f, P = welch(yu, fs=fs, window="hann", nperseg=nper, noverlap=nper // 2,
+                 detrend="linear")
+    return f, P, k
+
+
+def _prominence(f: np.ndarray, P: np.ndarray) -> np.ndarray:
+    """Power over the running median of the neighbouring bins (the local background)."""
+    df = float(f[1] - f[0])
+    half = max(BACKGROUND_BINS, int(round(BACKGROUND_HZ / df)))
+    # a chi-square spectrum's median lies below its mean: 2K large, about (1 - 2/(9*2K))^3
+    back = median_filter(P, size=2 * half + 1, mode="nearest")
+    return P / np.maximum(back, 1e-300)
+
+
+def _threshold(k: int, bins: int) -> float:
+    """Ratio a line-free chi-square(2K) spectrum passes in one of ``bins`` bins with
+    probability :data:`FALSE_ALARM` (over its median: the background is a median)."""
+    dof = 2 * k
+    alpha = FALSE_ALARM / max(bins, 1)
+    return float(stats.chi2.isf(alpha, dof) / stats.chi2.median(dof))
+
+
+def _lines(f: np.ndarray, ratio: np.ndarray, level: float) -> list[int]:
+    """Bins above ``level`` that are the largest within two bins, strongest first."""
+    out = []
+    for i in np.flatnonzero((ratio > level) & (f >= MIN_HZ) & (f <= MAX_SHARE * f[-1])):
+        lo, hi = max(i - 2, 0), min(i + 3, ratio.size)
+        if ratio[i] >= ratio[lo:hi].max():
+            out.append(int(i))
+    return sorted(out, key=lambda i: -ratio[i])
+
+
+def _sinusoid(t: np.ndarray, r: np.ndarray, freq: float) -> np.ndarray:
+    """The least-squares sinusoid (with a mean) at ``freq`` in ``r(t)``, without the mean."""
+    w = 2.0 * math.pi * freq * (t - t[0])
+    X = np.column_stack([np.cos(w), np.sin(w), np.ones_like(t)])
+    coef, *_ = np.linalg.lstsq(X, r, rcond=None)
+    return np.asarray(X[:, :2] @ coef[:2])
+
+
+def _refine(pieces: Sequence[tuple[np.ndarray, np.ndarray]], f0: float, df: float) -> float:
+    """The frequency near ``f0`` (within a bin) that maximises the summed periodograms."""
+    grid = f0 + df * np.linspace(-1.0, 1.0, 21)
+    power = np.zeros(grid.size)
+    for t, r in pieces:
+        rc = r - r.mean()
+        ph = 2.0 * math.pi * np.outer(grid, t - t[0])
+        power += (np.cos(ph) @ rc) ** 2 + (np.sin(ph) @ rc) ** 2
+    return float(grid[int(np.argmax(power))])
+
+
+def find(residual: np.ndarray, prediction: np.ndarray, data: DiagnosisData
+         ) -> list[tuple[float, float, list[np.ndarray]]]:
+    """Candidate lines of ``residual``: ``(frequency, prominence, sinusoid per experiment)``.
+
+    See the module docstring (steps 1-3, without the size rule, which needs the
+    noise floor once the lines are out).
+    """
+    if data.steady_state:
+        return []
+    t_all = data.signal("t")
+    feats = {"v": data.signal("v"), "x": data.signal("x"), "model": prediction}
+    feats["sign(v)"] = np.sign(feats["v"])
+    feats["|v|"] = np.abs(feats["v"])
+    found: dict[int, tuple[float, float, float]] = {}  # rounded Hz -> (f, ratio, df)
+    pieces = []
+    for idx, e in enumerate(data.experiments):
+        t = t_all[e.start:e.stop]
+        if t.size < 16 or t[-1] - t[0] < MIN_SECONDS:
+            continue
+        r = residual[e.start:e.stop]
+        pieces.append((t, r, idx))  # fitted wherever long enough, searched where K windows fit
+        spec = _spectrum(t, r)
+        if spec is None:
+            continue
+        f, P, k = spec
+        ratio = _prominence(f, P)
+        level = _threshold(k, int(np.sum((f >= MIN_HZ) & (f <= MAX_SHARE * f[-1]))))
+        cands = _lines(f, ratio, level)
+        if not cands:
+            continue
+        motion = []
+        for sig in feats.values():
+            s = _spectrum(t, sig[e.start:e.stop])
+            motion.append(None if s is None or not np.any(s[1] > 0) else _prominence(s[0], s[1]))
+        for i in cands[:2 * MAX_LINES]:
+            lo, hi = max(i - 2, 0), min(i + 3, f.size)
+            if any(m is not None and m[lo:hi].max() > 0.5 * level for m in motion):
+                continue  # the motion has a line there: the residual repeats with it
+            key = int(round(f[i]))
+            if key not in found or ratio[i] > found[key][1]:
+                found[key] = (float(f[i]), float(ratio[i]), float(f[1] - f[0]))
+    out = []
+    speed = feats["|v|"]
+    for f0, prom, df in sorted(found.values(), key=lambda x: -x[1])[:MAX_LINES]:
+        freq = _refine([(t, r) for t, r, _ in pieces], f0, df)
+        waves = [np.zeros(e.n) for e in data.experiments]
+        for t, r, idx in pieces:
+            waves[idx] = _sinusoid(t, r, freq)
+        if not _same_at_all_speeds(residual, np.concatenate(waves), speed):
+            continue
+        if _phase_consistency([(t, r) for t, r, _ in pieces], freq) < PHASE_CONSISTENCY:
+            continue
+        out.append((freq, prom, waves))
+    return out
+
+
+def _phase_consistency(pieces: Sequence[tuple[np.ndarray, np.ndarray]], freq: float) -> float:
+    """How steadily the line keeps its phase in time: ``|sum A_w| / sum |A_w|`` (0 to 1).
+
+    ``A_w = sum r*exp(-2i*pi*f*t)`` over windows of :data:`PHASE_WINDOW` seconds (at
+    least ten cycles), on absolute stamps, within each experiment (each its own
+    phase; the experiments weighted by their windows' magnitudes). A source that
+    runs on its own clock keeps its phase from window to window (1 without noise);
+    a structure tied to the motion (a ripple along the bore, met at varying
+    positions and speeds) does not.
+    """
+    num = 0.0
+    den = 0.0
+    span = max(PHASE_WINDOW, 10.0 / freq)
+    for t, r in pieces:
+        edges = np.arange(t[0], t[-1] + span, span)
+        amps = []
+        for lo, hi in zip(edges[:-1], edges[1:], strict=False):
+            m = (t >= lo) & (t < hi)
+            if m.sum() < 8:
+                continue
+            rc = r[m] - r[m].mean()
+            amps.append(complex(np.sum(rc * np.exp(-2j * math.pi * freq * t[m]))))
+        if len(amps) >= 2:
+            num += abs(sum(amps))
+            den += sum(abs(a) for a in amps)
+    return num / den if den > 0 else 0.0
+
+
+def _same_at_all_speeds(r: np.ndarray, wave: np.ndarray, speed: np.ndarray) -> bool:
+    """Whether the line is there at low and at high speed alike (:data:`SPEED_GAIN`).
+
+    A disturbance keeps its frequency whatever the piston does; a structure of
+    the bore (a ripple of wavelength ``L`` along the stroke) is a line only at
+    the speed ``f*L``, and absent at rest. The residual is projected onto the
+    fitted sinusoid within the slower and the faster half of the samples (by
+    ``|v|``, rests included): the gain in both must be at least
+    :data:`SPEED_GAIN`.
+    """
+    used = wave != 0.0
+    if used.sum() < 40:
+        return False
+    cut = float(np.median(speed[used]))
+    for group in (used & (speed <= cut), used & (speed > cut)):
+        w = wave[group]
+        if w.size < 20 or not float(w @ w) > 0:
+            continue  # one speed only: nothing to compare
+        if float(r[group] @ w) / float(w @ w) < SPEED_GAIN:
+            return False
+    return True
+
+
+def without(data: DiagnosisData, waves: Sequence[Sequence[np.ndarray]]) -> DiagnosisData:
+    """``data`` with the sinusoids ``waves`` (per line, per experiment) taken off the force."""
+    exps = []
+    for i, e in enumerate(data.experiments):
+        y = e.data.y - sum((w[i] for w in waves), np.zeros(e.n))
+        exps.append(dataclasses.replace(e, data=dataclasses.replace(e.data, y=y)))
+    return dataclasses.replace(data, experiments=exps)
+
+
+def band_gain(band_hz: float | None, freq: float) -> float:
+    """Gain at ``freq`` of the parallel filter a band-limited force went through: the
+    zero-phase second-order Butterworth (:func:`fcomp.reconstruction.band_limit`),
+    ``|H|^2 = 1/(1 + (f/fc)^4)``; 1 for an unfiltered force."""
+    if band_hz is None or not band_hz > 0:
+        return 1.0
+    return 1.0 / (1.0 + (freq / band_hz) ** 4)
+
+
+def describe(freq: float, prom: float, waves: Sequence[np.ndarray],
+             data: DiagnosisData | None = None) -> Disturbance:
+    """The :class:`Disturbance` of one line's fitted sinusoids, sized at the sensor.
+
+    The sinusoids are fitted to the force as matched; where that force went
+    through the parallel filter (``band_hz``) the line was attenuated by
+    :func:`band_gain`, which is divided out of the amplitude and RMS reported.
+    """
+    gains = [band_gain(e.data.band_hz, freq) for e in data.experiments] if data is not None \
+        else [1.0] * len(waves)
+    used = [(w, g) for w, g in zip(waves, gains, strict=True) if np.any(w)]
+    total = np.concatenate([w / max(g, 1e-3) for w, g in zip(waves, gains, strict=True)])
+    rms = float(np.sqrt(np.mean(total**2))) if total.size else 0.0
+    amps = [math.sqrt(2.0 * float(np.mean(w**2))) / max(g, 1e-3) for w, g in used]
+    sizes = [w.size for w, _ in used]
+    amp = float(np.average(amps, weights=sizes)) if used else 0.0
+    return Disturbance(freq, amp, rms, prom, len(used))

@@ -1,0 +1,78 @@
+"""Periodic disturbances (issue 24, item 3): a narrow line that follows no motion is found,
+sized, kept out of the noise floor and never called explained; the motion's own lines
+(a periodic stroke's harmonics, a ripple along the bore) are not disturbances."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from fcomp.diagnosis import Diagnosis, disturbance
+from fcomp.diagnosis.data import prepare
+from fcomp.synthetic import generate
+
+
+def _prepared(seed: int, scale: str = "pneumatic", rate: float = 1000.0, stamps: str = "uniform"):
+    rec = generate([], scale=scale, style="load-cell", rate=rate, duration=12.0, seed=seed,
+                   stamps=stamps, name=f"d{seed}")
+    return prepare(rec.measurement)
+
+
+@pytest.mark.parametrize("freq,amp,seed,stamps", [(37.0, 0.8, 1, "uniform"),
+                                                   (50.0, 0.3, 2, "uniform"),
+                                                   (11.3, 1.5, 3, "irregular")])
+def test_a_line_in_time_is_found_on_any_motion_and_sized(freq: float, amp: float, seed: int,
+                                                         stamps: str) -> None:
+    data = _prepared(seed, stamps=stamps)
+    rng = np.random.default_rng(seed)
+    t = data.signal("t")
+    noise = 0.2 * rng.standard_normal(t.size)
+    line = amp * np.sin(2 * np.pi * freq * t + 0.7)
+    found = disturbance.find(noise + line, np.zeros(t.size), data)
+    assert len(found) == 1, [(f, p) for f, p, _ in found]
+    f, prom, waves = found[0]
+    d = disturbance.describe(f, prom, waves)
+    assert d.frequency_hz == pytest.approx(freq, abs=0.05)
+    assert d.amplitude == pytest.approx(amp, rel=0.1)
+    # taken off, what is left is the noise
+    cleaned = noise + line - np.concatenate(waves)
+    assert np.std(cleaned) == pytest.approx(0.2, rel=0.1)
+
+
+@pytest.mark.parametrize("seed", [4, 5, 6])
+def test_white_noise_and_the_motions_own_harmonics_are_no_disturbance(seed: int) -> None:
+    data = _prepared(seed, scale="hydraulic" if seed % 2 else "pneumatic")
+    rng = np.random.default_rng(seed)
+    v = data.signal("v")
+    # a friction law's error that repeats with the motion: odd harmonics of sign(v), |v|
+    r = 0.3 * rng.standard_normal(v.size) + 2.0 * np.sign(v) * np.abs(v) ** 0.5 \
+        + 0.5 * np.tanh(v / 1e-3)
+    assert disturbance.find(r, np.zeros(v.size), data) == []
+    assert disturbance.find(0.3 * rng.standard_normal(v.size), np.zeros(v.size), data) == []
+
+
+def test_a_ripple_along_the_bore_is_no_disturbance() -> None:
+    """A 3 mm ripple along x is a line in time only at one speed, and absent at rest."""
+    data = _prepared(7)
+    x = data.signal("x")
+    moving = np.abs(data.signal("v")) > 1e-4
+    r = 0.05 * np.random.default_rng(7).standard_normal(x.size) \
+        + 1.0 * np.sin(2 * np.pi * x / 3e-3) * moving
+    assert disturbance.find(r, np.zeros(x.size), data) == []
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("scale,style", [("pneumatic", "load-cell"), ("hydraulic", "pressures")])
+def test_a_pump_pulsation_is_reported_kept_out_of_the_floor_and_not_explained(
+        scale: str, style: str) -> None:
+    rec = generate([], scale=scale, style=style, rate=1000.0, duration=12.0, seed=11,
+                   pulsation=(37.0, 0.8 if scale == "pneumatic" else 12.0), name="pump")
+    d = Diagnosis("lugre", n_jobs=1, check_baseline=False).fit(rec.measurement)
+    doc = d.to_dict()
+    (line,) = doc["disturbances"]
+    assert line["frequency_hz"] == pytest.approx(37.0, abs=0.05)
+    assert line["amplitude"] == pytest.approx(0.8 if scale == "pneumatic" else 12.0, rel=0.1)
+    # the floor is the sensor's noise, not the pulsation's (0.8 N amplitude is 0.57 N RMS)
+    assert doc["noise_floor"] < 1.3 * rec.truth.noise_std
+    assert doc["verdict"] == "unexplained-structure" and "disturbance" in doc["reason"]
+    assert doc["added"] == []

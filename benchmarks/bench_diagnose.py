@@ -1,28 +1,29 @@
-"""Benchmark: ``fcomp diagnose`` on a 60 s record at 1 kHz with the full catalogue.
+"""Benchmark: ``fcomp diagnose`` on a synthetic 60 s record and on the four O-ring files,
+beside the code of a baseline revision, in one run.
 
-Goal (issue 5): under 60 s wall time on a 2-core machine, with a progress bar.
+Goals (issue 24, item 5): a 60 s record at 1 kHz with the full catalogue in at most
+15 s warm on 2 cores; the four Zillen O-ring files (1, 3, 5, 7 bar, about 100 Hz with
+irregular stamps) from ``lugre`` in at most 60 s.
 
 What is timed
 -------------
-* **fcomp diagnose (cold)**: the console command in a *fresh process* with an
-  *empty compile cache* (``FCOMP_CACHE`` pointed at a new folder): imports,
-  CasADi code generation and C compilation of every candidate model's
-  sensitivity step, the baseline fit, every step of the search over the full
-  catalogue (each candidate refitted on the training samples and scored on the
-  held-out ones, two processes in parallel), the verdict and the JSON.
-* **fcomp diagnose (warm)**: the same command with the compile cache filled
-  (a user's second run).
-* **baseline: serial** (``--jobs 1``, warm): the same work in one process, the
-  reference the parallel refits are measured against.
+* **synthetic, warm**: the console command in a fresh process with the compile cache
+  filled (``FCOMP_CACHE``, filled by one untimed run first): imports, the baseline fit,
+  every step of the search over the full catalogue (two processes), the verdict, the
+  JSON. The record: :func:`fcomp.synthetic.generate` with the pressure dependence of the
+  seal hidden (LuGre truth, three experiments, quantised position, coloured force
+  noise), 60 s at 1 kHz = 60 001 samples.
+* **O-ring, warm**: ``fcomp diagnose O-ring_1bar.csv ... O-ring_7bar.csv --baseline
+  lugre`` as a user types it (the baseline check as the default decides).
 
-The record: :func:`fcomp.synthetic.generate` with the pressure dependence of
-the seal hidden (LuGre truth, three experiments at different chamber
-pressures, quantised position, coloured force noise), 60 s at 1 kHz =
-60 001 samples. The figure reported is the median of ``--repeats`` runs, with
-the ratio to the goal and to the serial run.
+Each is timed for this checkout and, with ``--baseline-rev REV`` (default: the commit
+before issue 24's work, ``c848ea1``), for that revision's code (``git archive`` into a
+temporary folder, run with ``PYTHONPATH`` pointing there), alternately A B A B, so a
+drift of the machine's speed hits both. Medians over ``--repeats`` runs and the ratio
+of the medians are printed, with each side's answer (added effects, verdict, errors).
 
-Run ``python benchmarks/bench_diagnose.py`` (``--quick`` for a 20 s record and
-one repeat).
+Run ``python benchmarks/bench_diagnose.py`` (``--quick``: a 20 s record, one repeat;
+``--no-baseline``: this checkout only).
 """
 
 from __future__ import annotations
@@ -37,15 +38,31 @@ import tempfile
 import time
 from pathlib import Path
 
+from fcomp import datasets
 from fcomp.synthetic import generate
 
-GOAL_S = 60.0
+REPO = Path(__file__).resolve().parents[1]
+#: The goals (s).
+GOALS = {"synthetic": 15.0, "o-ring": 60.0}
+#: The last commit before issue 24's work.
+BASELINE_REV = "c848ea1"
 
 
-def run(csv: Path, cache: Path, extra: list[str], out: Path) -> tuple[float, dict]:
+def checkout(rev: str, into: Path) -> Path:
+    """The package of revision ``rev`` unpacked under ``into`` (its ``PYTHONPATH``)."""
+    into.mkdir(parents=True, exist_ok=True)
+    archive = subprocess.run(["git", "-C", str(REPO), "archive", rev, "fcomp"],
+                             capture_output=True, check=True).stdout
+    subprocess.run(["tar", "-x", "-C", str(into)], input=archive, check=True)
+    return into
+
+
+def run(args: list[str], out: Path, cache: Path, pythonpath: Path | None) -> tuple[float, dict]:
     env = dict(os.environ, FCOMP_CACHE=str(cache))
-    cmd = [sys.executable, "-m", "fcomp.cli.main", "diagnose", str(csv), "--baseline", "lugre",
-           "--json", str(out), *extra]
+    if pythonpath is not None:
+        env["PYTHONPATH"] = str(pythonpath)
+    cmd = [sys.executable, "-m", "fcomp.cli.main", "diagnose", *args, "--no-progress",
+           "--json", str(out)]
     t0 = time.perf_counter()
     proc = subprocess.run(cmd, env=env, capture_output=True, text=True, check=False)
     wall = time.perf_counter() - t0
@@ -54,10 +71,19 @@ def run(csv: Path, cache: Path, extra: list[str], out: Path) -> tuple[float, dic
     return wall, json.loads(out.read_text())
 
 
+def answer(doc: dict) -> str:
+    return (f"added {doc['added']}, verdict {doc['verdict']}, held-out RMS "
+            f"{doc['rms_baseline']:.3g} -> {doc['rms_final']:.3g} N (floor "
+            f"{doc['noise_floor']:.3g} N)")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--quick", action="store_true", help="20 s record, one repeat")
+    ap.add_argument("--baseline-rev", default=BASELINE_REV)
+    ap.add_argument("--no-baseline", action="store_true")
+    ap.add_argument("--cases", default="synthetic,o-ring")
     args = ap.parse_args()
     duration = 20.0 if args.quick else 60.0
     repeats = 1 if args.quick else args.repeats
@@ -66,32 +92,35 @@ def main() -> None:
         csv = tmpd / "record.csv"
         generate(["pressure-dependence"], duration=duration, rate=1000.0, seed=11
                  ).measurement.write(csv)
+        orings = [str(datasets.path("zillen", f"O-ring_{k}bar.csv")) for k in (1, 3, 5, 7)]
+        cases = {"synthetic": [str(csv), "--baseline", "lugre"],
+                 "o-ring": [*orings, "--baseline", "lugre"]}
+        sides: dict[str, Path | None] = {"this checkout": None}
+        if not args.no_baseline:
+            sides[f"baseline {args.baseline_rev}"] = checkout(args.baseline_rev,
+                                                              tmpd / "baseline")
         out = tmpd / "out.json"
-        cold, warm, serial = [], [], []
-        doc: dict = {}
-        for k in range(repeats):
-            cache = tmpd / f"cache{k}"
-            w, doc = run(csv, cache, [], out)
-            cold.append(w)
-            w, doc = run(csv, cache, [], out)
-            warm.append(w)
-            w, _ = run(csv, cache, ["--jobs", "1", "--no-progress"], out)
-            serial.append(w)
-            print(f"run {k + 1}: cold {cold[-1]:.1f} s, warm {warm[-1]:.1f} s, serial (warm) "
-                  f"{serial[-1]:.1f} s", flush=True)
-    med = {name: statistics.median(v) for name, v in
-           (("cold", cold), ("warm", warm), ("serial", serial))}
-    print(f"\nrecord: {duration:.0f} s at 1 kHz, hidden pressure-dependence; "
-          f"{os.cpu_count()} CPUs; {repeats} repeat(s), medians:")
-    print(f"  fcomp diagnose, cold cache : {med['cold']:7.1f} s  ({med['cold'] / GOAL_S:.2f} of "
-          f"the {GOAL_S:.0f} s goal)")
-    print(f"  fcomp diagnose, warm cache : {med['warm']:7.1f} s  ({med['warm'] / GOAL_S:.2f} of "
-          "the goal)")
-    print(f"  serial baseline (--jobs 1) : {med['serial']:7.1f} s  (parallel refits "
-          f"{med['serial'] / med['warm']:.2f}x faster)")
-    print(f"  result: added {doc['added']}, verdict {doc['verdict']}, held-out RMS "
-          f"{doc['rms_baseline']:.3g} -> {doc['rms_final']:.3g} N (noise floor "
-          f"{doc['noise_floor']:.3g} N), {len(doc['candidates'])} candidates")
+        for case in args.cases.split(","):
+            times: dict[str, list[float]] = {s: [] for s in sides}
+            docs: dict[str, dict] = {}
+            for side, path in sides.items():  # fill each side's compile cache
+                run(cases[case], out, tmpd / f"cache-{len(docs)}-{case}", path)
+                docs[side] = {}
+            for k in range(repeats):
+                for i, (side, path) in enumerate(sides.items()):
+                    w, docs[side] = run(cases[case], out, tmpd / f"cache-{i}-{case}", path)
+                    times[side].append(w)
+                    print(f"{case} run {k + 1}, {side}: {w:.1f} s", flush=True)
+            print(f"\n{case} ({'60' if case == 'synthetic' and not args.quick else ''}"
+                  f"{' s at 1 kHz' if case == 'synthetic' else '4 files from lugre'}), "
+                  f"{os.cpu_count()} CPUs, {repeats} repeat(s), warm, medians:")
+            med = {s: statistics.median(v) for s, v in times.items()}
+            for side in sides:
+                print(f"  {side:22s}: {med[side]:7.1f} s  (goal {GOALS[case]:.0f} s: "
+                      f"{med[side] / GOALS[case]:.2f}x)  {answer(docs[side])}")
+            if len(sides) == 2:
+                a, b = list(med.values())
+                print(f"  ratio this/baseline     : {a / b:.2f}\n")
 
 
 if __name__ == "__main__":

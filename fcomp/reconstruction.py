@@ -76,6 +76,64 @@ def _grid(t: np.ndarray, label: str) -> tuple[np.ndarray, bool]:
     return t[0] + h * np.arange(m), False
 
 
+def _interp_weights(x: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Indices ``i`` and weights ``w`` with ``y(q) = (1 - w)*y[i] + w*y[i + 1]`` (``np.interp``'s
+    linear interpolation, ends held), to apply to many signals sampled at ``x``."""
+    i = np.clip(np.searchsorted(x, q, side="right") - 1, 0, x.size - 2)
+    w = np.clip((q - x[i]) / (x[i + 1] - x[i]), 0.0, 1.0)
+    return i, w
+
+
+def _apply(iw: tuple[np.ndarray, np.ndarray], y: np.ndarray) -> np.ndarray:
+    i, w = iw
+    if y.ndim == 1:
+        return (1.0 - w) * y[i] + w * y[i + 1]
+    return (1.0 - w)[:, None] * y[i] + w[:, None] * y[i + 1]
+
+
+class _Resampler:
+    """The uniform grid of :func:`_grid` for a time vector, and the linear maps to it and back,
+    computed once per time vector: a fit filters every prediction and every sensitivity column
+    of a non-uniformly stamped record on the same grid."""
+
+    def __init__(self, t: np.ndarray, label: str) -> None:
+        self.tu, self.same = _grid(t, label)
+        self.fs = (self.tu.size - 1) / float(self.tu[-1] - self.tu[0])
+        if not self.same:
+            self.to_grid = _interp_weights(t, self.tu)
+            self.back = _interp_weights(self.tu, t)
+
+    def filtfilt(self, y: np.ndarray, cutoff_hz: float, order: int, label: str) -> np.ndarray:
+        """:func:`zero_phase_lowpass` of ``y`` (samples along axis 0) on the uniform grid."""
+        yu = y if self.same else _apply(self.to_grid, y)
+        if yu.ndim == 1:
+            out = zero_phase_lowpass(yu, self.fs, cutoff_hz, order, label=label)
+        else:
+            from scipy.signal import sosfiltfilt
+
+            if yu.shape[0] < 3:
+                raise FcompError(f"{label}: at least three samples are needed to filter")
+            sos = butterworth_sos(order, float(cutoff_hz), float(self.fs))
+            padlen = min(yu.shape[0] - 1, int(math.ceil(3.0 * self.fs / cutoff_hz)))
+            out = sosfiltfilt(sos, yu, axis=0, padtype="odd", padlen=padlen)
+        return out if self.same else _apply(self.back, out)
+
+
+_RESAMPLERS: dict[tuple[Any, ...], _Resampler] = {}
+
+
+def _resampler(t: np.ndarray, label: str) -> _Resampler:
+    """The :class:`_Resampler` of ``t`` (cached by the stamps' bytes, a few at a time)."""
+    key = (t.size, float(t[0]), float(t[-1]), hash(np.ascontiguousarray(t).tobytes()))
+    found = _RESAMPLERS.get(key)
+    if found is None:
+        found = _Resampler(t, label)
+        if len(_RESAMPLERS) >= 64:
+            _RESAMPLERS.pop(next(iter(_RESAMPLERS)))
+        _RESAMPLERS[key] = found
+    return found
+
+
 @lru_cache(maxsize=256)
 def _butterworth(order: int, cutoff_hz: float, fs: float) -> np.ndarray:
     from scipy.signal import butter  # here: importing it costs ~0.4 s at start
@@ -121,12 +179,13 @@ def zero_phase_lowpass(y: np.ndarray, fs: float, cutoff_hz: float, order: int, *
 
 def smooth(t: np.ndarray, y: np.ndarray, *, cutoff_hz: float = 10.0, order: int = 2,
            label: str = "signal") -> np.ndarray:
-    """:func:`zero_phase_lowpass` of ``y(t)`` on any strictly increasing time vector."""
-    tu, same = _grid(t, label)
-    yu = y if same else np.interp(tu, t, y)
-    fs = (tu.size - 1) / float(tu[-1] - tu[0])
-    out = zero_phase_lowpass(yu, fs, cutoff_hz, order, label=label)
-    return out if same else np.interp(t, tu, out)
+    """:func:`zero_phase_lowpass` of ``y(t)`` on any strictly increasing time vector.
+
+    Non-uniform stamps: ``y`` is interpolated linearly onto a uniform grid of the
+    median interval (:func:`_grid`), filtered there and interpolated back to ``t``
+    (the grid and the maps are computed once per time vector, :class:`_Resampler`).
+    """
+    return _resampler(t, label).filtfilt(y, cutoff_hz, order, label)
 
 
 def band_limit(t: np.ndarray, y: np.ndarray, cutoff_hz: float, *, order: int = 2
@@ -138,19 +197,9 @@ def band_limit(t: np.ndarray, y: np.ndarray, cutoff_hz: float, *, order: int = 2
     a fit whose target was low-passed passes its prediction and sensitivities
     through the same filter.
     """
-    tu, same = _grid(t, "prediction")
-    fs = (tu.size - 1) / float(tu[-1] - tu[0])
-    fc = min(cutoff_hz, 0.45 * fs)
-    if y.ndim == 1:
-        return smooth(t, y, cutoff_hz=fc, order=order, label="prediction")
-    if not same:
-        return np.column_stack([smooth(t, y[:, j], cutoff_hz=fc, order=order,
-                                       label="prediction") for j in range(y.shape[1])])
-    from scipy.signal import sosfiltfilt
-
-    sos = butterworth_sos(order, float(fc), float(fs))
-    padlen = min(y.shape[0] - 1, int(math.ceil(3.0 * fs / fc)))
-    return sosfiltfilt(sos, y, axis=0, padtype="odd", padlen=padlen)
+    rs = _resampler(t, "prediction")
+    fc = min(cutoff_hz, 0.45 * rs.fs)
+    return rs.filtfilt(y, fc, order, "prediction")
 
 
 def differentiate(t: np.ndarray, x: np.ndarray, *, cutoff_hz: float = 10.0, order: int = 2,

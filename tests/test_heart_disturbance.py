@@ -20,7 +20,7 @@ def _prepared(seed: int, scale: str = "pneumatic", rate: float = 1000.0, stamps:
 
 @pytest.mark.parametrize("freq,amp,seed,stamps", [(37.0, 0.8, 1, "uniform"),
                                                    (50.0, 0.3, 2, "uniform"),
-                                                   (11.3, 1.5, 3, "irregular")])
+                                                   (17.3, 1.5, 3, "irregular")])
 def test_a_line_in_time_is_found_on_any_motion_and_sized(freq: float, amp: float, seed: int,
                                                          stamps: str) -> None:
     data = _prepared(seed, stamps=stamps)

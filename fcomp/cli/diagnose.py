@@ -90,8 +90,15 @@ def summary(doc: dict) -> str:
             lines.append(f"tie (confounded, {t[0]} added): " + ", ".join(t))
             for e, exp in doc["tie_experiments"][t[0]].items():
                 lines.append(f"    {e}: {exp}")
+    plain = doc.get("rms_plain") or {}
     lines.append(f"added: {', '.join(doc['added']) or 'nothing'}; final model {doc['model']}; "
-                 f"held-out RMS {doc['rms_final']:.4g} N")
+                 f"held-out RMS {doc['rms_final']:.4g} N"
+                 + (f" (plain y - F: {plain['baseline']:.4g} -> {plain['final']:.4g} N)"
+                    if plain.get("final") is not None and plain.get("baseline") is not None
+                    else ""))
+    for d in doc.get("disturbances") or []:
+        lines.append(f"periodic disturbance: {d['frequency_hz']:.4g} Hz, amplitude "
+                     f"{d['amplitude']:.3g} N (follows no motion; taken off the force)")
     other = doc.get("other_baseline")
     if other:
         same = "the same effects" if not doc["baseline_dependent"] else "OTHER effects"

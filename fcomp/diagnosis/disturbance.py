@@ -11,7 +11,8 @@ taken out, before the search:
 1. **Lines.** The residual of the first baseline fit (plain, ``y - F_hat``)
    of every experiment of at least :data:`MIN_SECONDS` is resampled onto its
    median interval where the stamps are not uniform, and its Welch spectrum
-   (Hann windows of about :data:`WINDOW_SECONDS`, half overlap) is divided by
+   (Hann windows of about :data:`WINDOW_SECONDS`, half overlap; the spectra of
+   experiments on one frequency grid pooled, their windows adding up) is divided by
    its running median over :data:`BACKGROUND_HZ` on either side (the local
    background of a smooth spectrum). A bin is a line when that ratio exceeds
    the level a chi-square spectrum with ``2K`` degrees of freedom (``K``
@@ -21,8 +22,8 @@ taken out, before the search:
 2. **Not the motion's.** A line is the motion's -- a friction law's error
    repeating with a periodic motion, its harmonics -- when the motion shows a
    line there too: the spectra of ``v``, ``sign(v)``, ``|v|``, ``x`` and the
-   model's prediction are tested the same way, at half the threshold, within
-   two bins. A line must also be there at low and at high speed alike
+   model's prediction are tested the same way, at half the threshold (at least
+   :data:`MOTION_LINE`), within two bins. A line must also be there at low and at high speed alike
    (:func:`_same_at_all_speeds`: a ripple along the bore is a line in time
    only at one speed), and keep its phase in time from window to window
    (:func:`_phase_consistency`: a source on its own clock does, a structure met
@@ -67,6 +68,10 @@ BACKGROUND_HZ = 3.0
 BACKGROUND_BINS = 8
 #: Chance that a spectrum without a line shows one anywhere in the band searched.
 FALSE_ALARM = 1e-3
+#: A motion feature has a line of its own where its spectrum is at least this many times its
+#: local background (and half the residual's threshold): its spectrum is no chi-square
+#: noise, and a pooled threshold near 1 would call its every ripple a line.
+MOTION_LINE = 3.0
 #: Lowest frequency searched (Hz): below it the residual's slow structure is a law's.
 MIN_HZ = 2.0
 #: Highest frequency searched, as a share of the Nyquist frequency (the anti-alias filter's
@@ -74,12 +79,16 @@ MIN_HZ = 2.0
 MAX_SHARE = 0.8
 #: A line is reported when its RMS is at least this share of the noise floor left.
 MIN_SHARE = 0.5
+#: Fewest samples of a speed group the line is compared in.
+MIN_GROUP = 200
 #: Least steadiness of the line's phase in time (:func:`_phase_consistency`) ...
-PHASE_CONSISTENCY = 0.7
+PHASE_CONSISTENCY = 0.5
 #: ... over windows of this length (s).
 PHASE_WINDOW = 1.0
 #: Least gain of the line's sinusoid in the slower and in the faster half of the samples.
 SPEED_GAIN = 0.5
+#: Most candidate lines tested for being the motion's (strongest first).
+MAX_CANDIDATES = 40
 #: Most lines reported.
 MAX_LINES = 5
 
@@ -201,6 +210,10 @@ def find(residual: np.ndarray, prediction: np.ndarray, data: DiagnosisData
     feats["|v|"] = np.abs(feats["v"])
     found: dict[int, tuple[float, float, float]] = {}  # rounded Hz -> (f, ratio, df)
     pieces = []
+    # the spectra of experiments on one frequency grid are pooled (their windows add up):
+    # a line every experiment carries stands out of a background one experiment's
+    # reversals can raise
+    pooled: dict[tuple[int, float], list[Any]] = {}
     for idx, e in enumerate(data.experiments):
         t = t_all[e.start:e.stop]
         if t.size < 16 or t[-1] - t[0] < MIN_SECONDS:
@@ -211,25 +224,31 @@ def find(residual: np.ndarray, prediction: np.ndarray, data: DiagnosisData
         if spec is None:
             continue
         f, P, k = spec
-        ratio = _prominence(f, P)
+        key = (f.size, round(float(f[1] - f[0]), 9))
+        motion = [_spectrum(t, sig[e.start:e.stop]) for sig in feats.values()]
+        acc = pooled.setdefault(key, [f, np.zeros_like(P), 0, [np.zeros_like(P) for _ in feats]])
+        acc[1] += k * P
+        acc[2] += k
+        for j, m in enumerate(motion):
+            if m is not None:
+                acc[3][j] += m[2] * m[1]
+    for f, P, k, motion_P in pooled.values():
+        ratio = _prominence(f, P / k)
         level = _threshold(k, int(np.sum((f >= MIN_HZ) & (f <= MAX_SHARE * f[-1]))))
-        cands = _lines(f, ratio, level)
-        if not cands:
-            continue
-        motion = []
-        for sig in feats.values():
-            s = _spectrum(t, sig[e.start:e.stop])
-            motion.append(None if s is None or not np.any(s[1] > 0) else _prominence(s[0], s[1]))
-        for i in cands[:2 * MAX_LINES]:
+        motion_ratio = [_prominence(f, m) if np.any(m > 0) else None for m in motion_P]
+        for i in _lines(f, ratio, level)[:MAX_CANDIDATES]:
             lo, hi = max(i - 2, 0), min(i + 3, f.size)
-            if any(m is not None and m[lo:hi].max() > 0.5 * level for m in motion):
+            if any(m is not None and m[lo:hi].max() > max(0.5 * level, MOTION_LINE)
+                   for m in motion_ratio):
                 continue  # the motion has a line there: the residual repeats with it
             key = int(round(f[i]))
             if key not in found or ratio[i] > found[key][1]:
                 found[key] = (float(f[i]), float(ratio[i]), float(f[1] - f[0]))
     out = []
     speed = feats["|v|"]
-    for f0, prom, df in sorted(found.values(), key=lambda x: -x[1])[:MAX_LINES]:
+    for f0, prom, df in sorted(found.values(), key=lambda x: -x[1]):
+        if len(out) >= MAX_LINES:
+            break
         freq = _refine([(t, r) for t, r, _ in pieces], f0, df)
         waves = [np.zeros(e.n) for e in data.experiments]
         for t, r, idx in pieces:
@@ -276,18 +295,19 @@ def _same_at_all_speeds(r: np.ndarray, wave: np.ndarray, speed: np.ndarray) -> b
     A disturbance keeps its frequency whatever the piston does; a structure of
     the bore (a ripple of wavelength ``L`` along the stroke) is a line only at
     the speed ``f*L``, and absent at rest. The residual is projected onto the
-    fitted sinusoid within the slower and the faster half of the samples (by
-    ``|v|``, rests included): the gain in both must be at least
-    :data:`SPEED_GAIN`.
+    fitted sinusoid at rest, and within the slower and the faster half of the
+    moving samples (by ``|v|``): the gain in each group of at least
+    :data:`MIN_GROUP` samples must be at least :data:`SPEED_GAIN`.
     """
     used = wave != 0.0
     if used.sum() < 40:
         return False
-    cut = float(np.median(speed[used]))
-    for group in (used & (speed <= cut), used & (speed > cut)):
+    moving = used & (speed > 0.0)  # the conditioned velocity is held at 0 at rest
+    cut = float(np.median(speed[moving])) if moving.any() else 0.0
+    for group in (used & (speed == 0.0), moving & (speed <= cut), moving & (speed > cut)):
         w = wave[group]
-        if w.size < 20 or not float(w @ w) > 0:
-            continue  # one speed only: nothing to compare
+        if w.size < MIN_GROUP or not float(w @ w) > 0:
+            continue  # too few samples at this speed: nothing to compare
         if float(r[group] @ w) / float(w @ w) < SPEED_GAIN:
             return False
     return True

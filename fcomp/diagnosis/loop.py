@@ -1236,6 +1236,12 @@ class Diagnosis:
             "final": regime_errors(self.fit_.residual, seg, split.test),
         }
         self._collect_warnings()
+        edge = sorted({w.parameter for w in self._final_warnings
+                       if w.code == "at-bound" and w.parameter})
+        if edge:
+            self.reason_ += (f"; the final fit sits at a bound of its box for {', '.join(edge)} "
+                             "(after the boxes the record's scale set were widened): the "
+                             "error may be the box's, not the model's")
         if hasattr(self, "baseline_check_"):  # an effect added or removed after the check
             self._fold_dependence()
 

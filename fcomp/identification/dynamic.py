@@ -229,9 +229,11 @@ class TrajectoryProblem:
         model_vals = {k: v for k, v in vals.items() if k not in EXTRAS}
         F, Gm = self._model_force(model_vals, jac)
         self.evaluations += 1
-        F = self.data.band_limited(F.copy())
-        if Gm.size and (jac or self.jacobian_is_free):
-            Gm = self.data.band_limited(Gm)
+        if Gm.size and (jac or self.jacobian_is_free):  # one pass of the filter for all
+            both = self.data.band_limited(np.column_stack([F, Gm]))
+            F, Gm = both[:, 0].copy(), both[:, 1:]
+        else:
+            F = self.data.band_limited(F.copy())
         G = np.empty((F.size, len(self.pv.names)))
         pos = [self.pv.index(n) for n in self.model_free]
         if pos == list(range(len(pos))):

@@ -153,7 +153,6 @@ def _prominence(f: np.ndarray, P: np.ndarray) -> np.ndarray:
     """Power over the running median of the neighbouring bins (the local background)."""
     df = float(f[1] - f[0])
     half = max(BACKGROUND_BINS, int(round(BACKGROUND_HZ / df)))
-    # a chi-square spectrum's median lies below its mean: 2K large, about (1 - 2/(9*2K))^3
     back = median_filter(P, size=2 * half + 1, mode="nearest")
     return P / np.maximum(back, 1e-300)
 
@@ -224,9 +223,9 @@ def find(residual: np.ndarray, prediction: np.ndarray, data: DiagnosisData
         if spec is None:
             continue
         f, P, k = spec
-        key = (f.size, round(float(f[1] - f[0]), 9))
+        grid = (f.size, round(float(f[1] - f[0]), 9))
         motion = [_spectrum(t, sig[e.start:e.stop]) for sig in feats.values()]
-        acc = pooled.setdefault(key, [f, np.zeros_like(P), 0, [np.zeros_like(P) for _ in feats]])
+        acc = pooled.setdefault(grid, [f, np.zeros_like(P), 0, [np.zeros_like(P) for _ in feats]])
         acc[1] += k * P
         acc[2] += k
         for j, m in enumerate(motion):
@@ -244,7 +243,7 @@ def find(residual: np.ndarray, prediction: np.ndarray, data: DiagnosisData
             key = int(round(f[i]))
             if key not in found or ratio[i] > found[key][1]:
                 found[key] = (float(f[i]), float(ratio[i]), float(f[1] - f[0]))
-    out = []
+    out: list[tuple[float, float, list[np.ndarray]]] = []
     speed = feats["|v|"]
     for f0, prom, df in sorted(found.values(), key=lambda x: -x[1]):
         if len(out) >= MAX_LINES:

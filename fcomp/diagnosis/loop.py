@@ -791,15 +791,32 @@ class Diagnosis:
         results: list[FitResult | str] = [""] * len(proposals)
         pool = self._workers(len(proposals))
         if pool is not None:
-            futures = {pool.submit(refit_candidate, self._refit, prop, self.fit_): i
+            pending = {pool.submit(refit_candidate, self._refit, prop, self.fit_): i
                        for i, prop in enumerate(proposals)}
-            for fut in as_completed(futures):
-                i = futures[fut]
-                results[i] = fut.result()
-                self._tick(proposals[i].effect)
+            while pending:
+                try:
+                    for fut in as_completed(list(pending), timeout=WATCH_SECONDS):
+                        i = pending.pop(fut)
+                        results[i] = fut.result()
+                        self._tick(proposals[i].effect)
+                except TimeoutError:
+                    if _workers_alive(pool):
+                        continue
+                    # the local pool lost its workers without a word (seen once in a
+                    # test run: futures pending, no process left): finish the jobs here
+                    for fut, i in pending.items():
+                        fut.cancel()
+                        results[i] = refit_candidate(self._refit, proposals[i], self.fit_)
+                        self._tick(proposals[i].effect)
+                    pending.clear()
+                    pool.shutdown(wait=False, cancel_futures=True)
+                    self._pool = None
         else:
             for i, prop in enumerate(proposals):
+                # each job sees the boxes as they were, as a worker process would
+                boxes = self._refit.box_state()
                 results[i] = refit_candidate(self._refit, prop, self.fit_)
+                self._refit.set_box_state(boxes)
                 self._tick(prop.effect)
         for res in results:  # a box a worker's fit had to widen holds here too
             if isinstance(res, FitResult):
@@ -1400,6 +1417,19 @@ def _timing_share(fit: FitResult, where: np.ndarray, nf: float) -> float:
     if fit.timing_spread is None or not where.size:
         return 1.0
     return score_noise_share(fit.timing_spread[where], nf)
+
+
+#: How often (s) a diagnosis waiting on its local worker processes checks they are alive.
+WATCH_SECONDS = 10.0
+
+
+def _workers_alive(pool: Executor) -> bool:
+    """Whether a local process pool still has a live worker (a pool of another kind, a Dask
+    client, is taken to be alive: it reports its own failures)."""
+    procs = getattr(pool, "_processes", None)
+    if procs is None:
+        return True
+    return any(p.is_alive() for p in list(procs.values()))
 
 
 def _located(fit: FitResult) -> np.ndarray:

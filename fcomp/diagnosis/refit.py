@@ -706,6 +706,14 @@ class Refit:
         self._widened[(name, side)] = count + 1
         return True
 
+    def box_state(self) -> tuple[dict[str, tuple[float, float]], dict[tuple[str, int], int]]:
+        """The widened boxes and their counts (to restore with :meth:`set_box_state`)."""
+        return dict(self.wide), dict(self._widened)
+
+    def set_box_state(self, state: tuple[dict[str, tuple[float, float]],
+                                         dict[tuple[str, int], int]]) -> None:
+        self.wide, self._widened = dict(state[0]), dict(state[1])
+
     def adopt_boxes(self, fit: FitResult) -> None:
         """Take over the boxes a fit elsewhere (a worker process) widened."""
         for name, box in (fit.boxes or {}).items():

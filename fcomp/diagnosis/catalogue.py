@@ -75,7 +75,7 @@ def record_view(ctx: Context) -> RecordView:
     return RecordView(
         signals=MappingProxyType({k: data.signal(k) for k in names}),
         y=data.y, F_hat=current.F_hat, train=ctx.train,
-        residual=current.tolerant if current.tolerant is not None else current.residual,
+        residual=current.located,
         params=MappingProxyType(dict(current.model.flat_params())),
         values=MappingProxyType(dict(current.values)),
         scales=data.scales, v_rest=seg.v_rest, d_pre=seg.d_pre, t_dwell=seg.t_dwell,

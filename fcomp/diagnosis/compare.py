@@ -293,8 +293,7 @@ def compare(model: str | FrictionModel, data: Measurement | Sequence[Measurement
         res = refit.result(mdl, values, 0)
         judged, label = seg.valid, "usable"
     r = res.residual  # scored (:func:`.refit.scored_residual`): what decides
-    plain = res.plain if res.plain is not None else r
-    located = res.tolerant if res.tolerant is not None else r
+    plain, located = res.plain_residual, res.located
     rms = float(np.sqrt(np.mean(r[judged] ** 2))) if judged.any() else math.nan
     width = max(10, int(round(0.25 / d.scales.dt)))
     bounds = [e.start for e in d.experiments[1:]]

@@ -512,8 +512,9 @@ class Diagnosis:
         floor = noise_floor(cleaned, self.segmentation_).value
         # sized in the force as matched (a band-limited force attenuates a line), reported
         # at the sensor
-        keep = [(ln, disturbance.describe(*ln, self.data_)) for ln in lines
-                if disturbance.describe(*ln).rms >= disturbance.MIN_SHARE * floor]
+        keep = [(ln, disturbance.describe(*ln, self.data_)) for ln, d in
+                ((ln, disturbance.describe(*ln)) for ln in lines)
+                if d.rms >= disturbance.MIN_SHARE * floor]
         if not keep:
             return first
         self.data_ = disturbance.without(self.data_, [ln[2] for ln, _ in keep])
@@ -1160,7 +1161,7 @@ class Diagnosis:
         self.rms_final_ = self.fit_.rms_test
         # where structure is left: the tolerant residual (a shape the model could place);
         # how large the error is: the scored residual (:func:`.refit.scored_residual`)
-        located = _located(self.fit_)
+        located = self.fit_.located
         self.residual_features_ = residual_structure(located, data, seg,
                                                      split.train, split.test)
         nf = self.noise_floor_.value
@@ -1307,8 +1308,7 @@ class Diagnosis:
         test = self.split_.test
 
         def plain(fit: FitResult) -> float | None:
-            r = fit.plain if fit.plain is not None else fit.residual
-            return num(_rms(r[test]))
+            return num(_rms(fit.plain_residual[test]))
 
         return {
             "baseline": self.baseline_name_,
@@ -1430,11 +1430,6 @@ def _workers_alive(pool: Executor) -> bool:
     if procs is None:
         return True
     return any(p.is_alive() for p in list(procs.values()))
-
-
-def _located(fit: FitResult) -> np.ndarray:
-    """The residual that locates structure: the tolerant one where the fit carries it."""
-    return fit.tolerant if fit.tolerant is not None else fit.residual
 
 
 class _NoBar:

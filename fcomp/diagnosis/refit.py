@@ -233,6 +233,16 @@ class FitResult:
     boxes: dict[str, tuple[float, float]] | None = None
     timing_spread: np.ndarray | None = dataclasses.field(default=None, repr=False)
 
+    @property
+    def located(self) -> np.ndarray:
+        """The residual that *locates* structure: the tolerant one where there is one."""
+        return self.tolerant if self.tolerant is not None else self.residual
+
+    @property
+    def plain_residual(self) -> np.ndarray:
+        """``y - F_hat`` (the scored residual where a result carries no plain one)."""
+        return self.plain if self.plain is not None else self.residual
+
 
 #: Largest timing tolerance (s) of :func:`tolerant_residual`.
 MAX_TIMING = 0.02

@@ -168,12 +168,6 @@ def _binned(f: np.ndarray, r: np.ndarray) -> tuple[list[float], list[float]]:
     return [a for a, _ in pairs], [b for _, b in pairs]
 
 
-def _plain(fit: Any) -> np.ndarray:
-    """The plain residual ``y - F_hat`` a person reads off a figure (the scored one where a
-    fit carries no plain one)."""
-    return fit.plain if getattr(fit, "plain", None) is not None else fit.residual
-
-
 def fig_residuals(obj: Diagnosis | Comparison | View) -> Figure:
     """Judged residual against each feature (every model drawn), with binned means; each
     panel is titled with its feature and how strongly the last model's residual follows it."""
@@ -188,7 +182,7 @@ def fig_residuals(obj: Diagnosis | Comparison | View) -> Figure:
         ax = fig.add_subplot(rows, cols, i + 1)
         shown = f[te] * _SHOWN_SCALE.get(name, 1.0)
         for s in vw.series:
-            r = _plain(s.fit)[te]
+            r = s.fit.plain_residual[te]
             ax.plot(shown, r, ".", ms=1.5, alpha=0.35, color=_COLORS[s.colour])
             cx, cy = _binned(shown, r)
             ax.plot(cx, cy, "-", color=_COLORS[s.colour], lw=1.5, label=s.label.split(":")[0])
@@ -248,7 +242,7 @@ def worst_windows(obj: Diagnosis | Comparison | View, count: int = 3
     vw = view(obj)
     width = max(10, int(round(0.25 / vw.data.scales.dt)))
     bounds = [e.start for e in vw.data.experiments[1:]]
-    segs = worst_segments(_plain(vw.first.fit), vw.judged, width, count, bounds)
+    segs = worst_segments(vw.first.fit.plain_residual, vw.judged, width, count, bounds)
     return [(s.start, s.stop, s.rms) for s in segs]
 
 

@@ -104,6 +104,11 @@ DWELL_CLASSES = ((0.1, 0.4), (0.8, 3.0))
 MOTION_KINDS = ("slide", "reverse", "dwell-slide", "loops", "sweep")
 
 
+
+def log_uniform(rng: np.random.Generator, lo: float, hi: float) -> float:
+    """A draw uniform in ``ln`` between ``lo`` and ``hi``."""
+    return float(np.exp(rng.uniform(np.log(lo), np.log(hi))))
+
 def schedule(plan: Plan, rng: np.random.Generator, duration: float, levels: Sequence[float],
              a_max: float, loop_amplitude: tuple[float, float] = (2e-5, 3e-4)) -> None:
     """Fill ``plan`` with a realistic motion of about ``duration`` seconds.
@@ -121,9 +126,6 @@ def schedule(plan: Plan, rng: np.random.Generator, duration: float, levels: Sequ
     deck: list[str] = []
     n_slide = n_dwell = int(rng.integers(3))
 
-    def log_uniform(lo: float, hi: float) -> float:
-        return float(np.exp(rng.uniform(np.log(lo), np.log(hi))))
-
     while plan.duration < duration:
         if not changed and plan.duration > 0.5 * duration:
             plan.pressure(float(levels[1]))
@@ -131,23 +133,23 @@ def schedule(plan: Plan, rng: np.random.Generator, duration: float, levels: Sequ
         if not deck:
             deck = [MOTION_KINDS[i] for i in rng.permutation(len(MOTION_KINDS))]
         kind = deck.pop()
-        V = log_uniform(*SPEED_CLASSES[n_slide % len(SPEED_CLASSES)])
+        V = log_uniform(rng, *SPEED_CLASSES[n_slide % len(SPEED_CLASSES)])
         n_slide += 1
         t_ramp = max(0.01, V / a_max * rng.uniform(1.0, 2.5))
         towards = 1.0 if plan.x < 0.5 * L else -1.0
         d = towards * min(V * rng.uniform(0.4, 1.2) + V * t_ramp, 0.35 * L)
         if kind == "slide":
             plan.move(d, V, t_ramp)
-            plan.dwell(log_uniform(0.05, 0.4))
+            plan.dwell(log_uniform(rng, 0.05, 0.4))
         elif kind == "reverse":  # out and straight back: a reversal without a stop
             plan.move(d, V, t_ramp)
             plan.move(-0.6 * d, V, t_ramp)
         elif kind == "dwell-slide":
-            plan.dwell(log_uniform(*DWELL_CLASSES[n_dwell % len(DWELL_CLASSES)]))
+            plan.dwell(log_uniform(rng, *DWELL_CLASSES[n_dwell % len(DWELL_CLASSES)]))
             n_dwell += 1
             plan.move(d, V, t_ramp)
         elif kind == "loops":  # small displacement cycles (presliding), at most 1 s
-            plan.loops(log_uniform(*loop_amplitude), float(rng.uniform(2.0, 5.0)), 2)
+            plan.loops(log_uniform(rng, *loop_amplitude), float(rng.uniform(2.0, 5.0)), 2)
             plan.dwell(0.1)
         else:  # one sinusoidal sweep, at most 1 s
             f = float(rng.uniform(1.0, 2.5))
@@ -189,27 +191,24 @@ def schedule_presliding(plan: Plan, rng: np.random.Generator, duration: float,
     slides_at = [duration * (k + 1) / (PRESLIDING_SLIDES + 1) for k in range(PRESLIDING_SLIDES)]
     k_f = int(rng.integers(len(PRESLIDING_FREQUENCIES)))
 
-    def log_uniform(lo: float, hi: float) -> float:
-        return float(np.exp(rng.uniform(np.log(lo), np.log(hi))))
-
     while plan.duration < duration:
         if not changed and plan.duration > 0.5 * duration:
             plan.pressure(float(levels[1]))
             changed = True
         if slides_at and plan.duration >= slides_at[0]:
             slides_at.pop(0)
-            V = log_uniform(*PRESLIDING_SPEEDS)
+            V = log_uniform(rng, *PRESLIDING_SPEEDS)
             t_ramp = max(0.01, V / a_max * rng.uniform(1.0, 2.5))
             towards = 1.0 if plan.x < 0.5 * L else -1.0
             plan.move(towards * min(PRESLIDING_SLIDE * rng.uniform(0.75, 1.25), 0.3 * L),
                       V, t_ramp)
-            plan.dwell(log_uniform(0.2, 1.0))
+            plan.dwell(log_uniform(rng, 0.2, 1.0))
             continue
         f = PRESLIDING_FREQUENCIES[k_f % len(PRESLIDING_FREQUENCIES)]
         k_f += 1
         cycles = max(1, min(int(rng.integers(1, 5)), int(2.0 * f)))
-        plan.loops(log_uniform(*amplitude), f, cycles)
-        plan.dwell(log_uniform(0.05, 0.5))
+        plan.loops(log_uniform(rng, *amplitude), f, cycles)
+        plan.dwell(log_uniform(rng, 0.05, 0.5))
 
 
 @dataclass(frozen=True)

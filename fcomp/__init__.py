@@ -15,6 +15,8 @@ stays light, so the command line starts fast)::
 name                      what it is
 ========================= ==========================================================
 ``make_model``            a friction model by name (:mod:`fcomp.models`)
+``load_model``            a friction model from its file (:mod:`fcomp.modelfile`);
+                          ``model.save(path)`` writes one
 ``FrictionModel``         their base class
 ``make_effect``           an effect by name, with parameters and configuration
 ``Effect``                the effect base class; ``register_effect`` registers one
@@ -43,6 +45,7 @@ if TYPE_CHECKING:
     from fcomp.effects import Effect, make_effect, register_effect
     from fcomp.identification import FrictionFit
     from fcomp.measurement import Measurement
+    from fcomp.modelfile import load_model
     from fcomp.models import FrictionModel, make_model
     from fcomp.synthetic import generate
     from fcomp.trajectory import friction_along_motion
@@ -50,6 +53,7 @@ if TYPE_CHECKING:
 #: Public name -> the module that defines it.
 _API: dict[str, str] = {
     "make_model": "fcomp.models", "FrictionModel": "fcomp.models",
+    "load_model": "fcomp.modelfile",
     "make_effect": "fcomp.effects", "register_effect": "fcomp.effects", "Effect": "fcomp.effects",
     "Measurement": "fcomp.measurement", "friction_along_motion": "fcomp.trajectory",
     "FrictionFit": "fcomp.identification", "Diagnosis": "fcomp.diagnosis",
@@ -62,7 +66,7 @@ _API: dict[str, str] = {
 __all__ = [
     "Comparison", "Diagnosis", "Effect", "FrictionFit", "FrictionModel", "Measurement",
     "PlantComparison", "__version__", "compare", "compare_plant", "diagnose", "fit",
-    "friction_along_motion", "generate", "make_effect", "make_model", "read",
+    "friction_along_motion", "generate", "load_model", "make_effect", "make_model", "read",
     "register_effect", "simulate",
 ]
 

@@ -60,6 +60,12 @@ class UnknownNameError(FcompError):
     """A model, effect, plant, parameter set, ... name that is not registered."""
 
 
+class FileFormatError(FcompError):
+    """A model file or a plant file that this release cannot read: malformed, of another
+    format or version, naming an unknown effect, or with a bad value (one line, naming the
+    file and the key)."""
+
+
 class ConvergenceError(FcompError):
     """A simulation or fit that did not converge."""
 

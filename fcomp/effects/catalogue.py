@@ -81,6 +81,17 @@ class StructuralEffect(Effect):
         """Parameter values of the added terms (from this effect's parameters)."""
         return dict(self.params.flat())
 
+    @classmethod
+    def config_in(cls, model: FrictionModel) -> dict[str, Any]:
+        """The configuration that attaches this effect as ``model`` has it (``model`` a
+        model it was attached to): its ``form`` where it has several (default: none).
+
+        The model keeps the effect as features, not as an instance
+        (:meth:`attach`); a model file (:mod:`fcomp.modelfile`) writes this to
+        rebuild it.
+        """
+        return {}
+
     def attach(self, model: FrictionModel) -> FrictionModel:
         fam = _family(model, self.name)
         if not self.applies_to(fam):
@@ -293,6 +304,12 @@ class FrictionalLag(StructuralEffect):
                 out.append({"vb": vb, "tau_hp": tau, "tau_hn": tau, "tau_h0": 1.0})
         return out
 
+    @classmethod
+    def config_in(cls, model: FrictionModel) -> dict[str, Any]:
+        """``speed-lag`` when the model follows a lagged speed, else ``film``."""
+        features = _features(model) or frozenset()
+        return {"form": "speed-lag" if "speed-lag" in features else "film"}
+
     def applies_to(self, model: FrictionModel) -> bool:
         from fcomp.models.lugre_family import LuGreFamily
 
@@ -406,6 +423,12 @@ class Presliding(StructuralEffect):
                 raise ValueError(f"model {fam.describe()!r} already has effect {self.name!r}")
             return Effect.attach(self, model)  # rigid bristles: the static map, unchanged
         return super().attach(model)
+
+    @classmethod
+    def config_in(cls, model: FrictionModel) -> dict[str, Any]:
+        """``elasto-plastic`` when the bristle has its break-away deflection, else ``bristle``."""
+        features = _features(model) or frozenset()
+        return {"form": "elasto-plastic" if "bristle-break" in features else "bristle"}
 
     def added_features(self) -> set[str]:
         """The bristle, its damping and exponent; the break in the elasto-plastic form."""
@@ -1145,6 +1168,11 @@ class NonlocalMemory(StructuralEffect):
             out.append({"ms_share": 0.9, "ms_dmax": 3.0 * d_pre, "ms_spread": spread,
                         "ms_shape": 0.0, "ms_scaling": scaling})
         return out
+
+    @classmethod
+    def config_in(cls, model: FrictionModel) -> dict[str, Any]:
+        """``hysteresis`` for a model with the turning-point memory, else ``maxwell-slip``."""
+        return {"form": "hysteresis" if model.discrete_memory() is not None else "maxwell-slip"}
 
     def applies_to(self, model: FrictionModel) -> bool:
         features = _features(model)

@@ -61,6 +61,7 @@ import math
 from abc import ABC, abstractmethod
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from pathlib import Path
 from typing import TYPE_CHECKING, Any, ClassVar, Protocol
 
 import casadi as ca
@@ -526,6 +527,28 @@ class FrictionModel(PlainValue, ABC):
             "force": ca.Function("force", args, [F0 + c * sig.a], argn, ["F"]),
             "force_parts": ca.Function("force_parts", args, [ca.vertcat(F0, c)], argn, ["Fc_a"]),
         }
+
+    # ----------------------------------------------------------------- file
+    def save(self, path: str | Path, **document: Any) -> Path:
+        """Write the model as a model file (``docs/model-file.md``); ``fcomp.load_model``
+        reads it back with the same forces, bit for bit.
+
+        Parameters
+        ----------
+        path : str or Path
+            The JSON file written (atomically).
+        **document
+            ``stderr``, ``measurement``, ``source`` of
+            :func:`fcomp.models.document.model_document`.
+
+        Returns
+        -------
+        Path
+            The file written.
+        """
+        from fcomp.models.document import save_model
+
+        return save_model(self, path, **document)
 
     # ----------------------------------------------------------------- misc
     def __repr__(self) -> str:

@@ -140,6 +140,72 @@ def build_model(name: str, params: str | None, args: argparse.Namespace) -> Fric
     return model.with_params(**overrides) if overrides else model
 
 
+def add_save_model_option(p: argparse.ArgumentParser, what: str) -> None:
+    """``--save-model MODEL.json``: write ``what`` as a model file (docs/model-file.md)."""
+    p.add_argument("--save-model", metavar="MODEL.json", default=None,
+                   help=f"write {what} as a model file (versioned JSON, docs/model-file.md) "
+                   "that every friction option reads (simulate --friction, compare --model, "
+                   "...)")
+
+
+def model_target(path: str | None) -> Path | None:
+    """The file ``--save-model PATH`` writes (``None`` without the option); checked before
+    any work: a ``.json`` name in an existing folder."""
+    if path is None:
+        return None
+    if not path.strip():
+        raise FcompError("--save-model: no file name given (an empty argument)")
+    out = Path(path)
+    if out.suffix.lower() != ".json" or not out.stem:
+        raise FcompError(f"--save-model {path}: a model file ends in .json")
+    if out.is_dir():
+        raise FcompError(f"--save-model {path}: is a directory")
+    if not out.parent.is_dir():
+        raise FcompError(f"--save-model {path}: folder {out.parent} does not exist")
+    return out
+
+
+def save_model_file(doc: dict[str, Any], out: Path | None, json_arg: str | None) -> None:
+    """Write the model file ``doc`` to ``out`` (atomically; nothing without ``--save-model``);
+    says so unless the JSON result goes to standard output."""
+    from fcomp.models.document import document_text
+    from fcomp.outputs import write_text
+
+    if out is None:
+        return
+    write_text(out, document_text(doc))
+    if json_arg != "-":
+        print(f"wrote {out}")
+
+
+def model_source(data: list[str]) -> dict[str, Any]:
+    """A model file's ``source`` for a command run on the records ``data``."""
+    import shlex
+
+    return {"command": "fcomp " + shlex.join(ARGV) if ARGV else None, "data": list(data)}
+
+
+def friction_model(spec: str, params: str | None, args: argparse.Namespace, *,
+                   use: str = "plant friction") -> FrictionModel:
+    """The friction model a friction option names: a model file (``.json``, its
+    measurement terms dropped with a warning) or a registered model (:func:`build_model`).
+
+    A file takes no parameter set; ``--add-effect`` and ``--set`` apply to it as to a name.
+    """
+    from fcomp.modelfile import is_model_file, read_model
+
+    if not is_model_file(spec):
+        return build_model(spec, params, args)
+    mf = read_model(spec, args.effects)
+    if mf.measurement_terms:
+        warn("measurement-terms", mf.dropped_note(use), "friction")
+    model = mf.model
+    if args.add_effect:
+        model = model.with_effects(*args.add_effect)
+    overrides = parse_assignments(args.set)
+    return model.with_params(**overrides) if overrides else model
+
+
 def output_path(path: str, suffix: str = ".csv", option: str = "-o") -> Path:
     """The measurement file an ``-o OUT.csv`` option names (its sidecar goes next to it)."""
     if not path.strip():

@@ -12,7 +12,10 @@ force-velocity and force-position loops and the windows where the model
 fails most. Without ``--fit`` the model is compared as given, on every usable
 sample; with ``--fit`` it is first fitted on the training samples and judged
 on the held-out ones. ``--plant NAME`` also simulates that plant with each
-record's valve command ``u`` and compares ``x``, ``p1``, ``p2``.
+record's valve command ``u`` and compares ``x``, ``p1``, ``p2``. ``--model
+MODEL.json`` takes a model file (docs/model-file.md: ``fcomp fit
+--save-model``) with its values; its measurement terms (offset, fitted mass)
+are used, as they describe these records.
 
 JSON (``--json OUT``, ``-`` for standard output)::
 
@@ -42,7 +45,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("data", nargs="+", metavar="DATA.csv",
                    help="measurement(s) (CSV + TOML sidecar); several files = several experiments")
-    p.add_argument("--model", required=True, help="friction model name (fcomp list models)")
+    p.add_argument("--model", required=True, metavar="NAME|MODEL.json",
+                   help="friction model name (fcomp list models), or a model file (fcomp fit "
+                   "--save-model) with its values")
     p.add_argument("--params", default=None, metavar="FIT.json|SET",
                    help="the values compared: a fit's JSON (fcomp fit --json) or a parameter "
                    "set (default: the model's defaults)")
@@ -93,8 +98,20 @@ def _model(args: argparse.Namespace) -> tuple[Any, float | None]:
     from fcomp.diagnosis.compare import model_from_fit
     from fcomp.textdata import check_path, read_text
 
+    from fcomp.modelfile import is_model_file, read_model
+
     mass = None
     spec = args.params
+    if is_model_file(args.model):
+        if spec is not None:
+            raise FcompError(f"--params {spec}: the model file {args.model} gives the values; "
+                             "change one with --set NAME=VALUE")
+        mf = read_model(args.model, args.effects)
+        model = mf.measured_model()  # its offset and mass describe the records compared
+        if args.add_effect:
+            model = model.with_effects(*args.add_effect)
+        overrides = common.parse_assignments(args.set)
+        return (model.with_params(**overrides) if overrides else model), mf.mass
     if spec is not None and spec.lower().endswith(".json"):
         path = check_path(spec, "fit JSON file")
         try:
@@ -135,10 +152,12 @@ def run(args: argparse.Namespace) -> int:
     inputs = common.measurement_inputs(args.data)
     for f in extra:
         inputs.file(f, "--params")
+    if args.model.lower().endswith(".json"):
+        inputs.file(args.model, "--model")
     if args.effects is not None:
         inputs.file(args.effects, "--effects")
     common.check_outputs(inputs, [("--json", out)], [("--report", report, "report")])
-    given = bool(args.params or args.set or args.fit)
+    given = bool(args.params or args.set or args.fit or args.model.lower().endswith(".json"))
     model, mass = _model(args)
     data = [Measurement.read(p) for p in args.data]
     for d in data:

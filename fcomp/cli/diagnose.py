@@ -13,6 +13,9 @@ column is split by it. Prints a summary; ``--json OUT`` writes
 
 (all errors in newtons, on held-out data; ``-`` writes to standard output)
 and ``--report DIR`` a self-contained ``DIR/report.html`` with every figure.
+``--save-model MODEL.json`` writes the final model as a model file
+(docs/model-file.md; the JSON's ``model_file`` is the same document), a fitted
+mass, the channel lag and measurement effects in it as measurement terms.
 ``--add EFFECT`` adds an effect (catalogue or registered with ``--effects
 MODULE.py``) before the search, whatever the acceptance rule says.
 """
@@ -69,6 +72,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--scheduler", default=None, metavar="ADDRESS",
                    help="run the candidate refits on the Dask distributed scheduler at ADDRESS "
                    "(tcp://host:8786) instead of local processes (--jobs); the same results")
+    common.add_save_model_option(p, "the diagnosis's final model")
     p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
     p.set_defaults(func=run)
 
@@ -129,7 +133,8 @@ def run(args: argparse.Namespace) -> int:
         raise FcompError(f"--jobs must be a positive integer, got {args.jobs}")
     if args.cutoff is not None and not args.cutoff > 0:
         raise FcompError(f"--cutoff must be a positive frequency in Hz, got {args.cutoff:g}")
-    common.guard_outputs(args.data, args.effects, [("--json", out)],
+    saved = common.model_target(args.save_model)
+    common.guard_outputs(args.data, args.effects, [("--json", out), ("--save-model", saved)],
                          [("--report", report, "report")])
     if args.effects is not None:
         load_effects_module(args.effects)
@@ -145,7 +150,8 @@ def run(args: argparse.Namespace) -> int:
                      check_baseline=(True if args.baseline_check else
                                      False if args.no_baseline_check else "auto"))
     diag.fit(data)
-    doc = common.with_warnings(diag.to_dict())
+    doc = common.with_warnings({**diag.to_dict(),
+                                "model_file": diag.model_file(common.model_source(args.data))})
     text = result_text(doc)
     command = "fcomp " + shlex.join(common.ARGV) if common.ARGV else None
     if report is not None:
@@ -154,5 +160,6 @@ def run(args: argparse.Namespace) -> int:
         if args.json != "-":
             print(f"wrote {report / 'report.html'}")
     emit_result(text, args.json, out, summary(doc))
+    common.save_model_file(doc["model_file"], saved, args.json)
     return 0
 

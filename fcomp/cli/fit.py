@@ -16,6 +16,9 @@ says so on one line and exits with status 2 (no JSON is written).
 Several records are fitted one by one, each on its own, in local processes
 (``--jobs N``) or on a Dask cluster (``--scheduler ADDRESS``); the JSON is then
 ``{"model", "records": [{"data", "params", "stderr", "rms", ...}, ...], "warnings"}``.
+``--save-model MODEL.json`` writes the fitted model as a model file
+(docs/model-file.md; the JSON's ``model_file`` is the same document), a fitted
+mass and offset in it as measurement terms.
 ``--report DIR`` draws the fit into ``DIR/report.html``: the estimates, the
 measured and fitted force, and the fitted model compared with the record as
 ``fcomp compare`` does (errors per regime, residual against every feature,
@@ -31,15 +34,19 @@ from typing import TYPE_CHECKING, Any
 from fcomp.cli.common import (
     Activity,
     add_model_options,
+    add_save_model_option,
     build_model,
     emit_result,
     finite_float,
     guard_outputs,
     json_target,
+    model_source,
+    model_target,
     name_list,
     parse_assignments,
     report_dir,
     result_text,
+    save_model_file,
     warn,
     warn_sidecar,
     with_warnings,
@@ -93,6 +100,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="write a self-contained HTML report of the fit to DIR/report.html: the "
                    "estimates, the fit drawn, and the fitted model compared with the record "
                    "(errors per regime, residual against every feature, loops, worst windows)")
+    add_save_model_option(p, "the fitted model")
     p.add_argument("--no-progress", action="store_true", help="no progress line on stderr")
     p.add_argument("--jobs", type=int, default=None, metavar="N",
                    help="several records: local processes fitting them (default: CPU count)")
@@ -140,7 +148,12 @@ def run(args: argparse.Namespace) -> int:
     if report is not None and len(args.data) > 1:
         raise FcompError("--report draws one fit: give one record (or fit the records one "
                          "by one)")
-    guard_outputs(args.data, args.effects, [("--json", out)], [("--report", report, "report")])
+    saved = model_target(args.save_model)
+    if saved is not None and len(args.data) > 1:
+        raise FcompError("--save-model writes one fitted model: give one record (or fit the "
+                         "records one by one)")
+    guard_outputs(args.data, args.effects, [("--json", out), ("--save-model", saved)],
+                  [("--report", report, "report")])
     model = build_model(args.model, args.params, args)
     initial = parse_assignments(args.set)
     fixed = parse_assignments(args.fix, "--fix")
@@ -164,10 +177,11 @@ def run(args: argparse.Namespace) -> int:
         fit.fit(data)
     for w in fit.warnings_:  # printed under the table, recorded in the JSON
         warn(w.code, w.message, w.parameter)
-    doc = with_warnings(fit.to_dict())
+    doc = with_warnings({**fit.to_dict(), "model_file": fit.model_file(model_source(args.data))})
     if report is not None:
         _write_report(fit, data, report, args)
     emit_result(result_text(doc), args.json, out, _table(fit))
+    save_model_file(doc["model_file"], saved, args.json)
     return 0
 
 

@@ -13,6 +13,9 @@ and a long run shows its progress on a terminal. Warnings (one line each, also i
 sidecar's ``warnings``): ``aliasing`` (input content above the Nyquist frequency of
 ``--rate``), ``command-saturation`` (a command outside the plant's documented range),
 ``cavitation`` (a hydraulic chamber at its ``p_min`` floor).
+``--friction MODEL.json`` takes a model file (docs/model-file.md: ``fcomp fit
+--save-model``) instead of a model name; its measurement terms are not plant
+friction and are dropped (a ``measurement-terms`` warning says so).
 """
 
 from __future__ import annotations
@@ -25,10 +28,10 @@ import numpy as np
 from fcomp.cli.common import (
     Progress,
     add_model_options,
-    build_model,
     check_outputs,
     current_warnings,
     finite_float,
+    friction_model,
     output_path,
     parse_assignments,
     warn,
@@ -43,7 +46,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                        description=__doc__)
     p.add_argument("plant", help="plant name: motion, hydraulic, pneumatic, presliding-rig, "
                    "force-rig")
-    p.add_argument("--friction", required=True, help="friction model name")
+    p.add_argument("--friction", required=True, metavar="NAME|MODEL.json",
+                   help="friction model name, or a model file (fcomp fit --save-model)")
     p.add_argument("--params", default=None, help="parameter set name (default: the plant's)")
     p.add_argument("--input", required=True, metavar="SPEC",
                    help="sine:amplitude=A,frequency=F | step:amplitude=A | csv:PATH")
@@ -71,6 +75,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from fcomp.modelfile import is_model_file
     from plants import PLANTS
     from plants.base import OdePlant, output_times
 
@@ -83,6 +88,8 @@ def run(args: argparse.Namespace) -> int:
         inputs.file(args.input.split(":", 1)[1].strip(), "--input")
     if args.effects is not None:
         inputs.file(args.effects, "--effects")
+    if is_model_file(args.friction):
+        inputs.file(args.friction, "--friction")
     check_outputs(inputs, [("-o", out)])
     t = output_times(args.duration, args.rate)
     engine = {k: getattr(args, k) for k in ("method", "rtol", "atol", "max_steps", "coupling")
@@ -96,7 +103,7 @@ def run(args: argparse.Namespace) -> int:
                          f"plant {args.plant} evaluates the friction along a prescribed motion")
     plant_set = {k: v for k, v in assignments.items() if k in plant_names}
     args.set = [f"{k}={v!r}" for k, v in assignments.items() if k not in plant_names]
-    model = build_model(args.friction, params, args)
+    model = friction_model(args.friction, params, args)
     plant: Any = (plant_cls(model, params, overrides=plant_set)  # type: ignore[call-arg]
                   if plant_set else plant_cls(model, params))
     x0 = parse_assignments(args.x0, option="--x0") if args.x0 else None

@@ -78,7 +78,7 @@ import dataclasses
 import math
 import os
 import sys
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from concurrent.futures import Executor, as_completed
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -1291,8 +1291,24 @@ class Diagnosis:
                 "reason": "; ".join(dict.fromkeys(f"{r['label']}: {r['reason']}" for r in recs)),
                 "records": recs}
 
+    def model_file(self, source: Mapping[str, Any] | None = None) -> dict[str, Any]:
+        """The final model as a model file's document (:mod:`fcomp.modelfile`): the
+        friction with every effect accepted and its fitted values; a fitted ``mass``, the
+        channel ``lag``, a ``force-offset`` or ``inertia-error`` as measurement terms.
+        ``source`` (``command``, ``data``) says where it comes from."""
+        from fcomp.models.document import model_document
+
+        if not hasattr(self, "verdict_"):
+            raise FcompError("this Diagnosis is not fitted yet: call fit(data) first")
+        return model_document(self.fit_.model, measurement=self.fit_.values,
+                              source={"diagnosis": {"baseline": self.baseline_name_,
+                                                    "added": list(self.added_),
+                                                    "verdict": self.verdict_},
+                                      **dict(source or {})})
+
     def to_dict(self) -> dict[str, Any]:
-        """The JSON of ``fcomp diagnose`` (public contract, plus extra keys)."""
+        """The JSON of ``fcomp diagnose`` (public contract, plus extra keys; ``model_file``:
+        :meth:`model_file`)."""
         if not hasattr(self, "verdict_"):
             raise FcompError("this Diagnosis is not fitted yet: call fit(data) first")
 
@@ -1351,6 +1367,7 @@ class Diagnosis:
             "disturbances": [d.to_dict() for d in getattr(self, "disturbances_", [])],
             "units": "N",
             "warnings": [w.to_dict() for w in self.warnings_],
+            "model_file": self.model_file(),
         }
 
 

@@ -408,8 +408,20 @@ class FrictionFit:
         """RMS force error (N) of the fitted model on ``data`` (e.g. a validation record)."""
         return float(np.sqrt(np.mean((self.target(data) - self.predict(data)) ** 2)))
 
+    def model_file(self, source: Mapping[str, Any] | None = None) -> dict[str, Any]:
+        """The fitted model as a model file's document (:mod:`fcomp.modelfile`): the
+        model with its values and standard errors; a fitted ``mass`` and ``offset`` as
+        measurement terms. ``source`` (``command``, ``data``) says where it comes from.
+        """
+        from fcomp.models.document import model_document
+
+        self._check_fitted()
+        return model_document(self.model_, stderr=self.stderr_, measurement=self._extras,
+                              source={"fit": self.method_, **dict(source or {})})
+
     def to_dict(self) -> dict[str, Any]:
-        """The JSON report (public contract: ``model``, ``params``, ``stderr``, ``rms``; more keys)."""
+        """The JSON report (public contract: ``model``, ``params``, ``stderr``, ``rms``; more
+        keys; ``model_file``: :meth:`model_file`)."""
         self._check_fitted()
 
         def num(x: float) -> float | str:
@@ -439,4 +451,5 @@ class FrictionFit:
             "evaluations": self.nfev_,
             "stages": self.stages_,
             "warnings": [w.to_dict() for w in self.warnings_],
+            "model_file": self.model_file(),
         }

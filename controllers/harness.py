@@ -44,7 +44,7 @@ import math
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -58,7 +58,10 @@ from controllers.plant_model import (
 )
 from controllers.tasks import check_fits_stroke, get_task
 from fcomp.errors import FcompError
-from fcomp.models import make_model
+from fcomp.models import FrictionModel, make_model
+
+if TYPE_CHECKING:
+    from plants.planfile import PlantFile
 
 #: Default friction mismatch of the controller's model (factors on the plant's values): an
 #: identification a few tens of percent off, the bristles half as stiff.
@@ -75,14 +78,19 @@ class LoopConfig:
     Attributes
     ----------
     plant
-        Plant name (``hydraulic``, ``pneumatic``).
+        Plant name (``hydraulic``, ``pneumatic``); with ``plant_file``, its kind.
     params
-        Parameter set (default: the plant's).
+        Parameter set (default: the plant's; not with ``plant_file``).
     friction
-        The plant's true friction model (name).
+        The plant's true friction model: a name (values from the parameter set)
+        or a model (e.g. read from a model file, :func:`fcomp.load_model`).
     controller_friction
-        The friction model the controller is built with (name; parameters
-        from the same set, times ``mismatch``).
+        The friction model the controller is built with (name or model; a name
+        takes its parameters from the same set; times ``mismatch``).
+    plant_file
+        A plant file (:class:`plants.planfile.PlantFile`) instead of the
+        built-in plant ``plant``: its parameters, sensors, limits and rate; a
+        friction *name* takes the values of the built-in plant of its kind.
     mismatch
         Factors on the controller model's friction parameters (by name).
     noise
@@ -97,13 +105,21 @@ class LoopConfig:
 
     plant: str = "hydraulic"
     params: str | None = None
-    friction: str = "nmlgm"
-    controller_friction: str = "nmlgm"
+    friction: str | FrictionModel = "nmlgm"
+    controller_friction: str | FrictionModel = "nmlgm"
     mismatch: Mapping[str, float] = field(default_factory=lambda: dict(DEFAULT_MISMATCH))
     noise: float = 1.0
     seed: int = 0
     fast: bool = False
     rtol: float = 1e-5
+    plant_file: PlantFile | None = None
+
+    def __post_init__(self) -> None:
+        if self.plant_file is not None:
+            if self.params is not None:
+                raise FcompError(f"plant file {self.plant_file.label} gives the plant: no "
+                                 f"parameter set {self.params!r} with it")
+            object.__setattr__(self, "plant", self.plant_file.kind)
 
 
 @dataclass
@@ -174,14 +190,31 @@ def build_loop(controller: str, config: LoopConfig, options: Mapping[str, Any] |
     if config.plant not in PLANT_SETTINGS:
         raise FcompError(f"closed-loop control is set up for plants "
                          f"{', '.join(sorted(PLANT_SETTINGS))}, not {config.plant!r}")
-    true_friction = make_model(config.friction, params=config.params or _default_set(config))
-    plant = make_plant(config.plant, true_friction, config.params)
-    ctrl_friction = friction_with_mismatch(
-        make_model(config.controller_friction, params=config.params or _default_set(config)),
-        config.mismatch)
-    model = ControlModel(config.plant, ctrl_friction, config.params)
+    true_friction = _friction(config.friction, config)
+    ctrl_friction = friction_with_mismatch(_friction(config.controller_friction, config),
+                                           config.mismatch)
+    if config.plant_file is not None:
+        plant = config.plant_file.make_plant(true_friction)
+        model = ControlModel(config.plant_file, ctrl_friction)
+    else:
+        plant = make_plant(config.plant, true_friction, config.params)
+        model = ControlModel(config.plant, ctrl_friction, config.params)
     ctrl = make_controller(controller, model, **dict(options or {}))
     return plant, model, ctrl
+
+
+def _friction(friction: str | FrictionModel, config: LoopConfig) -> FrictionModel:
+    """A friction model of the configuration: itself, or the model named with the values
+    of the configuration's parameter set."""
+    if isinstance(friction, FrictionModel):
+        return friction
+    return make_model(friction, params=config.params or _default_set(config))
+
+
+def friction_label(friction: str | FrictionModel) -> str:
+    """A friction model of a configuration as results name it: its name, or a model's
+    description (``lugre + dwell-time``)."""
+    return friction.describe() if isinstance(friction, FrictionModel) else friction
 
 
 def _default_set(config: LoopConfig) -> str:
@@ -273,4 +306,5 @@ def run_closed_loop(controller: str, task: str, config: LoopConfig | None = None
     )
 
 
-__all__ = ["DEFAULT_MISMATCH", "LoopConfig", "LoopResult", "build_loop", "run_closed_loop"]
+__all__ = ["DEFAULT_MISMATCH", "LoopConfig", "LoopResult", "build_loop", "friction_label",
+           "run_closed_loop"]

@@ -45,17 +45,20 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import casadi as ca
 import numpy as np
-from scipy.optimize import root
 
 from controllers.prediction import ContinuousModel
-from fcomp.errors import ConvergenceError, FcompError
+from fcomp.errors import FcompError
 from fcomp.measurement import G
 from fcomp.models.base import FrictionModel
 from fcomp.piston import piston_areas
+from plants.equilibrium import equilibrium  # noqa: F401 (the closed loops take it from here)
+
+if TYPE_CHECKING:
+    from plants.planfile import PlantFile
 
 
 @dataclass(frozen=True)
@@ -113,6 +116,21 @@ PLANT_SETTINGS: dict[str, PlantSettings] = {
     ),
 }
 
+def plant_settings(plant: str | PlantFile) -> PlantSettings:
+    """The controller settings of a plant: :data:`PLANT_SETTINGS` of a built-in plant's
+    name, or those a plant file gives (its sensors, valve limits, control rate and the
+    tuning it gives; the tuning it leaves out is the built-in plant's of its kind)."""
+    from plants.planfile import PlantFile
+
+    if not isinstance(plant, PlantFile):
+        if plant not in PLANT_SETTINGS:
+            raise FcompError(f"closed-loop control is set up for plants "
+                             f"{', '.join(sorted(PLANT_SETTINGS))}, not {plant!r}")
+        return PLANT_SETTINGS[plant]
+    return replace(PLANT_SETTINGS[plant.kind], sensors=Sensors(**plant.sensors),
+                   **plant.control)
+
+
 #: Plant states the controller measures, in the order of ``y``.
 MEASURED = ("x", "p1", "p2")
 
@@ -122,31 +140,37 @@ class ControlModel:
 
     Parameters
     ----------
-    plant
-        Plant name (``hydraulic``, ``pneumatic``).
-    friction
+    plant : str or PlantFile
+        Plant name (``hydraulic``, ``pneumatic``), or a plant file
+        (:class:`plants.planfile.PlantFile`: its parameters and settings).
+    friction : FrictionModel
         The controller's friction model (symbolic).
-    params
-        Parameter-set name (default: the plant's).
+    params : str, optional
+        Parameter-set name (default: the plant's; not with a plant file).
     settings
-        Overrides of :data:`PLANT_SETTINGS` fields by name.
+        Overrides of the plant's settings (:func:`plant_settings`) by field name.
     """
 
-    def __init__(self, plant: str, friction: FrictionModel, params: str | None = None,
-                 **settings: Any) -> None:
+    def __init__(self, plant: str | PlantFile, friction: FrictionModel,
+                 params: str | None = None, **settings: Any) -> None:
         from plants import OdePlant, make_plant
+        from plants.planfile import PlantFile
 
-        if plant not in PLANT_SETTINGS:
-            raise FcompError(f"closed-loop control is set up for plants "
-                             f"{', '.join(sorted(PLANT_SETTINGS))}, not {plant!r}")
-        base = PLANT_SETTINGS[plant]
+        base = plant_settings(plant)
         bad = sorted(set(settings) - set(base.__dataclass_fields__))
         if bad:
             raise FcompError(f"unknown plant setting(s) {', '.join(bad)}")
         self.settings = replace(base, **settings)
-        self.plant_name = plant
         self.friction = friction
-        own = make_plant(plant, friction, params)
+        if isinstance(plant, PlantFile):
+            if params is not None:
+                raise FcompError(f"plant file {plant.label} gives the plant's parameters: "
+                                 f"no parameter set {params!r} with it")
+            self.plant_name = plant.kind
+            own = plant.make_plant(friction)
+        else:
+            self.plant_name = plant
+            own = make_plant(plant, friction, params)
         if not isinstance(own, OdePlant):
             raise FcompError(f"plant {plant} is not given by differential equations")
         self.plant: OdePlant = own
@@ -301,42 +325,6 @@ class ControlModel:
             iz = names.index("z")
             P0[iz, iz] = sc[iz] ** 2
         return x0, P0
-
-
-def equilibrium(plant: Any, x_pos: float) -> tuple[np.ndarray, float]:
-    """State at rest at ``x_pos`` holding the load, and the valve command doing it.
-
-    Unknowns: the chamber pressures, the valve states and the command ``u``;
-    equations: zero derivative of ``v``, ``p1``, ``p2`` and the valve
-    states, with ``x = x_pos``, ``v = 0`` and friction states zero.
-    """
-    names = plant.state_names
-    fr = set(plant.friction.state_names)
-    free = [n for n in names if n not in ("x", "v") and n not in fr]
-    eqs = [names.index(n) for n in names if n != "x" and n not in fr]
-    rhs = plant.casadi_functions()["rhs"]
-    x0 = plant.initial_state({"x": x_pos})
-    idx = [names.index(n) for n in free]
-    scale = np.asarray(plant.ode_model().scales, dtype=float)
-    xs = ca.SX.sym("xs", len(free))
-    us = ca.SX.sym("u")
-    state = ca.DM(x0)
-    state = ca.vertcat(*[xs[idx.index(i)] * scale[i] if i in idx else state[i]
-                         for i in range(len(names))])
-    f = rhs(state, us)
-    res = ca.vertcat(*[f[i] / scale[i] for i in eqs])
-    z = ca.vertcat(xs, us)
-    F = ca.Function("eq", [z], [res, ca.jacobian(res, z)])
-    z0 = np.concatenate([x0[idx] / scale[idx], [0.0]])
-    sol = root(lambda q: np.asarray(F(q)[0]).ravel(), z0,
-               jac=lambda q: np.asarray(F(q)[1]), method="hybr", tol=1e-13)
-    resid = np.abs(np.asarray(F(sol.x)[0])).max()
-    if not sol.success and resid > 1e-9:
-        raise ConvergenceError(f"no equilibrium of plant {plant.name} at x = {x_pos} m "
-                               f"({sol.message})")
-    out = x0.copy()
-    out[idx] = sol.x[:-1] * scale[idx]
-    return out, float(sol.x[-1])
 
 
 def friction_with_mismatch(model: FrictionModel, factors: Mapping[str, float]) -> FrictionModel:

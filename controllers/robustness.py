@@ -46,8 +46,9 @@ from typing import Any
 
 import numpy as np
 
-from controllers.harness import LoopConfig, run_closed_loop
+from controllers.harness import LoopConfig, friction_label, run_closed_loop
 from fcomp.errors import FcompError
+from fcomp.models import FrictionModel
 from fcomp.parallel import run_tasks
 
 #: Friction parameters perturbed by the sweep (those a model lacks are ignored).
@@ -72,7 +73,8 @@ def run_job(job: Job) -> dict[str, Any]:
     out: dict[str, Any] = {
         "controller": job.controller, "task": job.task, "plant": job.config.plant,
         "sample": job.sample, "noise": job.config.noise, "mismatch": dict(job.config.mismatch),
-        "friction": job.config.friction, "controller_friction": job.config.controller_friction,
+        "friction": friction_label(job.config.friction),
+        "controller_friction": friction_label(job.config.controller_friction),
     }
     try:
         res = run_closed_loop(job.controller, job.task, job.config, job.options)
@@ -198,7 +200,7 @@ class Grid:
     task: str = "low-velocity-ramp"
     controllers: tuple[str, ...] = ("pid", "pid-ff", "lugre-observer", "ekf", "mpc")
     factors: Mapping[str, tuple[float, ...]] = field(default_factory=dict)
-    controller_frictions: tuple[str, ...] = ()
+    controller_frictions: tuple[str | FrictionModel, ...] = ()
     noise: float = 1.0
     seed: int = 2026
     fast: bool = True
@@ -215,7 +217,7 @@ class Grid:
         if not self.factors and not self.controller_frictions:
             raise FcompError("grid: give mismatch factors or controller friction models")
 
-    def points(self) -> list[tuple[dict[str, float], str]]:
+    def points(self) -> list[tuple[dict[str, float], str | FrictionModel]]:
         """``(mismatch factors, controller friction)`` of every grid point, in order."""
         import itertools
 

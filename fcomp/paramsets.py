@@ -90,6 +90,10 @@ class ParameterSet:
         ``bore``, ``rod``, ``stroke`` (m), ``mass`` (kg), ``orientation``.
     raw
         The whole TOML document (plant sections: valve, fluid, supply, ...).
+    plant
+        The plant's parameters by flat name (SI), when the set gives them
+        directly (a plant file, :mod:`plants.planfile`); empty for the sets
+        here, whose plants read their sections from ``raw``.
     """
 
     name: str
@@ -98,6 +102,7 @@ class ParameterSet:
     hysteresis: dict[str, float] = field(default_factory=dict)
     rig: dict[str, Any] = field(default_factory=dict)
     raw: dict[str, Any] = field(default_factory=dict)
+    plant: dict[str, float] = field(default_factory=dict)
 
     def friction_section(self, model_name: str) -> dict[str, Any]:
         """The friction parameters for ``model_name``.

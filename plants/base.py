@@ -219,7 +219,8 @@ class OdePlant(Plant):
         overrides: Mapping[str, float] | None = None,
     ) -> None:
         super().__init__(friction, params)
-        values = self.params_from_set(self.paramset)
+        given = self.paramset.plant if self.paramset is not None else {}
+        values = dict(given) if given else self.params_from_set(self.paramset)
         known = set(self.Params.names())
         for k, v in (overrides or {}).items():
             if k not in known:

@@ -96,9 +96,8 @@ def summary(doc: dict[str, Any]) -> str:
 def _model(args: argparse.Namespace) -> tuple[Any, float | None]:
     """The model compared and the mass a fit JSON gives (None otherwise)."""
     from fcomp.diagnosis.compare import model_from_fit
-    from fcomp.textdata import check_path, read_text
-
     from fcomp.modelfile import is_model_file, read_model
+    from fcomp.textdata import check_path, read_text
 
     mass = None
     spec = args.params

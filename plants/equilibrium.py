@@ -1,0 +1,87 @@
+"""Steady states of a cylinder plant: at rest holding its load, and in steady motion.
+
+Both solve the plant's own equations (:meth:`plants.base.OdePlant.casadi_functions`)
+with the piston held at a position ``x_pos`` and the friction states zero,
+scaled by the plant's state scales, by Newton's method with the exact
+Jacobian (``scipy.optimize.root``):
+
+:func:`equilibrium`
+    at rest (``v = 0``): the chamber pressures, the valve states and the
+    command ``u`` for which no state but ``x`` changes -- the load held;
+:func:`steady_motion`
+    under a given constant command ``u``: the speed ``v``, the chamber
+    pressures and the valve states for which nothing but ``x`` changes -- the
+    speed the valve allows (the valve-limited speed at full command).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import casadi as ca
+import numpy as np
+from scipy.optimize import root
+
+from fcomp.errors import ConvergenceError
+
+
+def _solve(plant: Any, x_pos: float, free: list[str], u: float | None,
+           guess: dict[str, float], what: str) -> tuple[np.ndarray, float]:
+    """The state at ``x_pos`` with the states ``free`` (and ``u`` if ``None``) unknown and
+    every derivative but those of ``x`` and the friction states zero."""
+    names = plant.state_names
+    fr = set(plant.friction.state_names)
+    eqs = [names.index(n) for n in names if n != "x" and n not in fr]
+    rhs = plant.casadi_functions()["rhs"]
+    x0 = plant.initial_state({"x": x_pos, **guess})
+    idx = [names.index(n) for n in free]
+    scale = np.asarray(plant.ode_model().scales, dtype=float)
+    xs = ca.SX.sym("xs", len(free))
+    us = ca.SX.sym("u")
+    state = ca.DM(x0)
+    state = ca.vertcat(*[xs[idx.index(i)] * scale[i] if i in idx else state[i]
+                         for i in range(len(names))])
+    f = rhs(state, us if u is None else u)
+    res = ca.vertcat(*[f[i] / scale[i] for i in eqs])
+    z = ca.vertcat(xs, us) if u is None else xs
+    F = ca.Function("eq", [z], [res, ca.jacobian(res, z)])
+    z0 = x0[idx] / scale[idx]
+    if u is None:
+        z0 = np.concatenate([z0, [0.0]])
+    sol = root(lambda q: np.asarray(F(q)[0]).ravel(), z0,
+               jac=lambda q: np.asarray(F(q)[1]), method="hybr", tol=1e-13)
+    resid = np.abs(np.asarray(F(sol.x)[0])).max()
+    if not sol.success and resid > 1e-9:
+        raise ConvergenceError(f"no {what} of plant {plant.name} at x = {x_pos} m "
+                               f"({sol.message})")
+    out = x0.copy()
+    out[idx] = sol.x[:len(idx)] * scale[idx]
+    return out, (float(sol.x[-1]) if u is None else float(u))
+
+
+def equilibrium(plant: Any, x_pos: float) -> tuple[np.ndarray, float]:
+    """State at rest at ``x_pos`` holding the load, and the valve command doing it.
+
+    Unknowns: the chamber pressures, the valve states and the command ``u``;
+    equations: zero derivative of ``v``, ``p1``, ``p2`` and the valve
+    states, with ``x = x_pos``, ``v = 0`` and friction states zero.
+    """
+    fr = set(plant.friction.state_names)
+    free = [n for n in plant.state_names if n not in ("x", "v") and n not in fr]
+    return _solve(plant, x_pos, free, None, {}, "equilibrium")
+
+
+def steady_motion(plant: Any, x_pos: float, u: float, v_guess: float) -> np.ndarray:
+    """State in steady motion through ``x_pos`` under the constant command ``u``.
+
+    Unknowns: the speed, the chamber pressures and the valve states (started from
+    ``v_guess`` m/s and the default state); equations: zero derivative of all of
+    them. Friction states are held at zero (a frictionless piston, or a static map).
+    """
+    fr = set(plant.friction.state_names)
+    free = [n for n in plant.state_names if n != "x" and n not in fr]
+    state, _ = _solve(plant, x_pos, free, u, {"v": v_guess}, "steady motion")
+    return state
+
+
+__all__ = ["equilibrium", "steady_motion"]

@@ -260,9 +260,9 @@ def _values(section: Any, label: str, key: str) -> dict[str, float]:
     """A ``{name: number}`` section; ``"inf"``/``"-inf"`` are the infinities."""
     out: dict[str, float] = {}
     for k, v in _section(section, label, key).items():
-        if isinstance(v, str) and v in ("inf", "-inf"):
-            out[k] = float(v)
-        elif isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v):
+        infinite = isinstance(v, str) and v in ("inf", "-inf")
+        finite = isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
+        if infinite or finite:
             out[k] = float(v)
         else:
             raise FileFormatError(f"{label}: {key}.{k} = {v!r} is not a number (SI units; "

@@ -26,12 +26,15 @@ from fcomp.errors import ConvergenceError
 
 
 def _solve(plant: Any, x_pos: float, free: list[str], u: float | None,
-           guess: dict[str, float], what: str) -> tuple[np.ndarray, float]:
+           guess: dict[str, float], what: str, zero: list[str] | None = None
+           ) -> tuple[np.ndarray, float]:
     """The state at ``x_pos`` with the states ``free`` (and ``u`` if ``None``) unknown and
-    every derivative but those of ``x`` and the friction states zero."""
+    the derivatives of the states ``zero`` (default: all but ``x`` and the friction
+    states) zero; the other states at ``guess`` or their defaults."""
     names = plant.state_names
     fr = set(plant.friction.state_names)
-    eqs = [names.index(n) for n in names if n != "x" and n not in fr]
+    zero = zero if zero is not None else [n for n in names if n != "x" and n not in fr]
+    eqs = [names.index(n) for n in zero]
     rhs = plant.casadi_functions()["rhs"]
     x0 = plant.initial_state({"x": x_pos, **guess})
     idx = [names.index(n) for n in free]
@@ -80,7 +83,11 @@ def steady_motion(plant: Any, x_pos: float, u: float, v_guess: float) -> np.ndar
     """
     fr = set(plant.friction.state_names)
     free = [n for n in plant.state_names if n != "x" and n not in fr]
-    state, _ = _solve(plant, x_pos, free, u, {"v": v_guess}, "steady motion")
+    # the valve first (its states follow the command alone), then everything from there
+    valve = [n for n in free if n not in ("v", "p1", "p2")]
+    start, _ = _solve(plant, x_pos, valve, u, {"v": v_guess}, "steady valve", zero=valve)
+    guess = {n: float(start[plant.state_names.index(n)]) for n in valve}
+    state, _ = _solve(plant, x_pos, free, u, {"v": v_guess, **guess}, "steady motion")
     return state
 
 

@@ -317,8 +317,6 @@ def parse_plant(doc: Mapping[str, Any], label: str, default_name: str = "plant")
                             f"({spec.unit})")
         else:
             numbers[target] = float(value)
-    if problems:
-        raise PlantFileError(problems)
     cls = KINDS[kind]
     values = _plant_values(cls, numbers, given, label, problems)
     sensors = {t.split(":", 1)[1]: v for t, v in numbers.items() if t.startswith("sensors:")}
@@ -338,8 +336,7 @@ def parse_plant(doc: Mapping[str, Any], label: str, default_name: str = "plant")
                    rig={"bore": values["bore"], "rod": values["rod"],
                         "stroke": values["stroke"], "mass": values["mass"],
                         "orientation": orientation})
-    if not problems:
-        problems += _cross_checks(pf, given)
+    problems += _cross_checks(pf, given)
     if problems:
         raise PlantFileError(problems)
     return pf

@@ -16,6 +16,10 @@ sidecar's ``warnings``): ``aliasing`` (input content above the Nyquist frequency
 ``--friction MODEL.json`` takes a model file (docs/model-file.md: ``fcomp fit
 --save-model``) instead of a model name; its measurement terms are not plant
 friction and are dropped (a ``measurement-terms`` warning says so).
+``--plant-params PLANT.toml`` runs the hydraulic or pneumatic plant of a plant
+file (docs/plants.md, "Plant files"; ``fcomp plant template``) instead of the
+built-in one; a friction model *named* then takes the values of ``--params``
+or of the built-in plant of that kind.
 """
 
 from __future__ import annotations
@@ -49,6 +53,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--friction", required=True, metavar="NAME|MODEL.json",
                    help="friction model name, or a model file (fcomp fit --save-model)")
     p.add_argument("--params", default=None, help="parameter set name (default: the plant's)")
+    p.add_argument("--plant-params", default=None, metavar="PLANT.toml",
+                   help="a plant file (hydraulic or pneumatic; fcomp plant template) instead "
+                   "of the built-in plant's parameters")
     p.add_argument("--input", required=True, metavar="SPEC",
                    help="sine:amplitude=A,frequency=F | step:amplitude=A | csv:PATH")
     p.add_argument("--duration", required=True, type=finite_float, help="simulated time, s")
@@ -82,6 +89,15 @@ def run(args: argparse.Namespace) -> int:
     out = output_path(args.output)
     plant_cls = PLANTS.get(args.plant)
     params = args.params if args.params is not None else plant_cls.default_params
+    plant_set: Any = params
+    if args.plant_params is not None:
+        from plants.planfile import read_plant_file
+
+        pf = read_plant_file(args.plant_params)
+        if pf.kind != args.plant:
+            raise FcompError(f"--plant-params {args.plant_params}: a {pf.kind} plant, not "
+                             f"{args.plant}; run `fcomp simulate {pf.kind} ...`")
+        plant_set = pf.parameter_set()
     u = parse_input(args.input)
     inputs = InputSet()
     if u.kind == "csv":
@@ -90,6 +106,8 @@ def run(args: argparse.Namespace) -> int:
         inputs.file(args.effects, "--effects")
     if is_model_file(args.friction):
         inputs.file(args.friction, "--friction")
+    if args.plant_params is not None:
+        inputs.file(args.plant_params, "--plant-params")
     check_outputs(inputs, [("-o", out)])
     t = output_times(args.duration, args.rate)
     engine = {k: getattr(args, k) for k in ("method", "rtol", "atol", "max_steps", "coupling")
@@ -101,11 +119,11 @@ def run(args: argparse.Namespace) -> int:
     elif engine:
         raise FcompError(f"--{next(iter(engine)).replace('_', '-')} applies to the ODE plants; "
                          f"plant {args.plant} evaluates the friction along a prescribed motion")
-    plant_set = {k: v for k, v in assignments.items() if k in plant_names}
+    overrides = {k: v for k, v in assignments.items() if k in plant_names}
     args.set = [f"{k}={v!r}" for k, v in assignments.items() if k not in plant_names]
     model = friction_model(args.friction, params, args)
-    plant: Any = (plant_cls(model, params, overrides=plant_set)  # type: ignore[call-arg]
-                  if plant_set else plant_cls(model, params))
+    plant: Any = (plant_cls(model, plant_set, overrides=overrides)  # type: ignore[call-arg]
+                  if overrides else plant_cls(model, plant_set))
     x0 = parse_assignments(args.x0, option="--x0") if args.x0 else None
     _check_x0(plant, x0)
     aliasing = sampling_warning(u, args.rate)

@@ -1,0 +1,121 @@
+"""What an engineer checks first on a plant file (``fcomp plant check FILE``).
+
+At mid stroke, holding its load at rest (:func:`plants.equilibrium.equilibrium`),
+the plant is linearised with python-control (``plant.to_iosys().linearize``);
+the piston and its two chambers -- the block of the states ``v``, ``p1``,
+``p2`` of that linear system, valve held -- give the natural frequency
+``w_n`` and damping ratio of the oil (or air) column (``control.damp``).
+For a hydraulic cylinder it is the textbook
+
+    w_n^2 = beta*A1^2/(m*V1) + beta*A2^2/(m*V2),
+
+and for a pneumatic one, at the equilibrium pressures,
+
+    w_n^2 = kappa*p1*A1^2/(m*V1) + kappa*p2*A2^2/(m*V2)
+
+(both printed beside it); the damping comes from the valve's flow-pressure
+coefficient (underlap). The valve-limited speed is that of steady motion
+through mid stroke at the command limit ``+-u_max`` (the piston free of
+friction and external load, its weight included:
+:func:`plants.equilibrium.steady_motion`), the force range what the supply
+and return pressures can push and pull, ``(ps - p_atm)*A1 - (pt - p_atm)*A2``
+to ``(pt - p_atm)*A1 - (ps - p_atm)*A2`` (``pt = p_atm`` for a pneumatic
+servo exhausting to atmosphere).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from fcomp.measurement import G
+from fcomp.piston import chamber_volumes, piston_areas
+from plants.equilibrium import equilibrium, steady_motion
+
+if TYPE_CHECKING:
+    from fcomp.models.base import FrictionModel
+    from plants.planfile import PlantFile
+
+
+def frictionless() -> FrictionModel:
+    """A friction model that adds no force: Coulomb with ``Fc = 0``."""
+    from fcomp.models import make_model
+
+    return make_model("coulomb", {"Fc": 0.0})
+
+
+def check_plant(pf: PlantFile, friction: FrictionModel | None = None) -> dict[str, Any]:
+    """The figures of ``fcomp plant check`` (module docstring), SI units.
+
+    Parameters
+    ----------
+    pf : PlantFile
+        The plant.
+    friction : FrictionModel, optional
+        Friction of the piston for the linearisation (default none); its viscous
+        term adds damping.
+
+    Returns
+    -------
+    dict
+        ``kind``, ``name``, ``natural_frequency`` (rad/s), ``natural_frequency_hz``,
+        ``damping``, ``hand_formula`` (rad/s), ``equilibrium`` (``u``, ``p1``, ``p2``
+        absolute Pa, ``V1``, ``V2`` m^3), ``valve_limited_speed`` (``extend``,
+        ``retract`` m/s), ``force_range`` (``max``, ``min`` N), ``weight`` (N),
+        ``valve_bandwidth_hz``, ``control_rate`` (Hz).
+    """
+    import control as ct
+
+    plant = pf.make_plant(friction or frictionless())
+    v = pf.values
+    names = list(plant.state_names)
+    mid = 0.5 * v["stroke"]
+    x0, u0 = equilibrium(plant, mid)
+    lin = plant.to_iosys().linearize(x0, [u0])
+    idx = [names.index(n) for n in ("v", "p1", "p2")]
+    A = np.asarray(lin.A, dtype=float)[np.ix_(idx, idx)]
+    wn, zeta, poles = ct.damp(ct.ss(A, np.zeros((3, 1)), np.eye(3), np.zeros((3, 1))),
+                              doprint=False)
+    pair = [i for i, p in enumerate(poles) if abs(np.imag(p)) > 0]
+    k = max(pair, key=lambda i: wn[i]) if pair else int(np.argmax(wn))
+    A1, A2 = piston_areas(v["bore"], v["rod"])
+    V1, V2 = chamber_volumes(mid, v["stroke"], v["V10"], v["V20"], A1, A2)
+    p1, p2 = float(x0[names.index("p1")]), float(x0[names.index("p2")])
+    m = v["mass"]
+    if pf.kind == "hydraulic":
+        hand = math.sqrt(v["beta"] * (A1**2 / V1 + A2**2 / V2) / m)
+        p_low = v["pt"]
+    else:
+        hand = math.sqrt(v["k_poly"] * (p1 * A1**2 / V1 + p2 * A2**2 / V2) / m)
+        p_low = v["p_atm"]
+    pa = v["p_atm"]
+    u_max = pf.control["u_max"]
+    return {
+        "kind": pf.kind, "name": pf.name, "file": pf.label,
+        "natural_frequency": float(wn[k]), "natural_frequency_hz": float(wn[k]) / (2 * math.pi),
+        "damping": float(zeta[k]), "hand_formula": hand,
+        "equilibrium": {"x": mid, "u": u0, "p1": p1, "p2": p2, "V1": float(V1), "V2": float(V2)},
+        "valve_limited_speed": {"extend": _speed(plant, mid, u_max, pf, A1),
+                                "retract": _speed(plant, mid, -u_max, pf, A1)},
+        "force_range": {"max": (v["ps"] - pa) * A1 - (p_low - pa) * A2,
+                        "min": (p_low - pa) * A1 - (v["ps"] - pa) * A2},
+        "weight": m * G * v["orient"],
+        "valve_bandwidth_hz": pf.valve_bandwidth, "control_rate": pf.control["control_rate"],
+    }
+
+
+def _speed(plant: Any, x_pos: float, u: float, pf: PlantFile, A1: float) -> float:
+    """Speed of steady motion through ``x_pos`` under the command ``u`` (m/s)."""
+    v = pf.values
+    if pf.kind == "hydraulic":  # the no-load estimate Q/A1 as the start
+        opening = v["kv"] * abs(u) + v["underlap"]
+        guess = v["cd"] * v["w"] * opening * math.sqrt((v["ps"] - v["pt"]) / v["rho"]) / A1
+    else:
+        guess = 0.1 * v["A_valve"] * 340.0 / A1  # a tenth of the sonic volume flow
+    state = steady_motion(plant, x_pos, u, math.copysign(guess, u))
+    return float(state[list(plant.state_names).index("v")])
+
+
+__all__ = ["check_plant", "frictionless"]

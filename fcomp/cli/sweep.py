@@ -17,6 +17,13 @@ know another:
   controllers' model parameters and of the friction models the controllers
   are built with (friction-model mismatch).
 
+``--plant-params PLANT.toml`` runs the loops on the plant of a plant file
+(docs/plants.md, "Plant files": its parameters, sensors, valve limits and
+control rate); ``--friction`` and ``--controller-friction`` also take model
+files (``MODEL.json``, docs/model-file.md; their measurement terms are dropped
+with a warning). A friction model *named* takes the values of the built-in
+plant of the plant's kind.
+
 The runs are independent jobs: local processes by default (``--workers``),
 or the Dask distributed cluster at ``--scheduler ADDRESS``; the results are
 the same. JSON: ``{"mode", "plant", "task", "controllers", "runs": [{"controller",
@@ -43,7 +50,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("sweep", help="Monte Carlo and parameter grids over compensators and "
                        "friction-model mismatch (local processes or a Dask cluster)",
                        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("--plant", default="hydraulic", help="hydraulic (default) or pneumatic")
+    p.add_argument("--plant", default=None,
+                   help="hydraulic (default) or pneumatic; with --plant-params, its kind")
+    p.add_argument("--plant-params", default=None, metavar="PLANT.toml",
+                   help="a plant file (fcomp plant template) instead of the built-in plant")
     p.add_argument("--task", default="low-velocity-ramp",
                    help="slow-sine, steps, low-velocity-ramp (default), seed002-sine")
     p.add_argument("--controllers", default="pid,pid-ff,lugre-observer,ekf,mpc",
@@ -60,8 +70,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--controller-friction", default=None, metavar="M1,M2,...",
                    help="grid over the friction models the controllers are built with "
                    "(e.g. lugre,nmlgm; friction-model mismatch)")
-    p.add_argument("--friction", default="nmlgm",
-                   help="the plant's true friction model (default nmlgm)")
+    p.add_argument("--friction", default="nmlgm", metavar="NAME|MODEL.json",
+                   help="the plant's true friction model: a name or a model file (default "
+                   "nmlgm)")
     p.add_argument("--seed", type=int, default=2026, help="seed of the draws and the noise")
     p.add_argument("--full", action="store_true",
                    help="full task durations (default: the fast ones)")
@@ -92,34 +103,57 @@ def _factors(items: list[str]) -> dict[str, tuple[float, ...]]:
     return out
 
 
+def _friction(spec: str, option: str) -> Any:
+    """A friction option's model: a registered name (checked), or a model file's friction
+    (its measurement terms dropped with a warning)."""
+    from fcomp.modelfile import is_model_file, read_model
+    from fcomp.models import MODELS
+
+    if not is_model_file(spec):
+        MODELS.get(spec)
+        return spec
+    mf = read_model(spec)
+    if mf.measurement_terms:
+        common.warn("measurement-terms", mf.dropped_note("plant or controller friction"),
+                    option)
+    return mf.model
+
+
 def _plan(args: argparse.Namespace) -> Any:
     """The :class:`~controllers.robustness.Sweep` or :class:`~controllers.robustness.Grid`."""
     from controllers import CONTROLLERS
     from controllers.harness import LoopConfig
     from controllers.robustness import Grid, Sweep
     from controllers.tasks import TASKS
-    from fcomp.models import MODELS
 
-    if args.plant not in ("hydraulic", "pneumatic"):
-        raise FcompError(f"--plant {args.plant!r}: the closed loops run on hydraulic or pneumatic")
+    plant_file = None
+    if args.plant_params is not None:
+        from plants.planfile import read_plant_file
+
+        plant_file = read_plant_file(args.plant_params)
+        if args.plant not in (None, plant_file.kind):
+            raise FcompError(f"--plant-params {args.plant_params}: a {plant_file.kind} plant, "
+                             f"not {args.plant}")
+    plant = plant_file.kind if plant_file is not None else args.plant or "hydraulic"
+    if plant not in ("hydraulic", "pneumatic"):
+        raise FcompError(f"--plant {plant!r}: the closed loops run on hydraulic or pneumatic")
     TASKS.get(args.task)
     controllers = tuple(common.name_list(args.controllers, "--controllers") or ())
     for c in controllers:
         CONTROLLERS.get(c)
-    MODELS.get(args.friction)
-    base = LoopConfig(plant=args.plant, friction=args.friction)
-    frictions = tuple(common.name_list(args.controller_friction, "--controller-friction") or ())
-    for f in frictions:
-        MODELS.get(f)
+    base = LoopConfig(plant=plant, friction=_friction(args.friction, "--friction"),
+                      plant_file=plant_file)
+    frictions = tuple(_friction(f, "--controller-friction") for f in
+                      common.name_list(args.controller_friction, "--controller-friction") or ())
     if args.grid or frictions:
-        return Grid(plant=args.plant, task=args.task, controllers=controllers,
+        return Grid(plant=plant, task=args.task, controllers=controllers,
                     factors=_factors(args.grid), controller_frictions=frictions,
                     seed=args.seed, fast=not args.full, base=base)
     try:
         lo, hi = (common.finite_float(v) for v in args.noise.split(","))
     except (ValueError, argparse.ArgumentTypeError):
         raise FcompError(f"--noise {args.noise!r}: expected LO,HI (two numbers)") from None
-    return Sweep(plant=args.plant, task=args.task, controllers=controllers,
+    return Sweep(plant=plant, task=args.task, controllers=controllers,
                  samples=args.samples, spread=args.spread, noise=(lo, hi), seed=args.seed,
                  fast=not args.full, base=base)
 
@@ -235,7 +269,11 @@ def run(args: argparse.Namespace) -> int:
     scheduler = check_scheduler(args.scheduler)
     if args.workers is not None and args.workers < 1:
         raise FcompError(f"--workers must be a positive integer, got {args.workers}")
-    common.check_outputs(InputSet(), [("--json", out)], [("--report", folder, "report")])
+    inputs = InputSet()
+    for option, spec in (("--plant-params", args.plant_params), ("--friction", args.friction)):
+        if spec is not None and spec.lower().endswith((".toml", ".json")):
+            inputs.file(spec, option)
+    common.check_outputs(inputs, [("--json", out)], [("--report", folder, "report")])
     plan = _plan(args)
     jobs = plan.jobs()
     bar = progress_bar("sweep", len(jobs), enabled=not args.no_progress)

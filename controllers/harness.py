@@ -193,6 +193,7 @@ def build_loop(controller: str, config: LoopConfig, options: Mapping[str, Any] |
     true_friction = _friction(config.friction, config)
     ctrl_friction = friction_with_mismatch(_friction(config.controller_friction, config),
                                            config.mismatch)
+    plant: Any
     if config.plant_file is not None:
         plant = config.plant_file.make_plant(true_friction)
         model = ControlModel(config.plant_file, ctrl_friction)

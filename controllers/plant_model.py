@@ -167,7 +167,7 @@ class ControlModel:
                 raise FcompError(f"plant file {plant.label} gives the plant's parameters: "
                                  f"no parameter set {params!r} with it")
             self.plant_name = plant.kind
-            own = plant.make_plant(friction)
+            own: Any = plant.make_plant(friction)
         else:
             self.plant_name = plant
             own = make_plant(plant, friction, params)

@@ -254,3 +254,27 @@ def test_save_model_refuses_a_name_that_is_not_json(tmp_path: Path, capsys) -> N
     assert main(["fit", str(rec), "--model", "coulomb", "--save-model",
                  str(tmp_path / "m.txt")]) == 2
     assert "ends in .json" in capsys.readouterr().err
+
+
+def test_diagnose_writes_its_final_model(tmp_path: Path, capsys) -> None:
+    """The diagnosis's final model with a force offset: the offset is a measurement term."""
+    from fcomp.synthetic import generate
+
+    data = tmp_path / "off.csv"
+    generate(["force-offset"], duration=12.0, seed=1).measurement.write(data)
+    saved = tmp_path / "diag.json"
+    assert main(["diagnose", str(data), "--baseline", "coulomb-viscous", "--add",
+                 "force-offset", "--no-search", "--no-baseline-check", "--no-progress",
+                 "--jobs", "1", "--save-model", str(saved), "--json", "-"]) == 0
+    result = json.loads(capsys.readouterr().out)
+    doc = json.loads(saved.read_text())
+    assert result["model_file"] == doc
+    assert doc["description"] == "coulomb-viscous + force-offset"
+    terms = doc["measurement_terms"]
+    assert [e["name"] for e in terms["effects"]] == ["force-offset"]
+    assert "offset" not in terms["params"] and "offset" not in doc["params"]
+    mf = read_model(saved)
+    assert mf.model.describe() == "coulomb-viscous"
+    assert mf.measured_model().flat_params()["offset"] == pytest.approx(
+        result["model_params"]["offset"], rel=1e-12)
+    assert doc["params"]["B"] == result["model_params"]["B"]

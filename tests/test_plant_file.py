@@ -211,3 +211,19 @@ def test_the_closed_loop_takes_a_plant_file() -> None:
     plant, cmodel, ctrl = build_loop("pid", LoopConfig(plant_file=pf, friction="lugre",
                                                        controller_friction=friction))
     assert plant.name == "pneumatic" and cmodel.u_max == 1.0
+
+
+def test_sweep_on_a_plant_file_is_the_sweep_on_the_built_in_plant(tmp_path: Path,
+                                                                   capsys) -> None:
+    import json
+
+    friction = tmp_path / "nmlgm.json"
+    make_model("nmlgm", params="seed000-servo").save(friction)
+    docs = []
+    for extra in (["--plant", "pneumatic", "--friction", "nmlgm"],
+                  ["--plant-params", str(builtin_path("pneumatic")), "--friction", str(friction)]):
+        assert main(["sweep", *extra, "--controllers", "pid", "--samples", "1",
+                     "--workers", "1", "--no-progress", "--json", "-"]) == 0
+        docs.append(json.loads(capsys.readouterr().out))
+    assert docs[0]["plant"] == docs[1]["plant"] == "pneumatic"
+    assert docs[0]["runs"][0]["metrics"] == docs[1]["runs"][0]["metrics"]

@@ -144,8 +144,10 @@ def model_document(model: FrictionModel, *, stderr: Mapping[str, float] | None =
             effects.append(entry)
     params = {k: number(v, f"params.{k}") for k, v in model.flat_params().items()
               if k not in dropped}
+    flat = model.flat_params()  # an effect's own parameter (force-offset's offset) is not an extra
     extras = {k: number(v, f"measurement_terms.{k}") for k, v in (measurement or {}).items()
-              if k in MEASUREMENT_PARAMS and v is not None}
+              if k in MEASUREMENT_PARAMS and k not in flat and v is not None
+              and not math.isnan(float(v))}
     doc: dict[str, Any] = {"format": FORMAT, "version": VERSION,
                            "model": lineage[0] if lineage else model.name,
                            "description": model.describe()}

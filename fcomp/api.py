@@ -31,6 +31,7 @@ from fcomp.identification import FrictionFit
 from fcomp.inputs import parse_input
 from fcomp.measurement import Measurement
 from fcomp.models import FrictionModel, make_model
+from fcomp.paramsets import ParameterSet
 from plants import PLANTS
 from plants.comparison import PlantComparison, compare_plant
 
@@ -71,14 +72,16 @@ def fit(data: Data, model: str | FrictionModel, **options: Any) -> FrictionFit:
 
 def compare(model: str | FrictionModel, data: Data | Sequence[Data], *, fit: bool = False,
             mass: float | None = None, split: str = "auto", cutoff_hz: float | None = None,
-            plant: str | None = None, plant_params: str | None = None) -> Comparison:
+            plant: str | None = None, plant_params: str | ParameterSet | None = None
+            ) -> Comparison:
     """One given model beside records (``fcomp compare``).
 
     The force domain is :func:`fcomp.diagnosis.compare` (``fit``, ``mass``,
     ``split``, ``cutoff_hz`` as there); with ``plant`` the plant of that name is
     also simulated with each record's command ``u`` and compared in ``x``,
     ``p1``, ``p2`` (:func:`plants.comparison.compare_plant`, with the parameter
-    set ``plant_params``), the results in ``Comparison.plant``.
+    set ``plant_params``: a name, or a plant file's
+    :meth:`~plants.planfile.PlantFile.parameter_set`), the results in ``Comparison.plant``.
     """
     meas = _measurements(data)
     records = [meas] if isinstance(meas, Measurement) else meas

@@ -21,6 +21,7 @@ from fcomp.diagnosis.report import fig_plant
 from fcomp.errors import FcompError
 from fcomp.measurement import Measurement
 from fcomp.models import FrictionModel
+from fcomp.paramsets import ParameterSet
 from plants import PLANTS
 
 
@@ -71,7 +72,7 @@ class PlantComparison:
 
 
 def compare_plant(meas: Measurement, plant: str, friction: FrictionModel, *,
-                  params: str | None = None) -> PlantComparison:
+                  params: str | ParameterSet | None = None) -> PlantComparison:
     """Simulate ``plant`` with the measured command ``u`` and compare ``x``, ``p1``, ``p2``.
 
     The plant starts from the measured ``x``, ``p1``, ``p2`` at the first
@@ -80,7 +81,8 @@ def compare_plant(meas: Measurement, plant: str, friction: FrictionModel, *,
     atmospheric pressure of a pneumatic plant's absolute chamber pressures)
     and is driven by ``u`` interpolated linearly between samples. Returns
     the simulated measurement and the RMS error of every compared signal
-    (m, gauge Pa) as a :class:`PlantComparison`.
+    (m, gauge Pa) as a :class:`PlantComparison`. ``params``: a parameter set's name
+    or object (a plant file's, :meth:`plants.planfile.PlantFile.parameter_set`).
     """
     if "u" not in meas:
         raise FcompError(f"{meas.label}: a plant-domain comparison needs the command column 'u'")

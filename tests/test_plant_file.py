@@ -227,3 +227,19 @@ def test_sweep_on_a_plant_file_is_the_sweep_on_the_built_in_plant(tmp_path: Path
         docs.append(json.loads(capsys.readouterr().out))
     assert docs[0]["plant"] == docs[1]["plant"] == "pneumatic"
     assert docs[0]["runs"][0]["metrics"] == docs[1]["runs"][0]["metrics"]
+
+
+def test_compare_in_the_plant_domain_with_a_plant_file(tmp_path: Path, capsys) -> None:
+    import json
+
+    rec = tmp_path / "rec.csv"
+    assert main(["simulate", "pneumatic", "--friction", "lugre", "--input",
+                 "sine:amplitude=0.3,frequency=1", "--duration", "3", "--rate", "200",
+                 "-o", str(rec)]) == 0
+    capsys.readouterr()
+    docs = []
+    for extra in (["--plant", "pneumatic"], ["--plant-params", str(builtin_path("pneumatic"))]):
+        assert main(["compare", str(rec), "--model", "lugre", "--params", "seed000-servo",
+                     *extra, "--json", "-"]) == 0
+        docs.append(json.loads(capsys.readouterr().out))
+    assert docs[0]["plant"] and docs[0]["plant"] == docs[1]["plant"]

@@ -61,8 +61,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--plant", default=None, metavar="NAME",
                    help="also compare in the plant domain: simulate this plant with the "
                    "records' command u (hydraulic, pneumatic, ...)")
-    p.add_argument("--plant-params", default=None, metavar="SET",
-                   help="parameter set of the plant (default: the plant's)")
+    p.add_argument("--plant-params", default=None, metavar="SET|PLANT.toml",
+                   help="parameter set of the plant (default: the plant's), or a plant file "
+                   "(fcomp plant template; its kind is the plant)")
     p.add_argument("--split", default="auto", choices=["auto", "experiment", "segment"],
                    help="train/held-out split (for --fit and the feature strengths)")
     p.add_argument("--cutoff", type=finite_float, default=None, metavar="HZ",
@@ -143,6 +144,15 @@ def run(args: argparse.Namespace) -> int:
         raise FcompError(f"--cutoff must be a positive frequency in Hz, got {args.cutoff:g}")
     if args.mass is not None and not args.mass >= 0:
         raise FcompError(f"--mass must be a non-negative number of kg, got {args.mass:g}")
+    plant_params: Any = args.plant_params
+    if plant_params is not None and plant_params.lower().endswith(".toml"):
+        from plants.planfile import read_plant_file
+
+        pf = read_plant_file(plant_params)
+        if args.plant not in (None, pf.kind):
+            raise FcompError(f"--plant-params {plant_params}: a {pf.kind} plant, not "
+                             f"{args.plant}")
+        args.plant, plant_params = pf.kind, pf.parameter_set()
     if args.plant is not None:
         from plants import PLANTS
 
@@ -153,6 +163,8 @@ def run(args: argparse.Namespace) -> int:
         inputs.file(f, "--params")
     if args.model.lower().endswith(".json"):
         inputs.file(args.model, "--model")
+    if args.plant_params is not None and args.plant_params.lower().endswith(".toml"):
+        inputs.file(args.plant_params, "--plant-params")
     if args.effects is not None:
         inputs.file(args.effects, "--effects")
     common.check_outputs(inputs, [("--json", out)], [("--report", report, "report")])
@@ -167,7 +179,7 @@ def run(args: argparse.Namespace) -> int:
                     "for a model that belongs to these records", "params")
     comp = compare(model, data, fit=args.fit, mass=args.mass if args.mass is not None else mass,
                    split=args.split, cutoff_hz=args.cutoff, plant=args.plant,
-                   plant_params=args.plant_params)
+                   plant_params=plant_params)
     doc = common.with_warnings(comp.to_dict())
     text = result_text(doc)
     command = "fcomp " + shlex.join(common.ARGV) if common.ARGV else None

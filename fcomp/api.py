@@ -30,6 +30,7 @@ from fcomp.diagnosis import compare as compare_force
 from fcomp.identification import FrictionFit
 from fcomp.inputs import parse_input
 from fcomp.measurement import Measurement
+from fcomp.modelfile import is_model_file, load_model
 from fcomp.models import FrictionModel, make_model
 from fcomp.paramsets import ParameterSet
 from plants import PLANTS
@@ -105,7 +106,9 @@ def simulate(plant: str, friction: str | FrictionModel,
              x0: Mapping[str, float] | None = None, **engine: Any) -> Measurement:
     """Simulate ``plant`` with the friction model ``friction`` (``fcomp simulate``).
 
-    ``input`` is a SPEC (``sine:amplitude=A,frequency=F``, ``step:amplitude=A``,
+    ``friction`` is a model, a model name, or a model file (``.json``,
+    :func:`fcomp.modelfile.load_model`: its measurement terms dropped with a
+    warning). ``input`` is a SPEC (``sine:amplitude=A,frequency=F``, ``step:amplitude=A``,
     ``csv:PATH``) or a function of time; ``params`` a parameter set (default: the
     plant's, which also gives a model named by ``friction`` its values);
     ``engine`` the integrator options (``method``, ``rtol``, ``atol``,
@@ -113,7 +116,10 @@ def simulate(plant: str, friction: str | FrictionModel,
     """
     cls = PLANTS.get(plant)
     pset = params if params is not None else getattr(cls, "default_params", None)
-    model = make_model(friction, params=pset) if isinstance(friction, str) else friction
+    if isinstance(friction, str) and is_model_file(friction):
+        model = load_model(friction)
+    else:
+        model = make_model(friction, params=pset) if isinstance(friction, str) else friction
     u = parse_input(input) if isinstance(input, str) else input
     run = cls(model, pset).simulate(u, duration, rate, x0=dict(x0) if x0 else None, **engine)
     if isinstance(input, str):

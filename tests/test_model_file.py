@@ -76,11 +76,13 @@ def test_saved_and_loaded_models_give_the_same_forces_bit_for_bit(name: str,
 def test_a_plant_with_the_loaded_model_runs_the_same_bit_for_bit(tmp_path: Path) -> None:
     model = make_model("lugre", params="seed002-type1").with_effects(
         make_effect("pressure-dependence", {"kp": 1e-8}))
-    back = fcomp.load_model(model.save(tmp_path / "m.json"))
+    path = model.save(tmp_path / "m.json")
+    back = fcomp.load_model(path)
     runs = [fcomp.simulate("hydraulic", m, "sine:amplitude=0.004,frequency=2", 0.2)
-            for m in (model, back)]
+            for m in (model, back, str(path))]  # a model, the one read back, the file
     for col in ("x", "p1", "p2", "F"):
         assert np.array_equal(runs[0][col], runs[1][col])
+        assert np.array_equal(runs[0][col], runs[2][col])
 
 
 def test_a_hand_written_file_gives_the_hand_formula(tmp_path: Path) -> None:

@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import json
 import math
+import numbers
 from collections.abc import Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -80,8 +81,10 @@ def _config(config: Mapping[str, Any], name: str) -> dict[str, Any]:
     for k, v in config.items():
         if isinstance(v, bool | str) or v is None:
             out[k] = v
-        elif isinstance(v, int | float):
-            out[k] = number(v, f"effect {name} config {k}")
+        elif isinstance(v, numbers.Integral):
+            out[k] = int(v)
+        elif isinstance(v, numbers.Real):  # numpy scalars too
+            out[k] = number(float(v), f"effect {name} config {k}")
         else:
             raise FileFormatError(f"model file: effect {name}: configuration {k} = {v!r} is "
                                   "not a number or a string and cannot be written")

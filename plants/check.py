@@ -54,8 +54,10 @@ def check_plant(pf: PlantFile, friction: FrictionModel | None = None) -> dict[st
     pf : PlantFile
         The plant.
     friction : FrictionModel, optional
-        Friction of the piston for the linearisation (default none); its viscous
-        term adds damping.
+        Friction of the piston for the linearisation (default none, as the hand
+        formulas). A static map's viscous slope adds damping; a model with states
+        (a bristle) is outside the block analysed, and a damping that leaves no
+        oscillating pair reports the fastest real pole.
 
     Returns
     -------

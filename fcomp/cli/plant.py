@@ -41,9 +41,6 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     c = actions.add_parser("check", help="natural frequency, damping, valve-limited speed and "
                            "force range of a plant file")
     c.add_argument("file", metavar="PLANT.toml", help="the plant file")
-    c.add_argument("--friction", default=None, metavar="NAME|MODEL.json",
-                   help="friction of the piston in the linearisation (default none)")
-    common.add_model_options(c)
     c.add_argument("--json", metavar="OUT", default=None,
                    help="write the result as JSON to OUT ('-' for standard output)")
     c.set_defaults(func=run_check)
@@ -85,8 +82,6 @@ def run_check(args: argparse.Namespace) -> int:
     out = json_target(args.json)
     inputs = InputSet()
     inputs.file(args.file, "PLANT.toml")
-    if args.friction is not None and args.friction.lower().endswith(".json"):
-        inputs.file(args.friction, "--friction")
     common.check_outputs(inputs, [("--json", out)])
     try:
         pf = read_plant_file(args.file)
@@ -94,9 +89,6 @@ def run_check(args: argparse.Namespace) -> int:
         for line in exc.problems:  # one line per bad value
             sys.stderr.write(f"fcomp: error: {line}\n")
         return 2
-    friction = None
-    if args.friction is not None:
-        friction = common.friction_model(args.friction, pf.friction_set, args)
-    doc = common.with_warnings(check_plant(pf, friction))
+    doc = common.with_warnings(check_plant(pf))
     emit_result(result_text(doc), args.json, out, summary(doc))
     return 0

@@ -249,6 +249,11 @@ def test_fit_writes_the_model_file_and_compare_reads_it(tmp_path: Path, capsys) 
     assert by_file["rms"] == by_fit["rms"]
     assert main(["compare", str(rec), "--model", str(saved), "--params", "canudas1995"]) == 2
     assert "gives the values" in capsys.readouterr().err
+    # a fit started from the file: the same model, the same optimum
+    assert main(["fit", str(rec), "--model", str(saved), "--json", "-", "--no-progress"]) == 0
+    again = json.loads(capsys.readouterr().out)
+    assert again["model"] == "coulomb-viscous"
+    assert again["params"]["B"] == pytest.approx(result["params"]["B"], rel=1e-6)
 
 
 def test_save_model_refuses_a_name_that_is_not_json(tmp_path: Path, capsys) -> None:
@@ -280,3 +285,9 @@ def test_diagnose_writes_its_final_model(tmp_path: Path, capsys) -> None:
     assert mf.measured_model().flat_params()["offset"] == pytest.approx(
         result["model_params"]["offset"], rel=1e-12)
     assert doc["params"]["B"] == result["model_params"]["B"]
+    # the final model as the baseline of another diagnosis (its offset left out, said so)
+    assert main(["diagnose", str(data), "--baseline", str(saved), "--no-search",
+                 "--no-baseline-check", "--no-progress", "--jobs", "1", "--json", "-"]) == 0
+    captured = capsys.readouterr()
+    assert json.loads(captured.out)["baseline"] == "coulomb-viscous"
+    assert "measurement terms force-offset dropped" in captured.err

@@ -305,12 +305,17 @@ def warn_sidecar(meas: Any) -> None:
 
 
 def guard_outputs(data: list[str], effects: str | None, files: list[tuple[str, Path | None]],
-                  folders: list[tuple[str, Path | None, str]] | None = None) -> None:
-    """:func:`check_outputs` for a command reading the measurements ``data`` (each once)
-    and the ``--effects`` module ``effects``."""
+                  folders: list[tuple[str, Path | None, str]] | None = None,
+                  models: list[tuple[str, str]] | None = None) -> None:
+    """:func:`check_outputs` for a command reading the measurements ``data`` (each once),
+    the ``--effects`` module ``effects`` and the model files of ``models`` (``(option,
+    spec)`` pairs; a spec that is a name, not a ``.json`` file, is no input)."""
     inputs = measurement_inputs(data)
     if effects is not None:
         inputs.file(effects, "--effects")
+    for option, spec in models or []:
+        if spec.lower().endswith(".json"):
+            inputs.file(spec, option)
     check_outputs(inputs, files, folders)
 
 

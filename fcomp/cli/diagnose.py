@@ -37,7 +37,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("data", nargs="+", metavar="DATA.csv",
                    help="measurement(s) (CSV + TOML sidecar); several files = several experiments")
-    p.add_argument("--baseline", required=True, help="friction model name (fcomp list models)")
+    p.add_argument("--baseline", required=True, metavar="NAME|MODEL.json",
+                   help="friction model name (fcomp list models), or a model file (a model "
+                   "with effects to diagnose further)")
     p.add_argument("--json", metavar="OUT", default=None,
                    help="write the result as JSON to OUT ('-' for standard output)")
     p.add_argument("--report", metavar="DIR", default=None,
@@ -123,6 +125,7 @@ def run(args: argparse.Namespace) -> int:
     from fcomp.diagnosis.report import write_report
     from fcomp.effects import load_effects_module
     from fcomp.measurement import Measurement
+    from fcomp.modelfile import is_model_file, read_model
     from fcomp.outputs import staged_folder
 
     out = json_target(args.json)
@@ -135,14 +138,21 @@ def run(args: argparse.Namespace) -> int:
         raise FcompError(f"--cutoff must be a positive frequency in Hz, got {args.cutoff:g}")
     saved = common.model_target(args.save_model)
     common.guard_outputs(args.data, args.effects, [("--json", out), ("--save-model", saved)],
-                         [("--report", report, "report")])
+                         [("--report", report, "report")], models=[("--baseline", args.baseline)])
     if args.effects is not None:
         load_effects_module(args.effects)
+    baseline = args.baseline
+    if is_model_file(baseline):
+        mf = read_model(baseline, args.effects)
+        if mf.measurement_terms:
+            common.warn("measurement-terms", mf.dropped_note("baseline (the diagnosis finds "
+                        "its own)"), "baseline")
+        baseline = mf.model
     candidates = common.name_list(args.candidates, "--candidates")
     data = [Measurement.read(p) for p in args.data]
     for d in data:
         common.warn_sidecar(d)
-    diag = Diagnosis(args.baseline, effects=candidates, add=args.add,
+    diag = Diagnosis(baseline, effects=candidates, add=args.add,
                      search=not args.no_search, split=args.split, cutoff_hz=args.cutoff,
                      max_steps=args.max_steps, n_jobs=args.jobs,
                      scheduler=check_scheduler(args.scheduler),

@@ -35,9 +35,9 @@ from fcomp.cli.common import (
     Activity,
     add_model_options,
     add_save_model_option,
-    build_model,
     emit_result,
     finite_float,
+    friction_model,
     guard_outputs,
     json_target,
     model_source,
@@ -65,7 +65,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("data", nargs="+", metavar="DATA.csv",
                    help="measurement (CSV + TOML sidecar); several files are fitted one by "
                    "one, in parallel (--jobs, --scheduler)")
-    p.add_argument("--model", required=True, help="friction model name (fcomp list models)")
+    p.add_argument("--model", required=True, metavar="NAME|MODEL.json",
+                   help="friction model name (fcomp list models), or a model file whose "
+                   "model and values start the fit")
     p.add_argument("--offset", action="store_true",
                    help="fit a constant force offset too (params.offset, N)")
     p.add_argument("--json", metavar="OUT", default=None,
@@ -128,6 +130,7 @@ def _table(f: FrictionFit) -> str:
 def run(args: argparse.Namespace) -> int:
     from fcomp.identification import FrictionFit
     from fcomp.measurement import Measurement
+    from fcomp.modelfile import is_model_file
 
     out = json_target(args.json)
     if args.max_nfev < 1:
@@ -153,8 +156,11 @@ def run(args: argparse.Namespace) -> int:
         raise FcompError("--save-model writes one fitted model: give one record (or fit the "
                          "records one by one)")
     guard_outputs(args.data, args.effects, [("--json", out), ("--save-model", saved)],
-                  [("--report", report, "report")])
-    model = build_model(args.model, args.params, args)
+                  [("--report", report, "report")], models=[("--model", args.model)])
+    if args.params is not None and is_model_file(args.model):
+        raise FcompError(f"--params {args.params}: the model file {args.model} gives the "
+                         "values the fit starts from")
+    model = friction_model(args.model, args.params, args, use="model the fit starts from")
     initial = parse_assignments(args.set)
     fixed = parse_assignments(args.fix, "--fix")
     both = sorted(set(initial) & set(fixed))

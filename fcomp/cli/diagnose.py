@@ -13,7 +13,8 @@ column is split by it. Prints a summary; ``--json OUT`` writes
 
 (all errors in newtons, on held-out data; ``-`` writes to standard output)
 and ``--report DIR`` a self-contained ``DIR/report.html`` with every figure.
-``--save-model MODEL.json`` writes the final model as a model file
+``--baseline MODEL.json`` starts from a model file (a model with effects,
+diagnosed further). ``--save-model MODEL.json`` writes the final model as a model file
 (docs/model-file.md; the JSON's ``model_file`` is the same document), a fitted
 mass, the channel lag and measurement effects in it as measurement terms.
 ``--add EFFECT`` adds an effect (catalogue or registered with ``--effects

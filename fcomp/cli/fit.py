@@ -16,7 +16,8 @@ says so on one line and exits with status 2 (no JSON is written).
 Several records are fitted one by one, each on its own, in local processes
 (``--jobs N``) or on a Dask cluster (``--scheduler ADDRESS``); the JSON is then
 ``{"model", "records": [{"data", "params", "stderr", "rms", ...}, ...], "warnings"}``.
-``--save-model MODEL.json`` writes the fitted model as a model file
+``--model MODEL.json`` starts the fit from a model file (its model, effects and
+values). ``--save-model MODEL.json`` writes the fitted model as a model file
 (docs/model-file.md; the JSON's ``model_file`` is the same document), a fitted
 mass and offset in it as measurement terms.
 ``--report DIR`` draws the fit into ``DIR/report.html``: the estimates, the

@@ -21,7 +21,7 @@ times the compiled step in a C loop (``fcomp_ctrl_bench``).
 
 What each controller's step holds
 ---------------------------------
-Every exported controller is the PID of :mod:`controllers.pid` with its
+Every exported controller but ``mpc`` is the PID of :mod:`controllers.pid` with its
 friction estimate and the force-to-valve inversion of
 :mod:`controllers.force_to_valve` (the grid of force rates, its running
 maximum and the linear interpolation of ``numpy.interp``, written out as a
@@ -44,15 +44,26 @@ steady-state map, EKF prediction and friction) are the controller's own
 CasADi functions, called inside the exported step, so the C code computes
 the same equations as the Python controller.
 
-``mpc`` is not exported: its quadratic programme is solved by DAQP, an
-active-set solver with a variable number of iterations that CasADi's code
-generator cannot express; :func:`step_function` refuses it in one line.
+``mpc`` solves the quadratic programme of its real-time iteration with DAQP,
+an active-set solver with a data-dependent number of iterations that CasADi's
+code generator cannot express. It is exported in its *fixed-iteration* form,
+:class:`controllers.mpc_fixed.FixedIterationMPC` (the same EKF, linearisation,
+warm start, limits and fallback law; the QP by a fixed number of ADMM
+iterations), and checked against that form in Python (numpy's ADMM); how far
+its commands are from DAQP's is measured in ``docs/compensators.md``. Its
+state is ``[ekf_x, ekf_P, u_prev, U (horizon), lam (2*horizon)]``, and
+``fcomp_ctrl_init`` sets the state the Python ``reset`` gives at rest at
+mid-stroke (the reset solves the plant's equilibrium, which is not
+generated); ``fcomp_ctrl_set_state`` sets another. In the check both
+compiled instances start from the Python controller's reset state.
 
 Reference input
 ---------------
-``ref = [r, dr, ddr]`` (m, m/s, m/s^2): ``fcomp_ctrl_step_ref`` takes all
-three (a trajectory, as the harness gives it); ``fcomp_ctrl_step(c, y, r)``
-is the set-point form, ``dr = ddr = 0`` (exact for a held set point).
+``ref = [r, dr, ddr]`` (m, m/s, m/s^2), for ``mpc`` followed by the
+positions at the next ``horizon`` samples: ``fcomp_ctrl_step_ref`` takes
+them (a trajectory, as the harness gives it); ``fcomp_ctrl_step(c, y, r)``
+is the set-point form, ``dr = ddr = 0`` and ``r`` over the horizon (exact for
+a held set point).
 
 Compiler
 --------
@@ -80,8 +91,8 @@ import numpy as np
 
 from fcomp.errors import FcompError
 
-#: Controllers :func:`step_function` exports.
-EXPORTABLE = ("pid", "pid-ff", "lugre-observer", "ekf")
+#: Controllers :func:`export_controller` exports (``mpc`` as its fixed-iteration form).
+EXPORTABLE = ("pid", "pid-ff", "lugre-observer", "ekf", "mpc")
 #: Relative tolerance of the equivalence check.
 RTOL = 1e-9
 #: Name of the CasADi function (and of its C file).
@@ -110,6 +121,7 @@ class StepExport:
     state0: np.ndarray
     layout: list[tuple[str, int]]
     note: str
+    n_ref: int = 3
 
     @property
     def n_state(self) -> int:
@@ -147,24 +159,129 @@ def _valve_command(valve: Any, F_d: Any, y: Any, v: Any) -> tuple[Any, Any]:
     return u, sat
 
 
+def _ekf_update(ekf: Any, xi: Any, P: Any, u_prev: Any, y: Any) -> tuple[Any, Any, Any]:
+    """:meth:`controllers.ekf.FrictionEKF.step` and ``friction``, symbolic (filterpy's
+    equations): ``(xi_next, P_next, F_hat)`` on the scaled state."""
+    nx = ekf.model.nx
+    pv, scv = ca.DM(ekf.p), ca.DM(ekf.scale)
+    xn, A = ekf._predict.fn(xi, u_prev, pv, scv)
+    P = ca.mtimes(ca.mtimes(A, P), A.T) + ca.DM(ekf.Q)
+    H = ca.DM(ekf.H)
+    R = ca.DM(ekf.R)
+    PHT = ca.mtimes(P, H.T)
+    S = ca.mtimes(H, PHT) + R
+    K = ca.mtimes(PHT, ca.inv(S))
+    z = y / ca.DM(ekf.r)
+    xi_new = xn + ca.mtimes(K, z - ca.mtimes(H, xn))
+    I_KH = ca.DM.eye(nx) - ca.mtimes(K, H)
+    P_new = ca.mtimes(ca.mtimes(I_KH, P), I_KH.T) + ca.mtimes(ca.mtimes(K, R), K.T)
+    F_hat = ekf._friction.fn(xi_new, u_prev, pv, scv)
+    return xi_new, P_new, F_hat
+
+
+def _all_finite(*ms: Any) -> Any:
+    """1 if every entry of the matrices is finite (NaN and inf give 0)."""
+    bad = 0
+    for m in ms:
+        bad = bad + ca.sum1(ca.vec(ca.fabs(m) < np.inf) == 0)
+    return bad == 0
+
+
+def _mpc_step(ctrl: Any) -> StepExport:
+    """The step of :class:`controllers.mpc_fixed.FixedIterationMPC` (module docstring)."""
+    m = ctrl.model
+    ekf = ctrl.ekf
+    sol = ctrl.solver
+    pb = ctrl.problem
+    N = pb.horizon
+    nx = ekf.model.nx
+    dt = float(ctrl.dt)
+    layout = [("ekf_x", nx), ("ekf_P", nx * nx), ("u_prev", 1), ("U", N), ("lam", 2 * N)]
+    ns = sum(k for _, k in layout)
+    s = ca.MX.sym("state", ns)
+    y = ca.MX.sym("y", 3)
+    ref = ca.MX.sym("ref", 3 + N)
+    r, dr, ddr = ref[0], ref[1], ref[2]
+    i = 0
+    xi = s[i:i + nx]
+    i += nx
+    P = ca.reshape(s[i:i + nx * nx], nx, nx)
+    i += nx * nx
+    u_prev = s[i]
+    i += 1
+    U = s[i:i + N]
+    i += N
+    lam = s[i:i + 2 * N]
+    xi_new, P_new, F_hat = _ekf_update(ekf, xi, P, u_prev, y)
+    x_hat = xi_new * ca.DM(ekf.scale)
+    R = ref[3:3 + N]
+    V = (R - ca.vertcat(r, R[:N - 1])) / dt
+    U_s = ca.vertcat(U[1:], U[N - 1])
+    H, g, _cost, _X = sol._lin.fn(x_hat, U_s, u_prev, R, V, ca.DM(sol.p), ca.DM(sol.scales))
+    ok_lin = _all_finite(H, g)
+    eye = ca.DM.eye(N)
+    H = H + (sol.reg * ca.fmax(ca.trace(H) / N, 1.0)) * eye
+    D = ca.DM(sol.D)
+    du = pb.du_max * pb.dt
+    diff = ca.mtimes(D, U_s) - ca.vertcat(u_prev, ca.DM.zeros(N - 1))
+    upper = ca.vertcat(pb.u_max - U_s, du - diff)
+    lower = ca.vertcat(-pb.u_max - U_s, -du - diff)
+    A = ca.DM(sol.A)
+    rho = sol.rho_rel * ca.trace(H) / N
+    sigma = 1e-6 * rho
+    Kinv = ca.inv(H + sigma * eye + rho * ca.DM(sol.A.T @ sol.A))
+    x = ca.DM.zeros(N)
+    z = ca.fmin(ca.fmax(ca.DM.zeros(2 * N), lower), upper)
+    for _ in range(sol.qp_iterations):
+        x = ca.mtimes(Kinv, sigma * x - g + ca.mtimes(A.T, rho * z - lam))
+        Ax = ca.mtimes(A, x)
+        z = ca.fmin(ca.fmax(Ax + lam / rho, lower), upper)
+        lam = lam + rho * (Ax - z)
+    ok = ca.logic_and(ok_lin, _all_finite(x, lam))
+    U_new = ca.fmin(ca.fmax(U_s + x, -pb.u_max), pb.u_max)
+    # the fallback law (MPCController._fallback)
+    fg = ctrl.fallback_gains
+    v = x_hat[ctrl.iv]
+    demand = m.mass * ddr + m.weight + fg.kp * (r - y[0]) + fg.kd * (dr - v) + F_hat
+    demand = ca.fmin(ca.fmax(demand, m.force_min), m.force_max)
+    u_fb, _sat = _valve_command(ctrl.valve, demand, y, v)
+    u_fb = ca.fmin(ca.fmax(u_fb, u_prev - pb.du_max * dt), u_prev + pb.du_max * dt)
+    u = ca.if_else(ok, U_new[0], u_fb)
+    U_next = ca.if_else(ok, U_new, ca.repmat(u_fb, N, 1))
+    lam_next = ca.if_else(ok, lam, ca.DM.zeros(2 * N))
+    s_next = ca.vertcat(xi_new, ca.reshape(P_new, nx * nx, 1), u, U_next, lam_next)
+    fn = ca.Function(CASADI_NAME, [s, y, ref], [u, s_next], ["state", "y", "ref"],
+                     ["u", "state_next"])
+    return StepExport(fn=fn, state0=np.zeros(ns), layout=layout, n_ref=3 + N,
+                      note=f"MPC real-time iteration (EKF, condensed Gauss-Newton, QP by "
+                      f"{sol.qp_iterations} ADMM iterations, not DAQP) with its fallback law")
+
+
 def step_function(ctrl: Any) -> StepExport:
     """The step of the Python controller ``ctrl`` (built, not yet reset) as a CasADi function.
 
     Raises
     ------
     FcompError
-        For a controller that is not exported (``mpc``; module docstring).
+        For a controller that is not exported (``mpc`` with DAQP; module docstring).
     """
     from controllers.ekf import EKFController
     from controllers.feedforward import PIDFeedforwardController
     from controllers.lugre_observer import LuGreObserverController
+    from controllers.mpc import MPCController
+    from controllers.mpc_fixed import FixedIterationMPC
     from controllers.pid import PIDController
 
     name = getattr(ctrl, "name", type(ctrl).__name__)
+    if isinstance(ctrl, FixedIterationMPC):
+        return _mpc_step(ctrl)
+    if isinstance(ctrl, MPCController):
+        raise FcompError("export: this mpc solves its QP with DAQP, an active-set solver CasADi "
+                         "cannot generate as C; export controllers.mpc_fixed.FixedIterationMPC "
+                         "(the same MPC with a fixed-iteration QP)")
     if not isinstance(ctrl, PIDController) or name not in EXPORTABLE:
-        raise FcompError(
-            f"export: controller {name} is not exported (exported: {', '.join(EXPORTABLE)}); "
-            "mpc solves its QP with DAQP, an active-set solver CasADi cannot generate as C")
+        raise FcompError(f"export: controller {name} is not exported (exported: "
+                         f"{', '.join(EXPORTABLE)})")
     m = ctrl.model
     law = ctrl.law
     g = ctrl.gains
@@ -226,19 +343,7 @@ def step_function(ctrl: Any) -> StepExport:
         xi = ca.if_else(started, s[4:4 + nx], xi0)
         P = ca.if_else(started, ca.reshape(s[4 + nx:4 + nx + nx * nx], nx, nx), Pi0)
         u_prev = ca.if_else(started, s[4 + nx + nx * nx], 0.0)
-        pv, scv = ca.DM(ekf.p), ca.DM(sc)
-        xn, A = ekf._predict.fn(xi, u_prev, pv, scv)
-        P = ca.mtimes(ca.mtimes(A, P), A.T) + ca.DM(ekf.Q)
-        H = ca.DM(ekf.H)
-        R = ca.DM(ekf.R)
-        PHT = ca.mtimes(P, H.T)
-        S = ca.mtimes(H, PHT) + R
-        K = ca.mtimes(PHT, ca.inv(S))
-        z = y / ca.DM(ekf.r)
-        xi_new = xn + ca.mtimes(K, z - ca.mtimes(H, xn))
-        I_KH = ca.DM.eye(nx) - ca.mtimes(K, H)
-        P_new = ca.mtimes(ca.mtimes(I_KH, P), I_KH.T) + ca.mtimes(ca.mtimes(K, R), K.T)
-        F_hat = ekf._friction.fn(xi_new, u_prev, pv, scv)
+        xi_new, P_new, F_hat = _ekf_update(ekf, xi, P, u_prev, y)
         v_inv = xi_new[ctrl.iv] * float(sc[ctrl.iv])
         comp_next = [xi_new, ca.reshape(P_new, nx * nx, 1)]  # u_prev appended below
         layout += [("ekf_x", nx), ("ekf_P", nx * nx), ("u_prev", 1)]
@@ -279,7 +384,10 @@ _HEADER = r"""/* fcomp_ctrl.h -- one sample of the controller @CONTROLLER@, gene
  *   fcomp_ctrl_step(c, y, r)     -> valve command u for the measurement
  *                                   y = {x [m], p1 [Pa abs], p2 [Pa abs]} and a held
  *                                   set point r [m] (reference velocity and acceleration 0).
- *   fcomp_ctrl_step_ref(c, y, ref) -> the same with ref = {r [m], dr [m/s], ddr [m/s^2]}.
+ *   fcomp_ctrl_step_ref(c, y, ref) -> the same with ref = {r [m], dr [m/s], ddr [m/s^2]}
+ *                                   then, for the MPC, the positions r [m] at the next
+ *                                   FCOMP_CTRL_NREF - 3 samples (the horizon).
+ *   fcomp_ctrl_set_state(c, s)   -> sets the state (FCOMP_CTRL_NSTATE values, layout below).
  *   Both return NAN if the evaluation failed. Units of u: @UNIT@, within +-@UMAX@.
  */
 #ifndef FCOMP_CTRL_H
@@ -291,7 +399,7 @@ extern "C" {
 
 #define FCOMP_CTRL_NSTATE @NSTATE@
 #define FCOMP_CTRL_NY 3
-#define FCOMP_CTRL_NREF 3
+#define FCOMP_CTRL_NREF @NREF@
 #define FCOMP_CTRL_DT @DT@
 #define FCOMP_CTRL_U_MAX @UMAX@
 #define FCOMP_CTRL_SZ_ARG @SZARG@
@@ -312,8 +420,9 @@ typedef struct {
 int fcomp_ctrl_init(fcomp_ctrl_t* c);
 double fcomp_ctrl_step(fcomp_ctrl_t* c, const double* y, double r);
 double fcomp_ctrl_step_ref(fcomp_ctrl_t* c, const double* y, const double* ref);
+void fcomp_ctrl_set_state(fcomp_ctrl_t* c, const double* state);
 /* Timing (fcomp_ctrl_bench.c, POSIX clock_gettime): n steps on the m recorded samples
- * Y (m x 3) and REF (m x 3), cycled (init before every cycle); times[i] the duration (s)
+ * Y (m x FCOMP_CTRL_NY) and REF (m x FCOMP_CTRL_NREF), cycled (init before every cycle); times[i] the duration (s)
  * of step i. Returns 0. */
 int fcomp_ctrl_bench(fcomp_ctrl_t* c, long n, long m, const double* Y, const double* REF,
                      double* times);
@@ -350,8 +459,16 @@ double fcomp_ctrl_step_ref(fcomp_ctrl_t* c, const double* y, const double* ref) 
 }
 
 double fcomp_ctrl_step(fcomp_ctrl_t* c, const double* y, double r) {
-  const double ref[3] = {r, 0.0, 0.0};
+  double ref[FCOMP_CTRL_NREF];
+  ref[0] = r;
+  ref[1] = 0.0;
+  ref[2] = 0.0;
+  for (int i = 3; i < FCOMP_CTRL_NREF; ++i) ref[i] = r;
   return fcomp_ctrl_step_ref(c, y, ref);
+}
+
+void fcomp_ctrl_set_state(fcomp_ctrl_t* c, const double* state) {
+  memcpy(c->state, state, sizeof(c->state));
 }
 """
 
@@ -368,7 +485,7 @@ int fcomp_ctrl_bench(fcomp_ctrl_t* c, long n, long m, const double* Y, const dou
     long k = i % m;
     if (k == 0) fcomp_ctrl_init(c);
     clock_gettime(CLOCK_MONOTONIC, &t0);
-    double u = fcomp_ctrl_step_ref(c, Y + 3 * k, REF + 3 * k);
+    double u = fcomp_ctrl_step_ref(c, Y + FCOMP_CTRL_NY * k, REF + FCOMP_CTRL_NREF * k);
     clock_gettime(CLOCK_MONOTONIC, &t1);
     sink += u;
     times[i] = (double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec);
@@ -402,7 +519,8 @@ int main(void) {
   }
   enum { N = 100000 };
   static double times[N];
-  double ref[3] = {r, 0.0, 0.0};
+  double ref[FCOMP_CTRL_NREF] = {r, 0.0, 0.0};
+  for (int i = 3; i < FCOMP_CTRL_NREF; ++i) ref[i] = r;
   fcomp_ctrl_bench(&ctrl, N, 1, y, ref, times);
   qsort(times, N, sizeof(double), cmp);
   printf("step time over %d steps: median %.3g us, max %.3g us\n", N,
@@ -471,7 +589,7 @@ def write_c(step: StepExport, folder: Path, *, controller: str, plant: str, unit
         "CASADI_NAME": CASADI_NAME, "CASADI_INT": CASADI_INT, "CONTROLLER": controller,
         "VERSION": __version__, "NOTE": step.note, "PLANT": plant, "NSTATE": str(step.n_state),
         "DT": repr(float(dt)), "UMAX": repr(float(u_max)), "UNIT": unit,
-        "SZARG": str(fn.sz_arg()), "SZRES": str(fn.sz_res()), "SZIW": str(fn.sz_iw()),
+        "NREF": str(step.n_ref), "SZARG": str(fn.sz_arg()), "SZRES": str(fn.sz_res()), "SZIW": str(fn.sz_iw()),
         "SZW": str(fn.sz_w()), "LAYOUT": layout,
         "STATE0": ", ".join(repr(float(v)) for v in step.state0),
         "Y0": ", ".join(repr(float(v)) for v in y_example), "R0": repr(float(r_example)),
@@ -507,7 +625,7 @@ def find_compiler() -> str | None:
 class CompiledController:
     """The exported C controller, built as a shared library and called through ctypes."""
 
-    def __init__(self, folder: Path, cc: str, n_state: int, build: Path) -> None:
+    def __init__(self, folder: Path, cc: str, n_state: int, build: Path, n_ref: int = 3) -> None:
         srcs = [folder / "fcomp_ctrl.c", folder / "fcomp_ctrl_bench.c",
                 folder / f"{CASADI_NAME}.c"]
         lib = build / "libfcomp_ctrl.so"
@@ -528,7 +646,7 @@ class CompiledController:
                                               dp, dp, dp]
         self.dll.fcomp_ctrl_bench.restype = ctypes.c_int
         self._y = np.zeros(3)
-        self._ref = np.zeros(3)
+        self._ref = np.zeros(n_ref)
         self._yp = self._y.ctypes.data_as(dp)
         self._refp = self._ref.ctypes.data_as(dp)
         self._dp = dp
@@ -567,7 +685,7 @@ class CompiledController:
         raw = ctypes.string_at(self.mem if mem is None else mem, 8 * self.n_state)
         return np.frombuffer(raw, dtype=float).copy()
 
-    def step(self, y: np.ndarray, ref: tuple[float, float, float], mem: Any = None) -> float:
+    def step(self, y: np.ndarray, ref: Any, mem: Any = None) -> float:
         self._y[:] = y
         self._ref[:] = ref
         return float(self.dll.fcomp_ctrl_step_ref(self.mem if mem is None else mem, self._yp,
@@ -588,7 +706,16 @@ def python_state(ctrl: Any) -> np.ndarray:
     ``reset``, so ``started = 1``)."""
     from controllers.ekf import EKFController
     from controllers.lugre_observer import LuGreObserverController
+    from controllers.mpc_fixed import FixedIterationMPC
 
+    if isinstance(ctrl, FixedIterationMPC):
+        kf = ctrl.ekf.kf
+        lam = ctrl.solver._lam
+        N = ctrl.problem.horizon
+        return np.concatenate([np.asarray(kf.x, dtype=float)[:, 0],
+                               np.asarray(kf.P, dtype=float).ravel(order="F"),
+                               [ctrl._u_prev], np.asarray(ctrl.solver.U, dtype=float),
+                               np.zeros(2 * N) if lam is None else np.asarray(lam, dtype=float)])
     law = ctrl.law
     parts = [np.array([1.0, law.integral, law.v_f, law.x_prev], dtype=float)]
     if isinstance(ctrl, LuGreObserverController):
@@ -668,7 +795,7 @@ def block_difference(s_c: np.ndarray, s_py: np.ndarray, layout: list[tuple[str, 
 
 
 def check_equivalence(ctrl: Any, compiled: CompiledController, plant: Any, *,
-                      layout: list[tuple[str, int]] | None = None,
+                      layout: list[tuple[str, int]] | None = None, start_from_init: bool = True,
                       task: str = "seed002-sine", duration: float = 0.6, noise: float = 1.0,
                       seed: int = 0) -> CheckResult:
     """Run the compiled controller in closed loop against ``plant`` (the harness's plant
@@ -676,7 +803,8 @@ def check_equivalence(ctrl: Any, compiled: CompiledController, plant: Any, *,
     measurements and references.
 
     Two compiled instances run: one on its own state from ``fcomp_ctrl_init`` (its
-    commands drive the plant: ``u_free``), and one whose state is set to the Python
+    commands drive the plant: ``u_free``; without ``start_from_init``, from the Python
+    controller's state after its reset, as the MPC needs), and one whose state is set to the Python
     controller's before every sample (``u_step``: the step itself, compared step for
     step, and its next state against the Python controller's).
     """
@@ -703,7 +831,9 @@ def check_equivalence(ctrl: Any, compiled: CompiledController, plant: Any, *,
     state = stepper.reset()
     u_py, u_step, u_free, s_diff = (np.zeros(n + 1) for _ in range(4))
     Y = np.zeros((n + 1, 3))
-    REF = np.zeros((n + 1, 3))
+    preview = int(getattr(ctrl, "preview", 0))
+    r_pad = np.concatenate([r, np.full(preview, r[-1])])
+    REF = np.zeros((n + 1, 3 + preview))
     synced = compiled.instance()
     compiled.init()
     compiled.init(synced)
@@ -712,15 +842,18 @@ def check_equivalence(ctrl: Any, compiled: CompiledController, plant: Any, *,
     for k in range(n + 1):
         y = sensors.measure(state[meas])
         Y[k] = y
-        ref = Reference(float(r[k]), float(dr[k]), float(ddr[k]))
-        REF[k] = ref[:3]
+        fut = tuple(float(v) for v in r_pad[k + 1:k + 1 + preview])
+        ref = Reference(float(r[k]), float(dr[k]), float(ddr[k]), fut)
+        REF[k] = (ref.r, ref.dr, ref.ddr, *fut)
         if k == 0:
             ctrl.reset(0.0, y, ref)
+            if not start_from_init:  # the MPC's start needs the plant's equilibrium (Python)
+                compiled.set_state(python_state(ctrl))
         compiled.set_state(python_state(ctrl), synced)
-        u_step[k] = compiled.step(y, (ref.r, ref.dr, ref.ddr), synced)
+        u_step[k] = compiled.step(y, REF[k], synced)
         u_py[k] = ctrl.step(float(t[k]), y, ref)
         s_diff[k] = block_difference(compiled.state(synced), python_state(ctrl), lay)
-        u_free[k] = compiled.step(y, (ref.r, ref.dr, ref.ddr))
+        u_free[k] = compiled.step(y, REF[k])
         if not math.isfinite(u_free[k]):
             raise FcompError(f"export: the compiled controller returned {u_free[k]} at "
                              f"t = {t[k]:.4f} s")
@@ -749,6 +882,7 @@ class ExportResult:
     compiler: str | None
     note: str
     layout: list[tuple[str, int]]
+    reference: str = ""
     warnings: list[str] = field(default_factory=list)
 
     def as_dict(self) -> dict[str, Any]:
@@ -762,7 +896,7 @@ class ExportResult:
                                     else self.free_run_max_rel_diff <= RTOL),
             "steps_checked": self.steps_checked, "step_time_median": self.step_time_median,
             "step_time_max": self.step_time_max, "timed_steps": self.timed_steps,
-            "compiler": self.compiler, "step": self.note,
+            "compiler": self.compiler, "step": self.note, "python_reference": self.reference,
             "state_layout": [{"name": n, "size": k} for n, k in self.layout],
         }
 
@@ -777,24 +911,31 @@ def export_controller(name: str, model: Any, folder: Path, *,
     compile, check in closed loop against ``plant`` (default: the model's own plant, the
     controller's friction as the true one) and time it (module docstring)."""
     from controllers import CONTROLLERS, make_controller
+    from controllers.base import Reference
+    from controllers.mpc_fixed import FixedIterationMPC
+    from controllers.plant_model import MEASURED, equilibrium
 
     CONTROLLERS.get(name)
     if name not in EXPORTABLE:
-        raise FcompError(
-            f"export: controller {name} is not exported (exported: {', '.join(EXPORTABLE)}); "
-            "mpc solves its QP with DAQP, an active-set solver CasADi cannot generate as C")
+        raise FcompError(f"export: controller {name} is not exported (exported: "
+                         f"{', '.join(EXPORTABLE)})")
     if timing_steps < 100_000:
         raise FcompError(f"export: time at least 100000 steps, got {timing_steps}")
     if not (math.isfinite(duration) and duration > 0):
         raise FcompError(f"export: the check's duration must be positive, got {duration}")
     say = on_stage or (lambda _s: None)
-    ctrl = make_controller(name, model, **dict(options or {}))
+    ctrl = (FixedIterationMPC(model, **dict(options or {})) if name == "mpc"
+            else make_controller(name, model, **dict(options or {})))
     step = step_function(ctrl)
     unit = "A (servo-valve current)" if model.plant_name == "hydraulic" else \
         "normalised valve command (-1..1)"
-    x0 = np.asarray(model.plant.initial_state(), dtype=float)
+    # the example's measurement: at rest at mid-stroke, holding the load
+    x_eq, _ = equilibrium(model.plant, 0.5 * model.stroke)
     names = model.plant.state_names
-    y_ex = np.array([0.5 * model.stroke, x0[names.index("p1")], x0[names.index("p2")]])
+    y_ex = np.array([x_eq[names.index(k)] for k in MEASURED])
+    if name == "mpc":  # fcomp_ctrl_init: the Python reset there (it solves the equilibrium)
+        ctrl.reset(0.0, y_ex, Reference(float(y_ex[0]), 0.0, 0.0))
+        step.state0 = python_state(ctrl)
     files = write_c(step, folder, controller=name, plant=model.describe(), unit=unit,
                     u_max=model.u_max, dt=ctrl.dt, y_example=y_ex,
                     r_example=0.5 * model.stroke + 0.001)
@@ -803,7 +944,8 @@ def export_controller(name: str, model: Any, folder: Path, *,
                        max_state_rel_diff=None, free_run_max_rel_diff=None,
                        free_run_max_abs_diff=None, steps_checked=0, step_time_median=None,
                        step_time_max=None, timed_steps=0, compiler=cc, note=step.note,
-                       layout=step.layout)
+                       layout=step.layout,
+                       reference=f"{type(ctrl).__module__}.{type(ctrl).__qualname__}")
     if cc is None:
         forced = os.environ.get("FCOMP_CC")
         where = (f"FCOMP_CC={forced} is not found" if forced is not None
@@ -813,10 +955,11 @@ def export_controller(name: str, model: Any, folder: Path, *,
         return res
     with tempfile.TemporaryDirectory() as tmp:
         say("compiling")
-        lib = CompiledController(folder, cc, step.n_state, Path(tmp))
+        lib = CompiledController(folder, cc, step.n_state, Path(tmp), n_ref=step.n_ref)
         say("checking")
         chk = check_equivalence(ctrl, lib, plant if plant is not None else model.plant,
-                                layout=step.layout, task=task, duration=duration, seed=seed)
+                                layout=step.layout, start_from_init=name != "mpc", task=task,
+                                duration=duration, seed=seed)
         say("timing")
         times = lib.bench(timing_steps, chk.Y, chk.REF)
     res.equivalent = bool(chk.max_rel_diff <= RTOL and chk.max_state_rel_diff <= RTOL)

@@ -16,6 +16,7 @@ import shutil
 import subprocess
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from controllers.export import find_compiler
@@ -96,14 +97,51 @@ def test_no_compiler_still_writes_the_code(tmp_path: Path, capsys: pytest.Captur
         assert (out / name).is_file()
 
 
-@pytest.mark.parametrize("name, words", [("nope", "unknown controller"),
-                                         ("mpc", "not exported")])
-def test_bad_controller_is_one_line(name: str, words: str, tmp_path: Path,
-                                    capsys: pytest.CaptureFixture) -> None:
-    code, _, err = _run(["export", name, "-o", str(tmp_path / "c")], capsys)
+@pytest.mark.parametrize("args, words", [(["nope"], "unknown controller"),
+                                         (["pid", "--plant", "motion"], "--plant"),
+                                         (["pid", "--option", "kp=-1"], "kp")])
+def test_bad_input_is_one_line(args: list[str], words: str, tmp_path: Path,
+                               capsys: pytest.CaptureFixture) -> None:
+    code, _, err = _run(["export", *args, "-o", str(tmp_path / "c")], capsys)
     assert code == 2
-    assert len(err.strip().splitlines()) == 1 and words in err
+    assert len(err.strip().splitlines()) == 1 and words in err, err
     assert not (tmp_path / "c").exists()
+
+
+def test_mpc_fixed_iteration_form_is_equivalent(tmp_path: Path) -> None:
+    """``mpc`` in its fixed-iteration form (the QP by ADMM): the compiled step equals the
+    Python :class:`~controllers.mpc_fixed.FixedIterationMPC` step for step and free-running
+    (the API, a short check and no timing: the MPC's C takes some 10 s to compile)."""
+    from controllers.base import Reference
+    from controllers.export import (
+        CompiledController,
+        check_equivalence,
+        python_state,
+        step_function,
+        write_c,
+    )
+    from controllers.mpc_fixed import FixedIterationMPC
+    from controllers.plant_model import ControlModel
+    from fcomp.models import make_model
+
+    model = ControlModel("hydraulic", make_model("nmlgm", params="seed002-type1"))
+    ctrl = FixedIterationMPC(model, horizon=8, qp_iterations=10)
+    step = step_function(ctrl)
+    assert step.n_ref == 3 + 8
+    y0 = np.array([0.5 * model.stroke, 2e6, 2e6])
+    ctrl.reset(0.0, y0, Reference(float(y0[0]), 0.0, 0.0))
+    step.state0 = python_state(ctrl)
+    write_c(step, tmp_path / "c", controller="mpc", plant=model.describe(), unit="A",
+            u_max=model.u_max, dt=ctrl.dt, y_example=y0, r_example=float(y0[0]))
+    cc = find_compiler()
+    assert cc is not None
+    lib = CompiledController(tmp_path / "c", cc, step.n_state, tmp_path, n_ref=step.n_ref)
+    chk = check_equivalence(ctrl, lib, model.plant, layout=step.layout, start_from_init=False,
+                            duration=0.2)
+    assert chk.u_step.size == 101
+    assert chk.max_rel_diff <= 1e-9 and chk.max_state_rel_diff <= 1e-9
+    assert chk.free_max_rel_diff <= 1e-9
+    assert np.ptp(chk.u_python) > 0  # the loop moved
 
 
 @pytest.mark.skipif(shutil.which("make") is None, reason="needs make")

@@ -955,7 +955,12 @@ def export_controller(name: str, model: Any, folder: Path, *,
         return res
     with tempfile.TemporaryDirectory() as tmp:
         say("compiling")
-        lib = CompiledController(folder, cc, step.n_state, Path(tmp), n_ref=step.n_ref)
+        try:
+            lib = CompiledController(folder, cc, step.n_state, Path(tmp), n_ref=step.n_ref)
+        except FcompError as exc:  # a broken toolchain: the code stays written
+            res.warnings.append(f"{exc}; the C code is written to {folder} but not checked "
+                                "or timed")
+            return res
         say("checking")
         chk = check_equivalence(ctrl, lib, plant if plant is not None else model.plant,
                                 layout=step.layout, start_from_init=name != "mpc", task=task,

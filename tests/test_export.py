@@ -125,9 +125,9 @@ def test_mpc_fixed_iteration_form_is_equivalent(tmp_path: Path) -> None:
     from fcomp.models import make_model
 
     model = ControlModel("hydraulic", make_model("nmlgm", params="seed002-type1"))
-    ctrl = FixedIterationMPC(model, horizon=8, qp_iterations=10)
+    ctrl = FixedIterationMPC(model, horizon=5, qp_iterations=10)
     step = step_function(ctrl)
-    assert step.n_ref == 3 + 8
+    assert step.n_ref == 3 + 5
     y0 = np.array([0.5 * model.stroke, 2e6, 2e6])
     ctrl.reset(0.0, y0, Reference(float(y0[0]), 0.0, 0.0))
     step.state0 = python_state(ctrl)
@@ -153,3 +153,32 @@ def test_the_example_builds_and_runs(tmp_path: Path, capsys: pytest.CaptureFixtu
     subprocess.run(["make", "-s", f"CC={cc}"], cwd=out, check=True, capture_output=True)
     run = subprocess.run([str(out / "example")], capture_output=True, text=True, check=True)
     assert "step 4: u =" in run.stdout and "step time over 100000 steps" in run.stdout
+
+
+def test_mpc_from_the_command_line(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    """A short-horizon MPC (counts given as numbers on the command line) exports, is
+    equivalent to its fixed-iteration Python form, and says which form that is."""
+    code, out, err = _run(["export", "mpc", "--option", "horizon=4", "--option", "rate=250",
+                           "--option", "qp_iterations=8", "--duration", "0.2", "-o",
+                           str(tmp_path / "c"), "--json", "-"], capsys)
+    assert code == 0, err
+    doc = json.loads(out)
+    assert doc["equivalent"] is True and doc["max_rel_diff"] <= 1e-9
+    assert doc["python_reference"] == "controllers.mpc_fixed.FixedIterationMPC"
+    assert "8 ADMM iterations" in doc["step"]
+    assert doc["steps_checked"] == 51 and doc["step_time_median"] > 0
+    assert "#define FCOMP_CTRL_NREF 7" in (tmp_path / "c" / "fcomp_ctrl.h").read_text()
+
+
+def test_a_failing_compiler_still_leaves_the_code(tmp_path: Path, capsys: pytest.CaptureFixture,
+                                                  monkeypatch: pytest.MonkeyPatch) -> None:
+    false = shutil.which("false")
+    if false is None:
+        pytest.skip("needs the false program")
+    monkeypatch.setenv("FCOMP_CC", false)
+    code, stdout, err = _run(["export", "pid", "-o", str(tmp_path / "c"), "--json", "-"], capsys)
+    assert code == 0
+    assert json.loads(stdout)["equivalent"] is None
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and "failed on the generated code" in lines[0]
+    assert (tmp_path / "c" / "fcomp_ctrl_casadi.c").is_file()

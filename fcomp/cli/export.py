@@ -31,6 +31,9 @@ from fcomp.cli import common
 from fcomp.cli.common import add_model_options, build_model, emit_result, finite_float, json_target
 from fcomp.errors import FcompError
 
+#: Controller options that are counts (integers).
+INTEGER_OPTIONS = ("horizon", "substeps", "qp_iterations")
+
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("export", help="a controller's step as C code (CasADi), compiled, "
@@ -82,7 +85,7 @@ def summary(doc: dict[str, Any]) -> str:
     lines = [f"export {doc['controller']} on {doc['plant']}: {len(doc['files'])} files in "
              f"{doc['folder']}", f"  step: {doc['step']}"]
     if doc["equivalent"] is None:
-        lines.append("  not compiled: no C compiler (see the warning)")
+        lines.append("  not compiled, checked or timed (see the warning)")
     else:
         lines.append(f"  equivalent to the Python controller ({doc['python_reference']}): "
                      f"{'yes' if doc['equivalent'] else 'NO'} (max relative difference "
@@ -113,7 +116,10 @@ def run(args: argparse.Namespace) -> int:
     if args.effects is not None:
         inputs.file(args.effects, "--effects")
     common.check_outputs(inputs, [("--json", out)], [("-o", folder, "export")])
-    options = common.parse_assignments(args.option, option="--option")
+    options: dict[str, Any] = dict(common.parse_assignments(args.option, option="--option"))
+    for k in INTEGER_OPTIONS:  # counts given on the command line as numbers
+        if k in options and float(options[k]).is_integer():
+            options[k] = int(options[k])
     model = control_model(args)
     command = "fcomp " + shlex.join(common.ARGV) if common.ARGV else "fcomp export"
     with staged_folder(folder, "-o", "export", note=command) as tmp:

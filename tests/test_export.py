@@ -142,6 +142,15 @@ def test_mpc_fixed_iteration_form_is_equivalent(tmp_path: Path) -> None:
     assert chk.max_rel_diff <= 1e-9 and chk.max_state_rel_diff <= 1e-9
     assert chk.free_max_rel_diff <= 1e-9
     assert np.ptp(chk.u_python) > 0  # the loop moved
+    # the fallback law: a warm start gone non-finite makes both take it, and reset to it
+    ctrl.solver.U[:] = np.nan
+    lib.set_state(python_state(ctrl))
+    y, ref = chk.Y[-1], chk.REF[-1]
+    u_c = lib.step(y, ref)
+    u_py = ctrl.step(0.2, y, Reference(ref[0], ref[1], ref[2], tuple(ref[3:])))
+    assert ctrl.fallback_active and np.isfinite(u_py)
+    assert abs(u_c - u_py) <= 1e-9 * abs(u_py)
+    assert np.allclose(lib.state()[-15:-10], u_py, rtol=1e-12, atol=0)  # U reset to u
 
 
 @pytest.mark.skipif(shutil.which("make") is None, reason="needs make")

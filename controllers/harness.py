@@ -42,7 +42,7 @@ from __future__ import annotations
 import gc
 import math
 import time
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -50,17 +50,13 @@ import numpy as np
 
 from controllers.base import Reference
 from controllers.metrics import Metrics, compute_metrics
-from controllers.plant_model import (
-    PLANT_SETTINGS,
-    ControlModel,
-    equilibrium,
-    friction_with_mismatch,
-)
+from controllers.plant_model import ControlModel, equilibrium, friction_with_mismatch
 from controllers.tasks import check_fits_stroke, get_task
 from fcomp.errors import FcompError
 from fcomp.models import FrictionModel, make_model
 
 if TYPE_CHECKING:
+    from controllers.tuning import Tuning
     from plants.planfile import PlantFile
 
 #: Default friction mismatch of the controller's model (factors on the plant's values): an
@@ -101,6 +97,10 @@ class LoopConfig:
         Use the task's fast duration.
     rtol
         Relative (and scaled absolute) tolerance of the plant integration.
+    tuning
+        A function of the controller's model giving its tuning instead of the derived
+        one (:func:`controllers.tuning.fixed_tuning`; a top-level function, so that the
+        configuration pickles); default the derived tuning.
     """
 
     plant: str = "hydraulic"
@@ -113,6 +113,7 @@ class LoopConfig:
     fast: bool = False
     rtol: float = 1e-5
     plant_file: PlantFile | None = None
+    tuning: Callable[[ControlModel], Tuning] | None = None
 
     def __post_init__(self) -> None:
         if self.plant_file is not None:
@@ -187,21 +188,31 @@ def build_loop(controller: str, config: LoopConfig, options: Mapping[str, Any] |
     from controllers import make_controller
     from plants import make_plant
 
-    if config.plant not in PLANT_SETTINGS:
+    from plants.planfile import KINDS
+
+    if config.plant not in KINDS:
         raise FcompError(f"closed-loop control is set up for plants "
-                         f"{', '.join(sorted(PLANT_SETTINGS))}, not {config.plant!r}")
+                         f"{', '.join(sorted(KINDS))}, not {config.plant!r}")
     true_friction = _friction(config.friction, config)
-    ctrl_friction = friction_with_mismatch(_friction(config.controller_friction, config),
-                                           config.mismatch)
     plant: Any
     if config.plant_file is not None:
         plant = config.plant_file.make_plant(true_friction)
-        model = ControlModel(config.plant_file, ctrl_friction)
     else:
         plant = make_plant(config.plant, true_friction, config.params)
-        model = ControlModel(config.plant, ctrl_friction, config.params)
+    model = control_model(config)
     ctrl = make_controller(controller, model, **dict(options or {}))
     return plant, model, ctrl
+
+
+def control_model(config: LoopConfig) -> ControlModel:
+    """The controller's own plant model of a configuration (its friction times the mismatch)."""
+    ctrl_friction = friction_with_mismatch(_friction(config.controller_friction, config),
+                                           config.mismatch)
+    model = (ControlModel(config.plant_file, ctrl_friction) if config.plant_file is not None
+             else ControlModel(config.plant, ctrl_friction, config.params))
+    if config.tuning is not None:
+        model.use_tuning(config.tuning(model))
+    return model
 
 
 def _friction(friction: str | FrictionModel, config: LoopConfig) -> FrictionModel:
@@ -307,5 +318,6 @@ def run_closed_loop(controller: str, task: str, config: LoopConfig | None = None
     )
 
 
-__all__ = ["DEFAULT_MISMATCH", "LoopConfig", "LoopResult", "build_loop", "friction_label",
+__all__ = ["DEFAULT_MISMATCH", "LoopConfig", "LoopResult", "build_loop", "control_model",
+           "friction_label",
            "run_closed_loop"]

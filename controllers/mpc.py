@@ -75,7 +75,10 @@ from controllers.plant_model import equilibrium
 from controllers.prediction import ContinuousModel
 from fcomp.errors import FcompError
 
-#: Defaults of the MPC's options.
+#: Defaults of the MPC's options. The controller derives its horizon and velocity
+#: tolerance from the plant (:mod:`controllers.tuning`, rule 6: ``T_N = 2 pi/w_F``,
+#: ``e_v = e_x*w_F/2``); ``horizon`` and ``velocity_tol`` here are the fixed problem of
+#: :mod:`controllers.mpc_benchmark`.
 DEFAULTS: dict[str, float] = {
     "rate": 500.0,          # Hz
     "horizon": 20,          # steps
@@ -203,11 +206,13 @@ class MPCController(Controller):
     rate
         MPC sample rate (Hz), default 500.
     horizon
-        Prediction horizon (steps), default 20 (40 ms at 500 Hz).
+        Prediction horizon (steps), default derived from the force-loop bandwidth
+        (:mod:`controllers.tuning`, ``ceil(2 pi/w_F*rate)``).
     substeps
         Integration steps per MPC step (prediction model and EKF), default 2.
     position_tol, velocity_tol
-        Error scales ``e_x`` (m) and ``e_v`` (m/s) of the cost.
+        Error scales ``e_x`` (m) and ``e_v`` (m/s) of the cost; ``e_v`` defaults to
+        ``e_x*w_F/2``, ``w_F`` the derived force-loop bandwidth (:mod:`controllers.tuning`).
     du_tol
         Command-increment scale ``e_du`` (fraction of ``u_max`` per step).
     u_max, du_max
@@ -226,12 +231,14 @@ class MPCController(Controller):
         options.setdefault("rate", DEFAULTS["rate"])
         super().__init__(model, **options)
         o = self.opts
+        tu = model.tuning
+        position_tol = float(o.get("position_tol", DEFAULTS["position_tol"]))
         self.problem = MPCProblem(
-            horizon=o.get("horizon", int(DEFAULTS["horizon"])),
+            horizon=o.get("horizon", tu.mpc_horizon(1.0 / self.dt)),
             dt=self.dt,
             substeps=o.get("substeps", int(DEFAULTS["substeps"])),
-            position_tol=float(o.get("position_tol", DEFAULTS["position_tol"])),
-            velocity_tol=float(o.get("velocity_tol", DEFAULTS["velocity_tol"])),
+            position_tol=position_tol,
+            velocity_tol=float(o.get("velocity_tol", position_tol * tu.mpc_velocity_ratio)),
             du_tol=float(o.get("du_tol", DEFAULTS["du_tol"])),
             u_max=float(o.get("u_max", model.u_max)),
             du_max=float(o.get("du_max", model.du_max)),

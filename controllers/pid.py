@@ -25,7 +25,9 @@ while the valve command itself saturates in the direction of the error.
 
 Default gains place the three closed-loop poles of the nominal
 mass-plus-force-loop at ``-w`` (``w = bandwidth`` rad/s):
-``kp = 3*m*w^2``, ``ki = m*w^3``, ``kd = 3*m*w``.
+``kp = 3*m*w^2``, ``ki = m*w^3``, ``kd = 3*m*w``; ``w``, the force-loop
+bandwidth and the derivative cut-off are derived from the plant by
+:mod:`controllers.tuning` (margins of :func:`position_loop`).
 
 **Unstable gains are refused**: :func:`check_stability` builds the sampled
 loop of the nominal model (mass ``m`` with the viscous friction slope, the
@@ -76,15 +78,18 @@ class PIDGains:
         return cls(kp=3 * mass * w**2, ki=mass * w**3, kd=3 * mass * w, **extra)
 
 
-def check_stability(gains: PIDGains, mass: float, damping: float, force_bandwidth: float,
-                    valve: Any, dt: float) -> float:
-    """Largest closed-loop pole magnitude of the nominal sampled loop; raise if >= 1.
+def position_loop(gains: PIDGains, mass: float, damping: float, force_bandwidth: float,
+                  valve: Any, dt: float) -> Any:
+    """The nominal sampled loop transfer function ``L(z) = C(z)*P(z)`` (python-control).
 
     Nominal plant: the piston ``1/(m s^2 + c s)`` (``c`` the viscous friction
     slope of the controller's friction model) driven by the force loop of
     :mod:`controllers.force_to_valve`, ``F_a/F_d = w_F*G_v/(s + w_F*G_v)`` with
     ``G_v`` the valve's linear dynamics (unit DC gain), discretised with a
-    zero-order hold at ``dt``; controller the discrete PID of this module.
+    zero-order hold at ``dt``; controller ``C(z)`` the discrete PID of this module
+    (backward-Euler integral, derivative through the first-order filter)::
+
+        C(z) = kp + ki*dt*z/(z - 1) + kd*(z - 1)/((Tf + dt)*z - Tf)
     """
     import control as ct
 
@@ -94,8 +99,24 @@ def check_stability(gains: PIDGains, mass: float, damping: float, force_bandwidt
     z = ct.tf([1.0, 0.0], [1.0], dt)
     Tf = 1.0 / (2 * math.pi * gains.derivative_cutoff)
     C = gains.kp + gains.ki * dt * z / (z - 1) + gains.kd * (z - 1) / ((Tf + dt) * z - Tf)
-    poles = ct.feedback(C * plant, 1).poles()
-    rho = float(np.max(np.abs(poles)))
+    return ct.tf(C) * ct.tf(plant)
+
+
+def spectral_radius(loop: Any) -> float:
+    """Largest closed-loop pole magnitude ``max |z|`` of the unity feedback of ``loop``."""
+    import control as ct
+
+    return float(np.max(np.abs(ct.feedback(loop, 1).poles())))
+
+
+def check_stability(gains: PIDGains, mass: float, damping: float, force_bandwidth: float,
+                    valve: Any, dt: float) -> float:
+    """Largest closed-loop pole magnitude of the nominal sampled loop; raise if >= 1.
+
+    The loop is :func:`position_loop`'s (the margins of the same loop:
+    :func:`controllers.tuning.loop_margins`).
+    """
+    rho = spectral_radius(position_loop(gains, mass, damping, force_bandwidth, valve, dt))
     if not rho < 1.0:
         raise FcompError(
             f"pid gains kp={gains.kp:.4g}, ki={gains.ki:.4g}, kd={gains.kd:.4g} give an unstable "
@@ -154,11 +175,14 @@ class PIDController(Controller):
     rate
         Sample rate (Hz); default the plant's control rate.
     bandwidth
-        Closed-loop bandwidth (rad/s) placing the default gains.
+        Closed-loop bandwidth (rad/s) placing the gains; default the plant's derived one
+        (:attr:`~controllers.plant_model.ControlModel.tuning`). Any explicit tuning option
+        is checked for margins (:func:`controllers.tuning.check_gains`).
     kp, ki, kd
         Gains (N/m, N/(m s), N s/m) overriding the placed ones.
     derivative_cutoff
-        Derivative filter cut-off (Hz).
+        Derivative filter cut-off (Hz); default the tuning's (rule 3 of
+        :mod:`controllers.tuning`).
     kt
         Anti-windup back-calculation gain (1/s).
     force_bandwidth
@@ -173,19 +197,31 @@ class PIDController(Controller):
     def __init__(self, model: Any, **options: Any) -> None:
         super().__init__(model, **options)
         o = self.opts
-        placed = PIDGains.placed(model.mass, float(o.get("bandwidth", model.pid_bandwidth)))
+        from controllers.force_to_valve import ForceToValve
+        from controllers.tuning import check_gains, force_noise, pid_gains
+
+        tu = model.tuning
+        explicit = sorted(set(o) & {"rate", "bandwidth", "kp", "ki", "kd", "derivative_cutoff",
+                                    "force_bandwidth"})
+        placed = (pid_gains(model.mass, float(o["bandwidth"]), model.sensors, force_noise(model),
+                            self.dt) if "bandwidth" in o
+                  else PIDGains.placed(model.mass, tu.pid_bandwidth,
+                                       derivative_cutoff=tu.derivative_cutoff))
         self.gains = PIDGains(
             kp=float(o.get("kp", placed.kp)), ki=float(o.get("ki", placed.ki)),
             kd=float(o.get("kd", placed.kd)),
-            derivative_cutoff=float(o.get("derivative_cutoff", 60.0)),
+            derivative_cutoff=float(o.get("derivative_cutoff", placed.derivative_cutoff)),
             kt=float(o.get("kt", 20.0)),
         )
-        from controllers.force_to_valve import ForceToValve
-
-        self.valve = ForceToValve(model, float(o.get("force_bandwidth", model.force_bandwidth)))
+        self.valve = ForceToValve(model, float(o.get("force_bandwidth", tu.force_bandwidth)))
         self.stability_radius = check_stability(
             self.gains, model.mass, model.viscous_damping(), self.valve.bandwidth,
             model.valve_transfer(), self.dt)
+        #: Margins of the nominal loop (:class:`controllers.tuning.Margins`); explicit
+        #: values are checked (refused without margins), the derived ones are the tuning's.
+        self.margins = (check_gains(self.gains, model, self.valve.bandwidth, self.dt,
+                                    f"{self.name} tuning ({', '.join(explicit)} given)")
+                        if explicit else tu.margins)
         self.law = PIDLaw(self.gains, self.dt)
         self.F_demand = 0.0
 

@@ -13,31 +13,18 @@ model the controller reads
 * the symbolic plant + friction equations (:attr:`ControlModel.prediction`)
   for the EKF and the MPC, and the chamber equations for
   :mod:`controllers.force_to_valve`;
-* the sensors (:class:`Sensors`) and the valve limits and default tuning
-  of :data:`PLANT_SETTINGS`.
+* the sensors (:class:`Sensors`), the valve limits and the control rate of
+  its plant file (a built-in plant's: ``plants/data/hydraulic.toml``,
+  ``pneumatic.toml``; :func:`plant_settings`);
+* its tuning (:attr:`ControlModel.tuning`), derived from the linearised
+  plant and its sensors by :mod:`controllers.tuning`, explicit values winning.
 
-Plant settings (assumed; the seeds give no controller)
-------------------------------------------------------
-=================== ======================= =======================================
-setting              hydraulic (seed 002)    pneumatic (seed000-servo)
-=================== ======================= =======================================
-control rate         1000 Hz                 1000 Hz (pneumatic servo boards run
-                                             0.5-2 kHz; the valve lag is 5 ms)
-valve command        +-10 mA (rated current; +-1 (normalised spool command)
-                     seed 002 drives 4.5 mA
-                     for +-0.14 m/s)
-valve rate limit     10 A/s (full range in   200 1/s (full range in 10 ms)
-                     2 ms, amplifier slew)
-position sensor      1 um resolution,        1 um resolution, 0.5 um noise
-                     0.5 um noise (encoder)
-pressure sensors     12-bit over 0-10 MPa    12-bit over 0-1 MPa (244 Pa),
-                     (2.44 kPa), 5 kPa noise  1 kPa noise
-PID bandwidth        40 rad/s                30 rad/s
-force-loop bandwidth 150 rad/s               120 rad/s (the 5 ms spool lag and
-                                             the air's compliance: 150/40 is
-                                             unstable, the nominal check says so)
-observer gain k      see the table of        controllers.lugre_observer
-=================== ======================= =======================================
+Plant settings (assumed; the seeds give no controller): the built-in plant
+files give a 1000 Hz control rate, the valve limits (hydraulic +-10 mA at
+10 A/s; pneumatic +-1 at 200 1/s), an encoder of 1 um resolution and
+0.5 um noise, 12-bit pressure sensors (0-10 MPa, 5 kPa noise; 0-1 MPa,
+1 kPa noise). The PID and force-loop bandwidths and the observer gain are
+no longer a per-name table: :mod:`controllers.tuning`.
 """
 
 from __future__ import annotations
@@ -51,6 +38,7 @@ import casadi as ca
 import numpy as np
 
 from controllers.prediction import ContinuousModel
+from controllers.tuning import Tuning, derive_tuning
 from fcomp.errors import FcompError
 from fcomp.measurement import G
 from fcomp.models.base import FrictionModel
@@ -92,44 +80,46 @@ class Sensors:
 
 @dataclass(frozen=True)
 class PlantSettings:
-    """Per-plant controller settings (see the module docstring table)."""
+    """A plant's controller settings: rate, valve limits, sensors; explicit tuning values.
+
+    The tuning fields are None unless given explicitly (a plant file's ``[control]``
+    table, or an override): the tuning is otherwise derived from the plant
+    (:mod:`controllers.tuning`).
+    """
 
     control_rate: float
     u_max: float
     du_max: float
     sensors: Sensors
-    pid_bandwidth: float
-    force_bandwidth: float
-    observer_gain: float
+    pid_bandwidth: float | None = None
+    force_bandwidth: float | None = None
+    observer_gain: float | None = None
+
+    def given_tuning(self) -> dict[str, float]:
+        """The tuning values given explicitly, by name."""
+        return {k: float(v) for k in TUNING_FIELDS if (v := getattr(self, k)) is not None}
 
 
-PLANT_SETTINGS: dict[str, PlantSettings] = {
-    "hydraulic": PlantSettings(
-        control_rate=1000.0, u_max=0.010, du_max=10.0,
-        sensors=Sensors(x_noise=0.5e-6, x_quantum=1e-6, p_noise=5e3, p_quantum=1e7 / 4096),
-        pid_bandwidth=40.0, force_bandwidth=150.0, observer_gain=20.0,
-    ),
-    "pneumatic": PlantSettings(
-        control_rate=1000.0, u_max=1.0, du_max=200.0,
-        sensors=Sensors(x_noise=0.5e-6, x_quantum=1e-6, p_noise=1e3, p_quantum=1e6 / 4096),
-        pid_bandwidth=30.0, force_bandwidth=120.0, observer_gain=20.0,
-    ),
-}
+#: The settings that are tuning (derived unless given).
+TUNING_FIELDS = ("pid_bandwidth", "force_bandwidth", "observer_gain")
+
 
 def plant_settings(plant: str | PlantFile) -> PlantSettings:
-    """The controller settings of a plant: :data:`PLANT_SETTINGS` of a built-in plant's
-    name, or those a plant file gives (its sensors, valve limits, control rate and the
-    tuning it gives; the tuning it leaves out is the built-in plant's of its kind)."""
-    from plants.planfile import PlantFile
+    """The controller settings of a plant: those of its plant file (a built-in plant's
+    name: the file shipped for it, :func:`plants.planfile.builtin_plant_file`) -- its
+    sensors, valve limits, control rate and the tuning values it gives explicitly."""
+    from plants.planfile import KINDS, PlantFile, builtin_plant_file
 
     if not isinstance(plant, PlantFile):
-        if plant not in PLANT_SETTINGS:
+        if plant not in KINDS:
             raise FcompError(f"closed-loop control is set up for plants "
-                             f"{', '.join(sorted(PLANT_SETTINGS))}, not {plant!r}")
-        return PLANT_SETTINGS[plant]
-    return replace(PLANT_SETTINGS[plant.kind], sensors=Sensors(**plant.sensors),
-                   **plant.control)
+                             f"{', '.join(sorted(KINDS))}, not {plant!r}")
+        plant = builtin_plant_file(plant)
+    return PlantSettings(sensors=Sensors(**plant.sensors), **plant.control)
 
+
+#: Derived tunings by plant, friction and settings (a derivation costs about a second).
+_TUNINGS: dict[tuple[Any, ...], Tuning] = {}
 
 #: Plant states the controller measures, in the order of ``y``.
 MEASURED = ("x", "p1", "p2")
@@ -156,6 +146,8 @@ class ControlModel:
         from plants import OdePlant, make_plant
         from plants.planfile import PlantFile
 
+        from plants.check import frictionless
+
         base = plant_settings(plant)
         bad = sorted(set(settings) - set(base.__dataclass_fields__))
         if bad:
@@ -168,9 +160,11 @@ class ControlModel:
                                  f"no parameter set {params!r} with it")
             self.plant_name = plant.kind
             own: Any = plant.make_plant(friction)
+            self._bare: Any = lambda: plant.make_plant(frictionless())
         else:
             self.plant_name = plant
             own = make_plant(plant, friction, params)
+            self._bare = lambda: make_plant(plant, frictionless(), params)
         if not isinstance(own, OdePlant):
             raise FcompError(f"plant {plant} is not given by differential equations")
         self.plant: OdePlant = own
@@ -186,15 +180,54 @@ class ControlModel:
         self.force_min = (p_low - self.p_atm) * self.A1 - (ps - self.p_atm) * self.A2
         self.stroke = float(flat["stroke"])
         self.prediction = self._prediction()
+        self._tuning: Tuning | None = None
 
     # ------------------------------------------------------------ settings
     control_rate = property(lambda self: self.settings.control_rate, doc="Hz")
     u_max = property(lambda self: self.settings.u_max, doc="valve command limit")
     du_max = property(lambda self: self.settings.du_max, doc="valve rate limit, 1/s")
-    pid_bandwidth = property(lambda self: self.settings.pid_bandwidth, doc="rad/s")
-    force_bandwidth = property(lambda self: self.settings.force_bandwidth, doc="rad/s")
-    observer_gain = property(lambda self: self.settings.observer_gain, doc="1/s")
     sensors = property(lambda self: self.settings.sensors, doc=":class:`Sensors`")
+
+    @property
+    def tuning(self) -> Tuning:
+        """The default tuning (:func:`controllers.tuning.derive_tuning`; explicit settings win).
+
+        Raises
+        ------
+        FcompError
+            An explicit tuning without margins (one line).
+        """
+        if self._tuning is None:
+            key = self._tuning_key()
+            if key not in _TUNINGS:
+                _TUNINGS[key] = derive_tuning(self, given=self.settings.given_tuning())
+            self._tuning = _TUNINGS[key]
+        return self._tuning
+
+    def use_tuning(self, tuning: Tuning) -> None:
+        """Replace the derived tuning by ``tuning`` (e.g. :func:`controllers.tuning.fixed_tuning`,
+        for comparisons); controllers built afterwards take it as their default."""
+        self._tuning = tuning
+
+    def _tuning_key(self) -> tuple[Any, ...]:
+        fp = self.friction.flat_params()
+        return (self.plant_name, tuple(sorted(self.params.items())), self.friction.describe(),
+                tuple(sorted(fp.items())), self.settings)
+
+    pid_bandwidth = property(lambda self: self.tuning.pid_bandwidth, doc="rad/s")
+    force_bandwidth = property(lambda self: self.tuning.force_bandwidth, doc="rad/s")
+    observer_gain = property(lambda self: self.tuning.observer_gain, doc="1/s")
+    derivative_cutoff = property(lambda self: self.tuning.derivative_cutoff, doc="Hz")
+
+    @property
+    def column_frequency(self) -> float:
+        """Natural frequency ``w_h`` (rad/s) of the oil (air) column at mid stroke, no friction.
+
+        :func:`plants.check.column_mode` (python-control's linearisation of the plant).
+        """
+        from plants.check import column_mode
+
+        return column_mode(self._bare(), 0.5 * self.stroke).frequency
 
     def describe(self) -> str:
         return self.plant.describe()
@@ -310,7 +343,8 @@ class ControlModel:
         return q
 
     def sensor_std(self) -> np.ndarray:
-        """Measurement noise standard deviations of ``[x, p1, p2]`` for the EKF."""
+        """Measurement noise standard deviations of ``[x, p1, p2]`` for the EKF (rule 5 of
+        :mod:`controllers.tuning`: the sensors' noise and quantisation)."""
         return self.sensors.std()
 
     def estimator_initial(self, y0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

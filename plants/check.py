@@ -26,12 +26,14 @@ servo exhausting to atmosphere).
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from fcomp.measurement import G
 from fcomp.piston import chamber_volumes, piston_areas
+from plants.base import OdePlant
 from plants.equilibrium import equilibrium, steady_motion
 
 if TYPE_CHECKING:
@@ -44,6 +46,50 @@ def frictionless() -> FrictionModel:
     from fcomp.models import make_model
 
     return make_model("coulomb", {"Fc": 0.0})
+
+
+@dataclass(frozen=True)
+class ColumnMode:
+    """The oil (air) column's mode at a position, holding the load at rest.
+
+    Attributes
+    ----------
+    frequency : float
+        Natural frequency ``w_n`` (rad/s).
+    damping : float
+        Damping ratio.
+    state : numpy.ndarray
+        The equilibrium state linearised about.
+    command : float
+        The valve command holding it.
+    """
+
+    frequency: float
+    damping: float
+    state: np.ndarray
+    command: float
+
+
+def column_mode(plant: OdePlant, x_pos: float) -> ColumnMode:
+    """Natural frequency and damping of the oil (air) column at ``x_pos`` (m).
+
+    The plant is linearised with python-control (``plant.to_iosys().linearize``) at
+    rest holding its load (:func:`plants.equilibrium.equilibrium`); the block of the
+    states ``v``, ``p1``, ``p2`` (valve held) gives the mode (``control.damp``): the
+    fastest oscillating pair, or the fastest real pole when the damping leaves none.
+    """
+    import control as ct
+
+    names = list(plant.state_names)
+    x0, u0 = equilibrium(plant, x_pos)
+    lin = plant.to_iosys().linearize(x0, [u0])
+    idx = [names.index(n) for n in ("v", "p1", "p2")]
+    A = np.asarray(lin.A, dtype=float)[np.ix_(idx, idx)]
+    wn, zeta, poles = ct.damp(ct.ss(A, np.zeros((3, 1)), np.eye(3), np.zeros((3, 1))),
+                              doprint=False)
+    pair = [i for i, p in enumerate(poles) if abs(np.imag(p)) > 0]
+    k = max(pair, key=lambda i: wn[i]) if pair else int(np.argmax(wn))
+    return ColumnMode(float(wn[k]), float(zeta[k]), np.asarray(x0, dtype=float), float(u0))
 
 
 def check_plant(pf: PlantFile, friction: FrictionModel | None = None) -> dict[str, Any]:
@@ -68,20 +114,12 @@ def check_plant(pf: PlantFile, friction: FrictionModel | None = None) -> dict[st
         ``retract`` m/s), ``force_range`` (``max``, ``min`` N), ``weight`` (N),
         ``valve_bandwidth_hz``, ``control_rate`` (Hz).
     """
-    import control as ct
-
     plant = pf.make_plant(friction or frictionless())
     v = pf.values
     names = list(plant.state_names)
     mid = 0.5 * v["stroke"]
-    x0, u0 = equilibrium(plant, mid)
-    lin = plant.to_iosys().linearize(x0, [u0])
-    idx = [names.index(n) for n in ("v", "p1", "p2")]
-    A = np.asarray(lin.A, dtype=float)[np.ix_(idx, idx)]
-    wn, zeta, poles = ct.damp(ct.ss(A, np.zeros((3, 1)), np.eye(3), np.zeros((3, 1))),
-                              doprint=False)
-    pair = [i for i, p in enumerate(poles) if abs(np.imag(p)) > 0]
-    k = max(pair, key=lambda i: wn[i]) if pair else int(np.argmax(wn))
+    mode = column_mode(plant, mid)
+    x0, u0 = mode.state, mode.command
     A1, A2 = piston_areas(v["bore"], v["rod"])
     V1, V2 = chamber_volumes(mid, v["stroke"], v["V10"], v["V20"], A1, A2)
     p1, p2 = float(x0[names.index("p1")]), float(x0[names.index("p2")])
@@ -96,8 +134,8 @@ def check_plant(pf: PlantFile, friction: FrictionModel | None = None) -> dict[st
     u_max = pf.control["u_max"]
     return {
         "kind": pf.kind, "name": pf.name, "file": pf.label,
-        "natural_frequency": float(wn[k]), "natural_frequency_hz": float(wn[k]) / (2 * math.pi),
-        "damping": float(zeta[k]), "hand_formula": hand,
+        "natural_frequency": mode.frequency, "natural_frequency_hz": mode.frequency / (2 * math.pi),
+        "damping": mode.damping, "hand_formula": hand,
         "equilibrium": {"x": mid, "u": u0, "p1": p1, "p2": p2, "V1": float(V1), "V2": float(V2)},
         "valve_limited_speed": {"extend": _speed(plant, mid, u_max, pf, A1),
                                 "retract": _speed(plant, mid, -u_max, pf, A1)},
@@ -120,4 +158,4 @@ def _speed(plant: Any, x_pos: float, u: float, pf: PlantFile, A1: float) -> floa
     return float(state[list(plant.state_names).index("v")])
 
 
-__all__ = ["check_plant", "frictionless"]
+__all__ = ["ColumnMode", "check_plant", "column_mode", "frictionless"]

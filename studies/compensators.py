@@ -44,8 +44,7 @@ from typing import Any
 import numpy as np
 
 from controllers import CONTROLLERS
-from controllers.harness import DEFAULT_MISMATCH, LoopConfig
-from controllers.plant_model import PLANT_SETTINGS
+from controllers.harness import DEFAULT_MISMATCH, LoopConfig, control_model
 from controllers.robustness import (
     Job,
     StoppingRule,
@@ -231,13 +230,18 @@ class CompensatorsStudy(Study):
                   caption="Mismatch of the controllers' friction model (factor on the "
                   "plant's value).", digits=[None, 2])
         rows = []
-        for p, s in PLANT_SETTINGS.items():
-            rows.append([p, s.control_rate, s.u_max, s.pid_bandwidth, s.force_bandwidth,
-                         s.sensors.x_quantum * 1e6, s.sensors.p_quantum])
+        for p in PLANTS:
+            model = control_model(LoopConfig(plant=p))
+            s, tu = model.settings, model.tuning
+            rows.append([p, s.control_rate, s.u_max, tu.pid_bandwidth, tu.force_bandwidth,
+                         tu.margins.gain_db, tu.margins.phase, tu.observer_gain,
+                         tu.mpc_horizon(500.0), s.sensors.x_quantum * 1e6, s.sensors.p_quantum])
         rep.table(["plant", "rate [Hz]", "u_max", "PID bw [rad/s]", "force bw [rad/s]",
-                   "x quantum [um]", "p quantum [Pa]"], rows,
-                  caption="Controller settings (MPC: 500 Hz, horizon 20 steps).",
-                  digits=[None, 0, 3, 0, 0, 1, 0])
+                   "GM [dB]", "PM [deg]", "observer k [1/s]", "MPC horizon", "x quantum [um]",
+                   "p quantum [Pa]"], rows,
+                  caption="Controller settings: the tuning derived from each plant "
+                  "(controllers.tuning; MPC at 500 Hz).",
+                  digits=[None, 0, 3, 1, 0, 1, 0, 1, 0, 1, 0])
         rep.table(["task", "what it exercises", "duration [s]"],
                   [[t, TASKS.get(t).description, TASKS.get(t).run_duration(config.fast)]
                    for t in TASK_ORDER], caption="Tasks.", digits=[None, None, 1])

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from controllers.harness import LoopConfig, build_loop
-from controllers.plant_model import PLANT_SETTINGS, ControlModel, plant_settings
+from controllers.plant_model import ControlModel, plant_settings
 from fcomp.cli.main import main
 from fcomp.errors import FileFormatError
 from fcomp.measurement import Measurement
@@ -43,7 +43,8 @@ def test_the_shipped_files_are_the_built_in_plants_bit_for_bit(kind: str) -> Non
     assert list(from_file) == list(built_in)
     for k, v in built_in.items():  # bitwise: the same floats, not close ones
         assert from_file[k] == v and math.copysign(1, from_file[k]) == math.copysign(1, v), k
-    assert plant_settings(pf) == PLANT_SETTINGS[kind]
+    assert plant_settings(pf) == plant_settings(kind)  # a name's settings are its file's
+    assert plant_settings(pf).given_tuning() == {}  # the tuning is derived (controllers.tuning)
     assert pf.rig["orientation"] == ("vertical-up" if kind == "hydraulic" else "horizontal")
 
 
@@ -206,7 +207,7 @@ def test_the_closed_loop_takes_a_plant_file() -> None:
     pf = builtin_plant_file("pneumatic")
     friction = make_model("lugre", params=pf.friction_set)
     model = ControlModel(pf, friction)
-    assert model.plant_name == "pneumatic" and model.settings == PLANT_SETTINGS["pneumatic"]
+    assert model.plant_name == "pneumatic" and model.settings == plant_settings("pneumatic")
     assert model.plant.flat_params() == ControlModel("pneumatic", friction).plant.flat_params()
     plant, cmodel, ctrl = build_loop("pid", LoopConfig(plant_file=pf, friction="lugre",
                                                        controller_friction=friction))

@@ -74,8 +74,9 @@ def control_model(args: argparse.Namespace) -> Any:
     (``--friction FILE.json``) resolve: whatever they give, the export takes a
     ``ControlModel``.
     """
-    from controllers.plant_model import PLANT_SETTINGS, ControlModel
+    from controllers.plant_model import ControlModel
     from plants import PLANTS
+    from plants.planfile import KINDS
 
     if args.plant_params is not None:
         from plants.planfile import read_plant_file
@@ -89,9 +90,9 @@ def control_model(args: argparse.Namespace) -> Any:
         return ControlModel(plant_file, common.friction_model(
             args.friction, params, args, use="the controller's friction"), args.params)
     plant = args.plant or "hydraulic"
-    if plant not in PLANT_SETTINGS:
+    if plant not in KINDS:
         raise FcompError(f"--plant {plant!r}: the controllers run on "
-                         f"{' or '.join(sorted(PLANT_SETTINGS))}")
+                         f"{' or '.join(sorted(KINDS))}")
     params = args.params if args.params is not None else PLANTS.get(plant).default_params
     friction = common.friction_model(args.friction, params, args,
                                      use="the controller's friction")

@@ -13,11 +13,17 @@ exit status 2) and prints what an engineer checks first: the natural
 frequency and damping of the oil (air) column at mid stroke from
 python-control's linearisation of the plant, beside the hand formula; the
 valve-limited speed in both directions; the force range the pressures allow
-and the weight; the valve bandwidth against the control rate. ``--json OUT``
+and the weight; the valve bandwidth against the control rate; the compensators'
+default tuning with its gain and phase margins. ``--json OUT``
 writes ``{"kind", "name", "natural_frequency", "natural_frequency_hz",
 "damping", "hand_formula", "equilibrium", "valve_limited_speed",
-"force_range", "weight", "valve_bandwidth_hz", "control_rate", "warnings"}``
-(SI units: rad/s, Hz, m/s, N, Pa).
+"force_range", "weight", "valve_bandwidth_hz", "control_rate", "tuning", "warnings"}``
+(SI units: rad/s, Hz, m/s, N, Pa). ``tuning`` is the compensators' default
+tuning derived from the plant (``controllers.tuning``, with the ``nmlgm``
+friction of the plant kind's parameter set): force-loop and PID bandwidths,
+derivative filter, observer gain, MPC horizon and weight, and the gain and
+phase margins python-control computes for the loops; explicit ``[control]``
+values win and are checked -- one without margins is refused (exit 2).
 """
 
 from __future__ import annotations
@@ -71,6 +77,7 @@ def summary(doc: dict[str, Any]) -> str:
         f"force range: {fr['min']:.5g} to {fr['max']:.5g} N (weight {doc['weight']:.4g} N)",
         f"valve bandwidth {doc['valve_bandwidth_hz']:.4g} Hz; control rate "
         f"{doc['control_rate']:.4g} Hz",
+        *doc["tuning_lines"],
     ])
 
 
@@ -89,6 +96,21 @@ def run_check(args: argparse.Namespace) -> int:
         for line in exc.problems:  # one line per bad value
             sys.stderr.write(f"fcomp: error: {line}\n")
         return 2
-    doc = common.with_warnings(check_plant(pf))
-    emit_result(result_text(doc), args.json, out, summary(doc))
+    doc = check_plant(pf)
+    tuning = plant_tuning(pf)  # FcompError (one line, exit 2): explicit values without margins
+    doc["tuning"] = tuning.as_dict()
+    doc["tuning_lines"] = tuning.lines()
+    doc = common.with_warnings(doc)
+    text = {k: v for k, v in doc.items() if k != "tuning_lines"}
+    emit_result(result_text(text), args.json, out, summary(doc))
     return 0
+
+
+def plant_tuning(pf: Any) -> Any:
+    """The compensators' default tuning on a plant file (:mod:`controllers.tuning`), with the
+    controllers' friction model the ``nmlgm`` of the plant kind's parameter set (its viscous
+    slope and bristle damping enter the rules)."""
+    from controllers.plant_model import ControlModel
+    from fcomp.models import make_model
+
+    return ControlModel(pf, make_model("nmlgm", params=pf.friction_set)).tuning

@@ -1,0 +1,483 @@
+"""Default tuning that follows the plant: every compensator's tuning from the linearised plant.
+
+The controllers of :mod:`controllers` share one structure (:mod:`controllers.pid`):
+a PID position loop whose force demand is met by the model-based force loop of
+:mod:`controllers.force_to_valve`. Their default tuning is derived here from
+the controller's own plant model (:class:`~controllers.plant_model.ControlModel`:
+its linearised valve, mass, friction slope, sensors and control rate), not from
+the plant's name. :func:`derive_tuning` gives a :class:`Tuning`: the values and
+the margins python-control computes for them (``control.stability_margins``).
+
+Rules (SI units; ``dt = 1/f_s`` the control period)
+---------------------------------------------------
+1. **Force loop** ``w_F``. The force loop closes ``dF_a/dt = w_F*(F_d - F_a)``
+   through the valve, so its loop transfer function is
+   ``L_F(s) = w_F*G_v(s)/s`` (``G_v`` the valve's linearised dynamics, unit DC
+   gain), sampled with a zero-order hold at ``dt``. ``w_F`` is the largest
+   crossover for which ``L_F`` keeps the phase margin
+   :data:`FORCE_PHASE_MARGIN` (45 deg: the valve's and the hold's lag at
+   ``w_F`` at most 45 deg; an inner loop with a 45 deg margin has its closed-loop
+   damping ratio near 0.45, Franklin, Powell & Emami-Naeini, *Feedback Control of
+   Dynamic Systems*, 7th ed., 2015, sec. 6.4, ``zeta ~ PM/100``). For a
+   first-order spool ``1/(tau_v s + 1)`` and a negligible hold this is
+   ``w_F = 1/tau_v``; for the second-order servo valve
+   (``w_v``, ``zeta_v``) the root of ``atan(2 zeta_v r/(1 - r^2)) = 45 deg``,
+   ``r = w_F/w_v``. Where the force loop is slower than the oil (air) column
+   (``w_F < w_h``) it cannot damp the column actively, and the classical limit
+   of a valve-controlled axis applies to the position loop below.
+2. **Position loop** ``w_P`` (the PID's pole placement ``kp = 3 m w_P^2``,
+   ``ki = m w_P^3``, ``kd = 3 m w_P``). ``w_P`` is the largest bandwidth for which
+   the nominal sampled loop of :func:`controllers.pid.position_loop` (mass and
+   friction slope, the force loop of rule 1 through the valve, zero-order hold,
+   the PID's derivative filter) keeps the margins :data:`MIN_GAIN_MARGIN`
+   (2, 6 dB) and :data:`MIN_PHASE_MARGIN` (30 deg) -- the usual minimum
+   margins (Franklin et al. sec. 6.4; Skogestad & Postlethwaite, *Multivariable
+   Feedback Control*, 2nd ed., 2005, sec. 2.4.3: ``GM > 2``, ``PM > 30 deg``). When
+   the force loop is slower than the column (``w_F < w_h``), ``w_P`` is also
+   kept below ``w_h/3``, the rule for a lightly damped hydraulic axis (Merritt,
+   *Hydraulic Control Systems*, 1967, sec. 8.3; Jelali & Kroll, *Hydraulic Servo-
+   systems*, 2003, sec. 7.2: position bandwidth below a third of ``w_h``).
+3. **Derivative filter** ``f_d`` (Hz). The filtered derivative of a position
+   measured with noise ``sigma_x`` (noise and quantisation ``q/sqrt(12)``) has the
+   variance ``sigma_x^2*w_d/dt`` (first-order filter, ``w_d*dt << 1``); its force
+   ``kd*sigma_v`` is kept at the force noise the pressure sensors already put in
+   the force loop, ``sigma_F = sigma_p*sqrt(A1^2 + A2^2)``::
+
+       w_d = dt*(sigma_F/(kd*sigma_x))^2,    f_d = min(w_d/(2 pi), f_s/4).
+
+   ``f_d`` depends on ``kd`` (on ``w_P``), and the margins of rule 2 on ``f_d``:
+   rule 2 is solved with ``f_d(w_P)``.
+4. **LuGre observer gain** ``k`` (1/s). The correction ``-k*e`` of the bristle
+   state is driven by the position error the PID shapes at ``w_P``; it is kept
+   an octave slower (``k = w_P/2``: the two time scales separated by two, so
+   the correction does not fight the loop), and its noise ``sigma1*k*sigma_x``
+   in the friction estimate below the pressure sensors' force noise
+   ``sigma_F`` (``k <= sigma_F/(sigma1*sigma_x)``, ``sigma1`` the bristle damping of
+   the controller's friction model).
+5. **EKF** (:mod:`controllers.ekf`). The measurement noise is the sensors':
+   ``R = diag(sigma_x^2, sigma_p^2, sigma_p^2)`` with noise and quantisation
+   (``sigma^2 = noise^2 + q^2/12``); the process noise is the model's
+   (:meth:`~controllers.plant_model.ControlModel.process_noise`: a thousandth of
+   each state's scale, the bristle free to absorb the friction mismatch).
+6. **MPC** (:mod:`controllers.mpc`). The MPC drives the valve itself (no force
+   loop, no PID), so its horizon and weights follow the actuator: the horizon
+   spans one period of the force-loop bandwidth of rule 1, ``T_N = 2 pi/w_F``
+   (the time the valve and chambers need to change the force; ``N =
+   ceil(T_N*f_mpc)`` steps), and the velocity weight makes a position error
+   ``e_x`` and a velocity error ``e_v`` equally costly an octave below it,
+   ``e_v = e_x*w_F/2`` (faster errors weigh as velocity errors, slower ones as
+   position errors; ``e_x`` sets only the scale of the cost).
+
+Values given explicitly -- in a plant file's ``[control]`` table or as
+controller options -- replace the derived ones, and are checked the same way:
+a tuning whose nominal loop is unstable or whose margins are below
+:data:`MIN_GAIN_MARGIN` / :data:`MIN_PHASE_MARGIN` is refused with one line
+(:class:`~fcomp.errors.FcompError`) naming the margin and what to change.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from controllers.pid import PIDGains, position_loop, spectral_radius
+from fcomp.errors import FcompError
+
+if TYPE_CHECKING:
+    from controllers.plant_model import ControlModel, Sensors
+
+#: Minimum gain margin (factor, either way) of the position loop: 2 (6 dB).
+MIN_GAIN_MARGIN = 2.0
+#: Minimum phase margin of the position loop (deg).
+MIN_PHASE_MARGIN = 30.0
+#: Phase margin the force loop is designed for (deg), rule 1.
+FORCE_PHASE_MARGIN = 45.0
+#: Ratio of the position-loop bandwidth to the column's frequency where the force
+#: loop does not damp the column (Merritt; Jelali & Kroll), rule 2.
+COLUMN_FRACTION = 1.0 / 3.0
+#: Highest derivative filter cut-off, as a fraction of the control rate (Hz per Hz).
+DERIVATIVE_CUTOFF_MAX_FRACTION = 0.25
+#: The derivation's margins above the minimum: 1 % on the gain, 1 deg on the phase
+#: (the bisection's interpolated margins against python-control's).
+PAD = 0.01
+#: Frequencies of the loops' responses (margins).
+N_FREQUENCIES = 2000
+
+
+@dataclass(frozen=True)
+class Margins:
+    """Stability margins of a sampled loop (python-control).
+
+    Attributes
+    ----------
+    gain : float
+        Gain margin: the factor by which the loop gain may grow (or, for a
+        conditionally stable loop, shrink) before the closed loop is unstable
+        (``inf`` if no phase crossover).
+    phase : float
+        Phase margin (deg; ``inf`` if no gain crossover).
+    crossover : float
+        Gain crossover frequency (rad/s) of the phase margin.
+    radius : float
+        Largest closed-loop pole magnitude ``|z|`` (stable below 1).
+    """
+
+    gain: float
+    phase: float
+    crossover: float
+    radius: float
+
+    @property
+    def gain_db(self) -> float:
+        """The gain margin in dB."""
+        return 20 * math.log10(self.gain) if self.gain > 0 else -math.inf
+
+    def shortfall(self, min_gain: float = MIN_GAIN_MARGIN,
+                  min_phase: float = MIN_PHASE_MARGIN) -> str | None:
+        """What is insufficient (one phrase), or None."""
+        if not self.radius < 1.0:
+            return f"the closed loop is unstable (largest pole |z| = {self.radius:.4f} >= 1)"
+        if self.gain < min_gain:
+            return (f"gain margin {self.gain:.3g} ({self.gain_db:.1f} dB) < {min_gain:g} "
+                    f"({20 * math.log10(min_gain):.0f} dB)")
+        if self.phase < min_phase:
+            return f"phase margin {self.phase:.1f} deg < {min_phase:g} deg"
+        return None
+
+    def describe(self) -> str:
+        return (f"gain margin {self.gain:.3g} ({self.gain_db:.1f} dB), phase margin "
+                f"{self.phase:.1f} deg at {self.crossover:.4g} rad/s, closed-loop |z| "
+                f"{self.radius:.4f}")
+
+
+def _response(loop: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Magnitude, unwrapped phase (deg) and frequencies (rad/s) of a sampled loop, 0.1 rad/s
+    to just below Nyquist (:data:`N_FREQUENCIES` points, logarithmic)."""
+    dt = float(loop.dt)
+    w = np.logspace(-1.0, math.log10(math.pi / dt) - 1e-4, N_FREQUENCIES)
+    resp = np.asarray(loop(np.exp(1j * w * dt)), dtype=complex).ravel()
+    return np.abs(resp), np.degrees(np.unwrap(np.angle(resp))), w
+
+
+def loop_margins(loop: Any) -> Margins:
+    """Gain and phase margins of a sampled loop transfer function (``control.stability_margins``).
+
+    python-control is given the loop's frequency response (:func:`_response`; its
+    polynomial method is unreliable on these high-order sampled loops). Every
+    crossing is considered (``returnall=True``): the gain margin is the smallest
+    factor, up (``gm > 1``) or down (``1/gm`` for ``gm < 1``: a PID on a double
+    integrator is conditionally stable), the phase margin the smallest over the
+    gain crossovers, wrapped to ``(-180, 180]`` deg.
+    """
+    import control as ct
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        gm, pm, _sm, _wpc, wgc, _wms = ct.stability_margins(_response(loop), returnall=True)
+    return _margins(np.atleast_1d(gm), np.atleast_1d(pm), np.atleast_1d(wgc),
+                    spectral_radius(loop))
+
+
+def _margins(gm: np.ndarray, pm: np.ndarray, wgc: np.ndarray, radius: float) -> Margins:
+    gms = [float(g) for g in gm if np.isfinite(g) and g > 0]
+    gain = min((g if g >= 1 else 1 / g for g in gms), default=math.inf)
+    pms = [((float(p) + 180.0) % 360.0) - 180.0 for p in pm]
+    if pms:
+        i = int(np.argmin(pms))
+        return Margins(gain=gain, phase=pms[i], crossover=float(wgc[i]), radius=radius)
+    return Margins(gain=gain, phase=math.inf, crossover=math.nan, radius=radius)
+
+
+def quick_margins(loop: Any) -> Margins:
+    """:func:`loop_margins` by linear interpolation of the same response (no python-control
+    search): the rules' bisections, the final values from :func:`loop_margins`."""
+    mag, ph, w = _response(loop)
+    lm = np.log(mag)
+    ig = np.nonzero(np.sign(lm[:-1]) != np.sign(lm[1:]))[0]
+    fg = lm[ig] / (lm[ig] - lm[ig + 1])
+    pm = 180.0 + ph[ig] + fg * (ph[ig + 1] - ph[ig])
+    wgc = w[ig] * (w[ig + 1] / w[ig]) ** fg
+    k = np.floor((ph + 180.0) / 360.0)
+    ip = np.nonzero(k[:-1] != k[1:])[0]
+    ref = -180.0 + 360.0 * np.maximum(k[ip], k[ip + 1])
+    fp = (ref - ph[ip]) / (ph[ip + 1] - ph[ip])
+    gm = 1.0 / np.exp(lm[ip] + fp * (lm[ip + 1] - lm[ip]))
+    keep = w[ip] > 1.0  # the integrators' phase at the bottom of the grid is no crossing
+    return _margins(gm[keep], pm, wgc, spectral_radius(loop))
+
+
+def force_loop(force_bandwidth: float, valve: Any, dt: float) -> Any:
+    """The force loop's sampled loop transfer function ``w_F*G_v(s)/s`` (zero-order hold)."""
+    import control as ct
+
+    s = ct.tf("s")
+    return ct.tf(ct.c2d(ct.ss(force_bandwidth * valve / s), dt, "zoh"))
+
+
+def _largest(ok: Any, low: float, high: float, rel: float = 5e-3) -> float:
+    """The largest ``w`` in ``[low, high]`` with ``ok(w)`` (``ok(low)`` true, monotone)."""
+    if ok(high):
+        return high
+    while high - low > rel * low:
+        mid = math.sqrt(low * high)
+        low, high = (mid, high) if ok(mid) else (low, mid)
+    return low
+
+
+def force_bandwidth_rule(valve: Any, dt: float) -> float:
+    """Rule 1: the largest ``w_F`` whose force loop keeps :data:`FORCE_PHASE_MARGIN`."""
+    def ok(w: float) -> bool:
+        return quick_margins(force_loop(w, valve, dt)).phase >= FORCE_PHASE_MARGIN
+
+    low = 1.0
+    if not ok(low):
+        raise FcompError(f"no force-loop bandwidth keeps a {FORCE_PHASE_MARGIN:g} deg phase "
+                         f"margin through this valve at {1 / dt:g} Hz; raise the control rate")
+    return _largest(ok, low, 0.5 * math.pi / dt)
+
+
+def force_noise(model: ControlModel) -> float:
+    """``sigma_F = sigma_p*sqrt(A1^2 + A2^2)`` (N): the pressure sensors' force noise."""
+    return float(model.sensors.std()[1]) * math.hypot(model.A1, model.A2)
+
+
+def derivative_cutoff_rule(kd: float, sensors: Sensors, sigma_F: float, dt: float) -> float:
+    """Rule 3: the derivative filter cut-off (Hz) whose force noise is ``sigma_F``."""
+    sigma_x = float(sensors.std()[0])
+    top = DERIVATIVE_CUTOFF_MAX_FRACTION / dt
+    if kd <= 0:
+        return top
+    w_d = dt * (sigma_F / (kd * sigma_x)) ** 2
+    return min(w_d / (2 * math.pi), top)
+
+
+@dataclass(frozen=True)
+class Tuning:
+    """A compensator tuning derived from the plant (module docstring), with its margins.
+
+    Attributes
+    ----------
+    column_frequency : float
+        ``w_h`` (rad/s): the oil (air) column at mid stroke (linearised).
+    valve_bandwidth : float
+        The valve's -3 dB bandwidth (rad/s), from its linearised dynamics.
+    control_rate : float
+        ``f_s`` (Hz).
+    force_bandwidth, pid_bandwidth : float
+        ``w_F``, ``w_P`` (rad/s), rules 1 and 2.
+    derivative_cutoff : float
+        ``f_d`` (Hz), rule 3.
+    observer_gain : float
+        ``k`` (1/s), rule 4.
+    ekf_measurement_std : tuple of float
+        Standard deviations of ``[x, p1, p2]`` (m, Pa, Pa), rule 5.
+    mpc_horizon_time : float
+        ``T_N`` (s), rule 6.
+    mpc_velocity_ratio : float
+        ``e_v/e_x = w_F/2`` (1/s), rule 6.
+    margins : Margins
+        The position loop's.
+    force_margins : Margins
+        The force loop's.
+    given : tuple of str
+        The values given explicitly (not derived).
+    """
+
+    column_frequency: float
+    valve_bandwidth: float
+    control_rate: float
+    force_bandwidth: float
+    pid_bandwidth: float
+    derivative_cutoff: float
+    observer_gain: float
+    ekf_measurement_std: tuple[float, float, float]
+    mpc_horizon_time: float
+    mpc_velocity_ratio: float
+    margins: Margins
+    force_margins: Margins
+    given: tuple[str, ...] = field(default=())
+
+    def mpc_horizon(self, rate: float) -> int:
+        """Horizon in steps at an MPC rate (Hz): ``ceil(T_N*rate)``, at least 2."""
+        return max(2, math.ceil(self.mpc_horizon_time * rate - 1e-9))
+
+    def lines(self) -> list[str]:
+        """The tuning as printed by ``fcomp plant check``."""
+        def src(name: str) -> str:
+            return "given" if name in self.given else "derived"
+
+        return [
+            f"tuning: force loop {self.force_bandwidth:.4g} rad/s ({src('force_bandwidth')}; "
+            f"valve bandwidth {self.valve_bandwidth:.4g} rad/s, column {self.column_frequency:.4g}"
+            f" rad/s), PID {self.pid_bandwidth:.4g} rad/s ({src('pid_bandwidth')}), "
+            f"derivative filter {self.derivative_cutoff:.4g} Hz, observer gain "
+            f"{self.observer_gain:.4g} 1/s ({src('observer_gain')})",
+            f"  position loop: {self.margins.describe()}",
+            f"  force loop: {self.force_margins.describe()}",
+            f"  MPC horizon {self.mpc_horizon_time * 1e3:.3g} ms, velocity weight e_v/e_x = "
+            f"{self.mpc_velocity_ratio:.4g} 1/s; EKF sensor std x {self.ekf_measurement_std[0]:.3g}"
+            f" m, p {self.ekf_measurement_std[1]:.4g} Pa",
+        ]
+
+    def as_dict(self) -> dict[str, Any]:
+        """JSON form (SI units)."""
+        def marg(m: Margins) -> dict[str, float | None]:
+            return {k: (v if math.isfinite(v) else None) for k, v in
+                    (("gain", m.gain), ("gain_db", m.gain_db), ("phase", m.phase),
+                     ("crossover", m.crossover), ("radius", m.radius))}
+
+        return {
+            "column_frequency": self.column_frequency, "valve_bandwidth": self.valve_bandwidth,
+            "control_rate": self.control_rate, "force_bandwidth": self.force_bandwidth,
+            "pid_bandwidth": self.pid_bandwidth, "derivative_cutoff": self.derivative_cutoff,
+            "observer_gain": self.observer_gain,
+            "ekf_measurement_std": list(self.ekf_measurement_std),
+            "mpc_horizon_time": self.mpc_horizon_time,
+            "mpc_velocity_ratio": self.mpc_velocity_ratio,
+            "margins": marg(self.margins), "force_margins": marg(self.force_margins),
+            "given": list(self.given),
+        }
+
+
+def valve_bandwidth(valve: Any) -> float:
+    """The -3 dB bandwidth (rad/s) of the valve's linear dynamics (``control.bandwidth``)."""
+    import control as ct
+
+    return float(ct.bandwidth(valve))
+
+
+def pid_gains(mass: float, bandwidth: float, sensors: Sensors, sigma_F: float,
+              dt: float) -> PIDGains:
+    """The placed PID gains of a bandwidth with the derivative filter of rule 3."""
+    placed = PIDGains.placed(mass, bandwidth)
+    return PIDGains.placed(mass, bandwidth, derivative_cutoff=derivative_cutoff_rule(
+        placed.kd, sensors, sigma_F, dt))
+
+
+def refuse(what: str, problem: str, advice: str) -> FcompError:
+    """The one-line refusal of a tuning."""
+    return FcompError(f"{what} refused: {problem} on the nominal loop; {advice}")
+
+
+def derive_tuning(model: ControlModel, dt: float | None = None,
+                  given: dict[str, float] | None = None) -> Tuning:
+    """Derive the tuning of ``model`` (module docstring), explicit values in ``given`` winning.
+
+    Parameters
+    ----------
+    model : ControlModel
+        The controller's plant model.
+    dt : float, optional
+        Control period (s); default ``1/model.control_rate``.
+    given : dict, optional
+        Explicit ``force_bandwidth``, ``pid_bandwidth`` (rad/s), ``derivative_cutoff`` (Hz),
+        ``observer_gain`` (1/s).
+
+    Raises
+    ------
+    FcompError
+        The explicit (or the derived) tuning's loop is unstable or lacks margin (one line).
+    """
+    given = dict(given or {})
+    bad = sorted(set(given) - {"force_bandwidth", "pid_bandwidth", "derivative_cutoff",
+                               "observer_gain"})
+    if bad:
+        raise FcompError(f"unknown tuning value(s) {', '.join(bad)}")
+    dt = 1.0 / model.control_rate if dt is None else dt
+    valve = model.valve_transfer()
+    damping = model.viscous_damping()
+    sigma_F = force_noise(model)
+    w_h = model.column_frequency
+    w_F = float(given.get("force_bandwidth") or force_bandwidth_rule(valve, dt))
+    f_margins = loop_margins(force_loop(w_F, valve, dt))
+    if "force_bandwidth" in given and (why := f_margins.shortfall(1.0, 0.0)) is not None:
+        raise refuse(f"force_bandwidth {w_F:g} rad/s", f"the force loop: {why}",
+                     "lower force_bandwidth")
+
+    def gains_of(w_P: float) -> PIDGains:
+        g = pid_gains(model.mass, w_P, model.sensors, sigma_F, dt)
+        if "derivative_cutoff" in given:
+            return PIDGains.placed(model.mass, w_P,
+                                   derivative_cutoff=float(given["derivative_cutoff"]))
+        return g
+
+    def margins_of(w_P: float, quick: bool = True) -> Margins:
+        loop = position_loop(gains_of(w_P), model.mass, damping, w_F, valve, dt)
+        return quick_margins(loop) if quick else loop_margins(loop)
+
+    if "pid_bandwidth" in given:
+        w_P = float(given["pid_bandwidth"])
+    else:
+        cap = COLUMN_FRACTION * w_h if w_F < w_h else w_F
+        low = min(1.0, cap)
+        if margins_of(low).shortfall() is not None:
+            raise refuse("the derived tuning", f"even a PID bandwidth of {low:g} rad/s gives "
+                         f"{margins_of(low).shortfall()}", "check the plant file's valve, "
+                         "mass and control rate")
+        w_P = _largest(lambda w: margins_of(w).shortfall(
+            MIN_GAIN_MARGIN * (1 + PAD), MIN_PHASE_MARGIN + PAD * 100) is None, low, cap)
+    gains = gains_of(w_P)
+    margins = margins_of(w_P, quick=False)
+    if (why := margins.shortfall()) is not None:
+        raise refuse(f"pid_bandwidth {w_P:g} rad/s with force_bandwidth {w_F:g} rad/s", why,
+                     "lower pid_bandwidth or raise force_bandwidth")
+    k = given.get("observer_gain") or observer_gain_rule(model, w_P, sigma_F)
+    return Tuning(
+        column_frequency=w_h, valve_bandwidth=valve_bandwidth(valve),
+        control_rate=1.0 / dt, force_bandwidth=w_F, pid_bandwidth=w_P,
+        derivative_cutoff=gains.derivative_cutoff, observer_gain=float(k),
+        ekf_measurement_std=tuple(float(s) for s in model.sensors.std()),  # type: ignore[arg-type]
+        mpc_horizon_time=2 * math.pi / w_F, mpc_velocity_ratio=0.5 * w_F,
+        margins=margins, force_margins=f_margins, given=tuple(sorted(given)),
+    )
+
+
+def observer_gain_rule(model: ControlModel, pid_bandwidth: float, sigma_F: float) -> float:
+    """Rule 4: ``k = min(w_P/2, sigma_F/(sigma1*sigma_x))`` (1/s)."""
+    k = 0.5 * pid_bandwidth
+    sigma1 = float(model.friction.flat_params().get("sigma1", 0.0))
+    sigma_x = float(model.sensors.std()[0])
+    if sigma1 > 0 and math.isfinite(sigma1):
+        k = min(k, sigma_F / (sigma1 * sigma_x))
+    return k
+
+
+def fixed_tuning(model: ControlModel, force_bandwidth: float, pid_bandwidth: float,
+                 derivative_cutoff: float, observer_gain: float, mpc_horizon_time: float,
+                 mpc_velocity_ratio: float) -> Tuning:
+    """A tuning of given numbers with its margins, *not* checked (comparisons, reports:
+    ``benchmarks/bench_tuning.py`` runs the former fixed tuning with it)."""
+    dt = 1.0 / model.control_rate
+    valve = model.valve_transfer()
+    gains = PIDGains.placed(model.mass, pid_bandwidth, derivative_cutoff=derivative_cutoff)
+    return Tuning(
+        column_frequency=model.column_frequency, valve_bandwidth=valve_bandwidth(valve),
+        control_rate=model.control_rate, force_bandwidth=force_bandwidth,
+        pid_bandwidth=pid_bandwidth, derivative_cutoff=derivative_cutoff,
+        observer_gain=observer_gain,
+        ekf_measurement_std=tuple(float(s) for s in model.sensors.std()),  # type: ignore[arg-type]
+        mpc_horizon_time=mpc_horizon_time, mpc_velocity_ratio=mpc_velocity_ratio,
+        margins=loop_margins(position_loop(gains, model.mass, model.viscous_damping(),
+                                           force_bandwidth, valve, dt)),
+        force_margins=loop_margins(force_loop(force_bandwidth, valve, dt)),
+        given=("force_bandwidth", "pid_bandwidth", "derivative_cutoff", "observer_gain"),
+    )
+
+
+def check_gains(gains: PIDGains, model: ControlModel, force_bandwidth: float, dt: float,
+                what: str) -> Margins:
+    """Margins of explicit gains on the nominal loop; refused (one line) if insufficient."""
+    m = loop_margins(position_loop(gains, model.mass, model.viscous_damping(), force_bandwidth,
+                                   model.valve_transfer(), dt))
+    if (why := m.shortfall()) is not None:
+        raise refuse(what, why, "lower the gains (bandwidth) or raise force_bandwidth")
+    return m
+
+
+__all__ = ["FORCE_PHASE_MARGIN", "MIN_GAIN_MARGIN", "MIN_PHASE_MARGIN", "Margins", "Tuning",
+           "check_gains", "derive_tuning", "fixed_tuning", "force_bandwidth_rule", "force_loop",
+           "loop_margins", "quick_margins"]

@@ -76,7 +76,7 @@ from controllers.prediction import ContinuousModel
 from fcomp.errors import FcompError
 
 #: Defaults of the MPC's options. The controller derives its horizon and velocity
-#: tolerance from the plant (:mod:`controllers.tuning`, rule 6: ``T_N = 2 pi/w_F``,
+#: tolerance from the plant (:mod:`controllers.tuning`, rule 6: ``T_N = pi/w_h``,
 #: ``e_v = e_x*w_F/2``); ``horizon`` and ``velocity_tol`` here are the fixed problem of
 #: :mod:`controllers.mpc_benchmark`.
 DEFAULTS: dict[str, float] = {
@@ -206,8 +206,8 @@ class MPCController(Controller):
     rate
         MPC sample rate (Hz), default 500.
     horizon
-        Prediction horizon (steps), default derived from the force-loop bandwidth
-        (:mod:`controllers.tuning`, ``ceil(2 pi/w_F*rate)``).
+        Prediction horizon (steps), default half a period of the oil (air) column
+        (:mod:`controllers.tuning`, ``ceil(pi/w_h*rate)``).
     substeps
         Integration steps per MPC step (prediction model and EKF), default 2.
     position_tol, velocity_tol

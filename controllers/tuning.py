@@ -60,13 +60,15 @@ Rules (SI units; ``dt = 1/f_s`` the control period)
    (:meth:`~controllers.plant_model.ControlModel.process_noise`: a thousandth of
    each state's scale, the bristle free to absorb the friction mismatch).
 6. **MPC** (:mod:`controllers.mpc`). The MPC drives the valve itself (no force
-   loop, no PID), so its horizon and weights follow the actuator: the horizon
-   spans one period of the force-loop bandwidth of rule 1, ``T_N = 2 pi/w_F``
-   (the time the valve and chambers need to change the force; ``N =
-   ceil(T_N*f_mpc)`` steps), and the velocity weight makes a position error
-   ``e_x`` and a velocity error ``e_v`` equally costly an octave below it,
+   loop, no PID): between its command and the position lie the valve and the
+   oil (air) column. Its horizon spans half a period of the column,
+   ``T_N = pi/w_h`` -- the time from a pressure change to the first peak of
+   the piston's response, the slowest of the actuator's own dynamics the
+   prediction must see (``N = ceil(T_N*f_mpc)`` steps); its velocity weight
+   makes a position error ``e_x`` and a velocity error ``e_v`` equally costly
+   an octave below the force bandwidth the valve allows (rule 1),
    ``e_v = e_x*w_F/2`` (faster errors weigh as velocity errors, slower ones as
-   position errors; ``e_x`` sets only the scale of the cost).
+   position errors; ``e_x`` only sets the scale of the cost).
 
 Values given explicitly -- in a plant file's ``[control]`` table or as
 controller options -- replace the derived ones, and are checked the same way:
@@ -276,7 +278,7 @@ class Tuning:
     ekf_measurement_std : tuple of float
         Standard deviations of ``[x, p1, p2]`` (m, Pa, Pa), rule 5.
     mpc_horizon_time : float
-        ``T_N`` (s), rule 6.
+        ``T_N = pi/w_h`` (s), rule 6.
     mpc_velocity_ratio : float
         ``e_v/e_x = w_F/2`` (1/s), rule 6.
     margins : Margins
@@ -395,7 +397,7 @@ def derive_tuning(model: ControlModel, dt: float | None = None,
     w_F = float(given.get("force_bandwidth") or force_bandwidth_rule(valve, dt))
     f_margins = loop_margins(force_loop(w_F, valve, dt))
     if "force_bandwidth" in given and (why := f_margins.shortfall(1.0, 0.0)) is not None:
-        raise refuse(f"force_bandwidth {w_F:g} rad/s", f"the force loop: {why}",
+        raise refuse(f"force_bandwidth {w_F:.4g} rad/s", f"the force loop: {why}",
                      "lower force_bandwidth")
 
     def gains_of(w_P: float) -> PIDGains:
@@ -423,7 +425,7 @@ def derive_tuning(model: ControlModel, dt: float | None = None,
     gains = gains_of(w_P)
     margins = margins_of(w_P, quick=False)
     if (why := margins.shortfall()) is not None:
-        raise refuse(f"pid_bandwidth {w_P:g} rad/s with force_bandwidth {w_F:g} rad/s", why,
+        raise refuse(f"pid_bandwidth {w_P:.4g} rad/s with force_bandwidth {w_F:.4g} rad/s", why,
                      "lower pid_bandwidth or raise force_bandwidth")
     k = given.get("observer_gain") or observer_gain_rule(model, w_P, sigma_F)
     return Tuning(
@@ -431,7 +433,7 @@ def derive_tuning(model: ControlModel, dt: float | None = None,
         control_rate=1.0 / dt, force_bandwidth=w_F, pid_bandwidth=w_P,
         derivative_cutoff=gains.derivative_cutoff, observer_gain=float(k),
         ekf_measurement_std=tuple(float(s) for s in model.sensors.std()),  # type: ignore[arg-type]
-        mpc_horizon_time=2 * math.pi / w_F, mpc_velocity_ratio=0.5 * w_F,
+        mpc_horizon_time=math.pi / w_h, mpc_velocity_ratio=0.5 * w_F,
         margins=margins, force_margins=f_margins, given=tuple(sorted(given)),
     )
 

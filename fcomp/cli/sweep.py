@@ -122,7 +122,7 @@ def _friction(spec: str, option: str) -> Any:
 def _plan(args: argparse.Namespace) -> Any:
     """The :class:`~controllers.robustness.Sweep` or :class:`~controllers.robustness.Grid`."""
     from controllers import CONTROLLERS
-    from controllers.harness import LoopConfig
+    from controllers.harness import LoopConfig, control_model
     from controllers.robustness import Grid, Sweep
     from controllers.tasks import TASKS
 
@@ -143,6 +143,8 @@ def _plan(args: argparse.Namespace) -> Any:
         CONTROLLERS.get(c)
     base = LoopConfig(plant=plant, friction=_friction(args.friction, "--friction"),
                       plant_file=plant_file)
+    if plant_file is not None:  # its explicit tuning without margins: refused before any run
+        _ = control_model(base).tuning
     frictions = tuple(_friction(f, "--controller-friction") for f in
                       common.name_list(args.controller_friction, "--controller-friction") or ())
     if args.grid or frictions:

@@ -187,7 +187,6 @@ def build_loop(controller: str, config: LoopConfig, options: Mapping[str, Any] |
     """The true plant, the controller's model and the controller of a configuration."""
     from controllers import make_controller
     from plants import make_plant
-
     from plants.planfile import KINDS
 
     if config.plant not in KINDS:

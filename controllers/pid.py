@@ -177,7 +177,7 @@ class PIDController(Controller):
     bandwidth
         Closed-loop bandwidth (rad/s) placing the gains; default the plant's derived one
         (:attr:`~controllers.plant_model.ControlModel.tuning`). Any explicit tuning option
-        is checked for margins (:func:`controllers.tuning.check_gains`).
+        is checked for margins (:meth:`~controllers.plant_model.ControlModel.checked_margins`).
     kp, ki, kd
         Gains (N/m, N/(m s), N s/m) overriding the placed ones.
     derivative_cutoff
@@ -198,13 +198,11 @@ class PIDController(Controller):
         super().__init__(model, **options)
         o = self.opts
         from controllers.force_to_valve import ForceToValve
-        from controllers.tuning import check_gains, force_noise, pid_gains
 
         tu = model.tuning
         explicit = sorted(set(o) & {"rate", "bandwidth", "kp", "ki", "kd", "derivative_cutoff",
                                     "force_bandwidth"})
-        placed = (pid_gains(model.mass, float(o["bandwidth"]), model.sensors, force_noise(model),
-                            self.dt) if "bandwidth" in o
+        placed = (model.placed_gains(float(o["bandwidth"]), self.dt) if "bandwidth" in o
                   else PIDGains.placed(model.mass, tu.pid_bandwidth,
                                        derivative_cutoff=tu.derivative_cutoff))
         self.gains = PIDGains(
@@ -219,8 +217,8 @@ class PIDController(Controller):
             model.valve_transfer(), self.dt)
         #: Margins of the nominal loop (:class:`controllers.tuning.Margins`); explicit
         #: values are checked (refused without margins), the derived ones are the tuning's.
-        self.margins = (check_gains(self.gains, model, self.valve.bandwidth, self.dt,
-                                    f"{self.name} tuning ({', '.join(explicit)} given)")
+        self.margins = (model.checked_margins(self.gains, self.valve.bandwidth, self.dt,
+                                              f"{self.name} tuning ({', '.join(explicit)} given)")
                         if explicit else tu.margins)
         self.law = PIDLaw(self.gains, self.dt)
         self.F_demand = 0.0

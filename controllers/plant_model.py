@@ -37,8 +37,9 @@ from typing import TYPE_CHECKING, Any
 import casadi as ca
 import numpy as np
 
+from controllers.pid import PIDGains
 from controllers.prediction import ContinuousModel
-from controllers.tuning import Tuning, derive_tuning
+from controllers.tuning import Margins, Tuning, check_gains, derive_tuning, force_noise, pid_gains
 from fcomp.errors import FcompError
 from fcomp.measurement import G
 from fcomp.models.base import FrictionModel
@@ -144,9 +145,8 @@ class ControlModel:
     def __init__(self, plant: str | PlantFile, friction: FrictionModel,
                  params: str | None = None, **settings: Any) -> None:
         from plants import OdePlant, make_plant
-        from plants.planfile import PlantFile
-
         from plants.check import frictionless
+        from plants.planfile import PlantFile
 
         base = plant_settings(plant)
         bad = sorted(set(settings) - set(base.__dataclass_fields__))
@@ -203,6 +203,17 @@ class ControlModel:
                 _TUNINGS[key] = derive_tuning(self, given=self.settings.given_tuning())
             self._tuning = _TUNINGS[key]
         return self._tuning
+
+    def placed_gains(self, bandwidth: float, dt: float) -> PIDGains:
+        """PID gains placed at ``bandwidth`` (rad/s) with the derivative filter of rule 3 of
+        :mod:`controllers.tuning` (:func:`controllers.tuning.pid_gains`)."""
+        return pid_gains(self.mass, bandwidth, self.sensors, force_noise(self), dt)
+
+    def checked_margins(self, gains: PIDGains, force_bandwidth: float, dt: float,
+                        what: str) -> Margins:
+        """Margins of explicit PID gains on the nominal loop, refused (one line, naming
+        ``what``) without them (:func:`controllers.tuning.check_gains`)."""
+        return check_gains(gains, self, force_bandwidth, dt, what)
 
     def use_tuning(self, tuning: Tuning) -> None:
         """Replace the derived tuning by ``tuning`` (e.g. :func:`controllers.tuning.fixed_tuning`,

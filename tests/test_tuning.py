@@ -26,7 +26,7 @@ from fcomp.cli.main import main
 from fcomp.errors import FcompError
 from fcomp.models import make_model
 from fcomp.piston import piston_areas
-from plants.planfile import builtin_plant_file, builtin_path, read_plant_file
+from plants.planfile import builtin_path, builtin_plant_file, read_plant_file
 
 AXIS_50 = Path(__file__).parent / "data" / "hydraulic-50mm.toml"
 

@@ -70,7 +70,6 @@ from controllers.base import Controller, Reference
 from controllers.ekf import make_ekf
 from controllers.force_to_valve import ForceToValve
 from controllers.native import native
-from controllers.pid import PIDGains
 from controllers.plant_model import equilibrium
 from controllers.prediction import ContinuousModel
 from fcomp.errors import FcompError
@@ -256,7 +255,7 @@ class MPCController(Controller):
         self.ekf = make_ekf(model, self.dt, o, substeps=self.problem.substeps)
         self.solver = RTISolver(model.prediction, self.problem)
         # fallback law: PD (placed gains without the integral) through the force loop
-        self.fallback_gains = PIDGains.placed(model.mass, model.pid_bandwidth)
+        self.fallback_gains = model.tuning.pid_gains
         self.valve = ForceToValve(model, model.force_bandwidth)
         self.iv = model.prediction.index("v")
         self._u_prev = 0.0

@@ -70,36 +70,66 @@ class PIDGains:
             raise FcompError("pid derivative_cutoff must be positive (Hz)")
 
     @classmethod
-    def placed(cls, mass: float, bandwidth: float, **extra: float) -> PIDGains:
-        """Gains placing the nominal closed-loop poles at ``-bandwidth`` (rad/s)."""
+    def placed(cls, mass: float, bandwidth: float, kp_factor: float = 1.0,
+               kd_factor: float = 1.0, **extra: float) -> PIDGains:
+        """Gains placing the nominal closed-loop poles at ``-bandwidth`` (rad/s):
+        ``kp = 3 m w^2``, ``ki = m w^3``, ``kd = 3 m w``; ``kp_factor`` and ``kd_factor``
+        scale ``kp`` and ``kd`` (another pole pattern with the same ``ki``)."""
         if not (math.isfinite(bandwidth) and bandwidth > 0):
             raise FcompError(f"pid bandwidth must be a positive number (rad/s), got {bandwidth}")
         w = bandwidth
-        return cls(kp=3 * mass * w**2, ki=mass * w**3, kd=3 * mass * w, **extra)
+        return cls(kp=kp_factor * 3 * mass * w**2, ki=mass * w**3,
+                   kd=kd_factor * 3 * mass * w, **extra)
 
 
-def position_loop(gains: PIDGains, mass: float, damping: float, force_bandwidth: float,
-                  valve: Any, dt: float) -> Any:
-    """The nominal sampled loop transfer function ``L(z) = C(z)*P(z)`` (python-control).
+def nominal_plant(mass: float, damping: float, force_bandwidth: float, valve: Any,
+                  dt: float) -> Any:
+    """The nominal plant of the position loop, force demand -> position, sampled (zero-order
+    hold at ``dt``): the piston ``1/(m s^2 + c s)`` (``c`` the viscous friction slope of the
+    controller's friction model) driven by the force loop of
+    :mod:`controllers.force_to_valve`, ``F_a/F_d = w_F*G_v/(s + w_F*G_v)`` with ``G_v`` the
+    valve's linear dynamics (unit DC gain)."""
+    import control as ct
 
-    Nominal plant: the piston ``1/(m s^2 + c s)`` (``c`` the viscous friction
-    slope of the controller's friction model) driven by the force loop of
-    :mod:`controllers.force_to_valve`, ``F_a/F_d = w_F*G_v/(s + w_F*G_v)`` with
-    ``G_v`` the valve's linear dynamics (unit DC gain), discretised with a
-    zero-order hold at ``dt``; controller ``C(z)`` the discrete PID of this module
-    (backward-Euler integral, derivative through the first-order filter)::
+    s = ct.tf("s")
+    inner = ct.feedback(force_bandwidth * valve / s, 1)
+    return ct.tf(ct.c2d(ct.ss(inner / (mass * s**2 + damping * s)), dt, "zoh"))
+
+
+def pid_transfer(gains: PIDGains, dt: float) -> Any:
+    """The discrete PID of this module, error -> force (backward-Euler integral, derivative
+    through the first-order filter)::
 
         C(z) = kp + ki*dt*z/(z - 1) + kd*(z - 1)/((Tf + dt)*z - Tf)
     """
     import control as ct
 
-    s = ct.tf("s")
-    inner = ct.feedback(force_bandwidth * valve / s, 1)
-    plant = ct.c2d(ct.ss(inner / (mass * s**2 + damping * s)), dt, "zoh")
     z = ct.tf([1.0, 0.0], [1.0], dt)
     Tf = 1.0 / (2 * math.pi * gains.derivative_cutoff)
-    C = gains.kp + gains.ki * dt * z / (z - 1) + gains.kd * (z - 1) / ((Tf + dt) * z - Tf)
-    return ct.tf(C) * ct.tf(plant)
+    return ct.tf(gains.kp + gains.ki * dt * z / (z - 1)
+                 + gains.kd * (z - 1) / ((Tf + dt) * z - Tf))
+
+
+def position_loop(gains: PIDGains, mass: float, damping: float, force_bandwidth: float,
+                  valve: Any, dt: float) -> Any:
+    """The nominal sampled loop transfer function ``L(z) = C(z)*P(z)`` (python-control):
+    :func:`pid_transfer` times :func:`nominal_plant`."""
+    return pid_transfer(gains, dt) * nominal_plant(mass, damping, force_bandwidth, valve, dt)
+
+
+def disturbance_response(gains: PIDGains, mass: float, damping: float, force_bandwidth: float,
+                         valve: Any, dt: float, duration: float) -> np.ndarray:
+    """Position error (m) of the nominal loop after a unit step force (1 N) on the piston,
+    at the samples ``0, dt, ..., duration``: ``e = -P_d/(1 + C P)`` with ``P_d`` the piston
+    ``1/(m s^2 + c s)`` sampled (the disturbance enters beside the force loop)."""
+    import control as ct
+
+    s = ct.tf("s")
+    Pd = ct.tf(ct.c2d(ct.ss(1 / (mass * s**2 + damping * s)), dt, "zoh"))
+    loop = position_loop(gains, mass, damping, force_bandwidth, valve, dt)
+    t = np.arange(0.0, duration + 0.5 * dt, dt)
+    resp = ct.step_response(ct.ss(Pd) * ct.ss(ct.feedback(1, loop)), t)
+    return -np.asarray(resp.outputs, dtype=float).ravel()
 
 
 def spectral_radius(loop: Any) -> float:
@@ -203,8 +233,7 @@ class PIDController(Controller):
         explicit = sorted(set(o) & {"rate", "bandwidth", "kp", "ki", "kd", "derivative_cutoff",
                                     "force_bandwidth"})
         placed = (model.placed_gains(float(o["bandwidth"]), self.dt) if "bandwidth" in o
-                  else PIDGains.placed(model.mass, tu.pid_bandwidth,
-                                       derivative_cutoff=tu.derivative_cutoff))
+                  else tu.pid_gains)
         self.gains = PIDGains(
             kp=float(o.get("kp", placed.kp)), ki=float(o.get("ki", placed.ki)),
             kd=float(o.get("kd", placed.kd)),

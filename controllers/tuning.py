@@ -86,7 +86,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from controllers.pid import PIDGains, position_loop, spectral_radius
+from controllers.pid import PIDGains, disturbance_response, position_loop, spectral_radius
 from fcomp.errors import FcompError
 
 if TYPE_CHECKING:
@@ -103,6 +103,11 @@ FORCE_PHASE_MARGIN = 45.0
 COLUMN_FRACTION = 1.0 / 3.0
 #: Highest derivative filter cut-off, as a fraction of the control rate (Hz per Hz).
 DERIVATIVE_CUTOFF_MAX_FRACTION = 0.25
+#: Pole patterns of rule 2: factors on the triple-pole ``kd`` and ``kp`` (``ki = m w^3``).
+KD_FACTORS = (0.4, 0.6, 0.8, 1.0)
+KP_FACTORS = (0.5, 0.7, 1.0)
+#: Duration (s) of the step-disturbance response whose IAE rule 2 minimises.
+IAE_DURATION = 1.0
 #: The derivation's margins above the minimum: 1 % on the gain, 1 deg on the phase
 #: (the bisection's interpolated margins against python-control's).
 PAD = 0.01
@@ -270,7 +275,9 @@ class Tuning:
     control_rate : float
         ``f_s`` (Hz).
     force_bandwidth, pid_bandwidth : float
-        ``w_F``, ``w_P`` (rad/s), rules 1 and 2.
+        ``w_F``, ``w_P`` (rad/s), rules 1 and 2 (``w_P``: ``ki = m w_P^3``).
+    pid_gains : PIDGains
+        The PID's gains (rule 2's pole pattern, rule 3's filter).
     derivative_cutoff : float
         ``f_d`` (Hz), rule 3.
     observer_gain : float
@@ -294,6 +301,7 @@ class Tuning:
     control_rate: float
     force_bandwidth: float
     pid_bandwidth: float
+    pid_gains: PIDGains
     derivative_cutoff: float
     observer_gain: float
     ekf_measurement_std: tuple[float, float, float]
@@ -316,7 +324,9 @@ class Tuning:
             f"tuning: force loop {self.force_bandwidth:.4g} rad/s ({src('force_bandwidth')}; "
             f"valve bandwidth {self.valve_bandwidth:.4g} rad/s, column {self.column_frequency:.4g}"
             f" rad/s), PID {self.pid_bandwidth:.4g} rad/s ({src('pid_bandwidth')}), "
-            f"derivative filter {self.derivative_cutoff:.4g} Hz, observer gain "
+            f"kp {self.pid_gains.kp:.4g} N/m, ki {self.pid_gains.ki:.4g} N/(m s), kd "
+            f"{self.pid_gains.kd:.4g} N s/m, derivative filter {self.derivative_cutoff:.4g} Hz, "
+            f"observer gain "
             f"{self.observer_gain:.4g} 1/s ({src('observer_gain')})",
             f"  position loop: {self.margins.describe()}",
             f"  force loop: {self.force_margins.describe()}",
@@ -336,6 +346,8 @@ class Tuning:
             "column_frequency": self.column_frequency, "valve_bandwidth": self.valve_bandwidth,
             "control_rate": self.control_rate, "force_bandwidth": self.force_bandwidth,
             "pid_bandwidth": self.pid_bandwidth, "derivative_cutoff": self.derivative_cutoff,
+            "pid_gains": {"kp": self.pid_gains.kp, "ki": self.pid_gains.ki,
+                          "kd": self.pid_gains.kd},
             "observer_gain": self.observer_gain,
             "ekf_measurement_std": list(self.ekf_measurement_std),
             "mpc_horizon_time": self.mpc_horizon_time,
@@ -353,11 +365,13 @@ def valve_bandwidth(valve: Any) -> float:
 
 
 def pid_gains(mass: float, bandwidth: float, sensors: Sensors, sigma_F: float,
-              dt: float) -> PIDGains:
-    """The placed PID gains of a bandwidth with the derivative filter of rule 3."""
-    placed = PIDGains.placed(mass, bandwidth)
-    return PIDGains.placed(mass, bandwidth, derivative_cutoff=derivative_cutoff_rule(
-        placed.kd, sensors, sigma_F, dt))
+              dt: float, kp_factor: float = 1.0, kd_factor: float = 1.0) -> PIDGains:
+    """The placed PID gains of a bandwidth and pole pattern with the derivative filter of
+    rule 3."""
+    placed = PIDGains.placed(mass, bandwidth, kp_factor, kd_factor)
+    return PIDGains.placed(mass, bandwidth, kp_factor, kd_factor,
+                           derivative_cutoff=derivative_cutoff_rule(placed.kd, sensors,
+                                                                    sigma_F, dt))
 
 
 def refuse(what: str, problem: str, advice: str) -> FcompError:
@@ -400,37 +414,49 @@ def derive_tuning(model: ControlModel, dt: float | None = None,
         raise refuse(f"force_bandwidth {w_F:.4g} rad/s", f"the force loop: {why}",
                      "lower force_bandwidth")
 
-    def gains_of(w_P: float) -> PIDGains:
-        g = pid_gains(model.mass, w_P, model.sensors, sigma_F, dt)
+    def gains_of(w_P: float, shape: tuple[float, float]) -> PIDGains:
         if "derivative_cutoff" in given:
-            return PIDGains.placed(model.mass, w_P,
+            return PIDGains.placed(model.mass, w_P, *shape,
                                    derivative_cutoff=float(given["derivative_cutoff"]))
-        return g
+        return pid_gains(model.mass, w_P, model.sensors, sigma_F, dt, *shape)
 
-    def margins_of(w_P: float, quick: bool = True) -> Margins:
-        loop = position_loop(gains_of(w_P), model.mass, damping, w_F, valve, dt)
+    def margins_of(gains: PIDGains, quick: bool = True) -> Margins:
+        loop = position_loop(gains, model.mass, damping, w_F, valve, dt)
         return quick_margins(loop) if quick else loop_margins(loop)
+
+    def iae(gains: PIDGains) -> float:
+        e = disturbance_response(gains, model.mass, damping, w_F, valve, dt, IAE_DURATION)
+        return float(np.sum(np.abs(e)) * dt)
 
     if "pid_bandwidth" in given:
         w_P = float(given["pid_bandwidth"])
+        gains = gains_of(w_P, (1.0, 1.0))
     else:
         cap = COLUMN_FRACTION * w_h if w_F < w_h else w_F
         low = min(1.0, cap)
-        if margins_of(low).shortfall() is not None:
+        candidates = []
+        for shape in ((kp, kd) for kd in KD_FACTORS for kp in KP_FACTORS):
+            def ok(w: float, shape: tuple[float, float] = shape) -> bool:
+                return margins_of(gains_of(w, shape)).shortfall(
+                    MIN_GAIN_MARGIN * (1 + PAD), MIN_PHASE_MARGIN + PAD * 100) is None
+
+            if ok(low):
+                w = _largest(ok, low, cap)
+                candidates.append((iae(gains_of(w, shape)), w, shape))
+        if not candidates:
+            why = margins_of(gains_of(low, (1.0, 1.0))).shortfall()
             raise refuse("the derived tuning", f"even a PID bandwidth of {low:g} rad/s gives "
-                         f"{margins_of(low).shortfall()}", "check the plant file's valve, "
-                         "mass and control rate")
-        w_P = _largest(lambda w: margins_of(w).shortfall(
-            MIN_GAIN_MARGIN * (1 + PAD), MIN_PHASE_MARGIN + PAD * 100) is None, low, cap)
-    gains = gains_of(w_P)
-    margins = margins_of(w_P, quick=False)
+                         f"{why}", "check the plant file's valve, mass and control rate")
+        _, w_P, shape = min(candidates)
+        gains = gains_of(w_P, shape)
+    margins = margins_of(gains, quick=False)
     if (why := margins.shortfall()) is not None:
         raise refuse(f"pid_bandwidth {w_P:.4g} rad/s with force_bandwidth {w_F:.4g} rad/s", why,
                      "lower pid_bandwidth or raise force_bandwidth")
     k = given.get("observer_gain") or observer_gain_rule(model, w_P, sigma_F)
     return Tuning(
         column_frequency=w_h, valve_bandwidth=valve_bandwidth(valve),
-        control_rate=1.0 / dt, force_bandwidth=w_F, pid_bandwidth=w_P,
+        control_rate=1.0 / dt, force_bandwidth=w_F, pid_bandwidth=w_P, pid_gains=gains,
         derivative_cutoff=gains.derivative_cutoff, observer_gain=float(k),
         ekf_measurement_std=tuple(float(s) for s in model.sensors.std()),  # type: ignore[arg-type]
         mpc_horizon_time=math.pi / w_h, mpc_velocity_ratio=0.5 * w_F,
@@ -459,7 +485,7 @@ def fixed_tuning(model: ControlModel, force_bandwidth: float, pid_bandwidth: flo
     return Tuning(
         column_frequency=model.column_frequency, valve_bandwidth=valve_bandwidth(valve),
         control_rate=model.control_rate, force_bandwidth=force_bandwidth,
-        pid_bandwidth=pid_bandwidth, derivative_cutoff=derivative_cutoff,
+        pid_bandwidth=pid_bandwidth, pid_gains=gains, derivative_cutoff=derivative_cutoff,
         observer_gain=observer_gain,
         ekf_measurement_std=tuple(float(s) for s in model.sensors.std()),  # type: ignore[arg-type]
         mpc_horizon_time=mpc_horizon_time, mpc_velocity_ratio=mpc_velocity_ratio,

@@ -24,8 +24,9 @@ servos):
    models.md 3.2; pneumatic: ISO 6358 mass flows, polytropic chambers,
    models.md 3.3), evaluated with the valve at its steady opening
    ``xv_ss(u)`` for the command (valve dynamics neglected in the
-   inversion: the servo valve at 440 rad/s and the pneumatic spool at
-   1/5 ms are three times faster than the force loop);
+   inversion; their lag is in the loop the bandwidth ``w_F`` is designed
+   on: :mod:`controllers.tuning`, rule 1, a 45 deg phase margin through the
+   valve's linearised dynamics and the zero-order hold);
 3. ``dF_a/dt(u)`` increases monotonically with ``u`` (opening the valve
    fills chamber 1 and drains chamber 2), and at fixed pressures it is
    piecewise linear in the opening; it is evaluated on a grid of commands
@@ -38,7 +39,7 @@ The term ``A1^2/V1 + A2^2/V2`` of the velocity (the flow the moving piston
 displaces) is part of the chamber equations, so the inversion also
 compensates the velocity-induced force drop. A friction estimate added
 to ``F_d`` thus becomes, within one force-loop time constant
-(``1/w_F``, about 7 ms), the extra pressure difference that cancels it.
+(``1/w_F``, about 5 ms), the extra pressure difference that cancels it.
 """
 
 from __future__ import annotations

@@ -25,18 +25,29 @@ Rules (SI units; ``dt = 1/f_s`` the control period)
    ``r = w_F/w_v``. Where the force loop is slower than the oil (air) column
    (``w_F < w_h``) it cannot damp the column actively, and the classical limit
    of a valve-controlled axis applies to the position loop below.
-2. **Position loop** ``w_P`` (the PID's pole placement ``kp = 3 m w_P^2``,
-   ``ki = m w_P^3``, ``kd = 3 m w_P``). ``w_P`` is the largest bandwidth for which
-   the nominal sampled loop of :func:`controllers.pid.position_loop` (mass and
-   friction slope, the force loop of rule 1 through the valve, zero-order hold,
-   the PID's derivative filter) keeps the margins :data:`MIN_GAIN_MARGIN`
-   (2, 6 dB) and :data:`MIN_PHASE_MARGIN` (30 deg) -- the usual minimum
-   margins (Franklin et al. sec. 6.4; Skogestad & Postlethwaite, *Multivariable
-   Feedback Control*, 2nd ed., 2005, sec. 2.4.3: ``GM > 2``, ``PM > 30 deg``). When
-   the force loop is slower than the column (``w_F < w_h``), ``w_P`` is also
-   kept below ``w_h/3``, the rule for a lightly damped hydraulic axis (Merritt,
-   *Hydraulic Control Systems*, 1967, sec. 8.3; Jelali & Kroll, *Hydraulic Servo-
-   systems*, 2003, sec. 7.2: position bandwidth below a third of ``w_h``).
+2. **Position loop** ``w_P`` and the PID's pole pattern. The PID's gains are
+   the triple-pole placement of :mod:`controllers.pid` with ``kp`` and ``kd``
+   scaled, ``kp = a_p*3 m w_P^2``, ``ki = m w_P^3``, ``kd = a_d*3 m w_P``
+   (``a_p`` in :data:`KP_FACTORS`, ``a_d`` in :data:`KD_FACTORS`; ``a_p = a_d = 1``
+   is the triple pole at ``-w_P``). For each pattern, ``w_P`` is the largest
+   bandwidth for which the nominal sampled loop of
+   :func:`controllers.pid.position_loop` (mass and friction slope, the force
+   loop of rule 1 through the valve, zero-order hold, the PID's derivative
+   filter) keeps the margins :data:`MIN_GAIN_MARGIN` (2, 6 dB) and
+   :data:`MIN_PHASE_MARGIN` (30 deg) -- the usual minimum margins (Franklin
+   et al. sec. 6.4; Skogestad & Postlethwaite, *Multivariable Feedback
+   Control*, 2nd ed., 2005, sec. 2.4.3: ``GM > 2``, ``PM > 30 deg``); of these,
+   the pattern whose loop has the least integrated absolute error (IAE) after
+   a step force on the piston (the load disturbance a friction force is;
+   :func:`controllers.pid.disturbance_response`) is taken -- the design of PID
+   controllers for load-disturbance rejection under robustness constraints
+   (Astrom & Hagglund, *Advanced PID Control*, 2006, sec. 7.2-7.4: minimise
+   IAE, or maximise ``ki``, subject to a robustness constraint). When the
+   force loop is slower than the column (``w_F < w_h``), ``w_P`` is also kept
+   below ``w_h/3``, the rule for a lightly damped hydraulic axis (Merritt,
+   *Hydraulic Control Systems*, 1967, sec. 8.3; Jelali & Kroll, *Hydraulic
+   Servo-systems*, 2003, sec. 7.2: position bandwidth below a third of
+   ``w_h``).
 3. **Derivative filter** ``f_d`` (Hz). The filtered derivative of a position
    measured with noise ``sigma_x`` (noise and quantisation ``q/sqrt(12)``) has the
    variance ``sigma_x^2*w_d/dt`` (first-order filter, ``w_d*dt << 1``); its force
@@ -46,7 +57,7 @@ Rules (SI units; ``dt = 1/f_s`` the control period)
        w_d = dt*(sigma_F/(kd*sigma_x))^2,    f_d = min(w_d/(2 pi), f_s/4).
 
    ``f_d`` depends on ``kd`` (on ``w_P``), and the margins of rule 2 on ``f_d``:
-   rule 2 is solved with ``f_d(w_P)``.
+   rule 2 is solved with ``f_d(kd)``.
 4. **LuGre observer gain** ``k`` (1/s). The correction ``-k*e`` of the bristle
    state is driven by the position error the PID shapes at ``w_P``; it is kept
    an octave slower (``k = w_P/2``: the two time scales separated by two, so

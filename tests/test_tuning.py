@@ -15,6 +15,8 @@ from controllers.pid import PIDGains, position_loop
 from controllers.plant_model import ControlModel
 from controllers.tuning import (
     FORCE_PHASE_MARGIN,
+    KD_FACTORS,
+    KP_FACTORS,
     MIN_GAIN_MARGIN,
     MIN_PHASE_MARGIN,
     fixed_tuning,
@@ -72,11 +74,18 @@ def test_derived_bandwidths_obey_the_rules_on_the_builtin_hydraulic_plant() -> N
     assert tu.force_bandwidth > tu.column_frequency
     assert tu.margins.gain >= MIN_GAIN_MARGIN and tu.margins.phase >= MIN_PHASE_MARGIN
     assert tu.margins.radius < 1
-    assert tu.margins.gain == pytest.approx(MIN_GAIN_MARGIN, rel=0.03)  # the binding margin
-    above = fixed_tuning(model, tu.force_bandwidth, 1.05 * tu.pid_bandwidth,
-                         tu.derivative_cutoff, tu.observer_gain, tu.mpc_horizon_time,
-                         tu.mpc_velocity_ratio)
-    assert above.margins.shortfall() is not None
+    # the pole pattern is one of the rule's, and its bandwidth the largest with the margins
+    g, w = tu.pid_gains, tu.pid_bandwidth
+    assert g.ki == pytest.approx(model.mass * w**3)
+    kp_factor, kd_factor = g.kp / (3 * model.mass * w**2), g.kd / (3 * model.mass * w)
+    assert min(abs(kp_factor - f) for f in KP_FACTORS) < 1e-9
+    assert min(abs(kd_factor - f) for f in KD_FACTORS) < 1e-9
+    damping = model.viscous_damping()
+    for factor, short in ((1.0, False), (1.03, True)):
+        gains = PIDGains.placed(model.mass, factor * w, kp_factor, kd_factor,
+                                derivative_cutoff=g.derivative_cutoff)
+        loop = position_loop(gains, model.mass, damping, tu.force_bandwidth, valve, dt)
+        assert (loop_margins(loop).shortfall() is not None) == short
     # rules 4 and 6
     assert tu.observer_gain == pytest.approx(0.5 * tu.pid_bandwidth)
     assert tu.mpc_horizon_time == pytest.approx(math.pi / tu.column_frequency)

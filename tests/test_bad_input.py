@@ -862,6 +862,7 @@ def test_diagnose_report_failure_leaves_nothing(lab: Path, capsys: pytest.Captur
 
     monkeypatch.setattr(fcomp.diagnosis.Diagnosis, "fit", lambda self, data: self)
     monkeypatch.setattr(fcomp.diagnosis.Diagnosis, "to_dict", lambda self: {"baseline": "x"})
+    monkeypatch.setattr(fcomp.diagnosis.Diagnosis, "model_file", lambda self, source=None: {})
 
     def half(diag: object, directory: Path, command: str | None = None) -> Path:
         (Path(directory) / "report.html").write_text("<html>half")

@@ -186,3 +186,16 @@ def test_bad_input_is_one_line_and_writes_nothing(case: str, words: str, tmp_pat
     assert len(lines) == 1 and lines[0].startswith("fcomp: error:"), err
     assert words in lines[0], lines[0]
     assert not (tmp_path / "out.json").exists() and not (tmp_path / "rep").exists()
+
+
+def test_the_example_plant_files_are_the_axes_of_the_docs() -> None:
+    """docs/examples: the 50 mm, 80 kg hydraulic axis at 21 MPa and the 40 mm pneumatic one
+    (docs/your-cylinder.md), edited from the templates."""
+    from plants.planfile import read_plant_file
+
+    hyd = read_plant_file(AXIS)
+    assert hyd.kind == "hydraulic"
+    assert (hyd.values["bore"], hyd.values["rod"], hyd.values["mass"]) == (0.05, 0.028, 80.0)
+    assert hyd.values["ps"] == 21.0e6
+    pn = read_plant_file(ROOT / "docs" / "examples" / "axis40.toml")
+    assert pn.kind == "pneumatic" and pn.values["bore"] == 0.04 and pn.values["mass"] == 4.0

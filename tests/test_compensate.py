@@ -47,7 +47,7 @@ def cli_run(tmp_path_factory: pytest.TempPathFactory) -> dict:
     code = main(["compensate", "--plant-params", str(AXIS), "--friction", str(true),
                  "--models", f"{base},{diag}", "--controllers", "pid-ff", "--task", "steps",
                  "--fast", "--samples", "1", "--workers", "1", "--json", str(out),
-                 "--no-progress"])
+                 "--report", str(folder / "report"), "--no-progress"])
     assert code == 0
     return {"doc": json.loads(out.read_text()), "folder": folder,
             "files": (true, base, diag)}
@@ -69,6 +69,13 @@ def test_json_contract(cli_run: dict) -> None:
     assert set(rob["draws"][0]) >= {"Fc", "Fs", "r_neg", "mass"}
     assert all(0.8 <= f <= 1.2 for f in rob["draws"][0].values())
     assert rob["controllers"]["pid-ff"]["ratio"]["diag"]["paired_draws"] == 1
+
+
+def test_the_report_draws_the_ratios_the_errors_and_the_draws(cli_run: dict) -> None:
+    html = (cli_run["folder"] / "report" / "report.html").read_text()
+    for heading in ("Ratios to the baseline", "Tracking errors", "Robustness", "Runs"):
+        assert heading in html
+    assert html.count("<img") + html.count("<svg") >= 3
 
 
 def test_ratios_follow_from_the_runs(cli_run: dict) -> None:

@@ -272,6 +272,11 @@ def draws(true_friction: FrictionModel, samples: int, spread: float, seed: int
     return out
 
 
+def default_samples(fast: bool) -> int:
+    """Robustness draws when not given: 8, or 4 with the fast tasks."""
+    return 4 if fast else 8
+
+
 def compensate(plant: Any, true_friction: Any, models: Sequence[Any] | Mapping[str, Any], *,
                controllers: Sequence[str] = DEFAULT_CONTROLLERS, task: str | None = None,
                reference: str | Path | Task | None = None, fast: bool = False,
@@ -335,7 +340,7 @@ def compensate(plant: Any, true_friction: Any, models: Sequence[Any] | Mapping[s
         CONTROLLERS.get(c)
     if task is not None:
         TASKS.get(task)
-    samples = (4 if fast else 8) if samples is None else samples
+    samples = default_samples(fast) if samples is None else samples
     if not (isinstance(samples, int) and samples >= 0):
         raise FcompError(f"samples must be a whole number >= 0, got {samples!r}")
     if not (math.isfinite(spread) and 0 <= spread < 1):
@@ -612,7 +617,7 @@ def report(result: CompensateResult, command: str | None = None) -> Any:
 
 
 __all__ = ["CONFIDENCE", "DEFAULT_CONTROLLERS", "ERRORS", "RATIO_ERRORS", "ROBUSTNESS_TASK",
-           "CompensateResult", "compensate", "draws", "figure_ratios",
+           "CompensateResult", "compensate", "default_samples", "draws", "figure_ratios",
            "figure_robustness", "figure_tracking", "model_label", "ratio", "ratios",
            "read_reference", "report", "resolve_friction", "resolve_plant",
            "robustness"]

@@ -192,8 +192,9 @@ def run(args: argparse.Namespace) -> int:
 
 def _count(args: argparse.Namespace, controllers: tuple[str, ...], n_models: int) -> int:
     """How many closed-loop runs the command makes (for the progress bar)."""
+    from controllers.compensate import default_samples
     from controllers.tasks import TASKS
 
     tasks = 1 if args.task is not None or args.reference is not None else len(TASKS.names())
-    samples = (4 if args.fast else 8) if args.samples is None else args.samples
+    samples = default_samples(args.fast) if args.samples is None else args.samples
     return len(controllers) * n_models * (tasks + samples)

@@ -160,6 +160,7 @@ def test_a_reference_file_is_tracked(tmp_path: Path, capsys: pytest.CaptureFixtu
     ("backwards", "times must increase"),
     ("outside", "outside the stroke"),
     ("one-model", "at least two models"),
+    ("spread", "--spread"),
 ])
 def test_bad_input_is_one_line_and_writes_nothing(case: str, words: str, tmp_path: Path,
                                                   capsys: pytest.CaptureFixture) -> None:
@@ -187,6 +188,8 @@ def test_bad_input_is_one_line_and_writes_nothing(case: str, words: str, tmp_pat
         args[i:i + 2] = ["--reference", str(ref)]
     elif case == "one-model":
         args[args.index(f"{base},{diag}")] = str(base)
+    elif case == "spread":
+        args += ["--spread", "1.5"]
     code, out, err = _run(args, capsys)
     assert code == 2
     lines = err.strip().splitlines()

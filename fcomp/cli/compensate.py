@@ -18,7 +18,8 @@ errors (on the true position), their ratios to the baseline's (below 1 the
 model helps), and a short robustness Monte Carlo on one task (``steps``, or
 the one given): ``--samples`` draws (default 8, 4 with ``--fast``; 0 none)
 in which every parameter of the true friction and the moving mass are off by
-a factor uniform in 1 +- 0.2, every controller and model on the same draws.
+a factor uniform in 1 +- 0.2 (``--spread``), every controller and model on the
+same draws.
 Measurement terms of a model file (force offset, fitted mass, channel lag)
 are dropped with a warning. The runs go to local processes (``--workers``)
 or to a Dask cluster (``--scheduler ADDRESS``).
@@ -37,7 +38,7 @@ import shlex
 from typing import Any
 
 from fcomp.cli import common
-from fcomp.cli.common import emit_result, json_target, report_dir, result_text
+from fcomp.cli.common import emit_result, finite_float, json_target, report_dir, result_text
 from fcomp.errors import FcompError
 
 
@@ -64,6 +65,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--fast", action="store_true", help="the short versions of the tasks")
     p.add_argument("--samples", type=int, default=None, metavar="N",
                    help="robustness draws (default 8, 4 with --fast; 0: none)")
+    p.add_argument("--spread", type=finite_float, default=0.2,
+                   help="half width of the draws' uniform factors on the true friction and "
+                   "the mass (default 0.2: +-20 %%)")
     p.add_argument("--seed", type=int, default=2026, help="seed of the draws and the noise")
     p.add_argument("--effects", metavar="MODULE.py", default=None,
                    help="a Python file that registers the user's own effects the model files "
@@ -140,6 +144,8 @@ def run(args: argparse.Namespace) -> int:
         raise FcompError(f"--workers must be a positive integer, got {args.workers}")
     if args.samples is not None and args.samples < 0:
         raise FcompError(f"--samples must be 0 or more, got {args.samples}")
+    if not 0 <= args.spread < 1:
+        raise FcompError(f"--spread must lie in [0, 1), got {args.spread:g}")
     controllers = tuple(common.name_list(args.controllers, "--controllers")
                         or DEFAULT_CONTROLLERS)
     for c in controllers:
@@ -170,7 +176,8 @@ def run(args: argparse.Namespace) -> int:
     try:
         res = compensate(plant, args.friction, models, controllers=controllers,
                          task=args.task, reference=args.reference, fast=args.fast,
-                         samples=args.samples, seed=args.seed, workers=args.workers,
+                         samples=args.samples, spread=args.spread, seed=args.seed,
+                         workers=args.workers,
                          scheduler=scheduler, keep_signals=folder is not None,
                          progress=lambda done, total: bar.update(done - bar.n),
                          effects=args.effects)

@@ -169,13 +169,14 @@ def _true_friction(spec: Any, warnings: list[str] | None) -> str | FrictionModel
     if not isinstance(spec, str | os.PathLike):
         raise FcompError(f"study friction: a model name, a model file or a friction model, "
                          f"not {type(spec).__name__}")
-    if is_model_file(spec):
-        mf = read_model(spec)
+    text = str(spec)
+    if is_model_file(text):
+        mf = read_model(text)
         if mf.measurement_terms and warnings is not None:
             warnings.append(mf.dropped_note("the plant's or the controllers' friction"))
         return mf.model
-    MODELS.get(str(spec))
-    return str(spec)
+    MODELS.get(text)
+    return text
 
 
 def _check_friction(base: LoopConfig) -> None:
@@ -498,6 +499,7 @@ class CompensatorsStudy(Study):
         rep.section("Tracking")
         for p in self._plants_of(runs, plants):
             fig, axes = out.subplots(len(TASK_ORDER), 1, figsize=(9, 2.6 * len(TASK_ORDER)))
+            axes = np.atleast_1d(axes)
             for ax, t in zip(axes, TASK_ORDER, strict=True):
                 for c, s in self._signals(runs, p, t).items():
                     ax.plot(s["t"], (s["r"] - s["x"]) * 1e6, lw=0.9, label=c)
@@ -514,7 +516,11 @@ class CompensatorsStudy(Study):
                       "reference velocity; the observer and the EKF estimate the bristle (and "
                       "film) state on line; the MPC uses the EKF estimate.")
         for p in self._plants_of(runs, plants):
-            fig, axes = out.subplots(2, 1, figsize=(9, 5.5))
+            if not LOW_VELOCITY:
+                continue
+            fig, axes = out.subplots(len(LOW_VELOCITY), 1,
+                                     figsize=(9, 2.75 * len(LOW_VELOCITY)))
+            axes = np.atleast_1d(axes)
             for ax, t in zip(axes, LOW_VELOCITY, strict=True):
                 for c, s in self._signals(runs, p, t).items():
                     if c == "pid":

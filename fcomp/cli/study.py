@@ -64,6 +64,8 @@ def run(args: argparse.Namespace) -> int:
             raise FcompError(f"{option} applies to the {' and '.join(takers)} study")
         if not value.strip():
             raise FcompError(f"{option}: no value given (an empty argument)")
+    if args.plant_params is not None and not args.plant_params.lower().endswith(".toml"):
+        raise FcompError(f"--plant-params {args.plant_params}: a plant file ends in .toml")
     scheduler = check_scheduler(args.scheduler)
     if args.workers is not None and args.workers < 1:
         raise FcompError(f"--workers must be a positive integer, got {args.workers}")

@@ -18,8 +18,8 @@ import pytest
 import studies.compensators as comp
 from controllers.harness import DEFAULT_MISMATCH, LoopConfig
 from fcomp.cli.main import main
-from fcomp.errors import FcompError
 from fcomp.effects import make_effect
+from fcomp.errors import FcompError
 from fcomp.models import make_model
 from studies import STUDIES
 from studies.base import StudyConfig

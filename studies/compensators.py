@@ -384,8 +384,10 @@ class CompensatorsStudy(Study):
                     "are multiplied by the mismatch factors below")
         else:
             true = friction_label(base.friction)
-            what = (f"the plant integrates the *true* friction `{true}` (given: "
-                    f"`{config.friction if isinstance(config.friction, str | os.PathLike) else true}`), "
+            spec = config.friction
+            given = (f" (model file `{spec}`)" if isinstance(spec, str | os.PathLike)
+                     and str(spec).lower().endswith(".json") else "")
+            what = (f"the plant integrates the *true* friction `{true}`{given}, "
                     f"the controller is built on its own plant model with the same friction "
                     f"model, its parameters multiplied by the mismatch factors below (a "
                     f"factor on a parameter the model lacks is ignored)")
@@ -476,17 +478,17 @@ class CompensatorsStudy(Study):
         assert pf is not None
         v = pf.values
         shown = {"bore": ("bore [mm]", 1e3), "rod": ("rod [mm]", 1e3),
-                 "stroke": ("stroke [mm]", 1e3), "mass": ("mass [kg]", 1.0),
-                 "orient": ("orientation (+1 up, -1 down)", 1.0),
+                 "stroke": ("stroke [mm]", 1e3), "mass": ("moving mass [kg]", 1.0),
                  "ps": ("supply [MPa abs]", 1e-6), "pt": ("return [MPa abs]", 1e-6),
                  "omega_v": ("spool bandwidth [rad/s]", 1.0),
                  "tau_v": ("spool lag [ms]", 1e3), "V10": ("line volume cap side [cm^3]", 1e6),
                  "V20": ("line volume rod side [cm^3]", 1e6),
                  "beta": ("bulk modulus [MPa]", 1e-6)}
-        rows = [[label, float(v[k]) * f] for k, (label, f) in shown.items() if k in v]
+        rows = [[label, f"{float(v[k]) * f:.4g}"] for k, (label, f) in shown.items() if k in v]
+        rows.insert(4, ["orientation", str(pf.rig.get("orientation", v.get("orient", "")))])
         out.report.table(["value", sp.label], rows,
                          caption=f"The plant of the plant file {sp.source} ({pf.kind}, name "
-                         f"`{pf.name}`), instead of the built-in plants.", digits=[None, 4])
+                         f"`{pf.name}`), instead of the built-in plants.")
 
     @staticmethod
     def _plants_of(runs: list[dict[str, Any]], plants: list[StudyPlant] | None) -> list[str]:

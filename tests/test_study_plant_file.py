@@ -9,8 +9,10 @@ edited plant (``docs/examples/axis50.toml``) runs end to end on the command line
 
 from __future__ import annotations
 
+import html
 import json
 import math
+import re
 from pathlib import Path
 
 import pytest
@@ -110,10 +112,13 @@ def test_edited_plant_file_on_the_command_line(tmp_path: Path, short_plan: None,
     assert len(setup["warnings"]) == 1 and "force-offset" in setup["warnings"][0]
     assert "--plant-params" in summary["meta"]["command"]
     assert "fig-tracking-axis50.png" in summary["meta"]["figures"]
-    html = (out / "report.html").read_text()
-    assert "axis50" in html and "plant file" in html
-    for value in ("50.0", "80.0", "21.0"):  # bore [mm], mass [kg], supply [MPa] shown
-        assert value in html
+    text = _text(out / "report.html")
+    assert "The plant of the plant file" in text and "name axis50" in text
+    for shown in ("bore [mm] 50 ", "moving mass [kg] 80 ", "supply [MPa abs] 21 ",
+                  "orientation horizontal"):  # the file's values, not the built-in plant's
+        assert shown in text, shown
+    assert "Controller settings, from the plant file" in text
+    assert "true* friction lugre (model file" in text and f"model file {friction}" in text
 
 
 def test_plant_file_settings_replace_the_builtin_table(tmp_path: Path) -> None:
@@ -130,6 +135,13 @@ def test_plant_file_settings_replace_the_builtin_table(tmp_path: Path) -> None:
     assert (s.control_rate, s.pid_bandwidth, s.sensors.x_noise, s.u_max) == (
         2000.0, 25.0, 2.0e-6, 0.008)
     assert sp.base.plant_file is not None and sp.base.plant_file.values["mass"] == 80.0
+    assert comp._slug("my axis/50") == "my-axis-50"  # a name as figure files hold it
+
+
+def _text(page: Path) -> str:
+    """A report's text, tags dropped and white space collapsed."""
+    text = re.sub(r"<[^>]+>", " ", page.read_text(encoding="utf-8"))
+    return re.sub(r"\s+", " ", html.unescape(text))
 
 
 def _one_line_exit_2(args: list[str], out: Path, capsys: pytest.CaptureFixture) -> str:

@@ -429,8 +429,20 @@ def _clock(seconds: float) -> str:
 
 
 def result_text(doc: dict) -> str:
-    """A command's JSON result as text (strict JSON: a NaN raises before anything is written)."""
-    return json.dumps(doc, indent=2, allow_nan=False) + "\n"
+    """A command's JSON result as text: strict JSON, a non-finite number (the error of a
+    run that failed, a bound at infinity) written as ``null``."""
+    return json.dumps(_finite(doc), indent=2, allow_nan=False) + "\n"
+
+
+def _finite(value: Any) -> Any:
+    """``value`` with every non-finite float, at any depth, replaced by None."""
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, dict):
+        return {k: _finite(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_finite(v) for v in value]
+    return value
 
 
 def emit_result(text: str, json_arg: str | None, out: Path | None, summary: str) -> None:

@@ -428,6 +428,20 @@ def _clock(seconds: float) -> str:
     return f"{h}:{m:02d}:{s:02d}" if h else f"{m}:{s:02d}"
 
 
+
+def add_closed_loop_run_options(p: argparse.ArgumentParser) -> None:
+    """The options of a command that runs many closed loops (``sweep``, ``compensate``):
+    ``--workers``, ``--scheduler``, ``--json``, ``--report``, ``--no-progress``."""
+    p.add_argument("--workers", type=int, default=None, metavar="N",
+                   help="local worker processes (default: CPU count)")
+    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="run on the Dask distributed scheduler at ADDRESS (tcp://host:8786)")
+    p.add_argument("--json", metavar="OUT", default=None,
+                   help="write the result as JSON to OUT ('-' for standard output)")
+    p.add_argument("--report", metavar="DIR", default=None,
+                   help="write a self-contained HTML report to DIR/report.html")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
+
 def result_text(doc: dict) -> str:
     """A command's JSON result as text: strict JSON, a non-finite number (the error of a
     run that failed, a bound at infinity) written as ``null``."""

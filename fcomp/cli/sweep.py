@@ -76,15 +76,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--seed", type=int, default=2026, help="seed of the draws and the noise")
     p.add_argument("--full", action="store_true",
                    help="full task durations (default: the fast ones)")
-    p.add_argument("--workers", type=int, default=None, metavar="N",
-                   help="local worker processes (default: CPU count)")
-    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
-                   help="run on the Dask distributed scheduler at ADDRESS (tcp://host:8786)")
-    p.add_argument("--json", metavar="OUT", default=None,
-                   help="write the result as JSON to OUT ('-' for standard output)")
-    p.add_argument("--report", metavar="DIR", default=None,
-                   help="write a self-contained HTML report to DIR/report.html")
-    p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
+    common.add_closed_loop_run_options(p)
     p.set_defaults(func=run)
 
 

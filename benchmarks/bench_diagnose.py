@@ -92,7 +92,10 @@ def main() -> None:
         csv = tmpd / "record.csv"
         generate(["pressure-dependence"], duration=duration, rate=1000.0, seed=11
                  ).measurement.write(csv)
-        orings = [str(datasets.path("zillen", f"O-ring_{k}bar.csv")) for k in (1, 3, 5, 7)]
+        orings = []  # the shipped source files (tab-separated logs) as measurement files
+        for k in (1, 3, 5, 7):
+            orings.append(str(tmpd / f"O-ring_{k}bar.csv"))
+            datasets.load("zillen", f"O-ring_{k}bar.csv").write(orings[-1])
         cases = {"synthetic": [str(csv), "--baseline", "lugre"],
                  "o-ring": [*orings, "--baseline", "lugre"]}
         sides: dict[str, Path | None] = {"this checkout": None}

@@ -84,11 +84,18 @@ def finite_float(text: str) -> float:
 def add_model_options(p: argparse.ArgumentParser, *, flag: str = "--friction") -> None:
     p.add_argument("--add-effect", action="append", default=[], metavar="EFFECT",
                    help="add a catalogue (or registered) effect to the model; repeatable")
-    p.add_argument("--effects", metavar="MODULE.py", default=None,
-                   help="a Python file that registers the user's own effects (it is executed: "
-                   "see SECURITY in the README)")
+    add_effects_option(p, "registers the user's own effects")
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                    help="override a friction parameter (flat name, SI units); repeatable")
+
+
+def add_effects_option(p: argparse.ArgumentParser,
+                       what: str = "registers the user's own effects the model files name"
+                       ) -> None:
+    """``--effects MODULE.py``: a Python file that ``what`` (executed: SECURITY, README)."""
+    p.add_argument("--effects", metavar="MODULE.py", default=None,
+                   help=f"a Python file that {what} (it is executed: see SECURITY in the "
+                   "README)")
 
 
 def parse_assignments(items: list[str], option: str = "--set") -> dict[str, float]:

@@ -69,9 +69,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="half width of the draws' uniform factors on the true friction and "
                    "the mass (default 0.2: +-20 %%)")
     p.add_argument("--seed", type=int, default=2026, help="seed of the draws and the noise")
-    p.add_argument("--effects", metavar="MODULE.py", default=None,
-                   help="a Python file that registers the user's own effects the model files "
-                   "name (it is executed: see SECURITY in the README)")
+    common.add_effects_option(p)
     common.add_closed_loop_run_options(p)
     p.set_defaults(func=run)
 

@@ -73,6 +73,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--friction", default="nmlgm", metavar="NAME|MODEL.json",
                    help="the plant's true friction model: a name or a model file (default "
                    "nmlgm)")
+    common.add_effects_option(p)
     p.add_argument("--seed", type=int, default=2026, help="seed of the draws and the noise")
     p.add_argument("--full", action="store_true",
                    help="full task durations (default: the fast ones)")
@@ -95,7 +96,7 @@ def _factors(items: list[str]) -> dict[str, tuple[float, ...]]:
     return out
 
 
-def _friction(spec: str, option: str) -> Any:
+def _friction(spec: str, option: str, effects: str | None) -> Any:
     """A friction option's model: a registered name (checked), or a model file's friction
     (its measurement terms dropped with a warning)."""
     from fcomp.modelfile import is_model_file, read_model
@@ -104,7 +105,7 @@ def _friction(spec: str, option: str) -> Any:
     if not is_model_file(spec):
         MODELS.get(spec)
         return spec
-    mf = read_model(spec)
+    mf = read_model(spec, effects)
     if mf.measurement_terms:
         common.warn("measurement-terms", mf.dropped_note("plant or controller friction"),
                     option)
@@ -133,9 +134,9 @@ def _plan(args: argparse.Namespace) -> Any:
     controllers = tuple(common.name_list(args.controllers, "--controllers") or ())
     for c in controllers:
         CONTROLLERS.get(c)
-    base = LoopConfig(plant=plant, friction=_friction(args.friction, "--friction"),
+    base = LoopConfig(plant=plant, friction=_friction(args.friction, "--friction", args.effects),
                       plant_file=plant_file)
-    frictions = tuple(_friction(f, "--controller-friction") for f in
+    frictions = tuple(_friction(f, "--controller-friction", args.effects) for f in
                       common.name_list(args.controller_friction, "--controller-friction") or ())
     if args.grid or frictions:
         return Grid(plant=plant, task=args.task, controllers=controllers,
@@ -265,6 +266,8 @@ def run(args: argparse.Namespace) -> int:
     for option, spec in (("--plant-params", args.plant_params), ("--friction", args.friction)):
         if spec is not None and spec.lower().endswith((".toml", ".json")):
             inputs.file(spec, option)
+    if args.effects is not None:
+        inputs.file(args.effects, "--effects")
     common.check_outputs(inputs, [("--json", out)], [("--report", folder, "report")])
     plan = _plan(args)
     jobs = plan.jobs()

@@ -152,16 +152,16 @@ def resolve_friction(spec: Any, plant_file: Any, use: str,
     """A friction model: itself, a model file read (its measurement terms dropped, with a
     warning appended to ``warnings``), or a registered name with the values of the
     built-in plant of the plant file's kind."""
-    from fcomp.modelfile import is_model_file, read_model
+    from fcomp.modelfile import is_model_file, seal_friction
     from fcomp.models import make_model
 
     if isinstance(spec, FrictionModel):
         return spec
     if is_model_file(spec):
-        mf = read_model(spec, effects)
-        if mf.measurement_terms and warnings is not None:
-            _warn(warnings, "measurement-terms", mf.dropped_note(use), str(spec))
-        return mf.model
+        model, dropped = seal_friction(spec, use, effects)
+        if dropped and warnings is not None:
+            _warn(warnings, "measurement-terms", dropped, str(spec))
+        return model
     return make_model(str(spec), params=plant_file.friction_set)
 
 

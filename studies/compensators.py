@@ -159,7 +159,7 @@ def study_plants(config: StudyConfig, warnings: list[str] | None = None
 def _true_friction(spec: Any, warnings: list[str] | None) -> str | FrictionModel:
     """The plant's true friction: the default, a model, a model file's model (measurement
     terms dropped: a line in ``warnings``) or a registered name (checked)."""
-    from fcomp.modelfile import is_model_file, read_model
+    from fcomp.modelfile import is_model_file, seal_friction
     from fcomp.models import MODELS
 
     if spec is None:
@@ -171,10 +171,10 @@ def _true_friction(spec: Any, warnings: list[str] | None) -> str | FrictionModel
                          f"not {type(spec).__name__}")
     text = str(spec)
     if is_model_file(text):
-        mf = read_model(text)
-        if mf.measurement_terms and warnings is not None:
-            warnings.append(mf.dropped_note("the plant's or the controllers' friction"))
-        return mf.model
+        model, dropped = seal_friction(text, "the plant's or the controllers' friction")
+        if dropped and warnings is not None:
+            warnings.append(dropped)
+        return model
     MODELS.get(text)
     return text
 

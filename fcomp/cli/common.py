@@ -199,14 +199,13 @@ def friction_model(spec: str, params: str | None, args: argparse.Namespace, *,
 
     A file takes no parameter set; ``--add-effect`` and ``--set`` apply to it as to a name.
     """
-    from fcomp.modelfile import is_model_file, read_model
+    from fcomp.modelfile import is_model_file, seal_friction
 
     if not is_model_file(spec):
         return build_model(spec, params, args)
-    mf = read_model(spec, args.effects)
-    if mf.measurement_terms:
-        warn("measurement-terms", mf.dropped_note(use), "friction")
-    model = mf.model
+    model, dropped = seal_friction(spec, use, args.effects)
+    if dropped:
+        warn("measurement-terms", dropped, "friction")
     if args.add_effect:
         model = model.with_effects(*args.add_effect)
     overrides = parse_assignments(args.set)

@@ -99,17 +99,16 @@ def _factors(items: list[str]) -> dict[str, tuple[float, ...]]:
 def _friction(spec: str, option: str, effects: str | None) -> Any:
     """A friction option's model: a registered name (checked), or a model file's friction
     (its measurement terms dropped with a warning)."""
-    from fcomp.modelfile import is_model_file, read_model
+    from fcomp.modelfile import is_model_file, seal_friction
     from fcomp.models import MODELS
 
     if not is_model_file(spec):
         MODELS.get(spec)
         return spec
-    mf = read_model(spec, effects)
-    if mf.measurement_terms:
-        common.warn("measurement-terms", mf.dropped_note("plant or controller friction"),
-                    option)
-    return mf.model
+    model, dropped = seal_friction(spec, "plant or controller friction", effects)
+    if dropped:
+        common.warn("measurement-terms", dropped, option)
+    return model
 
 
 def _plan(args: argparse.Namespace) -> Any:

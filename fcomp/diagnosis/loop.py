@@ -78,6 +78,7 @@ import dataclasses
 import math
 import os
 import sys
+import time
 from collections.abc import Mapping, Sequence
 from concurrent.futures import Executor, as_completed
 from dataclasses import dataclass, field
@@ -323,6 +324,14 @@ def refit_candidate(refit: Refit, prop: catalogue.Proposal, current: FitResult
         return f"refit failed: {str(exc).splitlines()[0] if str(exc) else type(exc).__name__}"
 
 
+def timed_refit_candidate(refit: Refit, prop: catalogue.Proposal, current: FitResult
+                          ) -> tuple[FitResult | str, float]:
+    """:func:`refit_candidate` and the seconds it took where it ran (a worker's own clock)."""
+    t0 = time.perf_counter()
+    out = refit_candidate(refit, prop, current)
+    return out, time.perf_counter() - t0
+
+
 class Diagnosis:
     """Compare a model with measurements, find the missing effect, add it, watch the error fall.
 
@@ -458,6 +467,7 @@ class Diagnosis:
                                    self.data_.scales.dt)
         self._bar = _progress(self.progress)
         self._pool: Executor | None = None
+        self._seconds: dict[tuple[str, str | None], float] = {}  # a refit's duration, by form
         self._cluster = contextlib.ExitStack()
         self._fitting = True
         try:
@@ -792,13 +802,14 @@ class Diagnosis:
         results: list[FitResult | str] = [""] * len(proposals)
         pool = self._workers(len(proposals))
         if pool is not None:
-            pending = {pool.submit(refit_candidate, self._refit, prop, self.fit_): i
-                       for i, prop in enumerate(proposals)}
+            pending = {pool.submit(timed_refit_candidate, self._refit, proposals[i], self.fit_): i
+                       for i in self._longest_first(proposals)}
             while pending:
                 try:
                     for fut in as_completed(list(pending), timeout=WATCH_SECONDS):
                         i = pending.pop(fut)
-                        results[i] = fut.result()
+                        results[i], seconds = fut.result()
+                        self._seconds[(proposals[i].effect, proposals[i].form)] = seconds
                         self._tick(proposals[i].effect)
                 except TimeoutError:
                     if _workers_alive(pool):
@@ -823,6 +834,27 @@ class Diagnosis:
             if isinstance(res, FitResult):
                 self._refit.adopt_boxes(res)
         return results
+
+    def _longest_first(self, proposals: Sequence[catalogue.Proposal]) -> list[int]:
+        """The order to submit ``proposals`` to the workers in: the longest jobs first.
+
+        The refits of one step take from a fraction of a second (a static term)
+        to many seconds (a memory model): submitted in catalogue order, the
+        longest often started last and ran alone while the other workers idled
+        (longest-processing-time-first scheduling). A job's length is what the
+        same effect and form took at the previous step of this diagnosis; one not
+        run yet goes first, the candidate models with more states first. The
+        results do not depend on the order (each job is independent).
+        """
+        seconds = self._seconds
+
+        def key(i: int) -> tuple[int, float, int]:
+            prop = proposals[i]
+            took = seconds.get((prop.effect, prop.form))
+            return (took is not None, -(took or 0.0),
+                    -(prop.model.n_states + (0 if prop.model.symbolic else 100)))
+
+        return sorted(range(len(proposals)), key=key)
 
     def _workers(self, jobs: int) -> Executor | None:
         """The diagnosis's process pool (``spawn``), started on first use within :meth:`fit`;

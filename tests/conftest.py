@@ -4,8 +4,13 @@ Markers (declared in ``pyproject.toml``, ``--strict-markers``):
 
 ``slow``
     tests that build the study site, run real processes or long diagnoses
-    (seconds to a minute each). CI runs everything (``pytest -q``); while
-    working, ``pytest -q -m "not slow"`` skips them.
+    (seconds to a minute each). CI runs everything (``pytest -q -n auto --dist
+    loadgroup``, the README's command); while working, ``pytest -q -m "not slow"``
+    skips them.
+``xdist_group("site")``
+    the tests reading the study site of :func:`site` / :func:`helpers.browser.study_summary`:
+    with ``--dist loadgroup`` they run in one pytest-xdist worker, which builds the
+    site once (each worker process would build its own).
 
 Helpers shared by several test modules live in the package :mod:`helpers`
 (``tests/helpers/``), importable because pytest puts ``tests/`` on the path.

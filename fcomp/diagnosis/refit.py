@@ -852,7 +852,7 @@ class Refit:
             held = check_held({n: float(fit.values[n]) for n in held_names},
                               {n: (hs[n].lower, hs[n].upper) for n in held_names},
                               units={n: hs[n].unit for n in held_names},
-                              dt=self.q * self.data.scales.dt)
+                              dt=self.q * self.data.scales.dt, context=context)
         names = [n for n in fit.values if n not in self.held]
         if not names:
             return held

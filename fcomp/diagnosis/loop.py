@@ -515,7 +515,7 @@ class Diagnosis:
         them off the force, estimate the noise floor again and refit the baseline."""
         self.disturbances_: list[disturbance.Disturbance] = []
         assert first.plain is not None
-        lines = disturbance.find(first.plain, first.F_hat, self.data_)
+        lines = disturbance.find(first.plain, self._refit.motion_prediction(first), self.data_)
         if not lines:
             return first
         cleaned = disturbance.without(self.data_, [w for _, _, w in lines])

@@ -611,6 +611,22 @@ class Refit:
             hi.append(f_hi)
         return np.concatenate(out), np.concatenate(lo), np.concatenate(hi)
 
+    def motion_prediction(self, fit: FitResult) -> np.ndarray:
+        """``fit``'s prediction without its channel-lag term ``-lag*dD/dt``: what the model
+        predicts from the motion alone.
+
+        The lag term is built from the measured driving force, so it carries
+        whatever that channel carries: a pump's line on ``p1`` reappeared in the
+        prediction through it, and the disturbance check (:mod:`.disturbance`)
+        took the line for the motion's and let it pass into the noise floor.
+        """
+        lag = fit.values.get("lag", self.held.get("lag"))
+        cols = [c for c in (e.data.extra_column("lag") for e in self.data.experiments)
+                if c is not None]
+        if not lag or len(cols) != len(self.data.experiments):
+            return fit.F_hat
+        return fit.F_hat - float(lag) * np.concatenate(cols)
+
     @staticmethod
     def _predict_one(model: FrictionModel, d: FitData, vals: Mapping[str, float],
                      rig: Mapping[str, float], s: Mapping[str, np.ndarray]) -> np.ndarray:

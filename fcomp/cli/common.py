@@ -434,7 +434,6 @@ def _clock(seconds: float) -> str:
     return f"{h}:{m:02d}:{s:02d}" if h else f"{m}:{s:02d}"
 
 
-
 def add_closed_loop_run_options(p: argparse.ArgumentParser) -> None:
     """The options of a command that runs many closed loops (``sweep``, ``compensate``):
     ``--workers``, ``--scheduler``, ``--json``, ``--report``, ``--no-progress``."""
@@ -447,6 +446,7 @@ def add_closed_loop_run_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--report", metavar="DIR", default=None,
                    help="write a self-contained HTML report to DIR/report.html")
     p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
+
 
 def result_text(doc: dict) -> str:
     """A command's JSON result as text: strict JSON, a non-finite number (the error of a

@@ -843,16 +843,14 @@ class Diagnosis:
         longest often started last and ran alone while the other workers idled
         (longest-processing-time-first scheduling). A job's length is what the
         same effect and form took at the previous step of this diagnosis; one not
-        run yet goes first, the candidate models with more states first. The
-        results do not depend on the order (each job is independent).
+        run yet goes first, the models without exact sensitivities (finite
+        differences) and then those with more states first. The results do not
+        depend on the order (each job is independent).
         """
-        seconds = self._seconds
-
-        def key(i: int) -> tuple[int, float, int]:
+        def key(i: int) -> tuple[bool, float, bool, int]:
             prop = proposals[i]
-            took = seconds.get((prop.effect, prop.form))
-            return (took is not None, -(took or 0.0),
-                    -(prop.model.n_states + (0 if prop.model.symbolic else 100)))
+            took = self._seconds.get((prop.effect, prop.form))
+            return (took is not None, -(took or 0.0), prop.model.symbolic, -prop.model.n_states)
 
         return sorted(range(len(proposals)), key=key)
 

@@ -621,11 +621,10 @@ class Refit:
         took the line for the motion's and let it pass into the noise floor.
         """
         lag = fit.values.get("lag", self.held.get("lag"))
-        cols = [c for c in (e.data.extra_column("lag") for e in self.data.experiments)
-                if c is not None]
-        if not lag or len(cols) != len(self.data.experiments):
+        if not lag or not self.data.fits_lag:
             return fit.F_hat
-        return fit.F_hat - float(lag) * np.concatenate(cols)
+        return fit.F_hat - float(lag) * np.concatenate(
+            [e.data.extra_column("lag") for e in self.data.experiments])
 
     @staticmethod
     def _predict_one(model: FrictionModel, d: FitData, vals: Mapping[str, float],

@@ -816,9 +816,15 @@ class Refit:
         budget = min(PROBE_NFEV, max_nfev) if several else max_nfev
         main = self._candidate_records if fast else self._records
         probe = self._probe_records if several else main
-        cost, sol, st, nfev = best_start(
-            start_list, lambda st: self._solve(model, self._pv(model, first, st, specs), budget,
-                                               records=probe), model.describe())
+
+        def solve(st: dict[str, float], k: int) -> tuple[Any, int]:
+            return self._solve(model, self._pv(model, first, st, specs), k, records=probe)
+
+        def resume(st: dict[str, float], sol: Any) -> dict[str, float]:
+            return dict(st, **dict(zip(first, map(float, sol.theta), strict=True)))
+
+        cost, sol, st, nfev = best_start(start_list, lambda st: solve(st, budget),
+                                         model.describe(), halving=(solve, resume, budget))
         st = dict(st, **dict(zip(first, map(float, sol.theta), strict=True)))
         if reference is not None and several and cost > (1.0 - MIN_GAIN) * reference:
             values = {n: float(st[n]) for n in names}

@@ -498,6 +498,7 @@ class Diagnosis:
                 self._search(names)
                 self._backward()
                 self._swaps(names)
+                self._partners_in_model()
         finally:
             self._bar.close()
             self._fitting = False
@@ -1123,6 +1124,31 @@ class Diagnosis:
                 self.ties_.append(tie)
             tie += [c for c in close if c not in tie]
             step.tie = list(tie)
+
+    def _partners_in_model(self) -> None:
+        """Report declared confounded partners that are *both* in the final model as a tie.
+
+        Effects that give the same force over the motions a record holds
+        (:attr:`Effect.confounded`: an offset of the force and a direction
+        asymmetry of the levels, while sliding) can both be accepted, one after
+        the other, each taking part of what the record shows. How the force
+        then splits between them is not fixed by the record (sliding, ``Fc+ +
+        offset`` and ``Fc- - offset`` are seen, not the three terms), so they are
+        reported together, with the experiment that separates them, as for a
+        partner that fits in the other's place (:meth:`_swaps`). The first added
+        leads the group.
+        """
+        for i, effect in enumerate(self.added_):
+            later = [p for p in self.added_[i + 1:]
+                     if p in EFFECTS.get(effect).confounded or effect in EFFECTS.get(p).confounded]
+            for p in later:
+                if any(effect in t and p in t for t in self.ties_):
+                    continue
+                tie = next((t for t in self.ties_ if effect in t or p in t), None)
+                if tie is None:
+                    self.ties_.append([effect, p])
+                else:
+                    tie += [e for e in (effect, p) if e not in tie]
 
     def _reweighted(self, fit: FitResult) -> FitResult:
         """``fit`` polished again after the sample weights follow its own prediction.

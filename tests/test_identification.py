@@ -115,7 +115,7 @@ def test_kept_sensitivities_stay_within_their_byte_budget(monkeypatch) -> None:
 
 
 def test_successive_halving_races_the_starts_and_keeps_the_best_valley() -> None:
-    """best_start with ``halving``: every start a third of the budget, the better half (at
+    """best_start with ``resume``: every start a third of the budget, the better half (at
     least two) the rest from where they stopped; the deepest valley wins; fewer
     evaluations than every start's full budget. A toy solver: each evaluation halves
     the distance to the start's valley floor (valleys at -2, 1 and 4, depths 3, 0, 1)."""
@@ -138,14 +138,12 @@ def test_successive_halving_races_the_starts_and_keeps_the_best_valley() -> None
     # the start in the deepest valley begins farthest from its floor
     starts = [{"x": -2.4}, {"x": 2.4}, {"x": 4.3}, {"x": -1.7}, {"x": 3.8}]
     budget = 20
-    cost, sol, st, nfev = best_start(starts, lambda st: solve(st, budget), "toy",
-                                     halving=(solve, resume, budget))
+    cost, sol, st, nfev = best_start(starts, solve, budget, "toy", resume=resume)
     assert abs(sol.theta[0] - 1.0) < 1e-4 and cost < 1e-8
     assert st["x"] == pytest.approx(1.0 + 1.4 * 0.5 ** (budget // 3))  # where it resumed
     assert nfev == 5 * (budget // 3) + 3 * (budget - budget // 3) < 5 * budget
     # two starts: no race, each gets the whole budget
-    cost2, sol2, st2, nfev2 = best_start(starts[:2], lambda st: solve(st, budget), "toy",
-                                         halving=(solve, resume, budget))
+    cost2, sol2, st2, nfev2 = best_start(starts[:2], solve, budget, "toy", resume=resume)
     assert nfev2 == 2 * budget and st2 is starts[1] and cost2 < 1e-8
 
 

@@ -1118,12 +1118,7 @@ class Diagnosis:
                      if fall > 0 and c.rms_heldout - full.rms_test <= TIE_SHARE * fall]
             if not close:
                 continue
-            tie = next((t for t in self.ties_ if t[0] == effect), None)
-            if tie is None:
-                tie = [effect]
-                self.ties_.append(tie)
-            tie += [c for c in close if c not in tie]
-            step.tie = list(tie)
+            step.tie = list(self._join_tie(effect, close))
 
     def _partners_in_model(self) -> None:
         """Report declared confounded partners that are *both* in the final model as a tie.
@@ -1139,16 +1134,20 @@ class Diagnosis:
         leads the group.
         """
         for i, effect in enumerate(self.added_):
-            later = [p for p in self.added_[i + 1:]
-                     if p in EFFECTS.get(effect).confounded or effect in EFFECTS.get(p).confounded]
-            for p in later:
-                if any(effect in t and p in t for t in self.ties_):
-                    continue
-                tie = next((t for t in self.ties_ if effect in t or p in t), None)
-                if tie is None:
-                    self.ties_.append([effect, p])
-                else:
-                    tie += [e for e in (effect, p) if e not in tie]
+            self._join_tie(effect, [p for p in self.added_[i + 1:]
+                                    if p in EFFECTS.get(effect).confounded
+                                    or effect in EFFECTS.get(p).confounded])
+
+    def _join_tie(self, effect: str, others: Sequence[str]) -> list[str]:
+        """The tie holding ``effect`` (led by it when new), grown by ``others``."""
+        tie = next((t for t in self.ties_ if effect in t), None)
+        if tie is None:
+            if not others:
+                return [effect]
+            tie = [effect]
+            self.ties_.append(tie)
+        tie += [e for e in others if e not in tie]
+        return tie
 
     def _reweighted(self, fit: FitResult) -> FitResult:
         """``fit`` polished again after the sample weights follow its own prediction.

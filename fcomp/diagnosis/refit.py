@@ -823,8 +823,8 @@ class Refit:
         def resume(st: dict[str, float], sol: Any) -> dict[str, float]:
             return dict(st, **dict(zip(first, map(float, sol.theta), strict=True)))
 
-        cost, sol, st, nfev = best_start(start_list, lambda st: solve(st, budget),
-                                         model.describe(), halving=(solve, resume, budget))
+        cost, sol, st, nfev = best_start(start_list, solve, budget, model.describe(),
+                                         resume=resume)
         st = dict(st, **dict(zip(first, map(float, sol.theta), strict=True)))
         if reference is not None and several and cost > (1.0 - MIN_GAIN) * reference:
             values = {n: float(st[n]) for n in names}

@@ -250,12 +250,12 @@ def fit_records(
     nfev = 0
     chosen = start_list[0]
     if len(start_list) > 1 and probe_nfev:
-        def probe(st: dict[str, float]) -> tuple[Solution, int]:
-            sol, prob = solve_records(model, records, vector(st), max_nfev=probe_nfev,
+        def probe(st: dict[str, float], k: int) -> tuple[Solution, int]:
+            sol, prob = solve_records(model, records, vector(st), max_nfev=k,
                                       substeps=substeps)
             return sol, prob.evaluations
 
-        cost, sol, st, k = best_start(start_list, probe, model.describe())
+        cost, sol, st, k = best_start(start_list, probe, probe_nfev, model.describe())
         nfev += k
         chosen = dict(st, **dict(zip(names, map(float, sol.theta), strict=True)))
         if keep_going is not None and not keep_going(cost):
@@ -269,43 +269,41 @@ def fit_records(
 
 
 def best_start(starts: Sequence[dict[str, float]],
-               solve_one: Callable[[dict[str, float]], tuple[Solution, int]],
-               what: str, *,
-               halving: tuple[Callable[[dict[str, float], int], tuple[Solution, int]],
-                              Callable[[dict[str, float], Solution], dict[str, float]],
-                              int] | None = None,
+               solve: Callable[[dict[str, float], int], tuple[Solution, int]],
+               budget: int, what: str, *,
+               resume: Callable[[dict[str, float], Solution], dict[str, float]] | None = None,
                ) -> tuple[float, Solution, dict[str, float], int]:
     """The start whose (short) solve ends with the least sum of squares.
 
-    ``solve_one(start)`` returns the solution and its evaluation count, or raises
-    :class:`~fcomp.errors.FcompError` for a start where the model gives non-finite
-    forces (that start is skipped). Returns ``(cost, solution, start, evaluations)``,
-    the evaluations summed over every start tried.
+    ``solve(start, evaluations)`` returns the solution and its evaluation count, or
+    raises :class:`~fcomp.errors.FcompError` for a start where the model gives
+    non-finite forces (that start is skipped); each start gets ``budget``
+    evaluations. Returns ``(cost, solution, start, evaluations)``, the evaluations
+    summed over every start tried.
 
-    With ``halving = (solve, resume, budget)`` and more than two starts, the
-    probes are raced by successive halving (Jamieson and Talwalkar, "Non-stochastic
-    best arm identification and hyperparameter optimization", AISTATS 2016): every
-    start gets ``solve(start, budget // 3)``; the better half (by cost, at least
-    two) continue from where they stopped (``resume(start, solution)``) with the
-    rest of ``budget``. A start that has not found its valley after a third of the
-    budget rarely wins; the evaluations of the others are saved (a third of the
-    probing with six starts). The start returned is where the winner resumed.
+    With ``resume`` and more than two starts, the probes are raced by successive
+    halving (Jamieson and Talwalkar, "Non-stochastic best arm identification and
+    hyperparameter optimization", AISTATS 2016): every start gets a third of
+    ``budget``; the better half (by cost, at least two) continue from where they
+    stopped (``resume(start, solution)``) with the rest. A start that has not found
+    its valley after a third of the budget rarely wins; the evaluations of the
+    others are saved (a third of the probing with six starts). The start returned
+    is then where the winner resumed.
 
     Raises
     ------
     FcompError
         When no start gives finite forces.
     """
-    if halving is not None and len(starts) > 2:
-        solve, resume, budget = halving
-        short = max(budget // 3, 1)
-        ranked, nfev = _ranked(starts, lambda st: solve(st, short), what)
-        keep = ranked[: max(2, (len(ranked) + 1) // 2)]
-        out, more = _ranked([resume(st, sol) for _, sol, st in keep],
-                            lambda st: solve(st, budget - short), what)
-        return (*out[0], nfev + more)
-    ranked, nfev = _ranked(starts, solve_one, what)
-    return (*ranked[0], nfev)
+    if resume is None or len(starts) <= 2:
+        ranked, nfev = _ranked(starts, lambda st: solve(st, budget), what)
+        return (*ranked[0], nfev)
+    short = max(budget // 3, 1)
+    ranked, nfev = _ranked(starts, lambda st: solve(st, short), what)
+    keep = ranked[: max(2, (len(ranked) + 1) // 2)]
+    out, more = _ranked([resume(st, sol) for _, sol, st in keep],
+                        lambda st: solve(st, budget - short), what)
+    return (*out[0], nfev + more)
 
 
 def _ranked(starts: Sequence[dict[str, float]],

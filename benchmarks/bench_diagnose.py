@@ -59,12 +59,15 @@ def checkout(rev: str, into: Path) -> Path:
 
 def run(args: list[str], out: Path, cache: Path, pythonpath: Path | None) -> tuple[float, dict]:
     env = dict(os.environ, FCOMP_CACHE=str(cache))
-    if pythonpath is not None:
-        env["PYTHONPATH"] = str(pythonpath)
+    env["PYTHONPATH"] = str(pythonpath if pythonpath is not None else REPO)
     cmd = [sys.executable, "-m", "fcomp.cli.main", "diagnose", *args, "--no-progress",
            "--json", str(out)]
     t0 = time.perf_counter()
-    proc = subprocess.run(cmd, env=env, capture_output=True, text=True, check=False)
+    # run away from the checkout: ``python -m`` puts the working directory first on
+    # sys.path, before PYTHONPATH, so run from the repository the baseline side would
+    # import this checkout's package (as it did until 2026-11-27: both sides ran this code)
+    proc = subprocess.run(cmd, env=env, cwd=out.parent, capture_output=True, text=True,
+                          check=False)
     wall = time.perf_counter() - t0
     if proc.returncode != 0:
         raise SystemExit(f"fcomp diagnose failed ({proc.returncode}): {proc.stderr[-2000:]}")
@@ -92,7 +95,10 @@ def main() -> None:
         csv = tmpd / "record.csv"
         generate(["pressure-dependence"], duration=duration, rate=1000.0, seed=11
                  ).measurement.write(csv)
-        orings = [str(datasets.path("zillen", f"O-ring_{k}bar.csv")) for k in (1, 3, 5, 7)]
+        orings = []  # the shipped source files (tab-separated logs) as measurement files
+        for k in (1, 3, 5, 7):
+            orings.append(str(tmpd / f"O-ring_{k}bar.csv"))
+            datasets.load("zillen", f"O-ring_{k}bar.csv").write(orings[-1])
         cases = {"synthetic": [str(csv), "--baseline", "lugre"],
                  "o-ring": [*orings, "--baseline", "lugre"]}
         sides: dict[str, Path | None] = {"this checkout": None}

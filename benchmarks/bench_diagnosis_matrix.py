@@ -29,6 +29,7 @@ short and why, and the time per case.
     python benchmarks/bench_diagnosis_matrix.py --seed-list 4 --sample 60 \
         --conditions pulsation,vertical,pink-noise --rows all       # other rigs and loggers
     python benchmarks/bench_diagnosis_matrix.py --conditions soft-presliding --list
+    python benchmarks/bench_diagnosis_matrix.py --cases-from old1.json,old2.json --json new.json
 """
 
 from __future__ import annotations
@@ -149,13 +150,26 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--sample", type=int, default=None,
                     help="run this many cases drawn at random (seeded) from the selection")
     ap.add_argument("--list", action="store_true", help="list the cases and stop")
+    ap.add_argument("--cases-from", default=None,
+                    help="comma-separated JSON files of earlier runs (--json): run their "
+                         "cases again instead of a selection, and name the answers that changed")
     args = ap.parse_args(argv)
     pick = {f: (getattr(args, f).split(",") if getattr(args, f) else None)
             for f in ("rows", "styles", "scales", "kinds", "conditions")}
     seeds = ([int(x) for x in args.seed_list.split(",")] if args.seed_list
              else list(range(1, args.seeds + 1)))
     todo = cases(seeds=seeds, duration=args.duration, rate=args.rate, **pick)
-    if args.sample is not None and args.sample < len(todo):
+    earlier: dict[str, bool] = {}
+    if args.cases_from:
+        todo = []
+        for path in args.cases_from.split(","):
+            with open(path) as fh:
+                for r in json.load(fh):
+                    key = json.dumps(r["case"], sort_keys=True)
+                    if key not in earlier:
+                        todo.append(Case(**r["case"]))
+                    earlier[key] = bool(r["right"])
+    elif args.sample is not None and args.sample < len(todo):
         keep = np.random.default_rng(sum(seeds)).choice(len(todo), args.sample, replace=False)
         todo = [todo[i] for i in sorted(keep)]
     if args.list:
@@ -177,6 +191,15 @@ def main(argv: list[str] | None = None) -> int:
                   f"({r['diagnose_s']:.1f} s)", file=sys.stderr, flush=True)
     wall = time.perf_counter() - t0
     print(report(results))
+    if earlier:
+        now = {json.dumps(r["case"], sort_keys=True): bool(r["right"]) for r in results}
+        fixed = sorted(k for k in now if now[k] and not earlier[k])
+        worse = sorted(k for k in now if earlier[k] and not now[k])
+        print(f"\nagainst the earlier runs: {sum(earlier.values())} -> {sum(now.values())} "
+              f"right of {len(now)}; fixed {len(fixed)}, worse {len(worse)}")
+        for tag, keys in (("fixed", fixed), ("worse", worse)):
+            for k in keys:
+                print(f"  {tag}: {k}")
     print(f"wall time {wall / 60:.1f} min for {len(results)} cases")
     if args.json:
         with open(args.json, "w") as fh:

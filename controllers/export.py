@@ -89,6 +89,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from fcomp.compiled import casadi_c
 from fcomp.errors import FcompError
 
 #: Controllers :func:`export_controller` exports (``mpc`` as its fixed-iteration form).
@@ -572,18 +573,8 @@ def write_c(step: StepExport, folder: Path, *, controller: str, plant: str, unit
 
     folder.mkdir(parents=True, exist_ok=True)
     fn = step.fn
-    with tempfile.TemporaryDirectory() as tmp:
-        cg = ca.CodeGenerator(f"{CASADI_NAME}.c", {"with_header": True, "casadi_real": "double",
-                                                  "casadi_int": CASADI_INT})
-        cg.add(fn)
-        cwd = os.getcwd()
-        try:
-            os.chdir(tmp)
-            cg.generate()
-        finally:
-            os.chdir(cwd)
-        gen = {f"{CASADI_NAME}.c": (Path(tmp) / f"{CASADI_NAME}.c").read_text(),
-               f"{CASADI_NAME}.h": (Path(tmp) / f"{CASADI_NAME}.h").read_text()}
+    gen = casadi_c([fn], CASADI_NAME, {"with_header": True, "casadi_real": "double",
+                                        "casadi_int": CASADI_INT})
     layout = ", ".join(f"{n}[{k}]" if k > 1 else n for n, k in step.layout)
     vals = {f"@{k}@": v for k, v in {
         "CASADI_NAME": CASADI_NAME, "CASADI_INT": CASADI_INT, "CONTROLLER": controller,

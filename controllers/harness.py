@@ -31,7 +31,8 @@ middle of a step costs a millisecond the controller did not spend. The true fric
 force is the plant's output ``F`` at every sample, beside the controller's
 estimate.
 
-Start: the piston at rest at mid-stroke with the chambers and valve at the
+Start: the piston at rest at mid-stroke (or where the task starts: a user's
+reference, :attr:`controllers.tasks.Task.start`) with the chambers and valve at the
 *equilibrium* that holds the load there (solved from the plant's equations:
 no flow into either chamber, zero acceleration, friction states zero), so
 every run starts from the same physical state, not from a settling load.
@@ -50,8 +51,13 @@ import numpy as np
 
 from controllers.base import Reference
 from controllers.metrics import Metrics, compute_metrics
-from controllers.plant_model import ControlModel, equilibrium, friction_with_mismatch
-from controllers.tasks import check_fits_stroke, get_task
+from controllers.plant_model import (
+    ControlModel,
+    equilibrium,
+    friction_with_mismatch,
+    sliding_damping,
+)
+from controllers.tasks import Task, check_fits_stroke, get_task
 from fcomp.errors import FcompError
 from fcomp.models import FrictionModel, make_model
 
@@ -97,6 +103,10 @@ class LoopConfig:
         Use the task's fast duration.
     rtol
         Relative (and scaled absolute) tolerance of the plant integration.
+    plant_factors
+        Factors on parameters of the *simulated* plant only (flat names of the
+        plant or of its friction, e.g. ``mass``, ``Fc``): the true plant differs
+        from the one the controller is built on (the controller never sees them).
     tuning
         A function of the controller's model giving its tuning instead of the derived
         one (:func:`controllers.tuning.fixed_tuning`; a top-level function, so that the
@@ -113,6 +123,7 @@ class LoopConfig:
     fast: bool = False
     rtol: float = 1e-5
     plant_file: PlantFile | None = None
+    plant_factors: Mapping[str, float] = field(default_factory=dict)
     tuning: Callable[[ControlModel], Tuning] | None = None
 
     def __post_init__(self) -> None:
@@ -198,20 +209,39 @@ def build_loop(controller: str, config: LoopConfig, options: Mapping[str, Any] |
         plant = config.plant_file.make_plant(true_friction)
     else:
         plant = make_plant(config.plant, true_friction, config.params)
+    if config.plant_factors:
+        plant = _with_factors(plant, config.plant_factors)
     model = control_model(config)
     ctrl = make_controller(controller, model, **dict(options or {}))
     return plant, model, ctrl
 
 
 def control_model(config: LoopConfig) -> ControlModel:
-    """The controller's own plant model of a configuration (its friction times the mismatch)."""
+    """The controller's own plant model of a configuration (its friction times the mismatch;
+    the tuning's loop damping the simulated plant's friction, :func:`sliding_damping`: the
+    same PID whatever friction model the controller is built with)."""
     ctrl_friction = friction_with_mismatch(_friction(config.controller_friction, config),
                                            config.mismatch)
-    model = (ControlModel(config.plant_file, ctrl_friction) if config.plant_file is not None
-             else ControlModel(config.plant, ctrl_friction, config.params))
+    damping = sliding_damping(_friction(config.friction, config))
+    model = (ControlModel(config.plant_file, ctrl_friction, damping=damping)
+             if config.plant_file is not None
+             else ControlModel(config.plant, ctrl_friction, config.params, damping=damping))
     if config.tuning is not None:
         model.use_tuning(config.tuning(model))
     return model
+
+
+def _with_factors(plant: Any, factors: Mapping[str, float]) -> Any:
+    """``plant`` with its parameters (plant or friction, flat names) times ``factors``."""
+    flat = plant.flat_params()
+    bad = sorted(set(factors) - set(flat))
+    if bad:
+        raise FcompError(f"plant factors: {', '.join(bad)} not parameters of the plant "
+                         f"{plant.describe()}")
+    for k, f in factors.items():
+        if not (isinstance(f, int | float) and math.isfinite(f) and f > 0):
+            raise FcompError(f"plant factor of {k} must be a positive number, got {f!r}")
+    return plant.with_params(**{k: float(flat[k]) * f for k, f in factors.items()})
 
 
 def _friction(friction: str | FrictionModel, config: LoopConfig) -> FrictionModel:
@@ -237,9 +267,10 @@ def _default_set(config: LoopConfig) -> str:
     return name
 
 
-def run_closed_loop(controller: str, task: str, config: LoopConfig | None = None,
+def run_closed_loop(controller: str, task: str | Task, config: LoopConfig | None = None,
                     options: Mapping[str, Any] | None = None) -> LoopResult:
-    """Run ``controller`` on ``task`` in the closed loop of ``config`` (see the module docstring).
+    """Run ``controller`` on ``task`` (a name, or a :class:`~controllers.tasks.Task` such
+    as a user's reference) in the closed loop of ``config`` (see the module docstring).
 
     Raises
     ------
@@ -249,16 +280,16 @@ def run_closed_loop(controller: str, task: str, config: LoopConfig | None = None
         The plant integration failed (for instance a loop gone unstable).
     """
     config = config or LoopConfig()
-    tk = get_task(task)
+    tk = get_task(task) if isinstance(task, str) else task
     plant, model, ctrl = build_loop(controller, config, options)
-    x_mid = 0.5 * model.stroke
-    check_fits_stroke(tk, x_mid, model.stroke, config.fast)
+    x_start = tk.start_position(model.stroke)
+    check_fits_stroke(tk, x_start, model.stroke, config.fast)
     dt = ctrl.dt
     n = int(round(tk.run_duration(config.fast) / dt))
     t = np.arange(n + 1) * dt
     r, dr, ddr = tk.sample(t)
-    r = r + x_mid
-    x0, _u0 = equilibrium(plant, x_mid)
+    r = r + x_start
+    x0, _u0 = equilibrium(plant, x_start)
     stepper = plant.stepper(dt, x0=x0, rtol=config.rtol, atol=config.rtol)
     sensors = SensorModel(model.sensors, config.noise, config.seed)
     names = plant.state_names
@@ -310,7 +341,7 @@ def run_closed_loop(controller: str, task: str, config: LoopConfig | None = None
         fallbacks=int(fb.sum()),
     )
     return LoopResult(
-        controller=controller, task=task, plant=config.plant, t=t, r=r,
+        controller=controller, task=tk.name, plant=config.plant, t=t, r=r,
         x=X[:, names.index("x")], v=X[:, names.index("v")], y=Y, u=U, F_true=outs["F"],
         F_hat=F_hat, solve_times=times, solve_cpu=cpu, fallbacks=fb, metrics=metrics,
         description=ctrl.describe(),

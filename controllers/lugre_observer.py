@@ -41,6 +41,7 @@ import numpy as np
 
 from controllers.base import Reference
 from controllers.pid import PIDController
+from controllers.tuning import check_observer
 from fcomp.backend import CASADI
 from fcomp.errors import FcompError
 from fcomp.models.base import FrictionModel, Signals
@@ -97,6 +98,13 @@ class LuGreObserverController(PIDController):
         self.k = float(self.opts.get("observer_gain", model.observer_gain))
         if not self.k > 0:
             raise FcompError(f"lugre-observer: observer_gain must be positive (1/s), got {self.k}")
+        explicit = sorted(set(self.opts) & {"observer_gain", "rate", "bandwidth", "kp", "ki",
+                                            "kd", "derivative_cutoff", "force_bandwidth"})
+        if explicit and "sigma0" in model.friction.flat_params():
+            #: Margins of the loop with the observer's path (rule 4 of controllers.tuning).
+            self.observer_margins = check_observer(
+                self.gains, model, self.k, self.valve.bandwidth, self.dt,
+                f"{self.name} tuning ({', '.join(explicit)} given)")
         self._step = observer_step(model.friction)
         self._side = 1.0
         self.x_hat = model.friction.initial_state()

@@ -85,8 +85,8 @@ class PIDGains:
 def nominal_plant(mass: float, damping: float, force_bandwidth: float, valve: Any,
                   dt: float) -> Any:
     """The nominal plant of the position loop, force demand -> position, sampled (zero-order
-    hold at ``dt``): the piston ``1/(m s^2 + c s)`` (``c`` the viscous friction slope of the
-    controller's friction model) driven by the force loop of
+    hold at ``dt``): the piston ``1/(m s^2 + c s)`` (``c`` the loop's viscous damping,
+    :meth:`controllers.plant_model.ControlModel.viscous_damping`) driven by the force loop of
     :mod:`controllers.force_to_valve`, ``F_a/F_d = w_F*G_v/(s + w_F*G_v)`` with ``G_v`` the
     valve's linear dynamics (unit DC gain)."""
     import control as ct

@@ -122,6 +122,13 @@ def plant_settings(plant: str | PlantFile) -> PlantSettings:
 #: Derived tunings by plant, friction and settings (a derivation costs about a second).
 _TUNINGS: dict[tuple[Any, ...], Tuning] = {}
 
+def sliding_damping(friction: FrictionModel) -> float:
+    """Slope of a friction model's steady-state map at 0.1-0.2 m/s (N s/m, >= 0): the
+    damping the seal adds to a sliding piston."""
+    F = friction.steady_state(np.array([0.1, 0.2]))
+    return max(float(F[1] - F[0]) / 0.1, 0.0)
+
+
 #: Plant states the controller measures, in the order of ``y``.
 MEASURED = ("x", "p1", "p2")
 
@@ -138,12 +145,20 @@ class ControlModel:
         The controller's friction model (symbolic).
     params : str, optional
         Parameter-set name (default: the plant's; not with a plant file).
+    damping : float, optional
+        The viscous damping (N s/m) the tuning's nominal loop assumes
+        (:meth:`loop_damping`); default the sliding slope of ``friction``
+        (:func:`sliding_damping`). A closed loop on a simulated plant gives the plant's
+        own (:func:`controllers.harness.control_model`): every friction model the
+        controllers are built with then gets the same PID, so that comparing models
+        compares their compensation, not their tuning.
     settings
         Overrides of the plant's settings (:func:`plant_settings`) by field name.
     """
 
     def __init__(self, plant: str | PlantFile, friction: FrictionModel,
-                 params: str | None = None, **settings: Any) -> None:
+                 params: str | None = None, damping: float | None = None,
+                 **settings: Any) -> None:
         from plants import OdePlant, make_plant
         from plants.check import frictionless
         from plants.planfile import PlantFile
@@ -154,6 +169,9 @@ class ControlModel:
             raise FcompError(f"unknown plant setting(s) {', '.join(bad)}")
         self.settings = replace(base, **settings)
         self.friction = friction
+        self._damping = sliding_damping(friction) if damping is None else float(damping)
+        if not (math.isfinite(self._damping) and self._damping >= 0):
+            raise FcompError(f"loop damping must be a finite number >= 0 (N s/m), got {damping}")
         if isinstance(plant, PlantFile):
             if params is not None:
                 raise FcompError(f"plant file {plant.label} gives the plant's parameters: "
@@ -223,7 +241,7 @@ class ControlModel:
     def _tuning_key(self) -> tuple[Any, ...]:
         fp = self.friction.flat_params()
         return (self.plant_name, tuple(sorted(self.params.items())), self.friction.describe(),
-                tuple(sorted(fp.items())), self.settings)
+                tuple(sorted(fp.items())), self.settings, self._damping)
 
     pid_bandwidth = property(lambda self: self.tuning.pid_bandwidth, doc="rad/s")
     force_bandwidth = property(lambda self: self.tuning.force_bandwidth, doc="rad/s")
@@ -322,9 +340,10 @@ class ControlModel:
         return ct.tf(sys) / float(np.asarray(ct.dcgain(sys)).ravel()[0])
 
     def viscous_damping(self) -> float:
-        """Slope of the controller's steady-state friction map at 0.1-0.2 m/s (N s/m, >= 0)."""
-        F = self.friction.steady_state(np.array([0.1, 0.2]))
-        return max(float(F[1] - F[0]) / 0.1, 0.0)
+        """The viscous damping (N s/m) of the nominal position loop: the tuning's, its
+        margins' and the PID's stability check's (the ``damping`` given, or the friction
+        model's sliding slope, :func:`sliding_damping`)."""
+        return self._damping
 
     # ---------------------------------------------------------- estimation
     def initial_state(self, y0: np.ndarray) -> np.ndarray:

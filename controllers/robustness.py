@@ -47,6 +47,7 @@ from typing import Any
 import numpy as np
 
 from controllers.harness import LoopConfig, friction_label, run_closed_loop
+from controllers.tasks import Task
 from fcomp.errors import FcompError
 from fcomp.models import FrictionModel
 from fcomp.parallel import run_tasks
@@ -58,10 +59,11 @@ MISMATCH_PARAMS: tuple[str, ...] = ("Fc", "Fs", "vs", "sigma0", "sigma1", "sigma
 
 @dataclass(frozen=True)
 class Job:
-    """One closed-loop run: controller, task, configuration, options, and a label."""
+    """One closed-loop run: controller, task (a name or a :class:`~controllers.tasks.Task`),
+    configuration, options, and a label."""
 
     controller: str
-    task: str
+    task: str | Task
     config: LoopConfig
     options: Mapping[str, Any] = field(default_factory=dict)
     sample: int = 0
@@ -71,7 +73,9 @@ class Job:
 def run_job(job: Job) -> dict[str, Any]:
     """Run one job; a dict with the metrics (or the failure) and the sample's draw."""
     out: dict[str, Any] = {
-        "controller": job.controller, "task": job.task, "plant": job.config.plant,
+        "controller": job.controller,
+        "task": job.task if isinstance(job.task, str) else job.task.name,
+        "plant": job.config.plant,
         "sample": job.sample, "noise": job.config.noise, "mismatch": dict(job.config.mismatch),
         "friction": friction_label(job.config.friction),
         "controller_friction": friction_label(job.config.controller_friction),

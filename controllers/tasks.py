@@ -76,6 +76,9 @@ class Task:
         Settle windows of the fast run, where those of the full run do not fit.
     kind
         ``"periodic"`` (sines), ``"regulation"`` (set points) or ``"ramp"``.
+    start
+        Absolute position (m) the piston starts from, at rest, and the reference is an
+        offset from; ``None``: mid-stroke (every registered task).
     """
 
     name: str
@@ -88,6 +91,11 @@ class Task:
     reversal_window: float = 0.2
     fast_settle: tuple[tuple[float, float], ...] = ()
     kind: str = "periodic"
+    start: float | None = None
+
+    def start_position(self, stroke: float) -> float:
+        """Where the run starts (m): :attr:`start`, else mid-stroke of ``stroke``."""
+        return 0.5 * stroke if self.start is None else self.start
 
     def run_duration(self, fast: bool = False) -> float:
         """Run length (s) in full or fast mode."""
@@ -209,6 +217,75 @@ TASKS.register("seed002-sine", Task(
 ))
 
 
+class SampledReference:
+    """A reference given by samples ``(t, x)``: linear interpolation, as an offset from
+    ``x[0]``, with its velocity and acceleration by finite differences (picklable, so a
+    task built on it runs in worker processes and on a Dask cluster).
+
+    Parameters
+    ----------
+    t
+        Increasing sample times from 0 (s).
+    x
+        Absolute positions (m).
+    """
+
+    def __init__(self, t: np.ndarray, x: np.ndarray) -> None:
+        self.t = np.asarray(t, dtype=float)
+        self.x = np.asarray(x, dtype=float)
+        self.v = np.gradient(self.x, self.t)
+        self.a = np.gradient(self.v, self.t)
+
+    def __call__(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        return (np.interp(t, self.t, self.x) - self.x[0], np.interp(t, self.t, self.v),
+                np.interp(t, self.t, self.a))
+
+
+#: Shortest still reference (s) that counts as a hold of a sampled reference.
+MIN_HOLD = 0.2
+
+
+def reference_task(t: np.ndarray, x: np.ndarray, name: str = "reference") -> Task:
+    """A :class:`Task` following a user's reference ``x(t)`` (absolute positions, m).
+
+    The run starts at rest at ``x[0]`` and lasts ``t[-1] - t[0]`` s (``fast``
+    changes nothing). Settle windows: the last 40 % of every hold (the
+    reference still for at least :data:`MIN_HOLD` s; the task is then a
+    ``regulation`` task with a hunting amplitude), else the last quarter of the
+    run (steady-state error as an RMS, as for the periodic tasks). Reversals:
+    where the reference velocity changes sign (speeds below 0.1 % of the
+    largest ignored).
+    """
+    t = np.asarray(t, dtype=float) - float(t[0])
+    x = np.asarray(x, dtype=float)
+    ref = SampledReference(t, x)
+    speed = np.abs(ref.v)
+    top = float(speed.max())
+    moving = speed > 1e-3 * top if top > 0 else np.zeros(t.size, dtype=bool)
+    holds: list[tuple[float, float]] = []
+    i = 0
+    while i < t.size:
+        if moving[i]:
+            i += 1
+            continue
+        j = i
+        while j + 1 < t.size and not moving[j + 1]:
+            j += 1
+        if t[j] - t[i] >= MIN_HOLD:
+            holds.append((float(t[i] + 0.6 * (t[j] - t[i])), float(t[j])))
+        i = j + 1
+    sign = np.sign(ref.v) * moving
+    idx = np.flatnonzero(sign)
+    reversals = tuple(float(0.5 * (t[a] + t[b])) for a, b in zip(idx[:-1], idx[1:], strict=True)
+                      if sign[a] != sign[b])
+    T = float(t[-1])
+    settle = tuple(holds) or ((0.75 * T, T),)
+    return Task(name, f"the reference of {name} ({t.size} samples over {T:g} s)",
+                duration=T, fast_duration=T, reference=ref, settle=settle,
+                reversals=reversals, kind="regulation" if holds else "periodic",
+                start=float(x[0]))
+
+
 def get_task(name: str) -> Task:
     """The task called ``name`` (:class:`~fcomp.errors.UnknownNameError` otherwise)."""
     return TASKS.get(name)
@@ -225,4 +302,5 @@ def check_fits_stroke(task: Task, x0: float, stroke: float, fast: bool = False) 
         )
 
 
-__all__ = ["TASKS", "Task", "check_fits_stroke", "get_task", "quintic_blend"]
+__all__ = ["MIN_HOLD", "TASKS", "SampledReference", "Task", "check_fits_stroke", "get_task",
+           "quintic_blend", "reference_task"]

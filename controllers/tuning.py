@@ -59,12 +59,23 @@ Rules (SI units; ``dt = 1/f_s`` the control period)
    ``f_d`` depends on ``kd`` (on ``w_P``), and the margins of rule 2 on ``f_d``:
    rule 2 is solved with ``f_d(kd)``.
 4. **LuGre observer gain** ``k`` (1/s). The correction ``-k*e`` of the bristle
-   state is driven by the position error the PID shapes at ``w_P``; it is kept
-   an octave slower (``k = w_P/2``: the two time scales separated by two, so
-   the correction does not fight the loop), and its noise ``sigma1*k*sigma_x``
-   in the friction estimate below the pressure sensors' force noise
-   ``sigma_F`` (``k <= sigma_F/(sigma1*sigma_x)``, ``sigma1`` the bristle damping of
-   the controller's friction model).
+   state (:mod:`controllers.lugre_observer`) is a second controller beside the
+   PID: at rest, where the bristle equation has no decay (``sigma0*|v|/g = 0``),
+   the estimate ``F_hat = sigma0*z_hat + sigma1*dz_hat/dt`` adds
+   ``sigma1*k + sigma0*k*dt/(z - 1)`` to the PID's ``C(z)`` -- an integral gain
+   ``sigma0*k`` that on a stiff seal is several times the PID's own ``ki``
+   (``sigma0`` = 1e6 N/m, ``k`` = 20 1/s: 2e7 N/(m s) against 7e6). ``k`` is
+   the largest value up to ``w_P/2`` (the correction an octave slower than the
+   loop it rides on) for which the loop *with* this path keeps the margins of
+   rule 2 (:func:`observer_loop`), and its noise ``sigma1*k*sigma_x`` in the
+   friction estimate stays below the pressure sensors' force noise ``sigma_F``
+   (``k <= sigma_F/(sigma1*sigma_x)``, ``sigma0``, ``sigma1`` the bristle
+   stiffness and damping of the controller's friction model). The passivity
+   argument of Canudas de Wit et al. (1995), stability for every ``k > 0``,
+   assumes a strictly positive real error dynamics that a sampled loop through a
+   valve does not have: with ``k = w_P/2`` the hydraulic servo's loop at rest
+   has no phase margin (-2 deg) and the observer built on the plant's true
+   friction tracks worse than one built on a third of it.
 5. **EKF** (:mod:`controllers.ekf`). The measurement noise is the sensors':
    ``R = diag(sigma_x^2, sigma_p^2, sigma_p^2)`` with noise and quantisation
    (``sigma^2 = noise^2 + q^2/12``); the process noise is the model's
@@ -97,7 +108,13 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from controllers.pid import PIDGains, disturbance_response, position_loop, spectral_radius
+from controllers.pid import (
+    PIDGains,
+    disturbance_response,
+    nominal_plant,
+    position_loop,
+    spectral_radius,
+)
 from fcomp.errors import FcompError
 
 if TYPE_CHECKING:
@@ -119,6 +136,9 @@ KD_FACTORS = (0.4, 0.6, 0.8, 1.0)
 KP_FACTORS = (0.5, 0.7, 1.0)
 #: Duration (s) of the step-disturbance response whose IAE rule 2 minimises.
 IAE_DURATION = 1.0
+#: Relative pad of rule 4's bisection on the margins (rule 2 leaves the PID at its
+#: margins plus :data:`PAD`: the observer may take the rest).
+OBSERVER_PAD = 1e-3
 #: The derivation's margins above the minimum: 1 % on the gain, 1 deg on the phase
 #: (the bisection's interpolated margins against python-control's).
 PAD = 0.01
@@ -303,6 +323,9 @@ class Tuning:
         The position loop's.
     force_margins : Margins
         The force loop's.
+    observer_margins : Margins or None
+        The position loop's with the LuGre observer's path at rest (rule 4); None for a
+        friction model without a bristle state.
     given : tuple of str
         The values given explicitly (not derived).
     """
@@ -321,6 +344,7 @@ class Tuning:
     margins: Margins
     force_margins: Margins
     given: tuple[str, ...] = field(default=())
+    observer_margins: Margins | None = None
 
     def mpc_horizon(self, rate: float) -> int:
         """Horizon in steps at an MPC rate (Hz): ``ceil(T_N*rate)``, at least 2."""
@@ -341,6 +365,8 @@ class Tuning:
             f"{self.observer_gain:.4g} 1/s ({src('observer_gain')})",
             f"  position loop: {self.margins.describe()}",
             f"  force loop: {self.force_margins.describe()}",
+            *([f"  with the LuGre observer at rest: {self.observer_margins.describe()}"]
+              if self.observer_margins is not None else []),
             f"  MPC horizon {self.mpc_horizon_time * 1e3:.3g} ms, velocity weight e_v/e_x = "
             f"{self.mpc_velocity_ratio:.4g} 1/s; EKF sensor std x {self.ekf_measurement_std[0]:.3g}"
             f" m, p {self.ekf_measurement_std[1]:.4g} Pa",
@@ -364,6 +390,8 @@ class Tuning:
             "mpc_horizon_time": self.mpc_horizon_time,
             "mpc_velocity_ratio": self.mpc_velocity_ratio,
             "margins": marg(self.margins), "force_margins": marg(self.force_margins),
+            "observer_margins": (None if self.observer_margins is None
+                                 else marg(self.observer_margins)),
             "given": list(self.given),
         }
 
@@ -464,7 +492,14 @@ def derive_tuning(model: ControlModel, dt: float | None = None,
     if (why := margins.shortfall()) is not None:
         raise refuse(f"pid_bandwidth {w_P:.4g} rad/s with force_bandwidth {w_F:.4g} rad/s", why,
                      "lower pid_bandwidth or raise force_bandwidth")
-    k = given.get("observer_gain") or observer_gain_rule(model, w_P, sigma_F)
+    k = (float(given["observer_gain"]) if "observer_gain" in given
+         else observer_gain_rule(model, gains, w_P, w_F, sigma_F, dt))
+    o_margins = None
+    if "sigma0" in model.friction.flat_params():
+        o_margins = loop_margins(observer_loop(gains, model, k, w_F, dt))
+        if "observer_gain" in given and (why := o_margins.shortfall()) is not None:
+            raise refuse(f"observer_gain {k:.4g} 1/s", f"the loop with the LuGre observer: {why}",
+                         "lower observer_gain")
     return Tuning(
         column_frequency=w_h, valve_bandwidth=valve_bandwidth(valve),
         control_rate=1.0 / dt, force_bandwidth=w_F, pid_bandwidth=w_P, pid_gains=gains,
@@ -472,16 +507,56 @@ def derive_tuning(model: ControlModel, dt: float | None = None,
         ekf_measurement_std=tuple(float(s) for s in model.sensors.std()),  # type: ignore[arg-type]
         mpc_horizon_time=math.pi / w_h, mpc_velocity_ratio=0.5 * w_F,
         margins=margins, force_margins=f_margins, given=tuple(sorted(given)),
+        observer_margins=o_margins,
     )
 
 
-def observer_gain_rule(model: ControlModel, pid_bandwidth: float, sigma_F: float) -> float:
-    """Rule 4: ``k = min(w_P/2, sigma_F/(sigma1*sigma_x))`` (1/s)."""
+def observer_loop(gains: PIDGains, model: ControlModel, observer_gain: float,
+                  force_bandwidth: float, dt: float) -> Any:
+    """The position loop with the LuGre observer's path at rest (rule 4)::
+
+        L(z) = (C(z) + sigma1*k + sigma0*k*dt/(z - 1)) * P(z)
+
+    ``C`` the PID (:func:`controllers.pid.pid_transfer`), ``P`` the nominal plant
+    (:func:`controllers.pid.nominal_plant`); the integrators written over one
+    denominator (no hidden pole at ``z = 1``)."""
+    import control as ct
+
+    p = model.friction.flat_params()
+    sigma0, sigma1 = float(p.get("sigma0", 0.0)), float(p.get("sigma1", 0.0))
+    k = observer_gain
+    z = ct.tf([1.0, 0.0], [1.0], dt)
+    Tf = 1.0 / (2 * math.pi * gains.derivative_cutoff)
+    C = ct.tf(gains.kp + sigma1 * k + (gains.ki * dt * z + sigma0 * k * dt) / (z - 1)
+              + gains.kd * (z - 1) / ((Tf + dt) * z - Tf))
+    return C * nominal_plant(model.mass, model.viscous_damping(), force_bandwidth,
+                             model.valve_transfer(), dt)
+
+
+def observer_gain_rule(model: ControlModel, gains: PIDGains, pid_bandwidth: float,
+                       force_bandwidth: float, sigma_F: float, dt: float) -> float:
+    """Rule 4: the largest ``k <= min(w_P/2, sigma_F/(sigma1*sigma_x))`` (1/s) whose
+    :func:`observer_loop` keeps the margins of rule 2."""
     k = 0.5 * pid_bandwidth
     sigma1 = float(model.friction.flat_params().get("sigma1", 0.0))
     sigma_x = float(model.sensors.std()[0])
     if sigma1 > 0 and math.isfinite(sigma1):
         k = min(k, sigma_F / (sigma1 * sigma_x))
+    if "sigma0" not in model.friction.flat_params():
+        return k  # no bristle state: no observer to tune (the LuGre observer refuses it)
+
+    def ok(kk: float) -> bool:
+        return quick_margins(observer_loop(gains, model, kk, force_bandwidth, dt)).shortfall(
+            MIN_GAIN_MARGIN * (1 + OBSERVER_PAD), MIN_PHASE_MARGIN + OBSERVER_PAD * 100) is None
+
+    low = 1e-3 * k
+    if not ok(low):
+        return low
+    k = _largest(ok, low, k)
+    # the bisection's interpolated margins against python-control's: shrink until it agrees
+    while k > low and loop_margins(observer_loop(gains, model, k, force_bandwidth,
+                                                 dt)).shortfall() is not None:
+        k = max(low, 0.9 * k)
     return k
 
 
@@ -504,7 +579,21 @@ def fixed_tuning(model: ControlModel, force_bandwidth: float, pid_bandwidth: flo
                                            force_bandwidth, valve, dt)),
         force_margins=loop_margins(force_loop(force_bandwidth, valve, dt)),
         given=("force_bandwidth", "pid_bandwidth", "derivative_cutoff", "observer_gain"),
+        observer_margins=(loop_margins(observer_loop(gains, model, observer_gain,
+                                                     force_bandwidth, dt))
+                          if "sigma0" in model.friction.flat_params() else None),
     )
+
+
+def check_observer(gains: PIDGains, model: ControlModel, observer_gain: float,
+                   force_bandwidth: float, dt: float, what: str) -> Margins:
+    """Margins of the loop with the LuGre observer (:func:`observer_loop`) for explicit values;
+    refused (one line) if insufficient."""
+    m = loop_margins(observer_loop(gains, model, observer_gain, force_bandwidth, dt))
+    if (why := m.shortfall()) is not None:
+        raise refuse(what, f"the loop with the LuGre observer at rest: {why}",
+                     "lower observer_gain (or the PID's gains)")
+    return m
 
 
 def check_gains(gains: PIDGains, model: ControlModel, force_bandwidth: float, dt: float,
@@ -518,5 +607,5 @@ def check_gains(gains: PIDGains, model: ControlModel, force_bandwidth: float, dt
 
 
 __all__ = ["FORCE_PHASE_MARGIN", "MIN_GAIN_MARGIN", "MIN_PHASE_MARGIN", "Margins", "Tuning",
-           "check_gains", "derive_tuning", "fixed_tuning", "force_bandwidth_rule", "force_loop",
-           "loop_margins", "quick_margins"]
+           "check_gains", "check_observer", "derive_tuning", "fixed_tuning", "force_bandwidth_rule", "force_loop",
+           "loop_margins", "observer_loop", "quick_margins"]

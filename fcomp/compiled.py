@@ -37,10 +37,11 @@ import stat
 import subprocess
 import tempfile
 import warnings
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
+from typing import Any
 
 import casadi as ca
 import numpy as np
@@ -174,6 +175,19 @@ def _build(step: ca.Function, nx: int, nu: int) -> ctypes.CDLL | None:
     return load_library(step, driver)
 
 
+def casadi_c(fns: Sequence[ca.Function], name: str, options: Mapping[str, Any]
+             ) -> dict[str, str]:
+    """CasADi's C code of ``fns`` (:class:`casadi.CodeGenerator` with ``options``) as
+    ``{file name: text}``: ``NAME.c``, and ``NAME.h`` when ``options`` ask
+    ``with_header``. Generated in a scratch folder; nothing is written elsewhere."""
+    cg = ca.CodeGenerator(f"{name}.c", dict(options))
+    for f in fns:
+        cg.add(f)
+    with tempfile.TemporaryDirectory() as tmp:
+        cg.generate(f"{tmp}{os.sep}")
+        return {f.name: f.read_text() for f in sorted(Path(tmp).iterdir())}
+
+
 def build_library(fn: ca.Function | Sequence[ca.Function], driver: str, *,
                   rebuild: bool = False, prelude: str = "") -> Path | None:
     """Compile CasADi's C code of ``fn`` (one or several functions) followed by the C
@@ -189,18 +203,10 @@ def build_library(fn: ca.Function | Sequence[ca.Function], driver: str, *,
         return None
     fns = [fn] if isinstance(fn, ca.Function) else list(fn)
     name = fns[0].name()
+    generated = casadi_c(fns, name, {"with_header": False, "casadi_real": "double"})
+    code = prelude + generated[f"{name}.c"] + driver
     with tempfile.TemporaryDirectory() as tmp:
-        cg = ca.CodeGenerator(f"{name}.c", {"with_header": False, "casadi_real": "double"})
-        for f in fns:
-            cg.add(f)
-        cwd = os.getcwd()
-        try:
-            os.chdir(tmp)
-            cg.generate()
-        finally:
-            os.chdir(cwd)
         src = Path(tmp) / f"{name}.c"
-        code = prelude + src.read_text() + driver
         key = hashlib.sha1((code + cc).encode()).hexdigest()[:16]
         cache = cache_dir()
         if cache is None:

@@ -115,6 +115,24 @@ class ModelFile:
                 f"{use}")
 
 
+def seal_friction(source: str | Path, use: str, effects_module: str | Path | None = None
+                  ) -> tuple[FrictionModel, str | None]:
+    """A model file's friction as a plant's or a controller's friction: the model without
+    its measurement terms, and the line saying what was dropped (None: nothing was).
+
+    Parameters
+    ----------
+    source : str or Path
+        The model file.
+    use : str
+        What the friction becomes, for the line (``"plant friction"``, ...).
+    effects_module : str or Path, optional
+        The user's effects module the file may name (:func:`read_model`).
+    """
+    mf = read_model(source, effects_module)
+    return mf.model, (mf.dropped_note(use) if mf.measurement_terms else None)
+
+
 def is_model_file(spec: str | Path) -> bool:
     """Whether a friction option's value names a model file (ends in ``.json``) rather
     than a registered model."""

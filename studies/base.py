@@ -41,6 +41,20 @@ from fcomp.version import __version__
 __all__ = ["Study", "StudyConfig", "StudyError", "StudyOutput", "to_jsonable"]
 
 
+#: :class:`StudyConfig` fields that only some studies take (:attr:`Study.options`), with
+#: the command-line option of each.
+STUDY_OPTIONS: dict[str, str] = {"plant_file": "--plant-params", "friction": "--friction"}
+
+
+def _option_label(value: Any) -> str:
+    """How the record of a run names a plant file or a friction model given to it."""
+    for attr in ("label", "describe"):  # a PlantFile's label, a FrictionModel's description
+        got = getattr(value, attr, None)
+        if got is not None:
+            return str(got() if callable(got) else got)
+    return str(value)
+
+
 class StudyError(RuntimeError):
     """One or more studies raised an error (their output says which and why)."""
 
@@ -71,6 +85,15 @@ class StudyConfig:
         Local worker processes (default: the study's own choice).
     progress
         Show progress bars on a terminal.
+    plant_file
+        A plant file (a path to a ``.toml``, or a :class:`plants.planfile.PlantFile`)
+        to run the study on instead of its built-in plants (studies whose
+        :attr:`Study.options` name it: ``compensators``).
+    friction
+        The simulated plant's friction model: a registered name, a model file
+        (``MODEL.json``, :mod:`fcomp.modelfile`) or a
+        :class:`~fcomp.models.base.FrictionModel` (default: the study's own;
+        studies whose :attr:`Study.options` name it).
     """
 
     out: Path
@@ -81,6 +104,8 @@ class StudyConfig:
     scheduler: str | None = None
     workers: int | None = None
     progress: bool = True
+    plant_file: Any = None
+    friction: Any = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "out", Path(self.out))
@@ -94,17 +119,24 @@ class StudyConfig:
             return config
         if not isinstance(config, Mapping):
             raise FcompError(f"study config must be a mapping, got {type(config).__name__}")
-        unknown = set(config) - {"out", "fast", "command", "scheduler", "workers"}
+        unknown = set(config) - {"out", "fast", "command", "scheduler", "workers",
+                                 "plant_file", "friction"}
         if unknown:
             raise FcompError(f"study config: unknown key(s) {', '.join(sorted(unknown))}")
         if "out" not in config:
             raise FcompError("study config: 'out' (output directory) is required")
         return cls(out=Path(config["out"]), fast=bool(config.get("fast", False)),
                    command=config.get("command"), scheduler=config.get("scheduler"),
-                   workers=config.get("workers"))
+                   workers=config.get("workers"), plant_file=config.get("plant_file"),
+                   friction=config.get("friction"))
 
     def as_dict(self) -> dict[str, Any]:
-        return {"out": str(self.out), "fast": self.fast, "command": self.command}
+        out: dict[str, Any] = {"out": str(self.out), "fast": self.fast, "command": self.command}
+        for key in STUDY_OPTIONS:  # only when given: a default run's record stays as it was
+            value = getattr(self, key)
+            if value is not None:
+                out[key] = _option_label(value)
+        return out
 
     def local_workers(self) -> int:
         """Local worker processes: :attr:`workers`, else ``FCOMP_WORKERS``, else up to 2
@@ -132,6 +164,20 @@ def to_jsonable(obj: Any) -> Any:
     if obj is None or isinstance(obj, bool | int | float | str):
         return obj
     raise TypeError(f"cannot write a {type(obj).__name__} to summary.json")
+
+
+def _takers(key: str) -> str:
+    """The studies (subclasses of :class:`Study` defined so far) whose :attr:`Study.options`
+    hold ``key``, for a message."""
+    names: list[str] = []
+    todo: list[type[Study]] = list(Study.__subclasses__())
+    while todo:
+        cls = todo.pop()
+        todo += cls.__subclasses__()
+        name = getattr(cls, "name", None)
+        if key in cls.options and isinstance(name, str) and name not in names:
+            names.append(name)
+    return " and ".join(sorted(names)) or "no"
 
 
 class StudyOutput:
@@ -191,6 +237,22 @@ class Study(ABC):
     report_files: ClassVar[tuple[str, ...]] = ("report.html",)
     #: Relative run time of a full run (about its CPU seconds): ``all`` starts the longest first.
     cost: ClassVar[float] = 1.0
+    #: The optional :class:`StudyConfig` fields (:data:`STUDY_OPTIONS`) this study takes.
+    options: ClassVar[tuple[str, ...]] = ()
+
+    def check(self, config: StudyConfig) -> list[str]:
+        """Check the configuration's inputs before anything is written (:meth:`main` calls
+        it first; the command line too): options this study does not take, files that do
+        not read. Returns warnings (one line each); raises :class:`FcompError`."""
+        for key, option in STUDY_OPTIONS.items():
+            if getattr(config, key) is not None and key not in self.options:
+                raise FcompError(f"{option} applies to the {_takers(key)} study, not to "
+                                 f"{self.name}")
+        return []
+
+    def subtitle(self, config: StudyConfig) -> str:
+        """The report's subtitle for a run of ``config`` (default: the summary)."""
+        return self.summary
 
     def headline(self, results: dict[str, Any]) -> str:
         """One line of result for the index of ``fcomp study all`` (default: the summary)."""
@@ -206,6 +268,7 @@ class Study(ABC):
     def main(self, config: StudyConfig | Mapping[str, Any]) -> dict[str, Any]:
         """Run the study: write ``summary.json``, figures and the report; return the results."""
         cfg = StudyConfig.coerce(config)
+        self.check(cfg)
         if cfg.workdir is not None:  # inside the staging folder of an enclosing run
             try:
                 return self._run(cfg, cfg.workdir)
@@ -222,7 +285,7 @@ class Study(ABC):
         except OSError as exc:
             raise FcompError(f"{cfg.out_label} {cfg.out}: cannot create it ({exc.strerror})") \
                 from None
-        report = Report(self.title, subtitle=self.summary, command=cfg.command,
+        report = Report(self.title, subtitle=self.subtitle(cfg), command=cfg.command,
                         config={"study": self.name, **cfg.as_dict()},
                         table_label=self.table_label, figure_label=self.figure_label)
         out = StudyOutput(directory, report)

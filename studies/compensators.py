@@ -4,11 +4,22 @@ Every controller of :mod:`controllers` (``pid``, ``pid-ff``,
 ``lugre-observer``, ``ekf``, ``mpc``) runs every task of
 :mod:`controllers.tasks` (``slow-sine``, ``steps``, ``low-velocity-ramp``,
 ``seed002-sine``) on both plants (``hydraulic``: seed 002's servo,
-``pneumatic``: seed 000's cylinder with the assumed servo valve), in the
+``pneumatic``: seed 000's cylinder with the assumed servo valve) -- or on
+the one plant of a plant file (:attr:`StudyConfig.plant_file
+<studies.base.StudyConfig>`, ``fcomp study compensators --plant-params
+PLANT.toml``: its parameters, sensors, valve limits, control rate and
+tuning; the results name it by the file's ``name``) -- in the
 sampled-data harness of :mod:`controllers.harness`: sensor noise and
 quantisation, and a controller whose friction model is *wrong* (the default
 mismatch of :data:`controllers.harness.DEFAULT_MISMATCH`) -- the plant
 integrates the true NMLGM friction, the controllers know a different one.
+``StudyConfig.friction`` (``--friction NAME|MODEL.json``) replaces the true
+friction: a model named takes its values from the parameter set of the
+plant (of the built-in plant of a plant file's kind), a model file
+(:mod:`fcomp.modelfile`) its own; the controllers are built with the same
+model times the same mismatch factors (a factor on a parameter the model
+lacks is ignored), and a model file's measurement terms are dropped with a
+warning.
 
 Outputs:
 
@@ -17,7 +28,9 @@ Outputs:
   "solve_time_max", ...}, ...]}`` (errors in m, times in s), plus the
   robustness distributions, how many draws and why (``robustness_draws``:
   the stopping rule's decisions), the EKF and MPC step times (wall clock and
-  CPU, per closed loop) and the verdict;
+  CPU, per closed loop) and the verdict; with a plant file or a friction
+  given, also ``setup``: the plants run (name, kind, source, controller
+  settings), the friction models and the mismatch factors, and the warnings;
 * the report: ranked tables (RMS error, ratio to ``pid``), tracking-error
   plots, friction estimate against the true friction, the Monte Carlo
   robustness sweep (friction mismatch and sensor noise, per-compensator
@@ -39,12 +52,15 @@ from __future__ import annotations
 
 import math
 import os
+import re
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
 
 from controllers import CONTROLLERS
-from controllers.harness import DEFAULT_MISMATCH, LoopConfig, control_model
+from controllers.harness import DEFAULT_MISMATCH, LoopConfig, control_model, friction_label
+from controllers.plant_model import PlantSettings, friction_with_mismatch, plant_settings
 from controllers.robustness import (
     Job,
     StoppingRule,
@@ -55,10 +71,15 @@ from controllers.robustness import (
     run_sequential,
 )
 from controllers.tasks import TASKS
+from fcomp.errors import FcompError
+from fcomp.models.base import FrictionModel
 from fcomp.parallel import progress_bar, ticker
 from studies.base import Study, StudyConfig, StudyOutput
 
+#: The built-in plants the study runs on (without a plant file).
 PLANTS = ("hydraulic", "pneumatic")
+#: The plant's true friction model (the controllers': the same times the mismatch).
+DEFAULT_FRICTION = "nmlgm"
 CONTROLLER_ORDER = ("pid", "pid-ff", "lugre-observer", "ekf", "mpc")
 TASK_ORDER = ("slow-sine", "steps", "low-velocity-ramp", "seed002-sine")
 #: Tasks at low velocity (the verdict: best compensator vs pid).
@@ -75,6 +96,101 @@ FULL_RULE = StoppingRule(confidence=0.95, min_draws=8, max_draws=20, batch=4,
 FAST_DRAWS = 3
 #: Relative cost of a controller's sample (plant step included), to hand out long runs first.
 COST = {"pid": 1.0, "pid-ff": 1.2, "lugre-observer": 1.5, "ekf": 2.0, "mpc": 3.0}
+
+
+@dataclass(frozen=True)
+class StudyPlant:
+    """A plant the study runs on.
+
+    Attributes
+    ----------
+    label
+        How the results name it: the built-in plant's name, or the plant file's ``name``.
+    base
+        The closed-loop set-up every run on it modifies (plant or plant file, the true and
+        the controllers' friction).
+    settings
+        The controllers' settings on it (:func:`controllers.plant_model.plant_settings`).
+    source
+        ``"built-in"`` or the plant file as given.
+    """
+
+    label: str
+    base: LoopConfig
+    settings: PlantSettings
+    source: str
+
+
+def study_plants(config: StudyConfig, warnings: list[str] | None = None
+                 ) -> list[StudyPlant]:
+    """The plants a configuration runs the study on: the built-in :data:`PLANTS`, or the
+    plant file of ``config.plant_file``; with the friction of ``config.friction``.
+
+    Checks every input (the plant file reads, the friction model exists and takes the
+    values of each plant's parameter set, the controllers' mismatched copy is valid); a
+    model file's dropped measurement terms are appended to ``warnings``.
+
+    Raises
+    ------
+    FcompError
+        A plant file or model file that does not read, an unknown model.
+    """
+    friction = _true_friction(config.friction, warnings)
+    if config.plant_file is None:
+        if config.friction is None:  # the study as it always ran (bit for bit)
+            return [StudyPlant(p, LoopConfig(plant=p), plant_settings(p), "built-in")
+                    for p in PLANTS]
+        plants = [StudyPlant(p, LoopConfig(plant=p, friction=friction,
+                                           controller_friction=friction),
+                             plant_settings(p), "built-in") for p in PLANTS]
+    else:
+        from controllers.compensate import resolve_plant
+
+        pf = resolve_plant(config.plant_file)
+        plants = [StudyPlant(pf.name, LoopConfig(plant=pf.kind, plant_file=pf,
+                                                 friction=friction,
+                                                 controller_friction=friction),
+                             plant_settings(pf), pf.label)]
+    for sp in plants:
+        _check_friction(sp.base)
+    return plants
+
+
+def _true_friction(spec: Any, warnings: list[str] | None) -> str | FrictionModel:
+    """The plant's true friction: the default, a model, a model file's model (measurement
+    terms dropped: a line in ``warnings``) or a registered name (checked)."""
+    from fcomp.modelfile import is_model_file, seal_friction
+    from fcomp.models import MODELS
+
+    if spec is None:
+        return DEFAULT_FRICTION
+    if isinstance(spec, FrictionModel):
+        return spec
+    if not isinstance(spec, str | os.PathLike):
+        raise FcompError(f"study friction: a model name, a model file or a friction model, "
+                         f"not {type(spec).__name__}")
+    text = str(spec)
+    if is_model_file(text):
+        model, dropped = seal_friction(text, "the plant's or the controllers' friction")
+        if dropped and warnings is not None:
+            warnings.append(dropped)
+        return model
+    MODELS.get(text)
+    return text
+
+
+def _check_friction(base: LoopConfig) -> None:
+    """The true friction of ``base`` builds on its plant's parameter set, and so does the
+    controllers' copy with the mismatch factors."""
+    from controllers.harness import _friction
+
+    friction_with_mismatch(_friction(base.controller_friction, base), base.mismatch)
+    _friction(base.friction, base)
+
+
+def _slug(label: str) -> str:
+    """A plant's label as a figure name may hold it (letters, digits, '-', '_')."""
+    return re.sub(r"[^A-Za-z0-9_-]+", "-", label).strip("-") or "plant"
 
 
 def _scheduler(config: StudyConfig) -> str | None:
@@ -94,17 +210,35 @@ class CompensatorsStudy(Study):
     title = "Friction compensation in closed loop"
     summary = ("PID, static feedforward, LuGre observer, EKF and MPC on a hydraulic and a "
                "pneumatic servo whose friction the controllers know only approximately.")
+    options = ("plant_file", "friction")
+
+    def check(self, config: StudyConfig) -> list[str]:
+        warnings = super().check(config)
+        study_plants(config, warnings)
+        return warnings
+
+    def subtitle(self, config: StudyConfig) -> str:
+        if config.plant_file is None:
+            return self.summary
+        pf = study_plants(config)[0]
+        return (f"PID, static feedforward, LuGre observer, EKF and MPC on the "
+                f"{pf.base.plant} servo {pf.label} (plant file {pf.source}) whose friction "
+                "the controllers know only approximately.")
 
     def build(self, out: StudyOutput, config: StudyConfig) -> dict[str, Any]:
         fast = config.fast
-        jobs = [Job(c, t, LoopConfig(plant=p, fast=fast), keep_signals=True)
-                for p in PLANTS for t in TASK_ORDER for c in CONTROLLER_ORDER]
+        warnings: list[str] = []
+        plants = study_plants(config, warnings)
+        names = [sp.label for sp in plants]
+        jobs = [Job(c, t, replace(sp.base, fast=fast), keep_signals=True)
+                for sp in plants for t in TASK_ORDER for c in CONTROLLER_ORDER]
         rule = (StoppingRule(min_draws=FAST_DRAWS, max_draws=FAST_DRAWS, batch=FAST_DRAWS)
                 if fast else FULL_RULE)
-        sweeps = {p: Sweep(plant=p, samples=rule.max_draws, fast=True,
-                           controllers=CONTROLLER_ORDER) for p in PLANTS}
+        sweeps = {sp.label: Sweep(plant=sp.base.plant, samples=rule.max_draws, fast=True,
+                                  controllers=CONTROLLER_ORDER, base=sp.base)
+                  for sp in plants}
         bar = progress_bar("compensators",
-                           len(jobs) + rule.max_draws * len(CONTROLLER_ORDER) * len(PLANTS),
+                           len(jobs) + rule.max_draws * len(CONTROLLER_ORDER) * len(plants),
                            enabled=config.progress)
         tick = ticker(bar)
 
@@ -114,7 +248,8 @@ class CompensatorsStudy(Study):
                             scheduler=_scheduler(config), progress=tick)
             res: list[dict[str, Any]] = [{}] * len(batch)
             for i, r in zip(order, done, strict=True):
-                res[i] = r
+                pf = batch[i].config.plant_file  # a plant file's runs: named by its name
+                res[i] = r if pf is None else {**r, "plant": pf.name}
             return res
 
         try:
@@ -130,12 +265,33 @@ class CompensatorsStudy(Study):
                               "metric": rule.metric}}
                  for p, s in sequential.items()}
         results = [self._row(r) for r in runs]
-        timing = self._timing(runs)
+        timing = self._timing(runs, names)
         bench = self._do_mpc(fast)
-        verdict = self._verdict(results)
-        self._report(out, config, runs, results, robust, sweeps, draws, timing, bench, verdict)
-        return {"results": results, "robustness": robust, "robustness_draws": draws,
-                "mpc_timing": timing, "benchmark": bench, "verdict": verdict}
+        verdict = self._verdict(results, names)
+        self._report(out, config, plants, warnings, runs, results, robust, sweeps, draws,
+                     timing, bench, verdict)
+        doc = {"results": results, "robustness": robust, "robustness_draws": draws,
+               "mpc_timing": timing, "benchmark": bench, "verdict": verdict}
+        if config.plant_file is not None or config.friction is not None:
+            doc["setup"] = self._setup(config, plants, warnings)
+        return doc
+
+    @staticmethod
+    def _setup(config: StudyConfig, plants: list[StudyPlant], warnings: list[str]
+               ) -> dict[str, Any]:
+        """What the runs were set up with (summary.json ``setup``, when not the default)."""
+        base = plants[0].base
+        spec = config.friction
+        return {
+            "plants": [{"name": sp.label, "kind": sp.base.plant, "source": sp.source,
+                        "settings": _settings_dict(sp.settings, control_model(sp.base).tuning)} for sp in plants],
+            "friction": friction_label(base.friction),
+            "friction_source": (None if spec is None or isinstance(spec, FrictionModel)
+                                else str(spec)),
+            "controller_friction": friction_label(base.controller_friction),
+            "mismatch": dict(base.mismatch),
+            "warnings": list(warnings),
+        }
 
     # --------------------------------------------------------------- results
     @staticmethod
@@ -150,14 +306,14 @@ class CompensatorsStudy(Study):
         return row
 
     @staticmethod
-    def _timing(runs: list[dict[str, Any]]) -> dict[str, Any]:
+    def _timing(runs: list[dict[str, Any]], plants: list[str]) -> dict[str, Any]:
         """Step times of the EKF and the MPC: over each plant's runs, and per closed loop.
 
         Wall clock and the controller thread's CPU time (:mod:`controllers.harness`):
         ``p99`` and ``cpu_p99`` are the largest 99th percentile of the runs.
         """
         out: dict[str, Any] = {}
-        for p in PLANTS:
+        for p in plants:
             for c in ("ekf", "mpc"):
                 mine = [r for r in runs
                         if r["plant"] == p and r["controller"] == c and r["metrics"]]
@@ -191,9 +347,9 @@ class CompensatorsStudy(Study):
         return {"available": True, **compare(steps=40 if fast else 300)}
 
     @staticmethod
-    def _verdict(results: list[dict[str, Any]]) -> dict[str, Any]:
+    def _verdict(results: list[dict[str, Any]], plants: list[str]) -> dict[str, Any]:
         out: dict[str, Any] = {}
-        for p in PLANTS:
+        for p in plants:
             for t in LOW_VELOCITY:
                 rows = {r["controller"]: r for r in results
                         if r["plant"] == p and r["task"] == t and r["status"] == "ok"}
@@ -214,34 +370,56 @@ class CompensatorsStudy(Study):
         return "best compensator RMS error vs PID at low velocity -- " + "; ".join(parts)
 
     # ---------------------------------------------------------------- report
-    def _report(self, out: StudyOutput, config: StudyConfig, runs: list[dict[str, Any]],
+    def _report(self, out: StudyOutput, config: StudyConfig, plants: list[StudyPlant],
+                warnings: list[str], runs: list[dict[str, Any]],
                 results: list[dict[str, Any]], robust: dict[str, Any],
                 sweeps: dict[str, Sweep], draws: dict[str, Any], timing: dict[str, Any],
                 bench: dict[str, Any], verdict: dict[str, Any]) -> None:
         rep = out.report
         rep.section("Settings")
+        base = plants[0].base
+        if config.friction is None:
+            what = ("the plant integrates the *true* NMLGM friction (its parameter set), "
+                    "the controller is built on its own plant model whose NMLGM parameters "
+                    "are multiplied by the mismatch factors below")
+        else:
+            true = friction_label(base.friction)
+            spec = config.friction
+            given = (f" (model file `{spec}`)" if isinstance(spec, str | os.PathLike)
+                     and str(spec).lower().endswith(".json") else "")
+            what = (f"the plant integrates the *true* friction `{true}`{given}, "
+                    f"the controller is built on its own plant model with the same friction "
+                    f"model, its parameters multiplied by the mismatch factors below (a "
+                    f"factor on a parameter the model lacks is ignored)")
         rep.paragraph(
-            "Each run: the plant integrates the *true* NMLGM friction (its parameter set), "
-            "the controller is built on its own plant model whose NMLGM parameters are "
-            "multiplied by the mismatch factors below; position and chamber pressures are "
+            f"Each run: {what}; position and chamber pressures are "
             "measured with noise and quantisation. Errors are `r - x` on the true position. "
             + ("Fast mode: shortened tasks." if config.fast else "Full-length tasks."))
+        for w in warnings:
+            rep.note(w, kind="warn")
         rep.table(["parameter", "factor"], [[k, v] for k, v in DEFAULT_MISMATCH.items()],
                   caption="Mismatch of the controllers' friction model (factor on the "
                   "plant's value).", digits=[None, 2])
+        for sp in plants:
+            if sp.base.plant_file is not None:
+                self._plant_file_table(out, sp)
         rows = []
-        for p in PLANTS:
-            model = control_model(LoopConfig(plant=p))
-            s, tu = model.settings, model.tuning
-            rows.append([p, s.control_rate, s.u_max, tu.pid_bandwidth, tu.force_bandwidth,
-                         tu.margins.gain_db, tu.margins.phase, tu.observer_gain,
-                         tu.mpc_horizon(500.0), s.sensors.x_quantum * 1e6, s.sensors.p_quantum])
-        rep.table(["plant", "rate [Hz]", "u_max", "PID bw [rad/s]", "force bw [rad/s]",
-                   "GM [dB]", "PM [deg]", "observer k [1/s]", "MPC horizon", "x quantum [um]",
-                   "p quantum [Pa]"], rows,
-                  caption="Controller settings: the tuning derived from each plant "
-                  "(controllers.tuning; MPC at 500 Hz).",
-                  digits=[None, 0, 3, 1, 0, 1, 0, 1, 0, 1, 0])
+        for sp in plants:
+            s, tu = sp.settings, control_model(sp.base).tuning
+            rows.append([sp.label, s.control_rate, s.u_max, s.du_max, tu.pid_bandwidth,
+                         tu.force_bandwidth, tu.margins.gain_db, tu.margins.phase,
+                         tu.observer_gain, tu.mpc_horizon(500.0), s.sensors.x_quantum * 1e6,
+                         s.sensors.x_noise * 1e6, s.sensors.p_quantum, s.sensors.p_noise])
+        source = ("the built-in plants'" if all(sp.source == "built-in" for sp in plants)
+                  else "the plant file's")
+        rep.table(["plant", "rate [Hz]", "u_max", "du_max [1/s]", "PID bw [rad/s]",
+                   "force bw [rad/s]", "GM [dB]", "PM [deg]", "observer k [1/s]",
+                   "MPC horizon", "x quantum [um]", "x noise [um]", "p quantum [Pa]",
+                   "p noise [Pa]"], rows,
+                  caption=f"Controller settings: {source} control rate, valve limits and "
+                  "sensors; the tuning derived from the plant (controllers.tuning; values "
+                  "the plant file gives explicitly win) with its margins; MPC at 500 Hz.",
+                  digits=[None, 0, 3, 3, 1, 0, 1, 0, 1, 0, 2, 2, 0, 0])
         rep.table(["task", "what it exercises", "duration [s]"],
                   [[t, TASKS.get(t).description, TASKS.get(t).run_duration(config.fast)]
                    for t in TASK_ORDER], caption="Tasks.", digits=[None, None, 1])
@@ -257,7 +435,7 @@ class CompensatorsStudy(Study):
                      kind=kind)
 
         rep.section("Ranked results")
-        for p in PLANTS:
+        for p in (sp.label for sp in plants):
             rep.section(f"{p}", level=3)
             for t in TASK_ORDER:
                 rows_t = [r for r in results if r["plant"] == p and r["task"] == t]
@@ -285,8 +463,8 @@ class CompensatorsStudy(Study):
                            "step median [us]", "step max [ms]", "fallbacks", "status"],
                           table, caption=f"{p}, task `{t}`, ranked by RMS tracking error.",
                           digits=[0, None, 1, 1, 1, 1, 1, 2, 2, 0, 2, 0, None])
-        self._tracking_figures(out, runs)
-        self._friction_figures(out, runs)
+        self._tracking_figures(out, runs, plants)
+        self._friction_figures(out, runs, plants)
         self._robustness(out, robust, sweeps, draws)
         self._benchmark(out, timing, bench)
 
@@ -295,27 +473,58 @@ class CompensatorsStudy(Study):
         return {r["controller"]: r["signals"] for r in runs
                 if r["plant"] == plant and r["task"] == task and r.get("signals")}
 
-    def _tracking_figures(self, out: StudyOutput, runs: list[dict[str, Any]]) -> None:
+    @staticmethod
+    def _plant_file_table(out: StudyOutput, sp: StudyPlant) -> None:
+        """The plant file's main values (geometry, supply, valve, lines) in the report."""
+        pf = sp.base.plant_file
+        assert pf is not None
+        v = pf.values
+        shown = {"bore": ("bore [mm]", 1e3), "rod": ("rod [mm]", 1e3),
+                 "stroke": ("stroke [mm]", 1e3), "mass": ("moving mass [kg]", 1.0),
+                 "ps": ("supply [MPa abs]", 1e-6), "pt": ("return [MPa abs]", 1e-6),
+                 "omega_v": ("spool bandwidth [rad/s]", 1.0),
+                 "tau_v": ("spool lag [ms]", 1e3), "V10": ("line volume cap side [cm^3]", 1e6),
+                 "V20": ("line volume rod side [cm^3]", 1e6),
+                 "beta": ("bulk modulus [MPa]", 1e-6)}
+        rows = [[label, f"{float(v[k]) * f:.4g}"] for k, (label, f) in shown.items() if k in v]
+        rows.insert(4, ["orientation", str(pf.rig.get("orientation", v.get("orient", "")))])
+        out.report.table(["value", sp.label], rows,
+                         caption=f"The plant of the plant file {sp.source} ({pf.kind}, name "
+                         f"`{pf.name}`), instead of the built-in plants.")
+
+    @staticmethod
+    def _plants_of(runs: list[dict[str, Any]], plants: list[StudyPlant] | None) -> list[str]:
+        return [sp.label for sp in plants] if plants is not None else \
+            list(dict.fromkeys(r["plant"] for r in runs))
+
+    def _tracking_figures(self, out: StudyOutput, runs: list[dict[str, Any]],
+                          plants: list[StudyPlant] | None = None) -> None:
         rep = out.report
         rep.section("Tracking")
-        for p in PLANTS:
+        for p in self._plants_of(runs, plants):
             fig, axes = out.subplots(len(TASK_ORDER), 1, figsize=(9, 2.6 * len(TASK_ORDER)))
+            axes = np.atleast_1d(axes)
             for ax, t in zip(axes, TASK_ORDER, strict=True):
                 for c, s in self._signals(runs, p, t).items():
                     ax.plot(s["t"], (s["r"] - s["x"]) * 1e6, lw=0.9, label=c)
                 _panel(ax, f"{p}: {t}", "r - x [um]")
-            _finish(out, fig, axes, 5, f"tracking-{p}", f"Tracking error of every controller "
+            _finish(out, fig, axes, 5, f"tracking-{_slug(p)}", f"Tracking error of every controller "
                     f"on every task, {p} plant (true position).")
 
-    def _friction_figures(self, out: StudyOutput, runs: list[dict[str, Any]]) -> None:
+    def _friction_figures(self, out: StudyOutput, runs: list[dict[str, Any]],
+                          plants: list[StudyPlant] | None = None) -> None:
         rep = out.report
         rep.section("Friction estimate against the true friction")
-        rep.paragraph("The force each compensator fed forward beside the plant's true NMLGM "
+        rep.paragraph("The force each compensator fed forward beside the plant's true "
                       "friction force in the same run (`pid` feeds none). `pid-ff` uses the static map at the "
                       "reference velocity; the observer and the EKF estimate the bristle (and "
                       "film) state on line; the MPC uses the EKF estimate.")
-        for p in PLANTS:
-            fig, axes = out.subplots(2, 1, figsize=(9, 5.5))
+        for p in self._plants_of(runs, plants):
+            if not LOW_VELOCITY:
+                continue
+            fig, axes = out.subplots(len(LOW_VELOCITY), 1,
+                                     figsize=(9, 2.75 * len(LOW_VELOCITY)))
+            axes = np.atleast_1d(axes)
             for ax, t in zip(axes, LOW_VELOCITY, strict=True):
                 for c, s in self._signals(runs, p, t).items():
                     if c == "pid":
@@ -324,7 +533,7 @@ class CompensatorsStudy(Study):
                     ax.plot(s["t"], s["F_true"], "--", lw=0.8, color=line.get_color(),
                             label=f"{c} true")
                 _panel(ax, f"{p}: {t}", "F [N]")
-            _finish(out, fig, axes, 4, f"friction-{p}",
+            _finish(out, fig, axes, 4, f"friction-{_slug(p)}",
                     f"Friction estimate (solid) vs the true friction of the same run (dashed), "
                     f"{p} plant.")
 
@@ -447,4 +656,16 @@ def _finish(out: StudyOutput, fig: Any, axes: Any, ncol: int, name: str, caption
 STUDY = CompensatorsStudy()
 main = STUDY.main
 
-__all__ = ["CONTROLLERS", "STUDY", "CompensatorsStudy", "main"]
+def _settings_dict(s: PlantSettings, tuning: Any) -> dict[str, Any]:
+    """Controller settings as summary.json holds them (SI units): the plant's, and the
+    tuning the controllers ran with (derived, or given explicitly)."""
+    return {"control_rate": s.control_rate, "u_max": s.u_max, "du_max": s.du_max,
+            "pid_bandwidth": tuning.pid_bandwidth, "force_bandwidth": tuning.force_bandwidth,
+            "observer_gain": tuning.observer_gain,
+            "tuning": tuning.as_dict(),
+            "sensors": {k: getattr(s.sensors, k) for k in ("x_noise", "x_quantum", "p_noise",
+                                                           "p_quantum")}}
+
+
+__all__ = ["CONTROLLERS", "DEFAULT_FRICTION", "PLANTS", "STUDY", "CompensatorsStudy",
+           "StudyPlant", "main", "study_plants"]

@@ -4,8 +4,13 @@ Markers (declared in ``pyproject.toml``, ``--strict-markers``):
 
 ``slow``
     tests that build the study site, run real processes or long diagnoses
-    (seconds to a minute each). CI runs everything (``pytest -q``); while
-    working, ``pytest -q -m "not slow"`` skips them.
+    (seconds to a minute each). CI runs everything (``pytest -q -n auto --dist
+    loadgroup``, the README's command); while working, ``pytest -q -m "not slow"``
+    skips them.
+``xdist_group("site")``
+    the tests reading the study site of :func:`site` / :func:`helpers.browser.study_summary`:
+    with ``--dist loadgroup`` they run in one pytest-xdist worker, which builds the
+    site once (each worker process would build its own).
 
 Helpers shared by several test modules live in the package :mod:`helpers`
 (``tests/helpers/``), importable because pytest puts ``tests/`` on the path.
@@ -13,11 +18,35 @@ Helpers shared by several test modules live in the package :mod:`helpers`
 
 from __future__ import annotations
 
+import math
+import os
 from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
 from helpers.browser import build_site
+
+
+def pytest_xdist_auto_num_workers(config: pytest.Config) -> int | None:
+    """``-n auto``: the CPUs this process may use, not the host's cores.
+
+    pytest-xdist asks psutil for the physical cores, which in a container are the
+    host's (a CI runner allowed two CPUs can see 64, and 64 workers of about
+    0.6 GB each would not fit). Here: the CPUs of this process's affinity,
+    bounded by a cgroup v2 CPU quota where one is set. ``PYTEST_XDIST_AUTO_NUM_WORKERS``
+    still decides when given (xdist's own rule, ``None`` here).
+    """
+    if os.environ.get("PYTEST_XDIST_AUTO_NUM_WORKERS"):
+        return None
+    n = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else \
+        (os.cpu_count() or 1)
+    try:
+        quota, period = Path("/sys/fs/cgroup/cpu.max").read_text().split()[:2]
+        if quota != "max":
+            n = min(n, math.ceil(int(quota) / int(period)))
+    except (OSError, ValueError):
+        pass
+    return max(1, n)
 
 
 @pytest.fixture(autouse=True)

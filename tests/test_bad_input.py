@@ -862,6 +862,7 @@ def test_diagnose_report_failure_leaves_nothing(lab: Path, capsys: pytest.Captur
 
     monkeypatch.setattr(fcomp.diagnosis.Diagnosis, "fit", lambda self, data: self)
     monkeypatch.setattr(fcomp.diagnosis.Diagnosis, "to_dict", lambda self: {"baseline": "x"})
+    monkeypatch.setattr(fcomp.diagnosis.Diagnosis, "model_file", lambda self, source=None: {})
 
     def half(diag: object, directory: Path, command: str | None = None) -> Path:
         (Path(directory) / "report.html").write_text("<html>half")
@@ -983,3 +984,20 @@ def test_case_count() -> None:
     extra = 7 + len(SUBPROCESS) + 2
     assert len(CASES) + extra >= 150
     print(f"{len(CASES)} table cases + {extra} interrupt/process cases")
+
+
+def test_a_result_with_non_finite_numbers_is_strict_json_with_nulls() -> None:
+    """A failed run's NaN error or an infinite bound is written as null, never as the
+    non-standard NaN/Infinity and never as a ValueError out of json.dumps."""
+    import json as _json
+
+    import numpy as np
+
+    from fcomp.cli.common import result_text
+
+    doc = {"rms_error": float("nan"), "runs": [{"max": np.float64(np.inf)}, (1.5, -np.inf)],
+           "ok": 2.0}
+    text = result_text(doc)
+    assert "NaN" not in text and "Infinity" not in text
+    assert _json.loads(text) == {"rms_error": None, "runs": [{"max": None}, [1.5, None]],
+                                 "ok": 2.0}

@@ -503,3 +503,28 @@ def test_the_lag_of_a_pressure_channel_is_fitted_with_the_model() -> None:
     d = Diagnosis("lugre", search=False, check_baseline=False, n_jobs=1,
                   progress=False).fit(cell)
     assert d.to_dict()["signals"]["force_lag_s"] is None and "lag" not in d.fit_.values
+
+
+def test_confounded_partners_both_in_the_model_are_reported_as_a_tie() -> None:
+    """An offset and a direction asymmetry both accepted are a tie (sliding, the record
+    fixes ``Fc+ + offset`` and ``Fc- - offset``, not three terms); effects that are not
+    partners are not, and an existing tie grows instead of doubling."""
+    from fcomp.effects import EFFECTS
+
+    assert "force-offset" in EFFECTS.get("direction-asymmetry").confounded
+    assert "pressure-dependence" not in EFFECTS.get("direction-asymmetry").confounded
+    d = Diagnosis.__new__(Diagnosis)
+    d.added_ = ["pressure-dependence", "force-offset", "direction-asymmetry"]
+    d.ties_ = []
+    d._partners_in_model()
+    assert d.ties_ == [["force-offset", "direction-asymmetry"]]
+    d._partners_in_model()  # idempotent
+    assert d.ties_ == [["force-offset", "direction-asymmetry"]]
+    d.added_ = ["force-offset", "direction-asymmetry"]
+    d.ties_ = [["force-offset", "area-error"]]  # a swap's tie of the first
+    d._partners_in_model()
+    assert d.ties_ == [["force-offset", "area-error", "direction-asymmetry"]]
+    d.added_ = ["pressure-dependence", "stribeck"]
+    d.ties_ = []
+    d._partners_in_model()
+    assert d.ties_ == []

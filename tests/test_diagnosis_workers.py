@@ -43,9 +43,26 @@ def test_a_refit_job_round_trips_and_runs_on_a_dask_worker(record) -> None:
     assert not isinstance(here, str)
     assert refit_candidate(*back).values == here.values
     with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True,
-                                  dashboard_address=None) as cluster, \
+                                  dashboard_address=":0") as cluster, \
             distributed.Client(cluster) as client:
         there = client.submit(refit_candidate, *job).result()
     assert not isinstance(there, str)
     assert there.values == here.values
     np.testing.assert_array_equal(there.F_hat, here.F_hat)
+
+
+def test_the_longest_refits_go_to_the_workers_first(record) -> None:
+    """Longest-processing-time-first: what an effect's refit took at the previous step
+    orders the next submission; refits not run yet go first, the models with more states
+    first (the last of a batch would otherwise run alone while the other workers idle)."""
+    d = Diagnosis("lugre", n_jobs=1, search=False, check_baseline=False).fit(record)
+    ctx = d._context()
+    props = [catalogue.propose(n, ctx) for n in ("force-offset", "dwell-time", "position-dependence")]
+    assert props[1].model.n_states > props[0].model.n_states
+    d._seconds = {}
+    assert d._longest_first(props)[0] == 1          # none timed: the extra state first
+    d._seconds = {("force-offset", props[0].form): 9.0, ("dwell-time", props[1].form): 2.0,
+                  ("position-dependence", props[2].form): 4.0}
+    assert d._longest_first(props) == [0, 2, 1]     # by the time each took
+    del d._seconds[("position-dependence", props[2].form)]
+    assert d._longest_first(props) == [2, 0, 1]     # one not timed yet goes first

@@ -1,4 +1,5 @@
-"""Scale-out on an existing Dask cluster: ``--scheduler ADDRESS`` on sweep, fit, diagnose, study.
+"""Scale-out on an existing Dask cluster: ``--scheduler ADDRESS`` on sweep, compensate, fit,
+diagnose, study.
 
 The test starts a real scheduler and a worker as separate processes on
 localhost (``dask-scheduler`` and ``dask-worker``, run as ``python -m
@@ -105,6 +106,26 @@ def test_grid_on_the_cluster_gives_the_local_results(scheduler: str, tmp_path: P
     assert remote == local and len(local["points"]) == 4
 
 
+def test_compensate_on_the_cluster_gives_the_local_results(scheduler: str,
+                                                           tmp_path: Path) -> None:
+    """``compensate --scheduler``: the runs (a user's reference among them, a task the
+    workers get pickled) and the draws are those of the local run."""
+    from fcomp.models import make_model
+
+    lugre = make_model("lugre", params="seed002-type1")
+    lugre.save(tmp_path / "base.json")
+    lugre.with_effects("direction-asymmetry").with_params(r_neg=1.5).save(tmp_path / "true.json")
+    (tmp_path / "ref.csv").write_text("t,x_ref\n0,0.15\n0.3,0.152\n0.8,0.152\n")
+    args = ["compensate", "--plant-params", str(ROOT / "docs" / "examples" / "axis50.toml"),
+            "--friction", str(tmp_path / "true.json"), "--models",
+            f"{tmp_path / 'base.json'},{tmp_path / 'true.json'}", "--controllers", "pid-ff",
+            "--reference", str(tmp_path / "ref.csv"), "--samples", "2"]
+    local = _json([*args, "--workers", "1"], tmp_path / "local.json")
+    remote = _json([*args, "--scheduler", scheduler], tmp_path / "remote.json")
+    assert remote == local
+    assert len(local["runs"]) == 2 and all(r["status"] == "ok" for r in local["runs"])
+
+
 @pytest.fixture(scope="module")
 def records(tmp_path_factory: pytest.TempPathFactory) -> list[str]:
     from fcomp.synthetic import generate
@@ -133,6 +154,9 @@ def test_diagnose_on_the_cluster(scheduler: str, records: list[str], tmp_path: P
             "--candidates", "force-offset,viscous,dwell-time", "--max-steps", "1"]
     local = _json([*args, "--jobs", "1"], tmp_path / "local.json")
     remote = _json([*args, "--scheduler", scheduler], tmp_path / "remote.json")
+    # the model file records its command line, which differs
+    assert "--scheduler" in remote["model_file"]["source"].pop("command")
+    assert "--scheduler" not in local["model_file"]["source"].pop("command")
     assert remote == local
     assert {c["effect"] for c in local["candidates"]} == {"force-offset", "dwell-time"}
 

@@ -193,7 +193,7 @@ def test_process_pool_gives_the_sequential_results(sequential) -> None:
 def test_dask_local_cluster_gives_the_sequential_results(sequential) -> None:
     import distributed  # part of the test extra: a missing package fails, never skips
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                                  dashboard_address=None) as cluster:
+                                  dashboard_address=":0") as cluster:
         res = run_jobs(JOBS, scheduler=cluster.scheduler_address)
     assert _physics(res) == _physics(sequential)
 

@@ -98,6 +98,55 @@ def test_sensitivities_equal_central_differences_of_the_simulation() -> None:
         assert np.abs(G[:, j] - fd).max() <= 1e-4 * scale, name
 
 
+def test_kept_sensitivities_stay_within_their_byte_budget(monkeypatch) -> None:
+    """The reuse store of :class:`SensitivityLoop` results keeps a running byte count
+    that equals the bytes it holds and never exceeds its budget."""
+    from fcomp.identification import sensitivity as sens
+
+    monkeypatch.setattr(sens, "_KEPT", [])
+    monkeypatch.setattr(sens, "_KEPT_BYTES", [0])
+    monkeypatch.setattr(sens, "KEEP_BYTES", 10 * 8 * 101)
+    record = (object(),)
+    for k in range(25):
+        sens._keep((k,), record, np.zeros(100), np.zeros((100, 1 + k % 3)))
+        held = sum(e[2].nbytes + e[3].nbytes for e in sens._KEPT)
+        assert sens._KEPT_BYTES[0] == held <= sens.KEEP_BYTES
+    assert sens._kept((24,), record) is not None and sens._kept((0,), record) is None
+
+
+def test_successive_halving_races_the_starts_and_keeps_the_best_valley() -> None:
+    """best_start with ``resume``: every start a third of the budget, the better half (at
+    least two) the rest from where they stopped; the deepest valley wins; fewer
+    evaluations than every start's full budget. A toy solver: each evaluation halves
+    the distance to the start's valley floor (valleys at -2, 1 and 4, depths 3, 0, 1)."""
+    from fcomp.identification.problem import Solution
+    from fcomp.identification.records import best_start
+
+    floors = {-2.0: 3.0, 1.0: 0.0, 4.0: 1.0}
+
+    def solve(st: dict[str, float], k: int) -> tuple[Solution, int]:
+        x = st["x"]
+        m = min(floors, key=lambda c: abs(c - x))
+        x = m + (x - m) * 0.5**k
+        cost = floors[m] + (x - m) ** 2
+        return Solution(np.array([x]), np.array([math.sqrt(cost)]), np.zeros((1, 1)), True,
+                        "", k, (False,)), k
+
+    def resume(st: dict[str, float], sol: Solution) -> dict[str, float]:
+        return {"x": float(sol.theta[0])}
+
+    # the start in the deepest valley begins farthest from its floor
+    starts = [{"x": -2.4}, {"x": 2.4}, {"x": 4.3}, {"x": -1.7}, {"x": 3.8}]
+    budget = 20
+    cost, sol, st, nfev = best_start(starts, solve, budget, "toy", resume=resume)
+    assert abs(sol.theta[0] - 1.0) < 1e-4 and cost < 1e-8
+    assert st["x"] == pytest.approx(1.0 + 1.4 * 0.5 ** (budget // 3))  # where it resumed
+    assert nfev == 5 * (budget // 3) + 3 * (budget - budget // 3) < 5 * budget
+    # two starts: no race, each gets the whole budget
+    cost2, sol2, st2, nfev2 = best_start(starts[:2], solve, budget, "toy", resume=resume)
+    assert nfev2 == 2 * budget and st2 is starts[1] and cost2 < 1e-8
+
+
 def test_maxwell_slip_sensitivities_equal_central_differences() -> None:
     """The clipped element deflections are differentiated exactly (piecewise, away from kinks)."""
     model = make_model("lugre", params="seed000-cylinder1").with_effects(make_effect(

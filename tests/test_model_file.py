@@ -291,3 +291,30 @@ def test_diagnose_writes_its_final_model(tmp_path: Path, capsys) -> None:
     captured = capsys.readouterr()
     assert json.loads(captured.out)["baseline"] == "coulomb-viscous"
     assert "measurement terms force-offset dropped" in captured.err
+
+
+def test_sweep_reads_a_model_file_with_a_users_effect_given_its_module(
+        tmp_path: Path, capsys) -> None:
+    """``sweep --friction FILE.json`` with a user's effect: refused in one line without
+    ``--effects``, run (in a worker process too) with it."""
+    from fcomp.effects import load_effects_module
+    from fcomp.usercode import USER_FILES
+
+    mod = tmp_path / "my_effects.py"
+    mod.write_text(USER_EFFECT)
+    load_effects_module(mod)
+    model = make_model("lugre", params="seed002-type1").with_effects(
+        make_effect("my-bias", {"bias": 40.0}))
+    path = model.save(tmp_path / "user.json")
+    EFFECTS._items.pop("my-bias")  # a fresh process: the effect is not registered
+    USER_FILES.clear()
+    args = ["sweep", "--plant", "hydraulic", "--controllers", "pid", "--samples", "1",
+            "--friction", str(path), "--no-progress"]
+    assert main([*args, "--json", str(tmp_path / "no.json")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--effects" in err[0], err
+    assert not (tmp_path / "no.json").exists()
+    out = tmp_path / "sweep.json"
+    assert main([*args, "--effects", str(mod), "--workers", "2", "--json", str(out)]) == 0
+    doc = json.loads(out.read_text())
+    assert doc["runs"] and all(r["status"] == "ok" for r in doc["runs"]), doc["runs"]

@@ -130,3 +130,13 @@ def test_refit_checks_the_held_lag() -> None:
     refit.hold("lag", 0.001)
     assert [w for w in refit.plausibility(refit.result(model, values, 2), data.rig)
             if w.parameter == "lag"] == []
+
+
+def test_a_held_mass_of_zero_is_flagged() -> None:
+    """Circle and KDN (Zillen pneumatic rigs): the mass went to 5.7e-28 and 8.8e-11 kg in
+    the first fit and was then held; the held value is judged as a fitted one."""
+    found = check_held({"mass": 5.7e-28}, {"mass": (0.0, 100.0)}, units={"mass": "kg"},
+                       context=BORE25)
+    codes = [w.code for w in found]
+    assert "mass-implausible" in codes
+    assert check_held({"mass": 0.05}, {"mass": (0.0, 100.0)}, context=BORE25) == []

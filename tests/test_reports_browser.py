@@ -19,7 +19,7 @@ from helpers.browser import CHROMIUM, Browser, page_problems, validate_html
 
 from studies import STUDIES
 
-pytestmark = pytest.mark.slow  # builds the study site or runs long diagnoses
+pytestmark = [pytest.mark.slow, pytest.mark.xdist_group("site")]  # builds the study site or runs long diagnoses
 
 WIDTHS = (1280, 390)
 

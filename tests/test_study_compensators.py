@@ -10,7 +10,7 @@ from helpers.browser import study_summary
 
 from studies import STUDIES
 
-pytestmark = pytest.mark.slow  # builds the study site or runs long diagnoses
+pytestmark = [pytest.mark.slow, pytest.mark.xdist_group("site")]  # builds the study site or runs long diagnoses
 
 FIELDS = ("plant", "controller", "task", "rms_error", "max_error", "steady_state_error",
           "solve_time_median", "solve_time_max")

@@ -15,7 +15,7 @@ from helpers.browser import study_summary
 
 from studies import friction_models as fm
 
-pytestmark = pytest.mark.slow  # builds the study site or runs long diagnoses
+pytestmark = [pytest.mark.slow, pytest.mark.xdist_group("site")]  # builds the study site or runs long diagnoses
 
 FIELDS = ("hf_velocity_rms", "hf_force_rms", "hf_pressure_rms")
 

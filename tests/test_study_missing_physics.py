@@ -9,7 +9,7 @@ from helpers.browser import study_summary
 
 from studies import missing_physics as mp
 
-pytestmark = pytest.mark.slow  # builds the study site or runs long diagnoses
+pytestmark = [pytest.mark.slow, pytest.mark.xdist_group("site")]  # builds the study site or runs long diagnoses
 
 
 @pytest.fixture(scope="module")

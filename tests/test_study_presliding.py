@@ -17,7 +17,7 @@ from fcomp.models import make_model
 from studies import presliding_analysis as analysis
 from studies import presliding_runs as runs
 
-pytestmark = pytest.mark.slow  # builds the study site or runs long diagnoses
+pytestmark = [pytest.mark.slow, pytest.mark.xdist_group("site")]  # builds the study site or runs long diagnoses
 
 
 @pytest.fixture(scope="module")

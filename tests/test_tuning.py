@@ -22,6 +22,7 @@ from controllers.tuning import (
     fixed_tuning,
     force_loop,
     loop_margins,
+    observer_loop,
     quick_margins,
 )
 from fcomp.cli.main import main
@@ -86,8 +87,12 @@ def test_derived_bandwidths_obey_the_rules_on_the_builtin_hydraulic_plant() -> N
                                 derivative_cutoff=g.derivative_cutoff)
         loop = position_loop(gains, model.mass, damping, tu.force_bandwidth, valve, dt)
         assert (loop_margins(loop).shortfall() is not None) == short
-    # rules 4 and 6
-    assert tu.observer_gain == pytest.approx(0.5 * tu.pid_bandwidth)
+    # rule 4: the largest observer gain (below w_P/2) whose loop keeps the margins
+    assert 0 < tu.observer_gain < 0.5 * tu.pid_bandwidth
+    assert tu.observer_margins is not None and tu.observer_margins.shortfall() is None
+    over = loop_margins(observer_loop(g, model, 1.2 * tu.observer_gain, tu.force_bandwidth, dt))
+    assert over.shortfall() is not None
+    # rule 6
     assert tu.mpc_horizon_time == pytest.approx(math.pi / tu.column_frequency)
     assert tu.mpc_horizon(500.0) == 20
     assert tu.mpc_velocity_ratio == pytest.approx(0.5 * tu.force_bandwidth)
@@ -154,9 +159,9 @@ def test_a_stiffer_lighter_axis_gets_its_own_tuning(tmp_path: Path) -> None:
 def test_explicit_values_win_and_are_checked(tmp_path: Path, capsys) -> None:
     path = _with(builtin_path("hydraulic"), tmp_path, "given.toml",
                  **{"# pid_bandwidth": "pid_bandwidth = 20.0",
-                    "# observer_gain": "observer_gain = 7.0"})
+                    "# observer_gain": "observer_gain = 0.5"})
     tu = _model(read_plant_file(path)).tuning
-    assert (tu.pid_bandwidth, tu.observer_gain) == (20.0, 7.0)
+    assert (tu.pid_bandwidth, tu.observer_gain) == (20.0, 0.5)
     assert tu.given == ("observer_gain", "pid_bandwidth")
     assert tu.margins.gain > MIN_GAIN_MARGIN
     bad = _with(builtin_path("hydraulic"), tmp_path, "bad.toml",
@@ -180,6 +185,35 @@ def test_explicit_values_win_and_are_checked(tmp_path: Path, capsys) -> None:
                         derivative_cutoff=60.0)
     ok = make_controller("pid", model, bandwidth=20.0)
     assert ok.margins.gain > MIN_GAIN_MARGIN
+    # the former observer gain (20/s) makes the loop at rest unstable: refused, a file's too
+    with pytest.raises(FcompError, match=r"observer_gain given\) refused: the loop with the "
+                       r"LuGre observer at rest: the closed loop is unstable"):
+        make_controller("lugre-observer", model, observer_gain=20.0)
+    loose = _with(builtin_path("hydraulic"), tmp_path, "loose.toml",
+                  **{"# observer_gain": "observer_gain = 20.0"})
+    capsys.readouterr()
+    assert main(["plant", "check", str(loose)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "observer_gain 20 1/s refused" in err[0], err
+
+
+def test_the_observer_loop_is_the_pid_with_an_integrator_of_the_error() -> None:
+    """Rule 4's loop against an independent evaluation: at z = exp(jw dt) the controller is
+    the PID plus ``sigma1 k + sigma0 k dt/(z - 1)`` (the bristle correction at rest)."""
+    model = _model(builtin_plant_file("hydraulic"))
+    tu = model.tuning
+    g, dt, k = tu.pid_gains, 1.0 / model.control_rate, 3.0
+    p = model.friction.flat_params()
+    L = observer_loop(g, model, k, tu.force_bandwidth, dt)
+    P = position_loop(g, model.mass, model.viscous_damping(), tu.force_bandwidth,
+                      model.valve_transfer(), dt)
+    Tf = 1.0 / (2 * math.pi * g.derivative_cutoff)
+    for w in (0.5, 5.0, 50.0, 500.0):
+        z = complex(math.cos(w * dt), math.sin(w * dt))
+        C = g.kp + g.ki * dt * z / (z - 1) + g.kd * (z - 1) / ((Tf + dt) * z - Tf)
+        plant = complex(P(z)) / C
+        want = (C + p["sigma1"] * k + p["sigma0"] * k * dt / (z - 1)) * plant
+        assert complex(L(z)) == pytest.approx(want, rel=1e-6)
 
 
 def test_check_prints_the_tuning_and_its_margins(capsys) -> None:

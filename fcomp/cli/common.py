@@ -84,11 +84,18 @@ def finite_float(text: str) -> float:
 def add_model_options(p: argparse.ArgumentParser, *, flag: str = "--friction") -> None:
     p.add_argument("--add-effect", action="append", default=[], metavar="EFFECT",
                    help="add a catalogue (or registered) effect to the model; repeatable")
-    p.add_argument("--effects", metavar="MODULE.py", default=None,
-                   help="a Python file that registers the user's own effects (it is executed: "
-                   "see SECURITY in the README)")
+    add_effects_option(p, "registers the user's own effects")
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                    help="override a friction parameter (flat name, SI units); repeatable")
+
+
+def add_effects_option(p: argparse.ArgumentParser,
+                       what: str = "registers the user's own effects the model files name"
+                       ) -> None:
+    """``--effects MODULE.py``: a Python file that ``what`` (executed: SECURITY, README)."""
+    p.add_argument("--effects", metavar="MODULE.py", default=None,
+                   help=f"a Python file that {what} (it is executed: see SECURITY in the "
+                   "README)")
 
 
 def parse_assignments(items: list[str], option: str = "--set") -> dict[str, float]:
@@ -192,14 +199,13 @@ def friction_model(spec: str, params: str | None, args: argparse.Namespace, *,
 
     A file takes no parameter set; ``--add-effect`` and ``--set`` apply to it as to a name.
     """
-    from fcomp.modelfile import is_model_file, read_model
+    from fcomp.modelfile import is_model_file, seal_friction
 
     if not is_model_file(spec):
         return build_model(spec, params, args)
-    mf = read_model(spec, args.effects)
-    if mf.measurement_terms:
-        warn("measurement-terms", mf.dropped_note(use), "friction")
-    model = mf.model
+    model, dropped = seal_friction(spec, use, args.effects)
+    if dropped:
+        warn("measurement-terms", dropped, "friction")
     if args.add_effect:
         model = model.with_effects(*args.add_effect)
     overrides = parse_assignments(args.set)
@@ -428,9 +434,35 @@ def _clock(seconds: float) -> str:
     return f"{h}:{m:02d}:{s:02d}" if h else f"{m}:{s:02d}"
 
 
+def add_closed_loop_run_options(p: argparse.ArgumentParser) -> None:
+    """The options of a command that runs many closed loops (``sweep``, ``compensate``):
+    ``--workers``, ``--scheduler``, ``--json``, ``--report``, ``--no-progress``."""
+    p.add_argument("--workers", type=int, default=None, metavar="N",
+                   help="local worker processes (default: CPU count)")
+    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="run on the Dask distributed scheduler at ADDRESS (tcp://host:8786)")
+    p.add_argument("--json", metavar="OUT", default=None,
+                   help="write the result as JSON to OUT ('-' for standard output)")
+    p.add_argument("--report", metavar="DIR", default=None,
+                   help="write a self-contained HTML report to DIR/report.html")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
+
+
 def result_text(doc: dict) -> str:
-    """A command's JSON result as text (strict JSON: a NaN raises before anything is written)."""
-    return json.dumps(doc, indent=2, allow_nan=False) + "\n"
+    """A command's JSON result as text: strict JSON, a non-finite number (the error of a
+    run that failed, a bound at infinity) written as ``null``."""
+    return json.dumps(_finite(doc), indent=2, allow_nan=False) + "\n"
+
+
+def _finite(value: Any) -> Any:
+    """``value`` with every non-finite float, at any depth, replaced by None."""
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, dict):
+        return {k: _finite(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_finite(v) for v in value]
+    return value
 
 
 def emit_result(text: str, json_arg: str | None, out: Path | None, summary: str) -> None:

@@ -94,7 +94,10 @@ def summary(doc: dict) -> str:
         lines.append(f"step {i}: + {s['effect']:22s} {s['rms_before']:.4g} -> {after} N  {tag}")
     if doc["ties"]:
         for t in doc["ties"]:
-            lines.append(f"tie (confounded, {t[0]} added): " + ", ".join(t))
+            both = [e for e in t if e in doc["added"]]
+            held = f"{' and '.join(both)} all in the model" if len(both) > 1 else \
+                f"{t[0]} added"
+            lines.append(f"tie (confounded, {held}): " + ", ".join(t))
             for e, exp in doc["tie_experiments"][t[0]].items():
                 lines.append(f"    {e}: {exp}")
     plain = doc.get("rms_plain") or {}

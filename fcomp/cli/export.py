@@ -88,14 +88,14 @@ def control_model(args: argparse.Namespace) -> Any:
         params = args.params if args.params is not None else PLANTS.get(
             plant_file.kind).default_params
         return ControlModel(plant_file, common.friction_model(
-            args.friction, params, args, use="the controller's friction"), args.params)
+            args.friction, params, args, use="controller friction"), args.params)
     plant = args.plant or "hydraulic"
     if plant not in KINDS:
         raise FcompError(f"--plant {plant!r}: the controllers run on "
                          f"{' or '.join(sorted(KINDS))}")
     params = args.params if args.params is not None else PLANTS.get(plant).default_params
     friction = common.friction_model(args.friction, params, args,
-                                     use="the controller's friction")
+                                     use="controller friction")
     return ControlModel(plant, friction, args.params)
 
 

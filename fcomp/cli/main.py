@@ -35,8 +35,8 @@ from fcomp.cli import common
 from fcomp.errors import FcompError
 from fcomp.version import __version__
 
-COMMANDS = ("simulate", "fit", "compare", "diagnose", "sweep", "study", "plant", "export",
-            "import_", "demo", "list_")
+COMMANDS = ("simulate", "fit", "compare", "diagnose", "sweep", "compensate", "study", "plant",
+            "export", "import_", "demo", "list_")
 
 
 class _Parser(argparse.ArgumentParser):

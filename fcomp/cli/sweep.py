@@ -73,18 +73,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--friction", default="nmlgm", metavar="NAME|MODEL.json",
                    help="the plant's true friction model: a name or a model file (default "
                    "nmlgm)")
+    common.add_effects_option(p)
     p.add_argument("--seed", type=int, default=2026, help="seed of the draws and the noise")
     p.add_argument("--full", action="store_true",
                    help="full task durations (default: the fast ones)")
-    p.add_argument("--workers", type=int, default=None, metavar="N",
-                   help="local worker processes (default: CPU count)")
-    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
-                   help="run on the Dask distributed scheduler at ADDRESS (tcp://host:8786)")
-    p.add_argument("--json", metavar="OUT", default=None,
-                   help="write the result as JSON to OUT ('-' for standard output)")
-    p.add_argument("--report", metavar="DIR", default=None,
-                   help="write a self-contained HTML report to DIR/report.html")
-    p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
+    common.add_closed_loop_run_options(p)
     p.set_defaults(func=run)
 
 
@@ -103,20 +96,19 @@ def _factors(items: list[str]) -> dict[str, tuple[float, ...]]:
     return out
 
 
-def _friction(spec: str, option: str) -> Any:
+def _friction(spec: str, option: str, effects: str | None) -> Any:
     """A friction option's model: a registered name (checked), or a model file's friction
     (its measurement terms dropped with a warning)."""
-    from fcomp.modelfile import is_model_file, read_model
+    from fcomp.modelfile import is_model_file, seal_friction
     from fcomp.models import MODELS
 
     if not is_model_file(spec):
         MODELS.get(spec)
         return spec
-    mf = read_model(spec)
-    if mf.measurement_terms:
-        common.warn("measurement-terms", mf.dropped_note("plant or controller friction"),
-                    option)
-    return mf.model
+    model, dropped = seal_friction(spec, "plant or controller friction", effects)
+    if dropped:
+        common.warn("measurement-terms", dropped, option)
+    return model
 
 
 def _plan(args: argparse.Namespace) -> Any:
@@ -141,11 +133,11 @@ def _plan(args: argparse.Namespace) -> Any:
     controllers = tuple(common.name_list(args.controllers, "--controllers") or ())
     for c in controllers:
         CONTROLLERS.get(c)
-    base = LoopConfig(plant=plant, friction=_friction(args.friction, "--friction"),
+    base = LoopConfig(plant=plant, friction=_friction(args.friction, "--friction", args.effects),
                       plant_file=plant_file)
     if plant_file is not None:  # its explicit tuning without margins: refused before any run
         _ = control_model(base).tuning
-    frictions = tuple(_friction(f, "--controller-friction") for f in
+    frictions = tuple(_friction(f, "--controller-friction", args.effects) for f in
                       common.name_list(args.controller_friction, "--controller-friction") or ())
     if args.grid or frictions:
         return Grid(plant=plant, task=args.task, controllers=controllers,
@@ -275,6 +267,8 @@ def run(args: argparse.Namespace) -> int:
     for option, spec in (("--plant-params", args.plant_params), ("--friction", args.friction)):
         if spec is not None and spec.lower().endswith((".toml", ".json")):
             inputs.file(spec, option)
+    if args.effects is not None:
+        inputs.file(args.effects, "--effects")
     common.check_outputs(inputs, [("--json", out)], [("--report", folder, "report")])
     plan = _plan(args)
     jobs = plan.jobs()

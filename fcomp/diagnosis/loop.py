@@ -78,6 +78,7 @@ import dataclasses
 import math
 import os
 import sys
+import time
 from collections.abc import Mapping, Sequence
 from concurrent.futures import Executor, as_completed
 from dataclasses import dataclass, field
@@ -323,6 +324,14 @@ def refit_candidate(refit: Refit, prop: catalogue.Proposal, current: FitResult
         return f"refit failed: {str(exc).splitlines()[0] if str(exc) else type(exc).__name__}"
 
 
+def timed_refit_candidate(refit: Refit, prop: catalogue.Proposal, current: FitResult
+                          ) -> tuple[FitResult | str, float]:
+    """:func:`refit_candidate` and the seconds it took where it ran (a worker's own clock)."""
+    t0 = time.perf_counter()
+    out = refit_candidate(refit, prop, current)
+    return out, time.perf_counter() - t0
+
+
 class Diagnosis:
     """Compare a model with measurements, find the missing effect, add it, watch the error fall.
 
@@ -458,6 +467,7 @@ class Diagnosis:
                                    self.data_.scales.dt)
         self._bar = _progress(self.progress)
         self._pool: Executor | None = None
+        self._seconds: dict[tuple[str, str | None], float] = {}  # a refit's duration, by form
         self._cluster = contextlib.ExitStack()
         self._fitting = True
         try:
@@ -488,6 +498,7 @@ class Diagnosis:
                 self._search(names)
                 self._backward()
                 self._swaps(names)
+                self._partners_in_model()
         finally:
             self._bar.close()
             self._fitting = False
@@ -505,7 +516,7 @@ class Diagnosis:
         them off the force, estimate the noise floor again and refit the baseline."""
         self.disturbances_: list[disturbance.Disturbance] = []
         assert first.plain is not None
-        lines = disturbance.find(first.plain, first.F_hat, self.data_)
+        lines = disturbance.find(first.plain, self._refit.motion_prediction(first), self.data_)
         if not lines:
             return first
         cleaned = disturbance.without(self.data_, [w for _, _, w in lines])
@@ -792,13 +803,14 @@ class Diagnosis:
         results: list[FitResult | str] = [""] * len(proposals)
         pool = self._workers(len(proposals))
         if pool is not None:
-            pending = {pool.submit(refit_candidate, self._refit, prop, self.fit_): i
-                       for i, prop in enumerate(proposals)}
+            pending = {pool.submit(timed_refit_candidate, self._refit, proposals[i], self.fit_): i
+                       for i in self._longest_first(proposals)}
             while pending:
                 try:
                     for fut in as_completed(list(pending), timeout=WATCH_SECONDS):
                         i = pending.pop(fut)
-                        results[i] = fut.result()
+                        results[i], seconds = fut.result()
+                        self._seconds[(proposals[i].effect, proposals[i].form)] = seconds
                         self._tick(proposals[i].effect)
                 except TimeoutError:
                     if _workers_alive(pool):
@@ -823,6 +835,25 @@ class Diagnosis:
             if isinstance(res, FitResult):
                 self._refit.adopt_boxes(res)
         return results
+
+    def _longest_first(self, proposals: Sequence[catalogue.Proposal]) -> list[int]:
+        """The order to submit ``proposals`` to the workers in: the longest jobs first.
+
+        The refits of one step take from a fraction of a second (a static term)
+        to many seconds (a memory model): submitted in catalogue order, the
+        longest often started last and ran alone while the other workers idled
+        (longest-processing-time-first scheduling). A job's length is what the
+        same effect and form took at the previous step of this diagnosis; one not
+        run yet goes first, the models without exact sensitivities (finite
+        differences) and then those with more states first. The results do not
+        depend on the order (each job is independent).
+        """
+        def key(i: int) -> tuple[bool, float, bool, int]:
+            prop = proposals[i]
+            took = self._seconds.get((prop.effect, prop.form))
+            return (took is not None, -(took or 0.0), prop.model.symbolic, -prop.model.n_states)
+
+        return sorted(range(len(proposals)), key=key)
 
     def _workers(self, jobs: int) -> Executor | None:
         """The diagnosis's process pool (``spawn``), started on first use within :meth:`fit`;
@@ -904,7 +935,7 @@ class Diagnosis:
             ranked = sorted(cands, key=lambda c: (math.isnan(c.rms_heldout), c.rms_heldout))
             good = [c for c in ranked if c.qualifies]
             if good and self._control(good[0]):  # the gain was the optimiser's: judge again
-                cands = self._evaluate(todo)
+                cands = self._again(cands)
                 ranked = sorted(cands, key=lambda c: (math.isnan(c.rms_heldout),
                                                       c.rms_heldout))
                 good = [c for c in ranked if c.qualifies]
@@ -956,6 +987,23 @@ class Diagnosis:
         else:
             self.baseline_fit_ = self.fit_
         return True
+
+    def _again(self, cands: list[Candidate]) -> list[Candidate]:
+        """``cands`` judged again after :meth:`_control` replaced the current fit.
+
+        The candidates that qualified are refitted from the new current fit (their
+        gain may have been the optimiser's); the others keep their refits and are
+        judged against the new fit: it is better on the training samples than the one
+        they failed to beat, and a refit from it (the earlier start moved to a lower
+        point of the same parameters) would not change that -- refitting them all
+        doubled the step's time for the same answer.
+        """
+        redo = [c.effect for c in cands if c.qualifies]
+        fresh = {c.effect: c for c in self._evaluate(redo)}
+        return [fresh[c.effect] if c.effect in fresh else
+                c if c.fit is None else dataclasses.replace(self._judge(c.effect, c.fit),
+                                                            form=c.form)
+                for c in cands]
 
     def _rebuilt(self, names: Sequence[str]) -> FitResult:
         """The baseline with the effects ``names`` (in order) refitted from the current values.
@@ -1070,12 +1118,36 @@ class Diagnosis:
                      if fall > 0 and c.rms_heldout - full.rms_test <= TIE_SHARE * fall]
             if not close:
                 continue
-            tie = next((t for t in self.ties_ if t[0] == effect), None)
-            if tie is None:
-                tie = [effect]
-                self.ties_.append(tie)
-            tie += [c for c in close if c not in tie]
-            step.tie = list(tie)
+            step.tie = list(self._join_tie(effect, close))
+
+    def _partners_in_model(self) -> None:
+        """Report declared confounded partners that are *both* in the final model as a tie.
+
+        Effects that give the same force over the motions a record holds
+        (:attr:`Effect.confounded`: an offset of the force and a direction
+        asymmetry of the levels, while sliding) can both be accepted, one after
+        the other, each taking part of what the record shows. How the force
+        then splits between them is not fixed by the record (sliding, ``Fc+ +
+        offset`` and ``Fc- - offset`` are seen, not the three terms), so they are
+        reported together, with the experiment that separates them, as for a
+        partner that fits in the other's place (:meth:`_swaps`). The first added
+        leads the group.
+        """
+        for i, effect in enumerate(self.added_):
+            self._join_tie(effect, [p for p in self.added_[i + 1:]
+                                    if p in EFFECTS.get(effect).confounded
+                                    or effect in EFFECTS.get(p).confounded])
+
+    def _join_tie(self, effect: str, others: Sequence[str]) -> list[str]:
+        """The tie holding ``effect`` (led by it when new), grown by ``others``."""
+        tie = next((t for t in self.ties_ if effect in t), None)
+        if tie is None:
+            if not others:
+                return [effect]
+            tie = [effect]
+            self.ties_.append(tie)
+        tie += [e for e in others if e not in tie]
+        return tie
 
     def _reweighted(self, fit: FitResult) -> FitResult:
         """``fit`` polished again after the sample weights follow its own prediction.

@@ -611,6 +611,21 @@ class Refit:
             hi.append(f_hi)
         return np.concatenate(out), np.concatenate(lo), np.concatenate(hi)
 
+    def motion_prediction(self, fit: FitResult) -> np.ndarray:
+        """``fit``'s prediction without its channel-lag term ``-lag*dD/dt``: what the model
+        predicts from the motion alone.
+
+        The lag term is built from the measured driving force, so it carries
+        whatever that channel carries: a pump's line on ``p1`` reappeared in the
+        prediction through it, and the disturbance check (:mod:`.disturbance`)
+        took the line for the motion's and let it pass into the noise floor.
+        """
+        lag = fit.values.get("lag", self.held.get("lag"))
+        if not lag or not self.data.fits_lag:
+            return fit.F_hat
+        return fit.F_hat - float(lag) * np.concatenate(
+            [e.data.extra_column("lag") for e in self.data.experiments])
+
     @staticmethod
     def _predict_one(model: FrictionModel, d: FitData, vals: Mapping[str, float],
                      rig: Mapping[str, float], s: Mapping[str, np.ndarray]) -> np.ndarray:
@@ -801,9 +816,15 @@ class Refit:
         budget = min(PROBE_NFEV, max_nfev) if several else max_nfev
         main = self._candidate_records if fast else self._records
         probe = self._probe_records if several else main
-        cost, sol, st, nfev = best_start(
-            start_list, lambda st: self._solve(model, self._pv(model, first, st, specs), budget,
-                                               records=probe), model.describe())
+
+        def solve(st: dict[str, float], k: int) -> tuple[Any, int]:
+            return self._solve(model, self._pv(model, first, st, specs), k, records=probe)
+
+        def resume(st: dict[str, float], sol: Any) -> dict[str, float]:
+            return dict(st, **dict(zip(first, map(float, sol.theta), strict=True)))
+
+        cost, sol, st, nfev = best_start(start_list, solve, budget, model.describe(),
+                                         resume=resume)
         st = dict(st, **dict(zip(first, map(float, sol.theta), strict=True)))
         if reference is not None and several and cost > (1.0 - MIN_GAIN) * reference:
             values = {n: float(st[n]) for n in names}
@@ -852,7 +873,7 @@ class Refit:
             held = check_held({n: float(fit.values[n]) for n in held_names},
                               {n: (hs[n].lower, hs[n].upper) for n in held_names},
                               units={n: hs[n].unit for n in held_names},
-                              dt=self.q * self.data.scales.dt)
+                              dt=self.q * self.data.scales.dt, context=context)
         names = [n for n in fit.values if n not in self.held]
         if not names:
             return held

@@ -666,9 +666,13 @@ def build_report(diag: Diagnosis, *, command: str | None = None) -> Report:
     if d["ties"]:
         rep.section("Confounded effects", level=3)
         for group in d["ties"]:
+            both = [e for e in group if e in d["added"]]
             rep.paragraph("These explain the data equally well: " +
-                          ", ".join(f"`{e}`" for e in group) + f"; `{group[0]}` was added. "
-                          "The experiments that tell them apart:")
+                          ", ".join(f"`{e}`" for e in group) + "; " + (
+                              f"`{group[0]}` was added. " if len(both) < 2 else
+                              ", ".join(f"`{e}`" for e in both) + " are all in the model "
+                              "and the record does not fix how the force splits between "
+                              "them. ") + "The experiments that tell them apart:")
             rep.bullets([f"`{e}`: {d['tie_experiments'][group[0]][e]}" for e in group])
     rep.section("4. Add it and watch the error fall")
     rep.figure(figs["error_fall"], "Held-out RMS error after each accepted step; dashed: the "

@@ -307,6 +307,7 @@ def check_held(
     *,
     units: Mapping[str, str] | None = None,
     dt: float = 0.0,
+    context: RigContext | None = None,
 ) -> list[FitWarning]:
     """The warnings of rig terms estimated once and held for the fits that follow.
 
@@ -321,13 +322,18 @@ def check_held(
     dt
         Sample interval (s) of the record it was estimated on: a ``lag`` above
         ``-LEAD_SAMPLES*dt`` is zero within the timing of the samples.
+    context
+        The rig, to judge a held ``mass`` as a fitted one is judged
+        (``mass-implausible``: a mass that went to zero is as wrong held as fitted).
 
     Returns
     -------
     list of FitWarning
         Per name (order of ``values``): ``at-bound`` (within :data:`BOUND_HAIR`
-        of a bound), then for ``lag`` ``lag-negative`` (see the module docstring).
+        of a bound), then for ``mass`` ``mass-implausible`` and for ``lag``
+        ``lag-negative`` (see the module docstring).
     """
+    ctx = context or RigContext()
     unit = dict(units or {})
     out: list[FitWarning] = []
     for name, value in values.items():
@@ -343,6 +349,9 @@ def check_held(
                         "beyond the allowed range (a missing effect, or a record that does "
                         "not determine it), and every later fit carries that value")))
                     break
+        mass = _mass_warning(name, value, None, ctx)
+        if mass is not None:
+            out.append(mass)
         if name == "lag" and value < -LEAD_SAMPLES * max(dt, 0.0) and value < 0.0:
             out.append(FitWarning("lag-negative", name, (
                 f"lag = {_q(value, u or 's')}: the driving force leads the motion by "

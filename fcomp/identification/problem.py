@@ -28,6 +28,7 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from fcomp.errors import FcompError
+from fcomp.parallel import one_blas_thread
 from fcomp.parameters import ParamSpec
 
 #: ``fun(theta, need_jacobian) -> (r, dF_hat/dtheta or None)`` of a stage (external theta).
@@ -194,13 +195,14 @@ def solve(
     the trust-region iterations are unchanged while the solver's
     per-iteration SVD works on a ``(p+1) x p`` matrix instead of ``N x p``.
     """
-    r0 = fun(pv.start, False)[0]
-    if not np.all(np.isfinite(r0)):
-        raise FcompError(f"{what}: the model gives non-finite forces at the initial guess")
-    sol = _solve(pv, fun, max_nfev, compress, constrained=False)
-    pairs = pv.level_pairs()
-    if any(sol.theta[i] < sol.theta[j] for i, j in pairs):
-        sol = _solve(pv, fun, max_nfev, compress, constrained=True)
+    with one_blas_thread():  # tall, thin algebra: threads only wait (fcomp.parallel)
+        r0 = fun(pv.start, False)[0]
+        if not np.all(np.isfinite(r0)):
+            raise FcompError(f"{what}: the model gives non-finite forces at the initial guess")
+        sol = _solve(pv, fun, max_nfev, compress, constrained=False)
+        pairs = pv.level_pairs()
+        if any(sol.theta[i] < sol.theta[j] for i, j in pairs):
+            sol = _solve(pv, fun, max_nfev, compress, constrained=True)
     return sol
 
 

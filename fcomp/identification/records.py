@@ -250,12 +250,12 @@ def fit_records(
     nfev = 0
     chosen = start_list[0]
     if len(start_list) > 1 and probe_nfev:
-        def probe(st: dict[str, float]) -> tuple[Solution, int]:
-            sol, prob = solve_records(model, records, vector(st), max_nfev=probe_nfev,
+        def probe(st: dict[str, float], k: int) -> tuple[Solution, int]:
+            sol, prob = solve_records(model, records, vector(st), max_nfev=k,
                                       substeps=substeps)
             return sol, prob.evaluations
 
-        cost, sol, st, k = best_start(start_list, probe, model.describe())
+        cost, sol, st, k = best_start(start_list, probe, probe_nfev, model.describe())
         nfev += k
         chosen = dict(st, **dict(zip(names, map(float, sol.theta), strict=True)))
         if keep_going is not None and not keep_going(cost):
@@ -269,21 +269,48 @@ def fit_records(
 
 
 def best_start(starts: Sequence[dict[str, float]],
-               solve_one: Callable[[dict[str, float]], tuple[Solution, int]],
-               what: str) -> tuple[float, Solution, dict[str, float], int]:
+               solve: Callable[[dict[str, float], int], tuple[Solution, int]],
+               budget: int, what: str, *,
+               resume: Callable[[dict[str, float], Solution], dict[str, float]] | None = None,
+               ) -> tuple[float, Solution, dict[str, float], int]:
     """The start whose (short) solve ends with the least sum of squares.
 
-    ``solve_one(start)`` returns the solution and its evaluation count, or raises
-    :class:`~fcomp.errors.FcompError` for a start where the model gives non-finite
-    forces (that start is skipped). Returns ``(cost, solution, start, evaluations)``,
-    the evaluations summed over every start tried.
+    ``solve(start, evaluations)`` returns the solution and its evaluation count, or
+    raises :class:`~fcomp.errors.FcompError` for a start where the model gives
+    non-finite forces (that start is skipped); each start gets ``budget``
+    evaluations. Returns ``(cost, solution, start, evaluations)``, the evaluations
+    summed over every start tried.
+
+    With ``resume`` and more than two starts, the probes are raced by successive
+    halving (Jamieson and Talwalkar, "Non-stochastic best arm identification and
+    hyperparameter optimization", AISTATS 2016): every start gets a third of
+    ``budget``; the better half (by cost, at least two) continue from where they
+    stopped (``resume(start, solution)``) with the rest. A start that has not found
+    its valley after a third of the budget rarely wins; the evaluations of the
+    others are saved (a third of the probing with six starts). The start returned
+    is then where the winner resumed.
 
     Raises
     ------
     FcompError
         When no start gives finite forces.
     """
-    best: tuple[float, Solution, dict[str, float]] | None = None
+    if resume is None or len(starts) <= 2:
+        ranked, nfev = _ranked(starts, lambda st: solve(st, budget), what)
+        return (*ranked[0], nfev)
+    short = max(budget // 3, 1)
+    ranked, nfev = _ranked(starts, lambda st: solve(st, short), what)
+    keep = ranked[: max(2, (len(ranked) + 1) // 2)]
+    out, more = _ranked([resume(st, sol) for _, sol, st in keep],
+                        lambda st: solve(st, budget - short), what)
+    return (*out[0], nfev + more)
+
+
+def _ranked(starts: Sequence[dict[str, float]],
+            solve_one: Callable[[dict[str, float]], tuple[Solution, int]],
+            what: str) -> tuple[list[tuple[float, Solution, dict[str, float]]], int]:
+    """Every start's ``(cost, solution, start)``, least cost first, and the evaluations."""
+    out: list[tuple[float, Solution, dict[str, float]]] = []
     nfev = 0
     for st in starts:
         try:
@@ -291,12 +318,11 @@ def best_start(starts: Sequence[dict[str, float]],
         except FcompError:
             continue
         nfev += k
-        cost = float(sol.residuals @ sol.residuals)
-        if best is None or cost < best[0]:
-            best = (cost, sol, st)
-    if best is None:
+        out.append((float(sol.residuals @ sol.residuals), sol, st))
+    if not out:
         raise FcompError(f"fitting {what}: the model gives non-finite forces at every start")
-    return (*best, nfev)
+    out.sort(key=lambda e: e[0])
+    return out, nfev
 
 
 def _result(model: FrictionModel, names: Sequence[str], values: Mapping[str, float],

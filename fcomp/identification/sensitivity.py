@@ -50,6 +50,7 @@ WIDER = 0.2
 #: Bytes of results kept for reuse (the module docstring).
 KEEP_BYTES = 64 * 2**20
 _KEPT: list[tuple[tuple, tuple, np.ndarray, np.ndarray]] = []  # (key, record, F, G), newest last
+_KEPT_BYTES = [0]  # their bytes (kept as a running sum: summing on every keep cost 3 %)
 
 
 def _same(a: tuple, b: tuple) -> bool:
@@ -68,8 +69,10 @@ def _keep(key: tuple, record: tuple, F: np.ndarray, G: np.ndarray) -> None:
     F.setflags(write=False)
     G.setflags(write=False)
     _KEPT.append((key, record, F, G))
-    while _KEPT and sum(e[2].nbytes + e[3].nbytes for e in _KEPT) > KEEP_BYTES:
-        _KEPT.pop(0)
+    _KEPT_BYTES[0] += F.nbytes + G.nbytes
+    while _KEPT and _KEPT_BYTES[0] > KEEP_BYTES:
+        _, _, F0, G0 = _KEPT.pop(0)
+        _KEPT_BYTES[0] -= F0.nbytes + G0.nbytes
 
 
 def _wider(key: tuple) -> tuple[Loop, ca.Function, tuple[str, ...]] | None:

@@ -238,10 +238,16 @@ class ControlModel:
         for comparisons); controllers built afterwards take it as their default."""
         self._tuning = tuning
 
+    def plant_key(self) -> tuple[Any, ...]:
+        """What the tuning's feedback part depends on (rules 1-3 of
+        :mod:`controllers.tuning`): the plant, its settings and the loop damping -- not the
+        friction model's levels."""
+        return (self.plant_name, tuple(sorted(self.params.items())), self.settings,
+                self._damping)
+
     def _tuning_key(self) -> tuple[Any, ...]:
         fp = self.friction.flat_params()
-        return (self.plant_name, tuple(sorted(self.params.items())), self.friction.describe(),
-                tuple(sorted(fp.items())), self.settings, self._damping)
+        return (*self.plant_key(), self.friction.describe(), tuple(sorted(fp.items())))
 
     pid_bandwidth = property(lambda self: self.tuning.pid_bandwidth, doc="rad/s")
     force_bandwidth = property(lambda self: self.tuning.force_bandwidth, doc="rad/s")

@@ -112,6 +112,7 @@ from controllers.pid import (
     PIDGains,
     disturbance_response,
     nominal_plant,
+    pid_transfer,
     position_loop,
     spectral_radius,
 )
@@ -418,34 +419,15 @@ def refuse(what: str, problem: str, advice: str) -> FcompError:
     return FcompError(f"{what} refused: {problem} on the nominal loop; {advice}")
 
 
-def derive_tuning(model: ControlModel, dt: float | None = None,
-                  given: dict[str, float] | None = None) -> Tuning:
-    """Derive the tuning of ``model`` (module docstring), explicit values in ``given`` winning.
+#: Rules 1-3 by plant (their results do not depend on the friction model's levels).
+_PID_PARTS: dict[tuple[Any, ...], tuple[Any, ...]] = {}
 
-    Parameters
-    ----------
-    model : ControlModel
-        The controller's plant model.
-    dt : float, optional
-        Control period (s); default ``1/model.control_rate``.
-    given : dict, optional
-        Explicit ``force_bandwidth``, ``pid_bandwidth`` (rad/s), ``derivative_cutoff`` (Hz),
-        ``observer_gain`` (1/s).
 
-    Raises
-    ------
-    FcompError
-        The explicit (or the derived) tuning's loop is unstable or lacks margin (one line).
-    """
-    given = dict(given or {})
-    bad = sorted(set(given) - {"force_bandwidth", "pid_bandwidth", "derivative_cutoff",
-                               "observer_gain"})
-    if bad:
-        raise FcompError(f"unknown tuning value(s) {', '.join(bad)}")
-    dt = 1.0 / model.control_rate if dt is None else dt
+def _pid_part(model: ControlModel, dt: float, given: dict[str, float], sigma_F: float
+              ) -> tuple[Any, ...]:
+    """Rules 1-3: ``(w_h, valve, w_F, force margins, w_P, gains, margins)``."""
     valve = model.valve_transfer()
     damping = model.viscous_damping()
-    sigma_F = force_noise(model)
     w_h = model.column_frequency
     w_F = float(given.get("force_bandwidth") or force_bandwidth_rule(valve, dt))
     f_margins = loop_margins(force_loop(w_F, valve, dt))
@@ -459,8 +441,10 @@ def derive_tuning(model: ControlModel, dt: float | None = None,
                                    derivative_cutoff=float(given["derivative_cutoff"]))
         return pid_gains(model.mass, w_P, model.sensors, sigma_F, dt, *shape)
 
+    plant = nominal_plant(model.mass, damping, w_F, valve, dt)  # position_loop's, once
+
     def margins_of(gains: PIDGains, quick: bool = True) -> Margins:
-        loop = position_loop(gains, model.mass, damping, w_F, valve, dt)
+        loop = pid_transfer(gains, dt) * plant
         return quick_margins(loop) if quick else loop_margins(loop)
 
     def iae(gains: PIDGains) -> float:
@@ -492,6 +476,40 @@ def derive_tuning(model: ControlModel, dt: float | None = None,
     if (why := margins.shortfall()) is not None:
         raise refuse(f"pid_bandwidth {w_P:.4g} rad/s with force_bandwidth {w_F:.4g} rad/s", why,
                      "lower pid_bandwidth or raise force_bandwidth")
+    return w_h, valve, w_F, f_margins, w_P, gains, margins
+
+
+def derive_tuning(model: ControlModel, dt: float | None = None,
+                  given: dict[str, float] | None = None) -> Tuning:
+    """Derive the tuning of ``model`` (module docstring), explicit values in ``given`` winning.
+
+    Parameters
+    ----------
+    model : ControlModel
+        The controller's plant model.
+    dt : float, optional
+        Control period (s); default ``1/model.control_rate``.
+    given : dict, optional
+        Explicit ``force_bandwidth``, ``pid_bandwidth`` (rad/s), ``derivative_cutoff`` (Hz),
+        ``observer_gain`` (1/s).
+
+    Raises
+    ------
+    FcompError
+        The explicit (or the derived) tuning's loop is unstable or lacks margin (one line).
+    """
+    given = dict(given or {})
+    bad = sorted(set(given) - {"force_bandwidth", "pid_bandwidth", "derivative_cutoff",
+                               "observer_gain"})
+    if bad:
+        raise FcompError(f"unknown tuning value(s) {', '.join(bad)}")
+    dt = 1.0 / model.control_rate if dt is None else dt
+    sigma_F = force_noise(model)
+    key = (model.plant_key(), dt, tuple(sorted((k, v) for k, v in given.items()
+                                                if k != "observer_gain")))
+    if key not in _PID_PARTS:
+        _PID_PARTS[key] = _pid_part(model, dt, given, sigma_F)
+    w_h, valve, w_F, f_margins, w_P, gains, margins = _PID_PARTS[key]
     k = (float(given["observer_gain"]) if "observer_gain" in given
          else observer_gain_rule(model, gains, w_P, w_F, sigma_F, dt))
     o_margins = None
@@ -512,14 +530,14 @@ def derive_tuning(model: ControlModel, dt: float | None = None,
 
 
 def observer_loop(gains: PIDGains, model: ControlModel, observer_gain: float,
-                  force_bandwidth: float, dt: float) -> Any:
+                  force_bandwidth: float, dt: float, plant: Any = None) -> Any:
     """The position loop with the LuGre observer's path at rest (rule 4)::
 
         L(z) = (C(z) + sigma1*k + sigma0*k*dt/(z - 1)) * P(z)
 
     ``C`` the PID (:func:`controllers.pid.pid_transfer`), ``P`` the nominal plant
-    (:func:`controllers.pid.nominal_plant`); the integrators written over one
-    denominator (no hidden pole at ``z = 1``)."""
+    (:func:`controllers.pid.nominal_plant`, or ``plant`` if given); the integrators written
+    over one denominator (no hidden pole at ``z = 1``)."""
     import control as ct
 
     p = model.friction.flat_params()
@@ -529,8 +547,10 @@ def observer_loop(gains: PIDGains, model: ControlModel, observer_gain: float,
     Tf = 1.0 / (2 * math.pi * gains.derivative_cutoff)
     C = ct.tf(gains.kp + sigma1 * k + (gains.ki * dt * z + sigma0 * k * dt) / (z - 1)
               + gains.kd * (z - 1) / ((Tf + dt) * z - Tf))
-    return C * nominal_plant(model.mass, model.viscous_damping(), force_bandwidth,
-                             model.valve_transfer(), dt)
+    if plant is None:
+        plant = nominal_plant(model.mass, model.viscous_damping(), force_bandwidth,
+                              model.valve_transfer(), dt)
+    return C * plant
 
 
 def observer_gain_rule(model: ControlModel, gains: PIDGains, pid_bandwidth: float,
@@ -545,8 +565,12 @@ def observer_gain_rule(model: ControlModel, gains: PIDGains, pid_bandwidth: floa
     if "sigma0" not in model.friction.flat_params():
         return k  # no bristle state: no observer to tune (the LuGre observer refuses it)
 
+    plant = nominal_plant(model.mass, model.viscous_damping(), force_bandwidth,
+                          model.valve_transfer(), dt)
+
     def ok(kk: float) -> bool:
-        return quick_margins(observer_loop(gains, model, kk, force_bandwidth, dt)).shortfall(
+        return quick_margins(observer_loop(gains, model, kk, force_bandwidth, dt,
+                                           plant)).shortfall(
             MIN_GAIN_MARGIN * (1 + OBSERVER_PAD), MIN_PHASE_MARGIN + OBSERVER_PAD * 100) is None
 
     low = 1e-3 * k
@@ -554,8 +578,8 @@ def observer_gain_rule(model: ControlModel, gains: PIDGains, pid_bandwidth: floa
         return low
     k = _largest(ok, low, k)
     # the bisection's interpolated margins against python-control's: shrink until it agrees
-    while k > low and loop_margins(observer_loop(gains, model, k, force_bandwidth,
-                                                 dt)).shortfall() is not None:
+    while k > low and loop_margins(observer_loop(gains, model, k, force_bandwidth, dt,
+                                                 plant)).shortfall() is not None:
         k = max(low, 0.9 * k)
     return k
 

@@ -11,7 +11,10 @@ the measured velocity and corrected by the tracking error ``e = x - r``::
 and ``F_hat`` is fed forward (added to the PID force demand of
 :mod:`controllers.pid`). With the PID error dynamics strictly positive
 real, the estimation error is dissipative and the loop is stable for every
-``k > 0`` (their Theorem/passivity argument).
+``k > 0`` (their Theorem/passivity argument). A sampled loop through a valve is
+not strictly positive real: at rest the correction is an integral action of gain
+``sigma0*k``, and ``k`` is derived (and an explicit one checked) on the loop that
+contains it (rule 4 of :mod:`controllers.tuning`).
 
 Extension to the film state: where the controller's model has the lubricant
 film ``h`` (modified LuGre, NMLGM; seed 002 Eqs. 7-9), ``h_hat`` is
@@ -92,19 +95,21 @@ class LuGreObserverController(PIDController):
 
     name: ClassVar[str] = "lugre-observer"
     options: ClassVar[tuple[str, ...]] = (*PIDController.options, "observer_gain")
+    tuning_options: ClassVar[tuple[str, ...]] = (*PIDController.tuning_options, "observer_gain")
 
     def __init__(self, model: Any, **options: Any) -> None:
         super().__init__(model, **options)
         self.k = float(self.opts.get("observer_gain", model.observer_gain))
         if not self.k > 0:
             raise FcompError(f"lugre-observer: observer_gain must be positive (1/s), got {self.k}")
-        explicit = sorted(set(self.opts) & {"observer_gain", "rate", "bandwidth", "kp", "ki",
-                                            "kd", "derivative_cutoff", "force_bandwidth"})
-        if explicit and "sigma0" in model.friction.flat_params():
-            #: Margins of the loop with the observer's path (rule 4 of controllers.tuning).
-            self.observer_margins = check_observer(
-                self.gains, model, self.k, self.valve.bandwidth, self.dt,
-                f"{self.name} tuning ({', '.join(explicit)} given)")
+        explicit = sorted(set(self.opts) & set(self.tuning_options))
+        #: Margins of the loop with the observer's path at rest (rule 4 of
+        #: :mod:`controllers.tuning`): explicit values are checked, the derived ones are the
+        #: tuning's.
+        self.observer_margins = (check_observer(self.gains, model, self.k, self.valve.bandwidth,
+                                                self.dt, f"{self.name} tuning "
+                                                f"({', '.join(explicit)} given)")
+                                 if explicit else model.tuning.observer_margins)
         self._step = observer_step(model.friction)
         self._side = 1.0
         self.x_hat = model.friction.initial_state()

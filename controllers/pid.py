@@ -96,17 +96,20 @@ def nominal_plant(mass: float, damping: float, force_bandwidth: float, valve: An
     return ct.tf(ct.c2d(ct.ss(inner / (mass * s**2 + damping * s)), dt, "zoh"))
 
 
-def pid_transfer(gains: PIDGains, dt: float) -> Any:
+def pid_transfer(gains: PIDGains, dt: float, extra_p: float = 0.0,
+                 extra_i: float = 0.0) -> Any:
     """The discrete PID of this module, error -> force (backward-Euler integral, derivative
-    through the first-order filter)::
+    through the first-order filter), with an optional parallel path ``extra_p +
+    extra_i*dt/(z - 1)`` (a forward-Euler integrator: the LuGre observer at rest,
+    :func:`controllers.tuning.observer_loop`) over the same denominator::
 
-        C(z) = kp + ki*dt*z/(z - 1) + kd*(z - 1)/((Tf + dt)*z - Tf)
+        C(z) = kp + extra_p + (ki*dt*z + extra_i*dt)/(z - 1) + kd*(z - 1)/((Tf + dt)*z - Tf)
     """
     import control as ct
 
     z = ct.tf([1.0, 0.0], [1.0], dt)
     Tf = 1.0 / (2 * math.pi * gains.derivative_cutoff)
-    return ct.tf(gains.kp + gains.ki * dt * z / (z - 1)
+    return ct.tf(gains.kp + extra_p + (gains.ki * dt * z + extra_i * dt) / (z - 1)
                  + gains.kd * (z - 1) / ((Tf + dt) * z - Tf))
 
 
@@ -223,6 +226,10 @@ class PIDController(Controller):
     options: ClassVar[tuple[str, ...]] = (
         "rate", "bandwidth", "kp", "ki", "kd", "derivative_cutoff", "kt", "force_bandwidth",
     )
+    #: The options that replace the derived tuning (checked for margins when given).
+    tuning_options: ClassVar[tuple[str, ...]] = (
+        "rate", "bandwidth", "kp", "ki", "kd", "derivative_cutoff", "force_bandwidth",
+    )
 
     def __init__(self, model: Any, **options: Any) -> None:
         super().__init__(model, **options)
@@ -230,8 +237,7 @@ class PIDController(Controller):
         from controllers.force_to_valve import ForceToValve
 
         tu = model.tuning
-        explicit = sorted(set(o) & {"rate", "bandwidth", "kp", "ki", "kd", "derivative_cutoff",
-                                    "force_bandwidth"})
+        explicit = sorted(set(o) & set(self.tuning_options))
         placed = (model.placed_gains(float(o["bandwidth"]), self.dt) if "bandwidth" in o
                   else tu.pid_gains)
         self.gains = PIDGains(

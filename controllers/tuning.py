@@ -425,7 +425,7 @@ _PID_PARTS: dict[tuple[Any, ...], tuple[Any, ...]] = {}
 
 def _pid_part(model: ControlModel, dt: float, given: dict[str, float], sigma_F: float
               ) -> tuple[Any, ...]:
-    """Rules 1-3: ``(w_h, valve, w_F, force margins, w_P, gains, margins)``."""
+    """Rules 1-3: ``(w_h, valve, w_F, force margins, w_P, gains, margins, nominal plant)``."""
     valve = model.valve_transfer()
     damping = model.viscous_damping()
     w_h = model.column_frequency
@@ -476,7 +476,7 @@ def _pid_part(model: ControlModel, dt: float, given: dict[str, float], sigma_F: 
     if (why := margins.shortfall()) is not None:
         raise refuse(f"pid_bandwidth {w_P:.4g} rad/s with force_bandwidth {w_F:.4g} rad/s", why,
                      "lower pid_bandwidth or raise force_bandwidth")
-    return w_h, valve, w_F, f_margins, w_P, gains, margins
+    return w_h, valve, w_F, f_margins, w_P, gains, margins, plant
 
 
 def derive_tuning(model: ControlModel, dt: float | None = None,
@@ -509,15 +509,15 @@ def derive_tuning(model: ControlModel, dt: float | None = None,
                                                 if k != "observer_gain")))
     if key not in _PID_PARTS:
         _PID_PARTS[key] = _pid_part(model, dt, given, sigma_F)
-    w_h, valve, w_F, f_margins, w_P, gains, margins = _PID_PARTS[key]
-    k = (float(given["observer_gain"]) if "observer_gain" in given
-         else observer_gain_rule(model, gains, w_P, w_F, sigma_F, dt))
+    w_h, valve, w_F, f_margins, w_P, gains, margins, plant = _PID_PARTS[key]
     o_margins = None
-    if "sigma0" in model.friction.flat_params():
-        o_margins = loop_margins(observer_loop(gains, model, k, w_F, dt))
-        if "observer_gain" in given and (why := o_margins.shortfall()) is not None:
-            raise refuse(f"observer_gain {k:.4g} 1/s", f"the loop with the LuGre observer: {why}",
-                         "lower observer_gain")
+    if "observer_gain" in given:
+        k = float(given["observer_gain"])
+        if bristles(model) is not None:
+            o_margins = check_observer(gains, model, k, w_F, dt, f"observer_gain {k:.4g} 1/s",
+                                       plant)
+    else:
+        k, o_margins = observer_gain_rule(model, gains, w_P, w_F, sigma_F, dt, plant)
     return Tuning(
         column_frequency=w_h, valve_bandwidth=valve_bandwidth(valve),
         control_rate=1.0 / dt, force_bandwidth=w_F, pid_bandwidth=w_P, pid_gains=gains,
@@ -529,59 +529,64 @@ def derive_tuning(model: ControlModel, dt: float | None = None,
     )
 
 
+def bristles(model: ControlModel) -> tuple[float, float] | None:
+    """``(sigma0, sigma1)`` of the controller's friction model (N/m, N s/m), or None for a
+    model without a bristle state (no LuGre observer to tune: it refuses such a model)."""
+    p = model.friction.flat_params()
+    if "sigma0" not in p:
+        return None
+    return float(p["sigma0"]), float(p.get("sigma1", 0.0))
+
+
 def observer_loop(gains: PIDGains, model: ControlModel, observer_gain: float,
                   force_bandwidth: float, dt: float, plant: Any = None) -> Any:
     """The position loop with the LuGre observer's path at rest (rule 4)::
 
         L(z) = (C(z) + sigma1*k + sigma0*k*dt/(z - 1)) * P(z)
 
-    ``C`` the PID (:func:`controllers.pid.pid_transfer`), ``P`` the nominal plant
-    (:func:`controllers.pid.nominal_plant`, or ``plant`` if given); the integrators written
-    over one denominator (no hidden pole at ``z = 1``)."""
-    import control as ct
-
-    p = model.friction.flat_params()
-    sigma0, sigma1 = float(p.get("sigma0", 0.0)), float(p.get("sigma1", 0.0))
-    k = observer_gain
-    z = ct.tf([1.0, 0.0], [1.0], dt)
-    Tf = 1.0 / (2 * math.pi * gains.derivative_cutoff)
-    C = ct.tf(gains.kp + sigma1 * k + (gains.ki * dt * z + sigma0 * k * dt) / (z - 1)
-              + gains.kd * (z - 1) / ((Tf + dt) * z - Tf))
+    ``C`` the PID and the path over one denominator (:func:`controllers.pid.pid_transfer`:
+    no hidden pole at ``z = 1``), ``P`` the nominal plant (:func:`controllers.pid.nominal_plant`,
+    or ``plant`` if given)."""
+    sigma0, sigma1 = bristles(model) or (0.0, 0.0)
     if plant is None:
         plant = nominal_plant(model.mass, model.viscous_damping(), force_bandwidth,
                               model.valve_transfer(), dt)
-    return C * plant
+    return pid_transfer(gains, dt, extra_p=sigma1 * observer_gain,
+                        extra_i=sigma0 * observer_gain) * plant
 
 
 def observer_gain_rule(model: ControlModel, gains: PIDGains, pid_bandwidth: float,
-                       force_bandwidth: float, sigma_F: float, dt: float) -> float:
+                       force_bandwidth: float, sigma_F: float, dt: float, plant: Any
+                       ) -> tuple[float, Margins | None]:
     """Rule 4: the largest ``k <= min(w_P/2, sigma_F/(sigma1*sigma_x))`` (1/s) whose
-    :func:`observer_loop` keeps the margins of rule 2."""
+    :func:`observer_loop` (on the nominal ``plant``) keeps the margins of rule 2, with those
+    margins (None for a model without a bristle state)."""
     k = 0.5 * pid_bandwidth
-    sigma1 = float(model.friction.flat_params().get("sigma1", 0.0))
+    if (b := bristles(model)) is None:
+        return k, None  # no bristle state: no observer to tune
+    sigma1 = b[1]
     sigma_x = float(model.sensors.std()[0])
     if sigma1 > 0 and math.isfinite(sigma1):
         k = min(k, sigma_F / (sigma1 * sigma_x))
-    if "sigma0" not in model.friction.flat_params():
-        return k  # no bristle state: no observer to tune (the LuGre observer refuses it)
-
-    plant = nominal_plant(model.mass, model.viscous_damping(), force_bandwidth,
-                          model.valve_transfer(), dt)
 
     def ok(kk: float) -> bool:
         return quick_margins(observer_loop(gains, model, kk, force_bandwidth, dt,
                                            plant)).shortfall(
             MIN_GAIN_MARGIN * (1 + OBSERVER_PAD), MIN_PHASE_MARGIN + OBSERVER_PAD * 100) is None
 
+    def margins(kk: float) -> Margins:
+        return loop_margins(observer_loop(gains, model, kk, force_bandwidth, dt, plant))
+
     low = 1e-3 * k
     if not ok(low):
-        return low
+        return low, margins(low)
     k = _largest(ok, low, k)
     # the bisection's interpolated margins against python-control's: shrink until it agrees
-    while k > low and loop_margins(observer_loop(gains, model, k, force_bandwidth, dt,
-                                                 plant)).shortfall() is not None:
+    m = margins(k)
+    while k > low and m.shortfall() is not None:
         k = max(low, 0.9 * k)
-    return k
+        m = margins(k)
+    return k, m
 
 
 def fixed_tuning(model: ControlModel, force_bandwidth: float, pid_bandwidth: float,
@@ -605,15 +610,15 @@ def fixed_tuning(model: ControlModel, force_bandwidth: float, pid_bandwidth: flo
         given=("force_bandwidth", "pid_bandwidth", "derivative_cutoff", "observer_gain"),
         observer_margins=(loop_margins(observer_loop(gains, model, observer_gain,
                                                      force_bandwidth, dt))
-                          if "sigma0" in model.friction.flat_params() else None),
+                          if bristles(model) is not None else None),
     )
 
 
 def check_observer(gains: PIDGains, model: ControlModel, observer_gain: float,
-                   force_bandwidth: float, dt: float, what: str) -> Margins:
+                   force_bandwidth: float, dt: float, what: str, plant: Any = None) -> Margins:
     """Margins of the loop with the LuGre observer (:func:`observer_loop`) for explicit values;
     refused (one line) if insufficient."""
-    m = loop_margins(observer_loop(gains, model, observer_gain, force_bandwidth, dt))
+    m = loop_margins(observer_loop(gains, model, observer_gain, force_bandwidth, dt, plant))
     if (why := m.shortfall()) is not None:
         raise refuse(what, f"the loop with the LuGre observer at rest: {why}",
                      "lower observer_gain (or the PID's gains)")
@@ -631,5 +636,5 @@ def check_gains(gains: PIDGains, model: ControlModel, force_bandwidth: float, dt
 
 
 __all__ = ["FORCE_PHASE_MARGIN", "MIN_GAIN_MARGIN", "MIN_PHASE_MARGIN", "Margins", "Tuning",
-           "check_gains", "check_observer", "derive_tuning", "fixed_tuning", "force_bandwidth_rule", "force_loop",
+           "bristles", "check_gains", "check_observer", "derive_tuning", "fixed_tuning", "force_bandwidth_rule", "force_loop",
            "loop_margins", "observer_loop", "quick_margins"]

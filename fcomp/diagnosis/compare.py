@@ -35,13 +35,6 @@ from fcomp.diagnosis.loop import Diagnosis
 from fcomp.diagnosis.noise import noise_floor
 from fcomp.diagnosis.refit import RIG_EXTRAS, FitResult, Refit
 from fcomp.diagnosis.regimes import Segmentation, segment
-from fcomp.diagnosis.report import (
-    Series,
-    View,
-    comparison_figures,
-    comparison_html,
-    write_comparison_report,
-)
 from fcomp.diagnosis.residuals import Segment, regime_errors, worst_segments
 from fcomp.diagnosis.split import Split, make_split
 from fcomp.errors import FcompError
@@ -51,6 +44,8 @@ from fcomp.models import FrictionModel, make_model
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
+
+    from fcomp.diagnosis.report import View
 
 
 @dataclass(frozen=True, repr=False)
@@ -151,6 +146,8 @@ class Comparison:
 
     def view(self) -> View:
         """What the figures draw: the record and this one model beside it."""
+        from fcomp.diagnosis.report import Series, View  # the report draws with matplotlib
+
         return View(self.data, self.segmentation, self.judged, self.judged_label,
                     (Series(f"model: {self.model.describe()}", "final", self.result,
                             self.regimes),),
@@ -159,11 +156,15 @@ class Comparison:
     def plot(self, name: str | None = None) -> Figure | dict[str, Figure]:
         """One figure by name (``regimes``, ``residuals``, ``loops``, ``worst``,
         ``before_after``; ``plant`` for the plant domain), or all of them by name."""
+        from fcomp.diagnosis.report import comparison_figures
+
         figs = comparison_figures(self, only=name)
         return figs if name is None else figs[name]
 
     def write_report(self, directory: str | Path, *, command: str | None = None) -> Path:
         """Write ``DIRECTORY/report.html`` (self-contained) and return its path."""
+        from fcomp.diagnosis.report import write_comparison_report
+
         return write_comparison_report(self, directory, command=command)
 
     def __repr__(self) -> str:
@@ -173,6 +174,8 @@ class Comparison:
                 f"{'; fitted' if self.fitted else ''}>")
 
     def _repr_html_(self) -> str:
+        from fcomp.diagnosis.report import comparison_html
+
         return comparison_html(self)
 
 

@@ -303,6 +303,10 @@ def delta_bic(before: FitResult, after: FitResult, train: np.ndarray,
 NONSYMBOLIC_NFEV = 8
 
 
+def _ready() -> None:
+    """A worker's first job: nothing; unpickling it imports this module and what it needs."""
+
+
 def refit_candidate(refit: Refit, prop: catalogue.Proposal, current: FitResult
                     ) -> FitResult | str:
     """Refit one proposal; a string says why it could not be.
@@ -466,11 +470,15 @@ class Diagnosis:
             heldout_pieces(self.split_.test, [e.start for e in self.data_.experiments],
                                    self.data_.scales.dt)
         self._bar = _progress(self.progress)
-        self._pool: Executor | None = None
+        # a pool lent by the diagnosis whose baseline check this is (:meth:`_other_baseline`)
+        self._lent: Executor | None = self.__dict__.pop("_lent_pool", None)
+        self._pool: Executor | None = self._lent
         self._seconds: dict[tuple[str, str | None], float] = {}  # a refit's duration, by form
         self._cluster = contextlib.ExitStack()
         self._fitting = True
         try:
+            if self.search:
+                self._start_workers()
             starts = catalogue.baseline_starts(model, self.data_, self.segmentation_,
                                                self.split_.train)
             first = self._refit.fit(model, starts)
@@ -499,16 +507,35 @@ class Diagnosis:
                 self._backward()
                 self._swaps(names)
                 self._partners_in_model()
+        except BaseException:
+            self._close_workers()
+            raise
         finally:
             self._bar.close()
             self._fitting = False
-            if self._pool is not None:
-                self._pool.shutdown()
-                self._pool = None
-            self._cluster.close()
-        self._conclude()
-        self._check(model, names)
+        try:
+            self._conclude()
+            self._check(model, names)  # a second diagnosis: it borrows these workers
+        finally:
+            self._close_workers()
         return self
+
+    def _start_workers(self) -> None:
+        """Start the local worker processes now, beside the baseline fit, not when the first
+        step needs them: each takes a second or more to start and import fcomp, on the
+        critical path of the first step otherwise."""
+        if self.scheduler or self._pool is not None:
+            return
+        pool = self._workers(2)
+        for _ in range(self._n_workers() if pool is not None else 0):
+            pool.submit(_ready)  # type: ignore[union-attr]
+
+    def _close_workers(self) -> None:
+        """Shut down this diagnosis's own pool (not a lent one) and its cluster context."""
+        if self._pool is not None and self._pool is not self._lent:
+            self._pool.shutdown()
+        self._pool = None
+        self._cluster.close()
 
     def _disturbances(self, model: FrictionModel, first: FitResult,
                       starts: list[dict[str, float]]) -> FitResult:
@@ -604,6 +631,7 @@ class Diagnosis:
                       scheduler=self.scheduler,
                       max_nfev=self.max_nfev, max_samples=self.max_samples,
                       check_baseline=False)
+        d._lent_pool = self._pool  # type: ignore[attr-defined]  # the same workers, warm
         try:
             return d.fit(self.data_)
         except FcompError:
@@ -855,10 +883,14 @@ class Diagnosis:
 
         return sorted(range(len(proposals)), key=key)
 
+    def _n_workers(self) -> int:
+        """The local worker processes to use (``n_jobs``; default the CPUs, at most 4)."""
+        return self.n_jobs if self.n_jobs is not None else min(os.cpu_count() or 1, 4)
+
     def _workers(self, jobs: int) -> Executor | None:
         """The diagnosis's process pool (``spawn``), started on first use within :meth:`fit`;
         None to run here (one job, one process, or a later :meth:`add_effect`)."""
-        n_jobs = self.n_jobs if self.n_jobs is not None else min(os.cpu_count() or 1, 4)
+        n_jobs = self._n_workers()
         if (n_jobs < 2 and not self.scheduler) or jobs < 2 or not getattr(self, "_fitting", False):
             return None
         if self._pool is None and self.scheduler:

@@ -166,10 +166,17 @@ def _threshold(k: int, bins: int) -> float:
 
 
 def _lines(f: np.ndarray, ratio: np.ndarray, level: float) -> list[int]:
-    """Bins above ``level`` that are the largest within two bins, strongest first."""
+    """Bins above ``level`` that are the largest of their neighbours, strongest first.
+
+    A local maximum over one bin either side, not two: a line between two bins
+    (scalloping spreads it over both) next to a stronger peak of the motion's a bin
+    or two away was masked by it, and lost when that peak failed the tests of
+    :func:`find`. Two maxima of one line's main lobe refine to one frequency and
+    are counted once (:func:`find`).
+    """
     out = []
     for i in np.flatnonzero((ratio > level) & (f >= MIN_HZ) & (f <= MAX_SHARE * f[-1])):
-        lo, hi = max(i - 2, 0), min(i + 3, ratio.size)
+        lo, hi = max(i - 1, 0), min(i + 2, ratio.size)
         if ratio[i] >= ratio[lo:hi].max():
             out.append(int(i))
     return sorted(out, key=lambda i: -ratio[i])
@@ -240,7 +247,7 @@ def find(residual: np.ndarray, prediction: np.ndarray, data: DiagnosisData
             if any(m is not None and m[lo:hi].max() > max(0.5 * level, MOTION_LINE)
                    for m in motion_ratio):
                 continue  # the motion has a line there: the residual repeats with it
-            key = int(round(f[i]))
+            key = round(float(f[i]), 6)
             if key not in found or ratio[i] > found[key][1]:
                 found[key] = (float(f[i]), float(ratio[i]), float(f[1] - f[0]))
     out: list[tuple[float, float, list[np.ndarray]]] = []
@@ -249,6 +256,8 @@ def find(residual: np.ndarray, prediction: np.ndarray, data: DiagnosisData
         if len(out) >= MAX_LINES:
             break
         freq = _refine([(t, r) for t, r, _ in pieces], f0, df)
+        if any(abs(freq - fl) < df for fl, _, _ in out):
+            continue  # a second maximum of a line already taken
         waves = [np.zeros(e.n) for e in data.experiments]
         for t, r, idx in pieces:
             waves[idx] = _sinusoid(t, r, freq)

@@ -228,3 +228,39 @@ def test_seen_only_with_a_force_channel_beside_the_pressures(channels: tuple, so
         assert reason is None
     else:
         assert reason is not None and why in reason
+
+
+# ----------------------------------------------------------------- position steps
+@pytest.mark.parametrize("x_s,step", [(0.094, -0.3), (0.05, 0.4), (0.14, -0.2)])
+def test_position_dependence_offers_a_step_start(x_s: float, step: float) -> None:
+    """A worn zone from ``x_s`` to the end of the stroke (friction ``1 + step`` times the
+    rest's) is among the starts of ``position-dependence``: the box reaching past the
+    far end, its edge within 2 mm of ``x_s`` and ``kb`` within 0.05 of the level change
+    (a Legendre cubic alone leaves a
+    ripple where the box start then sat: matrix record position-dependence/step,
+    seed 97)."""
+    n = 20_000
+    t = np.arange(n) * 1e-3
+    x = 0.04 + 0.06 * (1 - np.cos(2 * np.pi * 0.25 * t))  # strokes over 0.04..0.16 m
+    v = np.gradient(x, t)
+    level = np.where(x > x_s, 1.0 + step, 1.0)
+    truth = 30.0 * level * np.sign(v)
+    F_hat = np.mean(30.0 * level) * np.sign(v)  # the baseline's compromise level
+    residual = truth - F_hat + 0.3 * np.random.default_rng(1).standard_normal(n)
+    sc = Scales(force=30.0, speed=0.05, accel=1.0, x_min=0.04, x_max=0.16, resolution=1e-6,
+                p_mid=0.0, p_span=0.0, dt=1e-3, duration=float(t[-1]))
+    sig = {"t": t, "v": v, "a": np.gradient(v, t), "x": x, "p1": np.zeros(n),
+           "p2": np.zeros(n), "s": np.sign(v)}
+    train = np.ones(n, dtype=bool)
+    train[::5] = False
+    view = RecordView(signals=sig, y=F_hat + residual, F_hat=F_hat, residual=residual,
+                      train=train, params={"Fc": 30.0}, values={"Fc": 30.0}, scales=sc,
+                      v_rest=1e-4, d_pre=1e-5, t_dwell=0.5)
+    starts = EFFECTS.get("position-dependence")().guess(view)
+    steps = [s for s in starts if s.get("kb", 0.0) != 0.0 and s["xb"] - s["wb"] > 0.03
+             and s["xb"] + s["wb"] > 0.16]
+    assert steps, starts
+    s = steps[0]
+    assert s["xb"] - s["wb"] == pytest.approx(x_s, abs=2e-3)
+    # relative to the near side's level the far side's is 1 + step, whatever the baseline's
+    assert s["kb"] == pytest.approx(step, abs=0.05)

@@ -754,12 +754,44 @@ class PositionDependence(Effect):
         while (hi < sm.size - 1 and abs(sm[hi + 1]) > 0.5 * abs(peak)
                and np.sign(sm[hi + 1]) == np.sign(peak)):
             hi += 1
+        eb = float(max(0.25 * width, sc.resolution, 0.2 * SEAL_BAND))
         box = {"kb": float(np.clip(peak, -0.9, 2.9)),
                "xb": float(0.5 * (edges[lo] + edges[hi + 1])),
                "wb": float(max(0.5 * (edges[hi + 1] - edges[lo]), 0.5 * SEAL_BAND)),
-               "eb": float(max(0.25 * width, sc.resolution, 0.2 * SEAL_BAND))}
-        return [smooth_part, {**smooth_part, **box},
-                {"kx1": 0.0, "kx2": 0.0, "kx3": 0.0, **box}]
+               "eb": eb}
+        none = {"kx1": 0.0, "kx2": 0.0, "kx3": 0.0}
+        starts = [smooth_part, {**smooth_part, **box}, {**none, **box}]
+        step = _step_start(rs[m] / np.maximum(F[m], 1e-3 * sc.force), k, count, edges)
+        if step is not None:
+            starts.append({**none, **step, "eb": eb})
+        return starts
+
+
+def _step_start(rel: np.ndarray, k: np.ndarray, count: np.ndarray, edges: np.ndarray
+                ) -> dict[str, float] | None:
+    """A step along the stroke (a worn or scored zone from ``x_s`` to the end): the box
+    of :class:`PositionDependence` reaching past the far end of the stroke, from the
+    split that best separates two levels of the relative residual ``rel`` (binned by
+    ``k``), without the smooth part -- the Legendre cubic absorbs most of a step and
+    leaves the box start of :meth:`PositionDependence.guess` at a ripple of its own.
+
+    The split maximises the between-level sum of squares ``n_l*n_r/n*(m_l - m_r)^2``
+    over the bins with samples; ``kb`` is the far side's level relative to the near
+    side's, ``(m_r - m_l)/(1 + m_l)``. None where fewer than four bins have samples.
+    """
+    used = count >= 5
+    if used.sum() < 4:
+        return None
+    sums = np.bincount(k, rel, minlength=count.size)[used]
+    n = count[used].astype(float)
+    right_edges = edges[1:][used]
+    cn, cs = np.cumsum(n)[:-1], np.cumsum(sums)[:-1]
+    ml, mr = cs / cn, (sums.sum() - cs) / (n.sum() - cn)
+    j = int(np.argmax(cn * (n.sum() - cn) / n.sum() * (ml - mr) ** 2))
+    kb = float(np.clip((mr[j] - ml[j]) / max(1.0 + ml[j], 0.1), -0.9, 2.9))
+    span = float(edges[-1] - edges[0])
+    x_s = float(right_edges[j])
+    return {"kb": kb, "xb": x_s + span, "wb": span}
 
 
 DwellTimeParams = make_params_class("DwellTimeParams", [

@@ -214,7 +214,7 @@ def find(residual: np.ndarray, prediction: np.ndarray, data: DiagnosisData
     feats = {"v": data.signal("v"), "x": data.signal("x"), "model": prediction}
     feats["sign(v)"] = np.sign(feats["v"])
     feats["|v|"] = np.abs(feats["v"])
-    found: dict[int, tuple[float, float, float]] = {}  # rounded Hz -> (f, ratio, df)
+    found: dict[float, tuple[float, float, float]] = {}  # bin frequency -> (f, ratio, df)
     pieces = []
     # the spectra of experiments on one frequency grid are pooled (their windows add up):
     # a line every experiment carries stands out of a background one experiment's

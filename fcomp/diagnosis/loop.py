@@ -487,7 +487,7 @@ class Diagnosis:
         self._fitting = True
         try:
             if self.search:
-                self._start_workers()
+                self._start_workers(len(names))
             starts = catalogue.baseline_starts(model, self.data_, self.segmentation_,
                                                self.split_.train)
             first = self._refit.fit(model, starts)
@@ -529,13 +529,14 @@ class Diagnosis:
             self._close_workers()
         return self
 
-    def _start_workers(self) -> None:
+    def _start_workers(self, candidates: int) -> None:
         """Start the local worker processes now, beside the baseline fit, not when the first
         step needs them: each takes a second or more to start and import fcomp, on the
-        critical path of the first step otherwise."""
+        critical path of the first step otherwise. Not for fewer than two ``candidates``
+        (their refits run here, :meth:`_workers`)."""
         if self.scheduler or self._pool is not None:
             return
-        pool = self._workers(2)
+        pool = self._workers(candidates)
         for _ in range(self._n_workers() if pool is not None else 0):
             pool.submit(_ready)  # type: ignore[union-attr]
 

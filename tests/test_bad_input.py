@@ -949,7 +949,10 @@ def test_long_run_shows_progress_and_a_signal_leaves_nothing(lab: Path, sig: int
         [sys.executable, "-m", "fcomp.cli.main", "simulate", "hydraulic", "--friction",
          "nmlgm-hysteresis", "--input", "sine:amplitude=4.5e-3,frequency=1", "--duration",
          "200", "--rate", "200", "-o", "long.csv"],
-        cwd=lab, env=_env(), stdout=subprocess.PIPE, stderr=slave)
+        cwd=lab, env=_env(), stdout=subprocess.PIPE, stderr=slave,
+        # a suite started as a background job of a non-interactive shell inherits SIGINT
+        # ignored (POSIX), and Python then keeps ignoring it: Ctrl-C at a terminal is not
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     os.close(slave)
     seen = b""
     start = time.monotonic()

@@ -34,7 +34,8 @@ loop of the nominal model (mass ``m`` with the viscous friction slope, the
 force loop of :mod:`controllers.force_to_valve` through the valve's linear
 dynamics, zero-order hold at the controller rate) with python-control and
 raises :class:`FcompError` when a closed-loop pole lies on or outside the
-unit circle.
+unit circle. The controller takes that pole magnitude from its loop's margins
+(:attr:`PIDController.margins`, the same loop), not from a second evaluation.
 """
 
 from __future__ import annotations
@@ -151,12 +152,17 @@ def check_stability(gains: PIDGains, mass: float, damping: float, force_bandwidt
     """
     rho = spectral_radius(position_loop(gains, mass, damping, force_bandwidth, valve, dt))
     if not rho < 1.0:
-        raise FcompError(
-            f"pid gains kp={gains.kp:.4g}, ki={gains.ki:.4g}, kd={gains.kd:.4g} give an unstable "
-            f"closed loop on the nominal model (largest pole |z| = {rho:.4f} >= 1 at "
-            f"{1 / dt:.0f} Hz); lower the gains or the bandwidth"
-        )
+        raise unstable(gains, rho, dt)
     return rho
+
+
+def unstable(gains: PIDGains, rho: float, dt: float) -> FcompError:
+    """The refusal of gains whose nominal closed loop has a pole ``|z| = rho >= 1``."""
+    return FcompError(
+        f"pid gains kp={gains.kp:.4g}, ki={gains.ki:.4g}, kd={gains.kd:.4g} give an unstable "
+        f"closed loop on the nominal model (largest pole |z| = {rho:.4f} >= 1 at "
+        f"{1 / dt:.0f} Hz); lower the gains or the bandwidth"
+    )
 
 
 class PIDLaw:
@@ -247,14 +253,18 @@ class PIDController(Controller):
             kt=float(o.get("kt", 20.0)),
         )
         self.valve = ForceToValve(model, float(o.get("force_bandwidth", tu.force_bandwidth)))
-        self.stability_radius = check_stability(
-            self.gains, model.mass, model.viscous_damping(), self.valve.bandwidth,
-            model.valve_transfer(), self.dt)
         #: Margins of the nominal loop (:class:`controllers.tuning.Margins`); explicit
-        #: values are checked (refused without margins), the derived ones are the tuning's.
+        #: values are checked (refused without margins), the derived ones are the tuning's
+        #: (the same loop: the tuning's gains, force loop and rate).
         self.margins = (model.checked_margins(self.gains, self.valve.bandwidth, self.dt,
                                               f"{self.name} tuning ({', '.join(explicit)} given)")
                         if explicit else tu.margins)
+        #: Largest closed-loop pole magnitude of the nominal loop (the margins' own): a
+        #: tuning set unchecked (:meth:`~controllers.plant_model.ControlModel.use_tuning`)
+        #: is still refused when unstable.
+        self.stability_radius = self.margins.radius
+        if not self.stability_radius < 1.0:
+            raise unstable(self.gains, self.stability_radius, self.dt)
         self.law = PIDLaw(self.gains, self.dt)
         self.F_demand = 0.0
 

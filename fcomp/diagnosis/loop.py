@@ -485,44 +485,41 @@ class Diagnosis:
         self._seconds: dict[tuple[str, str | None], float] = {}  # a refit's duration, by form
         self._cluster = contextlib.ExitStack()
         self._fitting = True
-        try:
-            if self.search:
-                self._start_workers(len(names))
-            starts = catalogue.baseline_starts(model, self.data_, self.segmentation_,
-                                               self.split_.train)
-            first = self._refit.fit(model, starts)
-            first = self._disturbances(model, first, starts)
-            # the channel lag is the record's: fixed by this unweighted fit, then held
-            if "lag" in first.values:
-                self._refit.hold("lag", first.values["lag"])
-            # the fits from here on weigh samples by how well the motion fixes the prediction
-            if first.spread is not None:
-                self._refit.set_weights(first.spread, self.noise_floor_.value)
-            self.baseline_fit_ = self._polish(self._refit.fit(model, [first.values, *starts]))
-            self._tick(f"baseline {model.describe()}")
-            self.fit_ = self.baseline_fit_
-            self.steps_: list[Step] = []
-            self.candidates_: list[Candidate] = []
-            self.ties_: list[list[str]] = []
-            self.added_: list[str] = []
-            self.skipped_: dict[str, str] = {}
-            self.removed_: list[str] = []
-            self._forms: dict[str, str | None] = {}
-            self._instances: dict[str, Effect] = {}
-            for name in self.add:
-                self.add_effect(name)
-            if self.search:
-                self._search(names)
-                self._backward()
-                self._swaps(names)
-                self._partners_in_model()
-        except BaseException:
-            self._close_workers()
-            raise
-        finally:
-            self._bar.close()
-            self._fitting = False
-        try:
+        try:  # one path shuts this diagnosis's workers down, whatever happens
+            try:
+                if self.search:
+                    self._start_workers(len(names))
+                starts = catalogue.baseline_starts(model, self.data_, self.segmentation_,
+                                                   self.split_.train)
+                first = self._refit.fit(model, starts)
+                first = self._disturbances(model, first, starts)
+                # the channel lag is the record's: fixed by this unweighted fit, then held
+                if "lag" in first.values:
+                    self._refit.hold("lag", first.values["lag"])
+                # the fits from here on weigh samples by how well the motion fixes the prediction
+                if first.spread is not None:
+                    self._refit.set_weights(first.spread, self.noise_floor_.value)
+                self.baseline_fit_ = self._polish(self._refit.fit(model, [first.values, *starts]))
+                self._tick(f"baseline {model.describe()}")
+                self.fit_ = self.baseline_fit_
+                self.steps_: list[Step] = []
+                self.candidates_: list[Candidate] = []
+                self.ties_: list[list[str]] = []
+                self.added_: list[str] = []
+                self.skipped_: dict[str, str] = {}
+                self.removed_: list[str] = []
+                self._forms: dict[str, str | None] = {}
+                self._instances: dict[str, Effect] = {}
+                for name in self.add:
+                    self.add_effect(name)
+                if self.search:
+                    self._search(names)
+                    self._backward()
+                    self._swaps(names)
+                    self._partners_in_model()
+            finally:
+                self._bar.close()
+                self._fitting = False
             self._conclude()
             self._check(model, names)  # a second diagnosis: it borrows these workers
         finally:

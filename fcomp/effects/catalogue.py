@@ -720,7 +720,7 @@ class PositionDependence(Effect):
         ``|F_hat|``, is averaged in bins of 0.5 % of the stroke and its largest
         excursion (three bins smoothed) gives the box: centre, half-width (where it
         stays above half the peak), amplitude. Starts: the smooth part alone, the
-        smooth part with the box, and the box alone.
+        smooth part with the box, the box alone, and a step (:func:`_step_start`).
         """
         m = view.moving
         cfg = self.diagnosis_config(view.scales)
@@ -735,7 +735,8 @@ class PositionDependence(Effect):
         smooth_part = {"kx1": float(coef[0]), "kx2": float(coef[1]), "kx3": float(coef[2]),
                        "kb": 0.0}
         sc = view.scales
-        rel = (rs - cols @ coef)[m] / np.maximum(F[m], 1e-3 * sc.force)
+        level = np.maximum(F[m], 1e-3 * sc.force)
+        rel = (rs - cols @ coef)[m] / level
         width = max(0.005 * sc.stroke, 2.0 * sc.resolution)
         edges = np.arange(sc.x_min, sc.x_max + width, width)
         k = np.clip(np.digitize(x[m], edges) - 1, 0, max(edges.size - 2, 0))
@@ -760,15 +761,12 @@ class PositionDependence(Effect):
                "wb": float(max(0.5 * (edges[hi + 1] - edges[lo]), 0.5 * SEAL_BAND)),
                "eb": eb}
         none = {"kx1": 0.0, "kx2": 0.0, "kx3": 0.0}
-        starts = [smooth_part, {**smooth_part, **box}, {**none, **box}]
-        step = _step_start(rs[m] / np.maximum(F[m], 1e-3 * sc.force), k, count, edges)
-        if step is not None:
-            starts.append({**none, **step, "eb": eb})
-        return starts
+        step = _step_start(rs[m] / level, k, count, edges)
+        return [smooth_part, {**smooth_part, **box}, {**none, **box}, {**none, **step, "eb": eb}]
 
 
 def _step_start(rel: np.ndarray, k: np.ndarray, count: np.ndarray, edges: np.ndarray
-                ) -> dict[str, float] | None:
+                ) -> dict[str, float]:
     """A step along the stroke (a worn or scored zone from ``x_s`` to the end): the box
     of :class:`PositionDependence` reaching past the far end of the stroke, from the
     split that best separates two levels of the relative residual ``rel`` (binned by
@@ -777,11 +775,10 @@ def _step_start(rel: np.ndarray, k: np.ndarray, count: np.ndarray, edges: np.nda
 
     The split maximises the between-level sum of squares ``n_l*n_r/n*(m_l - m_r)^2``
     over the bins with samples; ``kb`` is the far side's level relative to the near
-    side's, ``(m_r - m_l)/(1 + m_l)``. None where fewer than four bins have samples.
+    side's, ``(m_r - m_l)/(1 + m_l)``. The bins used are those of at least five samples
+    (the caller has four or more).
     """
     used = count >= 5
-    if used.sum() < 4:
-        return None
     sums = np.bincount(k, rel, minlength=count.size)[used]
     n = count[used].astype(float)
     right_edges = edges[1:][used]

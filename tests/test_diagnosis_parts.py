@@ -47,6 +47,23 @@ def test_experiments_from_column_and_from_time_gaps(record) -> None:
     assert data.available["x"] and data.available["p1"]
 
 
+def test_a_logger_pause_inside_a_labelled_experiment_is_a_break() -> None:
+    """A pause of the logger inside an experiment the ``experiment`` column labels as one
+    (generated with ``stamps="gapped"``: a 0.2-0.6 s pause in the middle half of each) cuts it:
+    the piston moved during the pause, so the model must start afresh after it. Every
+    piece starts where a stamp interval is longer than 20 median ones, or where the
+    label changes, and nowhere else."""
+    m = generate([], duration=12.0, seed=3, stamps="gapped").measurement
+    t, label = m.t, m["experiment"]
+    dt = np.diff(t)
+    breaks = np.flatnonzero((dt > 20 * np.median(dt)) | (np.diff(label) != 0)) + 1
+    pauses = np.flatnonzero((dt > 20 * np.median(dt)) & (np.diff(label) == 0))
+    assert pauses.size == 3  # one per labelled experiment
+    data = prepare(m)
+    assert [e.start for e in data.experiments] == [0, *breaks.tolist()]
+    assert len(data.experiments) == 6
+
+
 def test_cutoff_follows_the_position_noise() -> None:
     t = np.arange(5000) / 1000.0
     x = 0.01 * np.sin(2 * np.pi * 0.5 * t)
@@ -570,3 +587,38 @@ def test_confounded_partners_both_in_the_model_are_reported_as_a_tie() -> None:
     d.ties_ = []
     d._partners_in_model()
     assert d.ties_ == []
+
+
+def test_a_flexible_effect_is_judged_where_its_signature_lives(monkeypatch) -> None:
+    """``Effect.acts_in``: the share of the held-out fall (in mean square) that lies in the
+    regimes an effect declares; ``nonlocal-memory`` declares the presliding travel after a
+    reversal or a start, and a fall it takes in steady sliding does not count there."""
+    from types import SimpleNamespace
+
+    from fcomp.diagnosis.loop import SIGNATURE_SHARE
+    from fcomp.diagnosis.regimes import REGIMES
+    from fcomp.effects import EFFECTS
+
+    nm = EFFECTS.get("nonlocal-memory")
+    assert set(nm.acts_in) == {"pre-sliding", "reversal", "dwell/break-away"} <= set(REGIMES)
+    regime = np.array([SLIDING] * 60 + [PRESLIDING] * 20 + [REVERSAL] * 10 + [DWELL] * 10)
+    test = np.ones(100, dtype=bool)
+    test[::7] = False  # training samples do not count
+    state = SimpleNamespace(split_=SimpleNamespace(test=test),
+                            segmentation_=SimpleNamespace(regime=regime))
+    share = Diagnosis._signature_share
+    before = np.full(100, 2.0)
+    inside, outside, half = before.copy(), before.copy(), before.copy()
+    inside[60:] = 1.0
+    outside[:60] = 1.0
+    half[:60] = np.sqrt(4.0 - 3.0 * (test[60:].sum() / test[:60].sum()))  # equal falls
+    half[60:] = 1.0
+    assert share(state, "nonlocal-memory", before, inside) == pytest.approx(1.0)
+    assert share(state, "nonlocal-memory", before, outside) == pytest.approx(0.0)
+    assert share(state, "nonlocal-memory", before, half) == pytest.approx(0.5)
+    assert 0.5 < SIGNATURE_SHARE < 1.0
+    assert share(state, "force-offset", before, outside) is None  # declares none: anywhere
+    assert share(state, "nonlocal-memory", before, before) is None  # nothing falls
+    monkeypatch.setattr(nm, "acts_in", ("presliding",))
+    with pytest.raises(FcompError, match="acts_in names regimes"):
+        share(state, "nonlocal-memory", before, inside)

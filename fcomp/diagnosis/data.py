@@ -1,10 +1,10 @@
 """The records a diagnosis works on: experiments, signals, the force to match, and data scales.
 
 A diagnosis reads one or several measurements. Each is cut into
-*experiments* -- runs whose friction states start afresh -- by its
-``experiment`` column when it has one (a user column, data-format.md keeps
-it), else at time gaps longer than :data:`GAP_FACTOR` median sample
-intervals. Per experiment the force to match and the motion come from
+*experiments* -- runs whose friction states start afresh -- where its
+``experiment`` column changes (a user column, data-format.md keeps it) and at
+time gaps longer than :data:`GAP_FACTOR` median sample intervals (a logger's
+pause, inside a labelled experiment too). Per experiment the force to match and the motion come from
 :func:`fcomp.identification.target.fit_data` (a measured ``F``; else the
 friction reconstructed as ``p1*A1 - p2*A2 - m*a + F_ext``, models.md 2; else
 the driving force with the mass fitted). Velocity and acceleration missing
@@ -153,15 +153,16 @@ class DiagnosisData:
 
 
 def _cut(meas: Measurement) -> list[Measurement]:
-    """Experiments of one measurement: by the ``experiment`` column, else at long time gaps."""
+    """Experiments of one measurement: where the ``experiment`` column changes, and at long
+    time gaps (a logger's pause inside a labelled experiment too: the piston's motion
+    during the pause is unknown, so the friction states start afresh after it)."""
     t = meas.t
+    dt = np.diff(t)
+    med = float(np.median(dt)) if dt.size else 0.0
+    gaps = dt > GAP_FACTOR * med
     if "experiment" in meas:
-        ids = meas["experiment"]
-        change = np.nonzero(np.diff(ids) != 0)[0] + 1
-    else:
-        dt = np.diff(t)
-        med = float(np.median(dt))
-        change = np.nonzero(dt > GAP_FACTOR * med)[0] + 1
+        gaps |= np.diff(meas["experiment"]) != 0
+    change = np.nonzero(gaps)[0] + 1
     bounds = [0, *change.tolist(), len(meas)]
     out = []
     for k, (a, b) in enumerate(zip(bounds[:-1], bounds[1:], strict=True)):

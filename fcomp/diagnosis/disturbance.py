@@ -21,9 +21,25 @@ taken out, before the search:
    it is the largest within two bins.
 2. **Not the motion's.** A line is the motion's -- a friction law's error
    repeating with a periodic motion, its harmonics -- when the motion shows a
-   line there too: the spectra of ``v``, ``sign(v)``, ``|v|``, ``x`` and the
-   model's prediction are tested the same way, at half the threshold (at least
-   :data:`MOTION_LINE`), within two bins. A line must also be there at low and at high speed alike
+   line there too: the spectra of ``v``, ``a``, ``sign(v)``, ``|v|``, ``x`` and
+   the model's prediction are tested the same way, at half the threshold (at least
+   :data:`MOTION_LINE`), within two bins. It is the motion's too when it no
+   longer stands out once the part of the residual *coherent* with the motion is
+   taken off: at each frequency the residual's spectrum times ``1 - C``, ``C`` the
+   largest Welch magnitude-squared coherence of the residual with one of those
+   features or with ``sign(v)*p1``, ``sign(v)*p2`` (a pressure-dependent friction
+   law's shape), is divided by its own running median and must still pass the
+   threshold within a bin. A missing law's misfit concentrated near a frequency
+   the motion dwells at, without a line of the motion's own, is coherent with it
+   and vanishes (generated records: a lead-lag law's 2.25 Hz "line", coherence 0.9
+   with ``v`` and ``a``; a chamber-weighted pressure law's 3.05 Hz "line", 0.5 with
+   ``sign(v)*p1``); a source on its own clock is incoherent with the motion and
+   stays, even where the friction the motion drives fills the same bin (a pump
+   line on a hydraulic record whose residual at 36 Hz is 85 % coherent with ``x``
+   stands out *more* without that part: 2.3 -> 4.2). A pump's line enters the force
+   through the chamber pressures themselves, unmodulated, so the pressures alone
+   are no such feature; modulated by ``sign(v)`` its coherence stays below 0.05.
+   A line must also be there at low and at high speed alike
    (:func:`_same_at_all_speeds`: a ripple along the bore is a line in time
    only at one speed), and keep its phase in time from window to window
    (:func:`_phase_consistency`: a source on its own clock does, a structure met
@@ -52,7 +68,7 @@ from typing import Any
 import numpy as np
 from scipy import stats
 from scipy.ndimage import median_filter
-from scipy.signal import welch
+from scipy.signal import csd, welch
 
 from fcomp.diagnosis.data import DiagnosisData
 
@@ -134,19 +150,36 @@ def _uniform(t: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, float]:
     return np.interp(grid, t, y), dt
 
 
+def _windows(n: int, dt: float) -> tuple[int, int] | None:
+    """``(samples per window, K windows)`` of the Welch spectra of ``n`` samples at ``dt``
+    (None: too short)."""
+    nper = int(round(WINDOW_SECONDS / dt))
+    if n < nper or nper < 16:
+        return None
+    k = 1 + (n - nper) // (nper // 2)
+    return (nper, k) if k >= MIN_WINDOWS else None
+
+
 def _spectrum(t: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray, int] | None:
     """``(f, P, K)``: Welch spectrum of ``y(t)`` and its number of windows (None: too short)."""
     yu, dt = _uniform(t, y)
-    fs = 1.0 / dt
-    nper = int(round(WINDOW_SECONDS * fs))
-    if yu.size < nper or nper < 16:
+    win = _windows(yu.size, dt)
+    if win is None:
         return None
-    k = 1 + (yu.size - nper) // (nper // 2)
-    if k < MIN_WINDOWS:
-        return None
-    f, P = welch(yu, fs=fs, window="hann", nperseg=nper, noverlap=nper // 2,
+    f, P = welch(yu, fs=1.0 / dt, window="hann", nperseg=win[0], noverlap=win[0] // 2,
                  detrend="linear")
-    return f, P, k
+    return f, P, win[1]
+
+
+def _cross(t: np.ndarray, r: np.ndarray, s: np.ndarray) -> np.ndarray | None:
+    """Welch cross spectrum of ``r(t)`` and ``s(t)`` over the windows of :func:`_spectrum`."""
+    ru, dt = _uniform(t, r)
+    su, _ = _uniform(t, s)
+    win = _windows(ru.size, dt)
+    if win is None:
+        return None
+    return np.asarray(csd(ru, su, fs=1.0 / dt, window="hann", nperseg=win[0],
+                          noverlap=win[0] // 2, detrend="linear")[1])
 
 
 def _prominence(f: np.ndarray, P: np.ndarray) -> np.ndarray:
@@ -212,8 +245,13 @@ def find(residual: np.ndarray, prediction: np.ndarray, data: DiagnosisData
         return []
     t_all = data.signal("t")
     feats = {"v": data.signal("v"), "x": data.signal("x"), "model": prediction}
+    if data.available.get("a", False):
+        feats["a"] = data.signal("a")
     feats["sign(v)"] = np.sign(feats["v"])
     feats["|v|"] = np.abs(feats["v"])
+    # what a pressure-dependent law makes of the pressures: coherence only (step 2)
+    laws = {f"sign(v)*{k}": feats["sign(v)"] * data.signal(k) for k in ("p1", "p2")
+            if data.available.get(k, False)}
     found: dict[float, tuple[float, float, float]] = {}  # bin frequency -> (f, ratio, df)
     pieces = []
     # the spectra of experiments on one frequency grid are pooled (their windows add up):
@@ -231,22 +269,37 @@ def find(residual: np.ndarray, prediction: np.ndarray, data: DiagnosisData
             continue
         f, P, k = spec
         grid = (f.size, round(float(f[1] - f[0]), 9))
-        motion = [_spectrum(t, sig[e.start:e.stop]) for sig in feats.values()]
-        acc = pooled.setdefault(grid, [f, np.zeros_like(P), 0, [np.zeros_like(P) for _ in feats]])
+        signals = [*feats.values(), *laws.values()]
+        motion = [_spectrum(t, sig[e.start:e.stop]) for sig in signals]
+        cross = [_cross(t, r, sig[e.start:e.stop]) for sig in signals]
+        acc = pooled.setdefault(grid, [f, np.zeros_like(P), 0,
+                                       [np.zeros_like(P) for _ in signals],
+                                       [np.zeros(P.size, dtype=complex) for _ in signals]])
         acc[1] += k * P
         acc[2] += k
-        for j, m in enumerate(motion):
-            if m is not None:
+        for j, (m, c) in enumerate(zip(motion, cross, strict=True)):
+            if m is not None and c is not None:
                 acc[3][j] += m[2] * m[1]
-    for f, P, k, motion_P in pooled.values():
+                acc[4][j] += m[2] * c
+    for f, P, k, motion_P, cross_P in pooled.values():
         ratio = _prominence(f, P / k)
         level = _threshold(k, int(np.sum((f >= MIN_HZ) & (f <= MAX_SHARE * f[-1]))))
-        motion_ratio = [_prominence(f, m) if np.any(m > 0) else None for m in motion_P]
+        motion_ratio = [_prominence(f, m) if np.any(m > 0) else None
+                        for m in motion_P[:len(feats)]]
+        # the residual's spectrum without, at each frequency, its part coherent with the motion
+        # feature that explains most of it: what follows no motion
+        share = np.zeros_like(P)
+        for m, c in zip(motion_P, cross_P, strict=True):
+            ok = (m > 0) & (P > 0)
+            share[ok] = np.maximum(share[ok], np.abs(c[ok]) ** 2 / (P[ok] * m[ok]))
+        alone = _prominence(f, P * (1.0 - np.clip(share, 0.0, 1.0)))
         for i in _lines(f, ratio, level)[:MAX_CANDIDATES]:
             lo, hi = max(i - 2, 0), min(i + 3, f.size)
             if any(m is not None and m[lo:hi].max() > max(0.5 * level, MOTION_LINE)
                    for m in motion_ratio):
                 continue  # the motion has a line there: the residual repeats with it
+            if alone[max(i - 1, 0):i + 2].max() <= level:
+                continue  # without what follows the motion, no line is left: a law's misfit
             key = round(float(f[i]), 6)
             if key not in found or ratio[i] > found[key][1]:
                 found[key] = (float(f[i]), float(ratio[i]), float(f[1] - f[0]))

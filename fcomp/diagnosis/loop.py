@@ -109,7 +109,7 @@ from fcomp.diagnosis.refit import (
     sample_weights,
     score_noise_share,
 )
-from fcomp.diagnosis.regimes import Segmentation, segment
+from fcomp.diagnosis.regimes import REGIMES, Segmentation, segment
 from fcomp.diagnosis.residuals import regime_errors
 from fcomp.diagnosis.split import Split, make_split
 from fcomp.effects import EFFECTS, Effect
@@ -130,6 +130,9 @@ FALL_RELATIVE = 0.02
 #: Falls below this share of the record's force scale are rounding, not evidence
 #: (an exact table of points is fitted to 1e-15 N by the right model already).
 FALL_NUMERIC = 1e-9
+#: An effect that declares the regimes its signature lives in (``Effect.acts_in``) must
+#: take at least this share of its held-out fall (in mean square) there.
+SIGNATURE_SHARE = 2.0 / 3.0
 #: Candidates within this share of the best candidate's fall tie with it.
 TIE_SHARE = 0.1
 #: The search stops when the held-out RMS is within this factor of the noise floor.
@@ -936,6 +939,12 @@ class Diagnosis:
                            f"floor where it acts (< {100 * EXCESS_SHARE:.0f} %)")
         if not p <= ACCEPT_P:
             reasons.append(f"fall not significant (z = {z:.2g}, p = {p:.2g} > {ACCEPT_P:g})")
+        inside = self._signature_share(name, before.residual, res.residual)
+        if fall > 0 and inside is not None and inside < SIGNATURE_SHARE:
+            where = ", ".join(EFFECTS.get(name).acts_in)
+            reasons.append(f"its fall lies outside its signature: {100 * inside:.0f} % of the "
+                           f"held-out fall where it acts ({where}; < "
+                           f"{100 * SIGNATURE_SHARE:.0f} %)")
         drift = self._drift(before)
         if fall > 0 and drift >= (1.0 - TIE_SHARE) * fall:
             reasons.append(f"confounded with time: a slow drift of the friction level alone "
@@ -945,6 +954,26 @@ class Diagnosis:
             reasons.append(f"BIC does not agree (dBIC = {dbic:.3g})")
         return Candidate(name, res, res.rms_test, fall, z, p, dbic, not reasons,
                          "; ".join(reasons))
+
+    def _signature_share(self, name: str, before: np.ndarray, after: np.ndarray
+                         ) -> float | None:
+        """Share of the held-out fall in mean square, ``sum(before^2 - after^2)``, that lies in
+        the regimes effect ``name`` declares (``Effect.acts_in``); None when it declares none
+        or nothing falls."""
+        acts_in = EFFECTS.get(name).acts_in
+        if not acts_in:
+            return None
+        unknown = [r for r in acts_in if r not in REGIMES]
+        if unknown:
+            raise FcompError(f"effect {name!r}: acts_in names regimes {unknown}; known: "
+                             f"{', '.join(REGIMES)}")
+        test = self.split_.test
+        gain = before[test] ** 2 - after[test] ** 2
+        total = float(np.sum(gain))
+        if not total > 0:
+            return None
+        there = np.isin(self.segmentation_.regime[test], [REGIMES.index(r) for r in acts_in])
+        return float(np.sum(gain[there])) / total
 
     def _drift(self, fit: FitResult) -> float:
         """:func:`.features.drift_fall` of ``fit`` (computed once per fit)."""

@@ -58,6 +58,14 @@ starts after a dwell, whether the mass is fitted.
     whether the effect needs a motion (a memory or the acceleration);
     effects with ``states`` are dynamic anyway. Not a candidate for
     steady-state points;
+``acts_in`` (class attribute, default ``()``: anywhere)
+    the motion regimes its signature lives in, named as
+    :data:`fcomp.diagnosis.regimes.REGIMES` names them (``"pre-sliding"``,
+    ``"reversal"``, ``"sliding"``, ``"dwell/break-away"``). A flexible effect that
+    declares them is accepted only when most of its held-out fall lies there
+    (:data:`fcomp.diagnosis.loop.SIGNATURE_SHARE`): its freedom must not win on a
+    misfit elsewhere (the Maxwell-slip elements of ``nonlocal-memory``, spread over
+    a long slip, can bend any transient after a reversal);
 :meth:`diagnosis_config` ``(scales) -> dict``
     class method (default ``{}``): the configuration of an instance fitted to a
     record with these :class:`~fcomp.conditioning.Scales` (a reference speed,
@@ -149,6 +157,8 @@ class Effect(PlainValue):
     needs: ClassVar[tuple[str, ...]] = ()
     #: needs a motion (memory, acceleration): not a candidate for steady-state points
     dynamic: ClassVar[bool] = False
+    #: the motion regimes its signature lives in (empty: anywhere; module docstring)
+    acts_in: ClassVar[tuple[str, ...]] = ()
     #: the laws the effect can take, chosen by the configuration ``form=``; the first is
     #: the default (empty: one law, no ``form``)
     FORMS: ClassVar[tuple[str, ...]] = ()

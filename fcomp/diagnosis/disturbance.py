@@ -68,7 +68,7 @@ from typing import Any
 import numpy as np
 from scipy import stats
 from scipy.ndimage import median_filter
-from scipy.signal import csd, welch
+from scipy.signal import csd
 
 from fcomp.diagnosis.data import DiagnosisData
 
@@ -150,36 +150,20 @@ def _uniform(t: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, float]:
     return np.interp(grid, t, y), dt
 
 
-def _windows(n: int, dt: float) -> tuple[int, int] | None:
-    """``(samples per window, K windows)`` of the Welch spectra of ``n`` samples at ``dt``
-    (None: too short)."""
+def _welch(a: np.ndarray, b: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray, int] | None:
+    """``(f, S_ab, K)``: the Welch cross spectrum of ``a`` and ``b`` on a uniform grid of
+    ``dt`` (the power spectrum where ``b`` is ``a``; Hann windows of about
+    :data:`WINDOW_SECONDS`, half overlap, linear detrend) and its number of windows (None:
+    too short)."""
     nper = int(round(WINDOW_SECONDS / dt))
-    if n < nper or nper < 16:
+    if a.size < nper or nper < 16:
         return None
-    k = 1 + (n - nper) // (nper // 2)
-    return (nper, k) if k >= MIN_WINDOWS else None
-
-
-def _spectrum(t: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray, int] | None:
-    """``(f, P, K)``: Welch spectrum of ``y(t)`` and its number of windows (None: too short)."""
-    yu, dt = _uniform(t, y)
-    win = _windows(yu.size, dt)
-    if win is None:
+    k = 1 + (a.size - nper) // (nper // 2)
+    if k < MIN_WINDOWS:
         return None
-    f, P = welch(yu, fs=1.0 / dt, window="hann", nperseg=win[0], noverlap=win[0] // 2,
-                 detrend="linear")
-    return f, P, win[1]
-
-
-def _cross(t: np.ndarray, r: np.ndarray, s: np.ndarray) -> np.ndarray | None:
-    """Welch cross spectrum of ``r(t)`` and ``s(t)`` over the windows of :func:`_spectrum`."""
-    ru, dt = _uniform(t, r)
-    su, _ = _uniform(t, s)
-    win = _windows(ru.size, dt)
-    if win is None:
-        return None
-    return np.asarray(csd(ru, su, fs=1.0 / dt, window="hann", nperseg=win[0],
-                          noverlap=win[0] // 2, detrend="linear")[1])
+    f, S = csd(a, b, fs=1.0 / dt, window="hann", nperseg=nper, noverlap=nper // 2,
+               detrend="linear")
+    return f, (S.real if b is a else S), k
 
 
 def _prominence(f: np.ndarray, P: np.ndarray) -> np.ndarray:
@@ -264,23 +248,24 @@ def find(residual: np.ndarray, prediction: np.ndarray, data: DiagnosisData
             continue
         r = residual[e.start:e.stop]
         pieces.append((t, r, idx))  # fitted wherever long enough, searched where K windows fit
-        spec = _spectrum(t, r)
+        ru, dt = _uniform(t, r)
+        spec = _welch(ru, ru, dt)
         if spec is None:
             continue
         f, P, k = spec
         grid = (f.size, round(float(f[1] - f[0]), 9))
         signals = [*feats.values(), *laws.values()]
-        motion = [_spectrum(t, sig[e.start:e.stop]) for sig in signals]
-        cross = [_cross(t, r, sig[e.start:e.stop]) for sig in signals]
         acc = pooled.setdefault(grid, [f, np.zeros_like(P), 0,
                                        [np.zeros_like(P) for _ in signals],
                                        [np.zeros(P.size, dtype=complex) for _ in signals]])
         acc[1] += k * P
         acc[2] += k
-        for j, (m, c) in enumerate(zip(motion, cross, strict=True)):
-            if m is not None and c is not None:
-                acc[3][j] += m[2] * m[1]
-                acc[4][j] += m[2] * c
+        for j, sig in enumerate(signals):  # each resampled once: its spectrum and the cross one
+            su = _uniform(t, sig[e.start:e.stop])[0]
+            auto, cross = _welch(su, su, dt), _welch(ru, su, dt)
+            assert auto is not None and cross is not None  # the residual's length and grid
+            acc[3][j] += k * auto[1]
+            acc[4][j] += k * cross[1]
     for f, P, k, motion_P, cross_P in pooled.values():
         ratio = _prominence(f, P / k)
         level = _threshold(k, int(np.sum((f >= MIN_HZ) & (f <= MAX_SHARE * f[-1]))))

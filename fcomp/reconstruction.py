@@ -76,19 +76,46 @@ def _grid(t: np.ndarray, label: str) -> tuple[np.ndarray, bool]:
     return t[0] + h * np.arange(m), False
 
 
-def _interp_weights(x: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Indices ``i`` and weights ``w`` with ``y(q) = (1 - w)*y[i] + w*y[i + 1]`` (``np.interp``'s
-    linear interpolation, ends held), to apply to many signals sampled at ``x``."""
+def _interp_matrix(x: np.ndarray, q: np.ndarray) -> Any:
+    """The sparse matrix of ``np.interp``'s linear interpolation from samples at ``x`` to ``q``
+    (ends held): row ``r`` holds ``1 - w`` at ``i`` and ``w`` at ``i + 1``, so that ``M @ y``
+    is ``(1 - w)*y[i] + w*y[i + 1]`` to the bit, for one signal or many columns at once."""
+    from scipy.sparse import csr_matrix
+
     i = np.clip(np.searchsorted(x, q, side="right") - 1, 0, x.size - 2)
     w = np.clip((q - x[i]) / (x[i + 1] - x[i]), 0.0, 1.0)
-    return i, w
+    return csr_matrix((np.column_stack([1.0 - w, w]).ravel(),
+                       np.column_stack([i, i + 1]).ravel(), np.arange(0, 2 * q.size + 1, 2)),
+                      shape=(q.size, x.size))
 
 
-def _apply(iw: tuple[np.ndarray, np.ndarray], y: np.ndarray) -> np.ndarray:
-    i, w = iw
-    if y.ndim == 1:
-        return (1.0 - w) * y[i] + w * y[i + 1]
-    return (1.0 - w)[:, None] * y[i] + w[:, None] * y[i + 1]
+@lru_cache(maxsize=256)
+def _sos_zi(order: int, cutoff_hz: float, fs: float) -> np.ndarray:
+    from scipy.signal import sosfilt_zi
+
+    return sosfilt_zi(_butterworth(order, cutoff_hz, fs))
+
+
+def _filtfilt_rows(order: int, cutoff_hz: float, fs: float, x: np.ndarray, padlen: int
+                   ) -> np.ndarray:
+    """``scipy.signal.sosfiltfilt(sos, x, axis=-1, padtype="odd", padlen=padlen)`` of the rows
+    of ``x`` for the Butterworth design of :func:`butterworth_sos`, step for step as scipy
+    does it (odd extension, initial conditions scaled by the first sample, forward, backward)
+    with the initial conditions (``sosfilt_zi``, a linear solve) computed once per design:
+    a fit filters its prediction and sensitivities with one design thousands of times."""
+    from scipy.signal import sosfilt
+
+    sos = _butterworth(order, cutoff_hz, fs)
+    zi = _sos_zi(order, cutoff_hz, fs)[:, None, :]  # (sections, 1, 2): broadcast over rows
+    if padlen > 0:
+        ext = np.concatenate((2 * x[:, :1] - x[:, padlen:0:-1], x,
+                              2 * x[:, -1:] - x[:, -2:-(padlen + 2):-1]), axis=1)
+    else:
+        ext = x
+    y, _ = sosfilt(sos, ext, axis=-1, zi=zi * ext[:, :1])
+    y, _ = sosfilt(sos, y[:, ::-1], axis=-1, zi=zi * y[:, -1:])
+    y = y[:, ::-1]
+    return y[:, padlen:-padlen] if padlen > 0 else y
 
 
 class _Resampler:
@@ -100,23 +127,23 @@ class _Resampler:
         self.tu, self.same = _grid(t, label)
         self.fs = (self.tu.size - 1) / float(self.tu[-1] - self.tu[0])
         if not self.same:
-            self.to_grid = _interp_weights(t, self.tu)
-            self.back = _interp_weights(self.tu, t)
+            self.to_grid = _interp_matrix(t, self.tu)
+            self.back = _interp_matrix(self.tu, t)
 
     def filtfilt(self, y: np.ndarray, cutoff_hz: float, order: int, label: str) -> np.ndarray:
         """:func:`zero_phase_lowpass` of ``y`` (samples along axis 0) on the uniform grid."""
-        yu = y if self.same else _apply(self.to_grid, y)
-        if yu.ndim == 1:
+        if y.ndim == 1:
+            yu = y if self.same else self.to_grid @ y
             out = zero_phase_lowpass(yu, self.fs, cutoff_hz, order, label=label)
-        else:
-            from scipy.signal import sosfiltfilt
-
-            if yu.shape[0] < 3:
-                raise FcompError(f"{label}: at least three samples are needed to filter")
-            sos = butterworth_sos(order, float(cutoff_hz), float(self.fs))
-            padlen = min(yu.shape[0] - 1, int(math.ceil(3.0 * self.fs / cutoff_hz)))
-            out = sosfiltfilt(sos, yu, axis=0, padtype="odd", padlen=padlen)
-        return out if self.same else _apply(self.back, out)
+            return out if self.same else self.back @ out
+        # columns: filtered as rows of the transposed array, each one contiguous (the
+        # recursion runs along the last axis without a copy per call)
+        rows = np.ascontiguousarray((y if self.same else self.to_grid @ y).T)
+        if rows.shape[1] < 3:
+            raise FcompError(f"{label}: at least three samples are needed to filter")
+        padlen = min(rows.shape[1] - 1, int(math.ceil(3.0 * self.fs / cutoff_hz)))
+        out = _filtfilt_rows(order, float(cutoff_hz), float(self.fs), rows, padlen)
+        return np.ascontiguousarray(out.T if self.same else self.back @ out.T)
 
 
 _RESAMPLERS: dict[tuple[Any, ...], _Resampler] = {}
@@ -170,11 +197,9 @@ def zero_phase_lowpass(y: np.ndarray, fs: float, cutoff_hz: float, order: int, *
                          f"sample rate ({0.5 * fs:g} Hz)")
     if y.size < 3:
         raise FcompError(f"{label}: at least three samples are needed to filter")
-    from scipy.signal import sosfiltfilt  # here: importing it costs ~0.4 s at start
-
-    sos = butterworth_sos(order, float(cutoff_hz), float(fs))
     padlen = min(y.size - 1, int(math.ceil(3.0 * fs / cutoff_hz)))
-    return sosfiltfilt(sos, y, padtype="odd", padlen=padlen)
+    row = np.asarray(y, dtype=float).reshape(1, -1)
+    return _filtfilt_rows(order, float(cutoff_hz), float(fs), row, padlen)[0]
 
 
 def smooth(t: np.ndarray, y: np.ndarray, *, cutoff_hz: float = 10.0, order: int = 2,

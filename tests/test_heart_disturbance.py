@@ -146,12 +146,17 @@ def test_a_pump_line_under_a_misfit_that_follows_the_motion_is_found(seed: int,
     # the motion drives fills it): found, though a rule on the coherence alone lost it
     (dict(row="viscous-lead", kind="dynamic", style="coarse-encoder", scale="hydraulic",
           seed=149, shape="viscous-lead:lead", baseline="lugre", condition="pulsation"),
-     [36.23])])
+     [36.23]),
+    # a ring the break-away excites, at 29.85 Hz (seed 179, never used): a line in time on
+    # a periodic stroke that passes every other test, but 5.0 times as large within three
+    # of its cycles of a start or reversal as its fit, and 0.7 times beyond
+    (dict(row="ringing", kind="dynamic", style="pressures-tacho", scale="pneumatic", seed=179,
+          shape="ringing:break-away", baseline="lugre", condition="vertical"), [])])
 def test_lines_of_matrix_records_are_told_from_a_laws_misfit(case: dict,
                                                             lines: list[float]) -> None:
     """Matrix records whose baseline residual peaks near one frequency: a missing law's
-    misfit the motion excites there (coherent with the motion: no disturbance) or a pump
-    (on its own clock: a disturbance)."""
+    misfit the motion excites there (coherent with the motion: no disturbance), a ring after
+    the motion's events (no disturbance) or a pump (on its own clock: a disturbance)."""
     from fcomp.synthetic.matrix import Case, record
 
     rec = record(Case(base=case["baseline"], duration=40.0, rate=1000.0, **case))

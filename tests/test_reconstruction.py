@@ -222,3 +222,32 @@ def test_bad_input_names_the_problem(meas: Measurement, kwargs: dict, message: s
     with pytest.raises(FcompError, match=message) as info:
         reconstruct_friction(meas, **kwargs)
     assert "\n" not in str(info.value)
+
+
+@pytest.mark.parametrize("order,stamps", [(1, "uniform"), (2, "irregular"), (3, "irregular")])
+def test_band_limit_is_scipys_filter_on_the_interpolated_grid(order: int, stamps: str) -> None:
+    """The column filter of a fit (its own odd extension, initial conditions computed once
+    per design, sparse interpolation maps) against an independent computation: ``np.interp``
+    onto the grid of the median interval, ``scipy.signal.sosfiltfilt`` per column, and
+    ``np.interp`` back; one signal and several columns alike."""
+    from scipy.signal import butter, sosfiltfilt
+
+    from fcomp.reconstruction import band_limit
+
+    rng = np.random.default_rng(order)
+    dt = 1e-2 * (rng.choice([0.5, 1.0, 1.5], 3000) if stamps == "irregular" else np.ones(3000))
+    t = np.concatenate([[0.0], np.cumsum(dt)])
+    y = np.cumsum(rng.standard_normal((t.size, 4)), axis=0)
+    h = float(np.median(np.diff(t)))
+    grid = t[0] + h * np.arange(int(math.floor((t[-1] - t[0]) / h + 1e-9)) + 1)
+    fs = (grid.size - 1) / (grid[-1] - grid[0])
+    sos = butter(order, 7.0, fs=fs, output="sos")
+    pad = min(grid.size - 1, int(math.ceil(3.0 * fs / 7.0)))
+    want = np.column_stack([
+        np.interp(t, grid, sosfiltfilt(sos, np.interp(grid, t, y[:, j]), padtype="odd",
+                                       padlen=pad)) for j in range(y.shape[1])])
+    got = band_limit(t, y, 7.0, order=order)
+    assert got.shape == y.shape and got.flags["C_CONTIGUOUS"]
+    np.testing.assert_allclose(got, want, rtol=0, atol=1e-9 * np.abs(y).max())
+    np.testing.assert_allclose(band_limit(t, y[:, 2].copy(), 7.0, order=order), want[:, 2],
+                               rtol=0, atol=1e-9 * np.abs(y).max())

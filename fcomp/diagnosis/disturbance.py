@@ -47,7 +47,9 @@ taken out, before the search:
    are no such feature; modulated by ``sign(v)`` its coherence stays below 0.05.
    A line must also be there at low and at high speed alike
    (:func:`_same_at_all_speeds`: a ripple along the bore is a line in time
-   only at one speed), and keep its phase in time from window to window
+   only at one speed), as large within three of its cycles of a start or
+   reversal as beyond (a ring the break-away excites is not), and keep its
+   phase in time from window to window
    (:func:`_phase_consistency`: a source on its own clock does, a structure met
    at varying positions and speeds does not). Only lines that pass all three are
    disturbances.
@@ -113,6 +115,9 @@ PHASE_CONSISTENCY = 0.5
 PHASE_WINDOW = 1.0
 #: Least gain of the line's sinusoid in the slower and in the faster half of the samples.
 SPEED_GAIN = 0.5
+#: A line must be as large within this many of its cycles after a start or reversal as
+#: beyond (:func:`_same_at_all_speeds`: a ring the break-away excites is not).
+EVENT_CYCLES = 3.0
 #: Most candidate lines tested for being the motion's (strongest first).
 MAX_CANDIDATES = 40
 #: Most lines reported.
@@ -245,14 +250,17 @@ def _refine(pieces: Sequence[tuple[np.ndarray, np.ndarray]], f0: float, df: floa
 
 
 def find(residual: np.ndarray, prediction: np.ndarray, data: DiagnosisData,
-         weights: np.ndarray | None = None) -> list[tuple[float, float, list[np.ndarray]]]:
+         weights: np.ndarray | None = None, since: np.ndarray | None = None
+         ) -> list[tuple[float, float, list[np.ndarray]]]:
     """Candidate lines of ``residual``: ``(frequency, prominence, sinusoid per experiment)``.
 
     See the module docstring (steps 1-3, without the size rule, which needs the
     noise floor once the lines are out). ``weights`` (0 to 1 per sample, the fits'
     :func:`~fcomp.diagnosis.refit.sample_weights`) gate the residual where the model
     could not place its prediction: the spectra and the tests see ``sqrt(w) * r``, the
-    sinusoids are fitted to ``r`` by weighted least squares.
+    sinusoids are fitted to ``r`` by weighted least squares. ``since`` (seconds since
+    the last start or reversal) lets the test of :func:`_same_at_all_speeds` tell a ring
+    after events from a line.
     """
     if data.steady_state:
         return []
@@ -333,7 +341,8 @@ def find(residual: np.ndarray, prediction: np.ndarray, data: DiagnosisData,
         for t, _, idx in pieces:
             e = data.experiments[idx]
             waves[idx] = _sinusoid(t, residual[e.start:e.stop], freq, w_all[e.start:e.stop])
-        if not _same_at_all_speeds(gated, np.concatenate(waves) * np.sqrt(w_all), speed):
+        if not _same_at_all_speeds(gated, np.concatenate(waves) * np.sqrt(w_all), speed,
+                                   since, freq):
             continue
         if _phase_consistency([(t, r) for t, r, _ in pieces], freq) < PHASE_CONSISTENCY:
             continue
@@ -369,26 +378,40 @@ def _phase_consistency(pieces: Sequence[tuple[np.ndarray, np.ndarray]], freq: fl
     return num / den if den > 0 else 0.0
 
 
-def _same_at_all_speeds(r: np.ndarray, wave: np.ndarray, speed: np.ndarray) -> bool:
-    """Whether the line is there at low and at high speed alike (:data:`SPEED_GAIN`).
+def _same_at_all_speeds(r: np.ndarray, wave: np.ndarray, speed: np.ndarray,
+                        since: np.ndarray | None, freq: float) -> bool:
+    """Whether the line is there at low and at high speed alike, and just after the
+    motion's events as much as away from them (:data:`SPEED_GAIN`).
 
-    A disturbance keeps its frequency whatever the piston does; a structure of
-    the bore (a ripple of wavelength ``L`` along the stroke) is a line only at
-    the speed ``f*L``, and absent at rest. The residual is projected onto the
-    fitted sinusoid at rest, and within the slower and the faster half of the
-    moving samples (by ``|v|``): the gain in each group of at least
-    :data:`MIN_GROUP` samples must be at least :data:`SPEED_GAIN`.
+    A disturbance keeps its frequency and its size whatever the piston does; a
+    structure of the bore (a ripple of wavelength ``L`` along the stroke) is a line
+    only at the speed ``f*L``, and absent at rest; a ring after starts and reversals
+    (a resonance the break-away excites) is a line in time only because the events
+    repeat, and lives within a few of its cycles of them. The residual is projected
+    onto the fitted sinusoid at rest, and within the slower and the faster half of
+    the moving samples (by ``|v|``): the gain in each group of at least
+    :data:`MIN_GROUP` samples must be at least :data:`SPEED_GAIN`. With ``since``
+    (seconds since the last start or reversal, :meth:`.regimes.Segmentation.events`)
+    the gain within :data:`EVENT_CYCLES` cycles of an event and beyond must also lie
+    between :data:`SPEED_GAIN` and its inverse (a generated ring at 30 Hz: 5.0 within
+    three cycles, 0.7 beyond; a pump line: 1 in both).
     """
     used = wave != 0.0
     if used.sum() < 40:
         return False
     moving = used & (speed > 0.0)  # the conditioned velocity is held at 0 at rest
     cut = float(np.median(speed[moving])) if moving.any() else 0.0
-    for group in (used & (speed == 0.0), moving & (speed <= cut), moving & (speed > cut)):
+    groups = [(used & (speed == 0.0), math.inf), (moving & (speed <= cut), math.inf),
+              (moving & (speed > cut), math.inf)]
+    if since is not None:
+        near = since <= EVENT_CYCLES / freq
+        groups += [(used & near, 1.0 / SPEED_GAIN), (used & ~near, 1.0 / SPEED_GAIN)]
+    for group, most in groups:
         w = wave[group]
         if w.size < MIN_GROUP or not float(w @ w) > 0:
-            continue  # too few samples at this speed: nothing to compare
-        if float(r[group] @ w) / float(w @ w) < SPEED_GAIN:
+            continue  # too few samples here: nothing to compare
+        gain = float(r[group] @ w) / float(w @ w)
+        if not SPEED_GAIN <= gain <= most:
             return False
     return True
 

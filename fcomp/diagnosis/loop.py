@@ -587,8 +587,9 @@ class Diagnosis:
         # reversal within the timing uncertainty: a broadband spike that buries a line)
         weights = None if fit.spread is None else sample_weights(fit.spread,
                                                                    self.noise_floor_.value)
+        since = self.segmentation_.events(self.data_)[0]
         lines = [ln for ln in disturbance.find(fit.plain, self._refit.motion_prediction(fit),
-                                                self.data_, weights)
+                                                self.data_, weights, since)
                  if all(abs(ln[0] - f) > disturbance.SAME_HZ for f in known)]
         if not lines:
             return False

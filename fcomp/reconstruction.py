@@ -96,26 +96,27 @@ def _sos_zi(order: int, cutoff_hz: float, fs: float) -> np.ndarray:
     return sosfilt_zi(_butterworth(order, cutoff_hz, fs))
 
 
-def _filtfilt_rows(order: int, cutoff_hz: float, fs: float, x: np.ndarray, padlen: int
-                   ) -> np.ndarray:
-    """``scipy.signal.sosfiltfilt(sos, x, axis=-1, padtype="odd", padlen=padlen)`` of the rows
-    of ``x`` for the Butterworth design of :func:`butterworth_sos`, step for step as scipy
-    does it (odd extension, initial conditions scaled by the first sample, forward, backward)
-    with the initial conditions (``sosfilt_zi``, a linear solve) computed once per design:
-    a fit filters its prediction and sensitivities with one design thousands of times."""
+def _filtfilt(order: int, cutoff_hz: float, fs: float, x: np.ndarray, padlen: int
+              ) -> np.ndarray:
+    """``scipy.signal.sosfiltfilt(sos, x, axis=0, padtype="odd", padlen=padlen)`` for the
+    Butterworth design of :func:`butterworth_sos`, step for step as scipy does it (odd
+    extension, initial conditions scaled by the first sample, forward, backward) with the
+    initial conditions (``sosfilt_zi``, a linear solve) computed once per design: a fit
+    filters its prediction and sensitivities with one design thousands of times."""
     from scipy.signal import sosfilt
 
     sos = _butterworth(order, cutoff_hz, fs)
-    zi = _sos_zi(order, cutoff_hz, fs)[:, None, :]  # (sections, 1, 2): broadcast over rows
+    zi = _sos_zi(order, cutoff_hz, fs)
+    zi = zi.reshape(zi.shape[0], 2, *([1] * (x.ndim - 1)))  # broadcast over the columns
     if padlen > 0:
-        ext = np.concatenate((2 * x[:, :1] - x[:, padlen:0:-1], x,
-                              2 * x[:, -1:] - x[:, -2:-(padlen + 2):-1]), axis=1)
+        ext = np.concatenate((2 * x[:1] - x[padlen:0:-1], x,
+                              2 * x[-1:] - x[-2:-(padlen + 2):-1]), axis=0)
     else:
         ext = x
-    y, _ = sosfilt(sos, ext, axis=-1, zi=zi * ext[:, :1])
-    y, _ = sosfilt(sos, y[:, ::-1], axis=-1, zi=zi * y[:, -1:])
-    y = y[:, ::-1]
-    return y[:, padlen:-padlen] if padlen > 0 else y
+    y, _ = sosfilt(sos, ext, axis=0, zi=zi * ext[:1])
+    y, _ = sosfilt(sos, y[::-1], axis=0, zi=zi * y[-1:])
+    y = y[::-1]
+    return y[padlen:-padlen] if padlen > 0 else y
 
 
 class _Resampler:
@@ -132,18 +133,9 @@ class _Resampler:
 
     def filtfilt(self, y: np.ndarray, cutoff_hz: float, order: int, label: str) -> np.ndarray:
         """:func:`zero_phase_lowpass` of ``y`` (samples along axis 0) on the uniform grid."""
-        if y.ndim == 1:
-            yu = y if self.same else self.to_grid @ y
-            out = zero_phase_lowpass(yu, self.fs, cutoff_hz, order, label=label)
-            return out if self.same else self.back @ out
-        # columns: filtered as rows of the transposed array, each one contiguous (the
-        # recursion runs along the last axis without a copy per call)
-        rows = np.ascontiguousarray((y if self.same else self.to_grid @ y).T)
-        if rows.shape[1] < 3:
-            raise FcompError(f"{label}: at least three samples are needed to filter")
-        padlen = min(rows.shape[1] - 1, int(math.ceil(3.0 * self.fs / cutoff_hz)))
-        out = _filtfilt_rows(order, float(cutoff_hz), float(self.fs), rows, padlen)
-        return np.ascontiguousarray(out.T if self.same else self.back @ out.T)
+        yu = y if self.same else self.to_grid @ y
+        out = zero_phase_lowpass(yu, self.fs, cutoff_hz, order, label=label)
+        return out if self.same else self.back @ out
 
 
 _RESAMPLERS: dict[tuple[Any, ...], _Resampler] = {}
@@ -182,7 +174,7 @@ def zero_phase_lowpass(y: np.ndarray, fs: float, cutoff_hz: float, order: int, *
     Parameters
     ----------
     y
-        Uniformly sampled signal.
+        Uniformly sampled signal (samples along axis 0; columns are filtered alike).
     fs
         Sample rate, Hz.
     cutoff_hz
@@ -195,11 +187,10 @@ def zero_phase_lowpass(y: np.ndarray, fs: float, cutoff_hz: float, order: int, *
     if not (cutoff_hz > 0 and cutoff_hz < 0.5 * fs):
         raise FcompError(f"{label}: cutoff {cutoff_hz:g} Hz must be positive and below half the "
                          f"sample rate ({0.5 * fs:g} Hz)")
-    if y.size < 3:
+    if y.shape[0] < 3:
         raise FcompError(f"{label}: at least three samples are needed to filter")
-    padlen = min(y.size - 1, int(math.ceil(3.0 * fs / cutoff_hz)))
-    row = np.asarray(y, dtype=float).reshape(1, -1)
-    return _filtfilt_rows(order, float(cutoff_hz), float(fs), row, padlen)[0]
+    padlen = min(y.shape[0] - 1, int(math.ceil(3.0 * fs / cutoff_hz)))
+    return _filtfilt(order, float(cutoff_hz), float(fs), np.asarray(y, dtype=float), padlen)
 
 
 def smooth(t: np.ndarray, y: np.ndarray, *, cutoff_hz: float = 10.0, order: int = 2,

@@ -118,6 +118,8 @@ SPEED_GAIN = 0.5
 #: A line must be as large within this many of its cycles after a start or reversal as
 #: beyond (:func:`_same_at_all_speeds`: a ring the break-away excites is not).
 EVENT_CYCLES = 3.0
+#: ... and at most this many times as large there as its fitted size.
+EVENT_GAIN = 3.0
 #: Most candidate lines tested for being the motion's (strongest first).
 MAX_CANDIDATES = 40
 #: Most lines reported.
@@ -342,7 +344,7 @@ def find(residual: np.ndarray, prediction: np.ndarray, data: DiagnosisData,
             e = data.experiments[idx]
             waves[idx] = _sinusoid(t, residual[e.start:e.stop], freq, w_all[e.start:e.stop])
         if not _same_at_all_speeds(gated, np.concatenate(waves) * np.sqrt(w_all), speed,
-                                   since, freq):
+                                   since, freq, w_all):
             continue
         if _phase_consistency([(t, r) for t, r, _ in pieces], freq) < PHASE_CONSISTENCY:
             continue
@@ -379,7 +381,7 @@ def _phase_consistency(pieces: Sequence[tuple[np.ndarray, np.ndarray]], freq: fl
 
 
 def _same_at_all_speeds(r: np.ndarray, wave: np.ndarray, speed: np.ndarray,
-                        since: np.ndarray | None, freq: float) -> bool:
+                        since: np.ndarray | None, freq: float, weights: np.ndarray) -> bool:
     """Whether the line is there at low and at high speed alike, and just after the
     motion's events as much as away from them (:data:`SPEED_GAIN`).
 
@@ -390,11 +392,13 @@ def _same_at_all_speeds(r: np.ndarray, wave: np.ndarray, speed: np.ndarray,
     repeat, and lives within a few of its cycles of them. The residual is projected
     onto the fitted sinusoid at rest, and within the slower and the faster half of
     the moving samples (by ``|v|``): the gain in each group of at least
-    :data:`MIN_GROUP` samples must be at least :data:`SPEED_GAIN`. With ``since``
+    :data:`MIN_GROUP` samples (counted by their ``weights``: gated samples say little)
+    must be at least :data:`SPEED_GAIN`. With ``since``
     (seconds since the last start or reversal, :meth:`.regimes.Segmentation.events`)
     the gain within :data:`EVENT_CYCLES` cycles of an event and beyond must also lie
-    between :data:`SPEED_GAIN` and its inverse (a generated ring at 30 Hz: 5.0 within
-    three cycles, 0.7 beyond; a pump line: 1 in both).
+    between :data:`SPEED_GAIN` and :data:`EVENT_GAIN` (a generated ring at 30 Hz: 5.0
+    within three cycles, 0.7 beyond; pump lines: 1 beyond, and up to 2.2 within, where
+    the gated residual still carries a law's misfit at the events).
     """
     used = wave != 0.0
     if used.sum() < 40:
@@ -405,11 +409,11 @@ def _same_at_all_speeds(r: np.ndarray, wave: np.ndarray, speed: np.ndarray,
               (moving & (speed > cut), math.inf)]
     if since is not None:
         near = since <= EVENT_CYCLES / freq
-        groups += [(used & near, 1.0 / SPEED_GAIN), (used & ~near, 1.0 / SPEED_GAIN)]
+        groups += [(used & near, EVENT_GAIN), (used & ~near, EVENT_GAIN)]
     for group, most in groups:
         w = wave[group]
-        if w.size < MIN_GROUP or not float(w @ w) > 0:
-            continue  # too few samples here: nothing to compare
+        if float(np.sum(weights[group])) < MIN_GROUP or not float(w @ w) > 0:
+            continue  # too few samples here (after the gate): nothing to compare
         gain = float(r[group] @ w) / float(w @ w)
         if not SPEED_GAIN <= gain <= most:
             return False

@@ -91,6 +91,7 @@ def _interp_matrix(x: np.ndarray, q: np.ndarray) -> Any:
 
 @lru_cache(maxsize=256)
 def _sos_zi(order: int, cutoff_hz: float, fs: float) -> np.ndarray:
+    """``sosfilt_zi`` of the design (a linear solve), once per ``(order, cutoff, rate)``."""
     from scipy.signal import sosfilt_zi
 
     return sosfilt_zi(_butterworth(order, cutoff_hz, fs))
@@ -99,7 +100,7 @@ def _sos_zi(order: int, cutoff_hz: float, fs: float) -> np.ndarray:
 def _filtfilt(order: int, cutoff_hz: float, fs: float, x: np.ndarray, padlen: int
               ) -> np.ndarray:
     """``scipy.signal.sosfiltfilt(sos, x, axis=0, padtype="odd", padlen=padlen)`` for the
-    Butterworth design of :func:`butterworth_sos`, step for step as scipy does it (odd
+    Butterworth design of :func:`_butterworth`, step for step as scipy does it (odd
     extension, initial conditions scaled by the first sample, forward, backward) with the
     initial conditions (``sosfilt_zi``, a linear solve) computed once per design: a fit
     filters its prediction and sensitivities with one design thousands of times."""
@@ -158,13 +159,6 @@ def _butterworth(order: int, cutoff_hz: float, fs: float) -> np.ndarray:
     from scipy.signal import butter  # here: importing it costs ~0.4 s at start
 
     return butter(order, cutoff_hz, fs=fs, output="sos")
-
-
-def butterworth_sos(order: int, cutoff_hz: float, fs: float) -> np.ndarray:
-    """Second-order sections of a Butterworth low-pass (``scipy.signal.butter``), designed once
-    per ``(order, cutoff, rate)``: a fit filters every prediction with the same design, and the
-    design (``zpk2sos``) costs more than the filtering of a short record."""
-    return _butterworth(order, cutoff_hz, fs).copy()
 
 
 def zero_phase_lowpass(y: np.ndarray, fs: float, cutoff_hz: float, order: int, *,

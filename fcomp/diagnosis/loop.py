@@ -561,7 +561,7 @@ class Diagnosis:
     def _late_disturbances(self) -> None:
         """Lines the baseline's misfit hid, looked for again in the final model's residual.
 
-        A pump's 2 N line under a baseline misfit of 30 N (a missing viscous law)
+        A pump's 5 N line under a baseline misfit of 33 N (a missing viscous law)
         does not stand out of the first fit's residual; once the search has explained
         the misfit it does. It is then taken out as the first check takes its lines
         out, and the final model refitted on the cleaned force, so that the verdict

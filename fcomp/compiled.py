@@ -198,13 +198,20 @@ def build_library(fn: ca.Function | Sequence[ca.Function], driver: str, *,
     loop). ``rebuild`` compiles again even if the cache holds the library.
     ``prelude`` is C placed before CasADi's code (e.g. :data:`HIDDEN`).
     """
-    cc = compiler()
-    if cc is None:
+    if compiler() is None:
         return None
     fns = [fn] if isinstance(fn, ca.Function) else list(fn)
     name = fns[0].name()
     generated = casadi_c(fns, name, {"with_header": False, "casadi_real": "double"})
-    code = prelude + generated[f"{name}.c"] + driver
+    return _compile_cached(name, prelude + generated[f"{name}.c"] + driver, rebuild)
+
+
+def _compile_cached(name: str, code: str, rebuild: bool) -> Path | None:
+    """The C source ``code`` compiled into the cache as ``NAME_HASH.so`` (verified, module
+    docstring); ``None`` without a working compiler or usable cache."""
+    cc = compiler()
+    if cc is None:
+        return None
     with tempfile.TemporaryDirectory() as tmp:
         src = Path(tmp) / f"{name}.c"
         key = hashlib.sha1((code + cc).encode()).hexdigest()[:16]
@@ -240,8 +247,20 @@ def load_library(fn: ca.Function | Sequence[ca.Function], driver: str, *,
                  prelude: str = "") -> ctypes.CDLL | None:
     """:func:`build_library`, loaded with :mod:`ctypes`; a cached library that does not load
     (corrupted on disk) is rebuilt once. ``None``: use the virtual machine."""
+    return _loaded(lambda rebuild: build_library(fn, driver, rebuild=rebuild, prelude=prelude))
+
+
+def load_c(name: str, code: str) -> ctypes.CDLL | None:
+    """The plain C source ``code`` (no CasADi function) compiled into the cache as ``name``
+    and loaded with :mod:`ctypes`, as :func:`load_library` does; ``None`` without a compiler
+    or usable cache (callers then run their numpy or scipy equivalent)."""
+    return _loaded(lambda rebuild: _compile_cached(name, code, rebuild))
+
+
+def _loaded(build: Callable[[bool], Path | None]) -> ctypes.CDLL | None:
+    """``build(rebuild)``'s library loaded; rebuilt once if the cached one does not load."""
     for rebuild in (False, True):
-        lib = build_library(fn, driver, rebuild=rebuild, prelude=prelude)
+        lib = build(rebuild)
         if lib is None:
             return None
         try:

@@ -43,7 +43,8 @@ __all__ = ["Study", "StudyConfig", "StudyError", "StudyOutput", "to_jsonable"]
 
 #: :class:`StudyConfig` fields that only some studies take (:attr:`Study.options`), with
 #: the command-line option of each.
-STUDY_OPTIONS: dict[str, str] = {"plant_file": "--plant-params", "friction": "--friction"}
+STUDY_OPTIONS: dict[str, str] = {"plant_file": "--plant-params", "friction": "--friction",
+                                 "effects": "--effects"}
 
 
 def _option_label(value: Any) -> str:
@@ -94,6 +95,9 @@ class StudyConfig:
         (``MODEL.json``, :mod:`fcomp.modelfile`) or a
         :class:`~fcomp.models.base.FrictionModel` (default: the study's own;
         studies whose :attr:`Study.options` name it).
+    effects
+        The user's effects module (a ``.py`` file, :func:`fcomp.effects.load_effects_module`)
+        that registers the effects a model file of ``friction`` names (the same studies).
     """
 
     out: Path
@@ -106,6 +110,7 @@ class StudyConfig:
     progress: bool = True
     plant_file: Any = None
     friction: Any = None
+    effects: str | os.PathLike[str] | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "out", Path(self.out))
@@ -120,7 +125,7 @@ class StudyConfig:
         if not isinstance(config, Mapping):
             raise FcompError(f"study config must be a mapping, got {type(config).__name__}")
         unknown = set(config) - {"out", "fast", "command", "scheduler", "workers",
-                                 "plant_file", "friction"}
+                                 "plant_file", "friction", "effects"}
         if unknown:
             raise FcompError(f"study config: unknown key(s) {', '.join(sorted(unknown))}")
         if "out" not in config:
@@ -128,7 +133,7 @@ class StudyConfig:
         return cls(out=Path(config["out"]), fast=bool(config.get("fast", False)),
                    command=config.get("command"), scheduler=config.get("scheduler"),
                    workers=config.get("workers"), plant_file=config.get("plant_file"),
-                   friction=config.get("friction"))
+                   friction=config.get("friction"), effects=config.get("effects"))
 
     def as_dict(self) -> dict[str, Any]:
         out: dict[str, Any] = {"out": str(self.out), "fast": self.fast, "command": self.command}

@@ -135,7 +135,7 @@ def study_plants(config: StudyConfig, warnings: list[str] | None = None
     FcompError
         A plant file or model file that does not read, an unknown model.
     """
-    friction = _true_friction(config.friction, warnings)
+    friction = _true_friction(config.friction, warnings, config.effects)
     if config.plant_file is None:
         if config.friction is None:  # the study as it always ran (bit for bit)
             return [StudyPlant(p, LoopConfig(plant=p), plant_settings(p), "built-in")
@@ -156,9 +156,11 @@ def study_plants(config: StudyConfig, warnings: list[str] | None = None
     return plants
 
 
-def _true_friction(spec: Any, warnings: list[str] | None) -> str | FrictionModel:
+def _true_friction(spec: Any, warnings: list[str] | None, effects: Any = None
+                   ) -> str | FrictionModel:
     """The plant's true friction: the default, a model, a model file's model (measurement
-    terms dropped: a line in ``warnings``) or a registered name (checked)."""
+    terms dropped: a line in ``warnings``; its user effects registered by the module
+    ``effects``) or a registered name (checked)."""
     from fcomp.modelfile import is_model_file, seal_friction
     from fcomp.models import MODELS
 
@@ -171,7 +173,8 @@ def _true_friction(spec: Any, warnings: list[str] | None) -> str | FrictionModel
                          f"not {type(spec).__name__}")
     text = str(spec)
     if is_model_file(text):
-        model, dropped = seal_friction(text, "the plant's or the controllers' friction")
+        model, dropped = seal_friction(text, "the plant's or the controllers' friction",
+                                       effects)
         if dropped and warnings is not None:
             warnings.append(dropped)
         return model
@@ -210,7 +213,7 @@ class CompensatorsStudy(Study):
     title = "Friction compensation in closed loop"
     summary = ("PID, static feedforward, LuGre observer, EKF and MPC on a hydraulic and a "
                "pneumatic servo whose friction the controllers know only approximately.")
-    options = ("plant_file", "friction")
+    options = ("plant_file", "friction", "effects")
 
     def check(self, config: StudyConfig) -> list[str]:
         warnings = super().check(config)

@@ -293,6 +293,45 @@ def test_diagnose_writes_its_final_model(tmp_path: Path, capsys) -> None:
     assert "measurement terms force-offset dropped" in captured.err
 
 
+def test_study_compensators_reads_a_model_file_with_a_users_effect_given_its_module(
+        tmp_path: Path, capsys) -> None:
+    """``study compensators --friction FILE.json`` with a user's effect: refused in one line
+    without ``--effects`` (nothing written); with it, the study's plants carry the user's
+    effect as the true friction and in the controllers' mismatched copy; ``--effects`` for a
+    study that takes no friction is refused."""
+    from fcomp.effects import load_effects_module
+    from fcomp.usercode import USER_FILES
+    from studies.base import StudyConfig
+    from studies.compensators import study_plants
+
+    mod = tmp_path / "my_effects.py"
+    mod.write_text(USER_EFFECT)
+    load_effects_module(mod)
+    model = make_model("lugre", params="seed002-type1").with_effects(
+        make_effect("my-bias", {"bias": 40.0}))
+    path = model.save(tmp_path / "user.json")
+    EFFECTS._items.pop("my-bias")  # a fresh process: the effect is not registered
+    USER_FILES.clear()
+    out = tmp_path / "study"
+    args = ["study", "compensators", "--fast", "--no-progress", "--friction", str(path),
+            "--out", str(out)]
+    assert main(args) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--effects" in err[0] and "my-bias" in err[0], err
+    assert not out.exists()
+    assert main(["study", "presliding", "--fast", "--effects", str(mod), "--out",
+                 str(tmp_path / "other")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == ["fcomp: error: --effects applies to the compensators study"], err
+    plants = study_plants(StudyConfig(out=out, friction=str(path), effects=str(mod)))
+    assert [p.label for p in plants] == ["hydraulic", "pneumatic"]
+    for p in plants:
+        for friction in (p.base.friction, p.base.controller_friction):
+            assert "my-bias" in friction.describe(), friction.describe()
+            assert friction.flat_params()["bias"] == pytest.approx(40.0)
+    assert StudyConfig.coerce({"out": out, "effects": str(mod)}).effects == str(mod)
+
+
 def test_sweep_reads_a_model_file_with_a_users_effect_given_its_module(
         tmp_path: Path, capsys) -> None:
     """``sweep --friction FILE.json`` with a user's effect: refused in one line without

@@ -8,8 +8,9 @@ results are those of a local run.
 the plant of a plant file, docs/plants.md, instead of the two built-in plants; the
 results name it by the file's ``name``) and ``--friction NAME|MODEL.json`` (the
 simulated plant's friction, default nmlgm of the plant's parameter set; the
-controllers are built with the same model times the study's mismatch factors).
-Other studies refuse them."""
+controllers are built with the same model times the study's mismatch factors), and
+``--effects MODULE.py`` (the user's effects a model file of ``--friction`` names, as
+``simulate``, ``sweep`` and ``compensate`` take it). Other studies refuse them."""
 
 from __future__ import annotations
 
@@ -20,6 +21,8 @@ from pathlib import Path
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
+    from fcomp.cli import common
+
     p = sub.add_parser("study", help="run a study and write its report", description=__doc__)
     p.add_argument("name", help="study name: coulomb-viscous, friction-models, presliding, "
                    "compensators, missing-physics, all (`fcomp list studies` shows those "
@@ -42,6 +45,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="compensators: the plant's true friction, a model name or a model file "
                    "(default nmlgm); the controllers get the same model with the study's "
                    "mismatch")
+    common.add_effects_option(p, "registers the user's own effects a --friction model file "
+                              "names (compensators)")
     p.set_defaults(func=run)
 
 
@@ -51,11 +56,12 @@ def run(args: argparse.Namespace) -> int:
     from fcomp.outputs import InputSet
     from fcomp.parallel import check_scheduler
     from studies import STUDIES
-    from studies.base import StudyConfig, StudyError
+    from studies.base import STUDY_OPTIONS, StudyConfig, StudyError
 
     study = STUDIES.get(args.name)
-    given = {"plant_file": args.plant_params, "friction": args.friction}
-    for key, option in (("plant_file", "--plant-params"), ("friction", "--friction")):
+    given = {"plant_file": args.plant_params, "friction": args.friction,
+             "effects": args.effects}
+    for key, option in STUDY_OPTIONS.items():
         value = given[key]
         if value is None:
             continue
@@ -76,15 +82,17 @@ def run(args: argparse.Namespace) -> int:
     for option, spec in (("--plant-params", args.plant_params), ("--friction", args.friction)):
         if spec is not None and spec.lower().endswith((".toml", ".json")):
             inputs.file(spec, option)
+    if args.effects is not None:
+        inputs.file(args.effects, "--effects")
     common.check_outputs(inputs, [], [("--out", out, "study")])  # check_folder_target too
     words = ["fcomp", "study", args.name, "--out", str(out)] + (["--fast"] if args.fast else [])
-    for option, spec in (("--plant-params", args.plant_params), ("--friction", args.friction)):
-        if spec is not None:
-            words += [option, spec]
+    for key, option in STUDY_OPTIONS.items():
+        if given[key] is not None:
+            words += [option, given[key]]
     config = StudyConfig(out=out, fast=args.fast, command=shlex.join(words), out_label="--out",
                          scheduler=scheduler, workers=args.workers,
                          progress=not args.no_progress, plant_file=args.plant_params,
-                         friction=args.friction)
+                         friction=args.friction, effects=args.effects)
     for warning in study.check(config):  # bad inputs: one line, before anything is written
         common.warn("measurement-terms", warning, "--friction")
     try:

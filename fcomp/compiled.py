@@ -14,6 +14,10 @@ in: one library serves every parameter value.
 Without a compiler, or with ``FCOMP_JIT=0``, the same step runs in CasADi's
 virtual machine through ``mapaccum`` (slower, identical results).
 
+:func:`load_c` compiles a plain C kernel (no CasADi function: the fits' zero-phase
+filter, :mod:`fcomp.reconstruction`) through the same cache; its callers run their
+numpy or scipy equivalent without a compiler.
+
 The cache and trust (README, "Security")
 ----------------------------------------
 Cached libraries are *loaded and run* (``ctypes``): whoever can write into

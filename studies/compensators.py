@@ -156,13 +156,18 @@ def study_plants(config: StudyConfig, warnings: list[str] | None = None
     return plants
 
 
-def _true_friction(spec: Any, warnings: list[str] | None, effects: Any = None
-                   ) -> str | FrictionModel:
+def _true_friction(spec: Any, warnings: list[str] | None,
+                   effects: str | os.PathLike[str] | None = None) -> str | FrictionModel:
     """The plant's true friction: the default, a model, a model file's model (measurement
-    terms dropped: a line in ``warnings``; its user effects registered by the module
-    ``effects``) or a registered name (checked)."""
+    terms dropped: a line in ``warnings``) or a registered name (checked). The user's
+    effects module ``effects`` is loaded first, whatever the friction (an error in it is
+    one line, as in ``compensate``)."""
+    from fcomp.effects import load_effects_module
     from fcomp.modelfile import is_model_file, seal_friction
     from fcomp.models import MODELS
+
+    if effects is not None:
+        load_effects_module(effects)
 
     if spec is None:
         return DEFAULT_FRICTION

@@ -293,16 +293,11 @@ def test_diagnose_writes_its_final_model(tmp_path: Path, capsys) -> None:
     assert "measurement terms force-offset dropped" in captured.err
 
 
-def test_study_compensators_reads_a_model_file_with_a_users_effect_given_its_module(
-        tmp_path: Path, capsys) -> None:
-    """``study compensators --friction FILE.json`` with a user's effect: refused in one line
-    without ``--effects`` (nothing written); with it, the study's plants carry the user's
-    effect as the true friction and in the controllers' mismatched copy; ``--effects`` for a
-    study that takes no friction is refused."""
+def _users_model_file(tmp_path: Path) -> tuple[Path, Path]:
+    """A user's effects module (:data:`USER_EFFECT`) and a model file naming its effect,
+    the effect then unregistered as in a fresh process: ``(module, model file)``."""
     from fcomp.effects import load_effects_module
     from fcomp.usercode import USER_FILES
-    from studies.base import StudyConfig
-    from studies.compensators import study_plants
 
     mod = tmp_path / "my_effects.py"
     mod.write_text(USER_EFFECT)
@@ -312,6 +307,19 @@ def test_study_compensators_reads_a_model_file_with_a_users_effect_given_its_mod
     path = model.save(tmp_path / "user.json")
     EFFECTS._items.pop("my-bias")  # a fresh process: the effect is not registered
     USER_FILES.clear()
+    return mod, path
+
+
+def test_study_compensators_reads_a_model_file_with_a_users_effect_given_its_module(
+        tmp_path: Path, capsys) -> None:
+    """``study compensators --friction FILE.json`` with a user's effect: refused in one line
+    without ``--effects`` (nothing written); with it, the study's plants carry the user's
+    effect as the true friction and in the controllers' mismatched copy; ``--effects`` for a
+    study that takes no friction is refused."""
+    from studies.base import StudyConfig
+    from studies.compensators import study_plants
+
+    mod, path = _users_model_file(tmp_path)
     out = tmp_path / "study"
     args = ["study", "compensators", "--fast", "--no-progress", "--friction", str(path),
             "--out", str(out)]
@@ -336,17 +344,7 @@ def test_sweep_reads_a_model_file_with_a_users_effect_given_its_module(
         tmp_path: Path, capsys) -> None:
     """``sweep --friction FILE.json`` with a user's effect: refused in one line without
     ``--effects``, run (in a worker process too) with it."""
-    from fcomp.effects import load_effects_module
-    from fcomp.usercode import USER_FILES
-
-    mod = tmp_path / "my_effects.py"
-    mod.write_text(USER_EFFECT)
-    load_effects_module(mod)
-    model = make_model("lugre", params="seed002-type1").with_effects(
-        make_effect("my-bias", {"bias": 40.0}))
-    path = model.save(tmp_path / "user.json")
-    EFFECTS._items.pop("my-bias")  # a fresh process: the effect is not registered
-    USER_FILES.clear()
+    mod, path = _users_model_file(tmp_path)
     args = ["sweep", "--plant", "hydraulic", "--controllers", "pid", "--samples", "1",
             "--friction", str(path), "--no-progress"]
     assert main([*args, "--json", str(tmp_path / "no.json")]) == 2

@@ -44,7 +44,9 @@ zero-phase filter so that every term of ``F`` has the same bandwidth.
 
 from __future__ import annotations
 
+import ctypes
 import math
+from collections.abc import Callable
 from functools import lru_cache
 from typing import Any
 
@@ -147,11 +149,10 @@ int fcomp_filtfilt(int n, int k, int p, int ns, const double *sos, const double 
 
 
 @lru_cache(maxsize=1)
-def _native_filtfilt() -> Any:
-    """The compiled :data:`_FILTFILT_C` (:func:`fcomp.compiled.load_c`), or ``None`` without
-    a C compiler or usable cache (:func:`_filtfilt` then calls scipy: the same result)."""
-    import ctypes
-
+def _native_filtfilt() -> Callable[[np.ndarray, int, np.ndarray, np.ndarray], np.ndarray] | None:
+    """The compiled :data:`_FILTFILT_C` (:func:`fcomp.compiled.load_c`) as ``run(x, padlen,
+    sos, zi) -> y`` for a C-contiguous ``x`` of one or two dimensions, or ``None`` without a
+    C compiler or usable cache (:func:`_filtfilt` then calls scipy: the same result)."""
     from fcomp.compiled import load_c
 
     lib = load_c("fcomp_filtfilt", _FILTFILT_C)
@@ -161,7 +162,17 @@ def _native_filtfilt() -> Any:
     dp = ctypes.POINTER(ctypes.c_double)
     fn.argtypes = [ctypes.c_int] * 4 + [dp] * 6
     fn.restype = ctypes.c_int
-    return fn
+
+    def run(x: np.ndarray, padlen: int, sos: np.ndarray, zi: np.ndarray) -> np.ndarray:
+        n, k = x.shape[0], (x.shape[1] if x.ndim == 2 else 1)
+        out = np.empty_like(x)
+        work = np.empty((n + 2 * padlen) * k)
+        z = np.empty(zi.size * k)
+        args = (np.ascontiguousarray(sos), np.ascontiguousarray(zi), x, work, z, out)
+        fn(n, k, padlen, sos.shape[0], *(a.ctypes.data_as(dp) for a in args))
+        return out
+
+    return run
 
 
 def _filtfilt(order: int, cutoff_hz: float, fs: float, x: np.ndarray, padlen: int
@@ -177,17 +188,7 @@ def _filtfilt(order: int, cutoff_hz: float, fs: float, x: np.ndarray, padlen: in
     zi = _sos_zi(order, cutoff_hz, fs)
     native = _native_filtfilt() if x.ndim <= 2 and x.shape[0] < 2**31 - 2 * padlen else None
     if native is not None:
-        import ctypes
-
-        dp = ctypes.POINTER(ctypes.c_double)
-        xc = np.ascontiguousarray(x, dtype=float)
-        n, k = xc.shape[0], (xc.shape[1] if xc.ndim == 2 else 1)
-        out = np.empty_like(xc)
-        work = np.empty((n + 2 * padlen) * k)
-        z = np.empty(zi.size * k)
-        native(n, k, padlen, sos.shape[0], *(a.ctypes.data_as(dp) for a in (
-            np.ascontiguousarray(sos), np.ascontiguousarray(zi), xc, work, z, out)))
-        return out
+        return native(np.ascontiguousarray(x, dtype=float), padlen, sos, zi)
     from scipy.signal import sosfilt
 
     zi = zi.reshape(zi.shape[0], 2, *([1] * (x.ndim - 1)))  # broadcast over the columns

@@ -23,7 +23,7 @@ from functools import cache
 import pytest
 
 from fcomp.diagnosis import Diagnosis
-from fcomp.diagnosis.loop import trimmed_rms
+from fcomp.diagnosis.features import trimmed_rms
 from fcomp.synthetic import generate
 
 pytestmark = pytest.mark.slow  # builds the study site or runs long diagnoses

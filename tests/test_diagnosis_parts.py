@@ -5,10 +5,12 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
+import fcomp.diagnosis.revision as revision
 from fcomp.conditioning import default_cutoff, position_noise
 from fcomp.diagnosis import Diagnosis
 from fcomp.diagnosis.data import prepare
@@ -19,13 +21,17 @@ from fcomp.diagnosis.features import (
     strength,
     trimmed_rms,
 )
-from fcomp.diagnosis.loop import RING_CONCENTRATION, RING_NOISE, fall_test, heldout_pieces
 from fcomp.diagnosis.noise import effective_sample_size, noise_floor, tolerant_noise_share
 from fcomp.diagnosis.regimes import DWELL, PRESLIDING, REVERSAL, SLIDING, segment
+from fcomp.diagnosis.rule import fall_test, heldout_pieces
 from fcomp.diagnosis.split import make_split
+from fcomp.diagnosis.verdict import VerdictRule
 from fcomp.errors import FcompError
 from fcomp.measurement import Measurement
 from fcomp.synthetic import SCALES, generate
+
+RING_CONCENTRATION = VerdictRule().ring_concentration
+RING_NOISE = VerdictRule().ring_noise
 
 
 @pytest.fixture(scope="module")
@@ -512,10 +518,10 @@ def test_a_reduced_model_is_never_worse_than_the_same_structure_seen_before() ->
                   n_jobs=1, check_baseline=False).fit(rec)
     before = d.steps_[0].fit
     assert before is not None and before.model.describe() == "stribeck + presliding"
-    reduced = d._rebuilt(["presliding"])
+    reduced = revision.rebuilt(d._search, ["presliding"])
     assert reduced.model.describe() == "stribeck + presliding"
     assert reduced.rms_train <= before.rms_train
-    assert d._rebuilt([]).rms_train <= d.baseline_fit_.rms_train
+    assert revision.rebuilt(d._search, []).rms_train <= d.baseline_fit_.rms_train
 
 
 def test_baseline_finds_a_stribeck_speed_below_every_sliding_speed() -> None:
@@ -547,15 +553,15 @@ def test_the_lag_of_a_pressure_channel_is_fitted_with_the_model() -> None:
                       progress=False).fit(rec.measurement)
         got[tau] = d.to_dict()["signals"]["force_lag_s"]
         assert d.fit_.values["lag"] == got[tau]
-        assert "lag" not in d._refit.free_names(d.fit_.model)  # held
+        assert "lag" not in d._search.refit.free_names(d.fit_.model)  # held
     assert got[3e-3] == pytest.approx(3e-3, rel=0.15)
     # a lag held at a wrong value is estimated again for a model (alone, unweighted),
     # and the sample weights of the later fits are left as they were
-    weights = d._refit._weights
-    d._refit.hold("lag", 0.0)
-    assert d._refit.refit_held("lag", d.fit_) == pytest.approx(3e-3, rel=0.15)
-    assert d._refit.held["lag"] == pytest.approx(3e-3, rel=0.15)
-    assert d._refit._weights is weights
+    weights = d._search.refit._weights
+    d._search.refit.hold("lag", 0.0)
+    assert d._search.refit.refit_held("lag", d.fit_) == pytest.approx(3e-3, rel=0.15)
+    assert d._search.refit.held["lag"] == pytest.approx(3e-3, rel=0.15)
+    assert d._search.refit._weights is weights
     # without a lag it stays within half a sample (1 kHz): the timing of the sampled model
     assert abs(got[0.0]) < 5e-4
     cell = generate([], base="lugre", duration=9.0, seed=3).measurement
@@ -572,31 +578,28 @@ def test_confounded_partners_both_in_the_model_are_reported_as_a_tie() -> None:
 
     assert "force-offset" in EFFECTS.get("direction-asymmetry").confounded
     assert "pressure-dependence" not in EFFECTS.get("direction-asymmetry").confounded
-    d = Diagnosis.__new__(Diagnosis)
-    d.added_ = ["pressure-dependence", "force-offset", "direction-asymmetry"]
-    d.ties_ = []
-    d._partners_in_model()
-    assert d.ties_ == [["force-offset", "direction-asymmetry"]]
-    d._partners_in_model()  # idempotent
-    assert d.ties_ == [["force-offset", "direction-asymmetry"]]
-    d.added_ = ["force-offset", "direction-asymmetry"]
-    d.ties_ = [["force-offset", "area-error"]]  # a swap's tie of the first
-    d._partners_in_model()
-    assert d.ties_ == [["force-offset", "area-error", "direction-asymmetry"]]
-    d.added_ = ["pressure-dependence", "stribeck"]
-    d.ties_ = []
-    d._partners_in_model()
-    assert d.ties_ == []
+    d = SimpleNamespace(added=["pressure-dependence", "force-offset", "direction-asymmetry"],
+                        ties=[])
+    revision.partners_in_model(d)
+    assert d.ties == [["force-offset", "direction-asymmetry"]]
+    revision.partners_in_model(d)  # idempotent
+    assert d.ties == [["force-offset", "direction-asymmetry"]]
+    d.added = ["force-offset", "direction-asymmetry"]
+    d.ties = [["force-offset", "area-error"]]  # a swap's tie of the first
+    revision.partners_in_model(d)
+    assert d.ties == [["force-offset", "area-error", "direction-asymmetry"]]
+    d.added = ["pressure-dependence", "stribeck"]
+    d.ties = []
+    revision.partners_in_model(d)
+    assert d.ties == []
 
 
 def test_a_flexible_effect_is_judged_where_its_signature_lives(monkeypatch) -> None:
     """``Effect.acts_in``: the share of the held-out fall (in mean square) that lies in the
     regimes an effect declares; ``nonlocal-memory`` declares the presliding travel after a
     reversal or a start, and a fall it takes in steady sliding does not count there."""
-    from types import SimpleNamespace
-
-    from fcomp.diagnosis.loop import SIGNATURE_SHARE
     from fcomp.diagnosis.regimes import REGIMES
+    from fcomp.diagnosis.rule import AcceptanceRule, signature_share
     from fcomp.effects import EFFECTS
 
     nm = EFFECTS.get("nonlocal-memory")
@@ -604,21 +607,24 @@ def test_a_flexible_effect_is_judged_where_its_signature_lives(monkeypatch) -> N
     regime = np.array([SLIDING] * 60 + [PRESLIDING] * 20 + [REVERSAL] * 10 + [DWELL] * 10)
     test = np.ones(100, dtype=bool)
     test[::7] = False  # training samples do not count
-    state = SimpleNamespace(split_=SimpleNamespace(test=test),
-                            segmentation_=SimpleNamespace(regime=regime))
-    share = Diagnosis._signature_share
+    ground = SimpleNamespace(split=SimpleNamespace(test=test),
+                             segmentation=SimpleNamespace(regime=regime))
+
+    def share(name, b, a):
+        return signature_share(EFFECTS.get(name).acts_in, b, a, ground)
+
     before = np.full(100, 2.0)
     inside, outside, half = before.copy(), before.copy(), before.copy()
     inside[60:] = 1.0
     outside[:60] = 1.0
     half[:60] = np.sqrt(4.0 - 3.0 * (test[60:].sum() / test[:60].sum()))  # equal falls
     half[60:] = 1.0
-    assert share(state, "nonlocal-memory", before, inside) == pytest.approx(1.0)
-    assert share(state, "nonlocal-memory", before, outside) == pytest.approx(0.0)
-    assert share(state, "nonlocal-memory", before, half) == pytest.approx(0.5)
-    assert 0.5 < SIGNATURE_SHARE < 1.0
-    assert share(state, "force-offset", before, outside) is None  # declares none: anywhere
-    assert share(state, "nonlocal-memory", before, before) is None  # nothing falls
+    assert share("nonlocal-memory", before, inside) == pytest.approx(1.0)
+    assert share("nonlocal-memory", before, outside) == pytest.approx(0.0)
+    assert share("nonlocal-memory", before, half) == pytest.approx(0.5)
+    assert 0.5 < AcceptanceRule().signature_share < 1.0
+    assert share("force-offset", before, outside) is None  # declares none: anywhere
+    assert share("nonlocal-memory", before, before) is None  # nothing falls
     monkeypatch.setattr(nm, "acts_in", ("presliding",))
     with pytest.raises(FcompError, match="acts_in names regimes"):
-        share(state, "nonlocal-memory", before, inside)
+        share("nonlocal-memory", before, inside)

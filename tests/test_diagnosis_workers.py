@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from fcomp.diagnosis import Diagnosis, catalogue
-from fcomp.diagnosis.loop import refit_candidate
+from fcomp.diagnosis.workers import longest_first, refit_candidate
 from fcomp.synthetic import generate
 
 
@@ -30,14 +30,14 @@ def test_spawned_workers_give_the_serial_answer(record) -> None:
     ser = Diagnosis("lugre", n_jobs=1, check_baseline=False).fit(record)
     assert par.added_ == ser.added_ == ["pressure-dependence"]
     assert par.rms_final_ == ser.rms_final_
-    assert par._pool is None  # the pool is closed with the fit
+    assert par._search.pool is None  # the pool is closed with the fit
     assert [c.rms_heldout for c in par.candidates_] == [c.rms_heldout for c in ser.candidates_]
 
 
 def test_a_refit_job_round_trips_and_runs_on_a_dask_worker(record) -> None:
     d = Diagnosis("lugre", n_jobs=1, search=False, check_baseline=False).fit(record)
-    prop = catalogue.propose("pressure-dependence", d._context())
-    job = (d._refit, prop, d.fit_)
+    prop = catalogue.propose("pressure-dependence", d._search.context())
+    job = (d._search.refit, prop, d.fit_)
     back = pickle.loads(pickle.dumps(job))
     here = refit_candidate(*job)
     assert not isinstance(here, str)
@@ -56,13 +56,13 @@ def test_the_longest_refits_go_to_the_workers_first(record) -> None:
     orders the next submission; refits not run yet go first, the models with more states
     first (the last of a batch would otherwise run alone while the other workers idle)."""
     d = Diagnosis("lugre", n_jobs=1, search=False, check_baseline=False).fit(record)
-    ctx = d._context()
+    ctx = d._search.context()
     props = [catalogue.propose(n, ctx) for n in ("force-offset", "dwell-time", "position-dependence")]
     assert props[1].model.n_states > props[0].model.n_states
-    d._seconds = {}
-    assert d._longest_first(props)[0] == 1          # none timed: the extra state first
-    d._seconds = {("force-offset", props[0].form): 9.0, ("dwell-time", props[1].form): 2.0,
-                  ("position-dependence", props[2].form): 4.0}
-    assert d._longest_first(props) == [0, 2, 1]     # by the time each took
-    del d._seconds[("position-dependence", props[2].form)]
-    assert d._longest_first(props) == [2, 0, 1]     # one not timed yet goes first
+    seconds: dict = {}
+    assert longest_first(props, seconds)[0] == 1          # none timed: the extra state first
+    seconds = {("force-offset", props[0].form): 9.0, ("dwell-time", props[1].form): 2.0,
+               ("position-dependence", props[2].form): 4.0}
+    assert longest_first(props, seconds) == [0, 2, 1]     # by the time each took
+    del seconds[("position-dependence", props[2].form)]
+    assert longest_first(props, seconds) == [2, 0, 1]     # one not timed yet goes first

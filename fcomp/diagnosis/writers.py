@@ -1,0 +1,128 @@
+"""The JSON of ``fcomp diagnose`` and the model file, written from a :class:`.result.DiagnosisResult`."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from fcomp.diagnosis.refit import FitResult
+from fcomp.diagnosis.result import DiagnosisResult
+from fcomp.diagnosis.search import Candidate
+from fcomp.diagnosis.wording import QUALIFIES
+from fcomp.effects import EFFECTS
+
+#: What ``rms_*`` measure (the JSON's ``error_measure``).
+ERROR_MEASURE = ("held-out RMS of the scored residual: the logarithmic score of the model's "
+                 "prediction band with the noise floor, in N (equal to the plain residual where "
+                 "the motion fixes the prediction; a wider band costs); rms_plain: y - F_hat")
+
+
+def _num(x: float) -> float | None:
+    return float(x) if math.isfinite(x) else None
+
+
+def _rms(r: np.ndarray) -> float:
+    return float(np.sqrt(np.mean(r**2))) if r.size else math.nan
+
+
+def _candidate(c: Candidate) -> dict[str, Any]:
+    return {"effect": c.effect, "form": c.form, "rms_heldout": _num(c.rms_heldout),
+            "qualifies": c.qualifies, "z": _num(c.z), "p": _num(c.p),
+            "delta_bic": _num(c.delta_bic), "reason": c.reason or QUALIFIES}
+
+
+def signals(result: DiagnosisResult) -> dict[str, Any]:
+    """Which velocity drove the friction states, from which force, and why (JSON ``signals``).
+
+    ``velocity`` (``"x"``, ``"v"``, ``"fused"``, or ``"mixed"`` when records
+    differ), ``force`` and ``reason`` summarise; ``unresolved_samples``
+    counts the samples left out because the position missed motion there
+    (:func:`fcomp.diagnosis.regimes.unresolved_rests`); ``force_lag_s`` is the
+    lag of a driving force's channel, fitted with the first (unweighted) baseline
+    fit, held in the weighted fits and estimated again (alone, unweighted) for
+    every model accepted (s; None for a load cell): pressure transducers and their
+    lines lag, and a force reconstructed from them misses ``lag*dD/dt`` where ``D``
+    changes fast; ``records`` holds the full conditioning of every file
+    (:class:`fcomp.conditioning.Conditioning`).
+    """
+    data = result.ground.data
+    recs = [c.to_dict() for c in data.signals]
+    if not recs:
+        return {"velocity": "v", "force": data.source, "records": [],
+                "reason": "steady-state points: the velocity of each point as given"}
+    kinds = {r["velocity"] for r in recs}
+    lag = result.fit.values.get("lag")
+    return {"velocity": kinds.pop() if len(kinds) == 1 else "mixed",
+            "force": data.source,
+            "force_lag_s": None if lag is None else float(lag),
+            "unresolved_samples": result.ground.segmentation.unresolved,
+            "reason": "; ".join(dict.fromkeys(f"{r['label']}: {r['reason']}" for r in recs)),
+            "records": recs}
+
+
+def model_file(result: DiagnosisResult, source: Mapping[str, Any] | None = None
+               ) -> dict[str, Any]:
+    """The final model as a model file's document (:mod:`fcomp.modelfile`): the friction
+    with every effect accepted and its fitted values, the measurement terms (a fitted
+    ``mass``, the channel ``lag``, ...) as such. ``source`` (``command``, ``data``) says
+    where it comes from."""
+    from fcomp.models.document import model_document
+
+    return model_document(result.fit.model, measurement=result.fit.values,
+                          source={"diagnosis": {"baseline": result.baseline_name,
+                                                "added": list(result.added),
+                                                "verdict": result.verdict.verdict},
+                                  **dict(source or {})})
+
+
+def to_dict(result: DiagnosisResult) -> dict[str, Any]:
+    """The JSON of ``fcomp diagnose`` (public contract, plus extra keys)."""
+    test = result.ground.split.test
+    data = result.ground.data
+
+    def plain(fit: FitResult) -> float | None:
+        return _num(_rms(fit.plain_residual[test]))
+
+    return {
+        "baseline": result.baseline_name,
+        "rms_baseline": result.baseline_fit.rms_test,
+        "added": list(result.added),
+        "steps": [{"effect": s.effect, "rms_before": s.rms_before, "rms_after":
+                   _num(s.rms_after), "accepted": bool(s.accepted), "forced": s.forced,
+                   "removed": bool(s.removed),
+                   "removed_because": s.removed or None,
+                   "candidates": [_candidate(c) for c in s.candidates],
+                   "warnings": [w.to_dict() for w in s.warnings]}
+                  for s in result.steps],
+        "candidates": [_candidate(c) for c in result.candidates],
+        "ties": [list(t) for t in result.ties],
+        "removed": list(result.removed),
+        "rms_final": result.fit.rms_test,
+        "rms_plain": {"baseline": plain(result.baseline_fit), "final": plain(result.fit)},
+        "error_measure": ERROR_MEASURE,
+        "noise_floor": result.noise_floor.value,
+        "verdict": result.verdict.verdict,
+        "reason": result.reason,
+        "signals": signals(result),
+        "baseline_dependent": bool(result.dependence and result.dependence["dependent"]),
+        "baseline_check": dict(result.check or {}),
+        "other_baseline": result.dependence,
+        "residual_features": [{"feature": f.feature, "strength": round(f.strength, 4)}
+                              for f in result.verdict.features],
+        "model": result.fit.model.describe(),
+        "params": {k: _num(v) for k, v in result.fit.values.items()},
+        "model_params": {k: _num(float(v)) for k, v in result.fit.model.flat_params().items()},
+        "regimes": dict(result.regimes),
+        "tie_experiments": {t[0]: {e: EFFECTS.get(e).experiment_for(data.kind) for e in t}
+                            for t in result.ties},
+        "skipped": dict(result.skipped),
+        "split": result.ground.split.description,
+        "noise_method": result.noise_floor.method,
+        "disturbances": [d.to_dict() for d in result.disturbances],
+        "units": "N",
+        "warnings": [w.to_dict() for w in result.warnings],
+        "model_file": model_file(result),
+    }

@@ -17,8 +17,8 @@ from typing import Any
 import numpy as np
 from matplotlib.figure import Figure
 
-from fcomp.diagnosis.report import fig_plant
 from fcomp.errors import FcompError
+from fcomp.figures import fig_plant
 from fcomp.measurement import Measurement
 from fcomp.models import FrictionModel
 from fcomp.paramsets import ParameterSet

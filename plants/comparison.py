@@ -22,7 +22,7 @@ from fcomp.figures import fig_plant
 from fcomp.measurement import Measurement
 from fcomp.models import FrictionModel
 from fcomp.paramsets import ParameterSet
-from plants import PLANTS
+from fcomp.registry import PLANTS
 
 
 @dataclass(frozen=True, repr=False)

@@ -32,9 +32,12 @@ from controllers.feedforward import PIDFeedforwardController
 from controllers.lugre_observer import LuGreObserverController
 from controllers.mpc import MPCController
 from controllers.pid import PIDController
+from fcomp import registry
 from fcomp.registry import Registry
 
-CONTROLLERS: Registry[type[Controller]] = Registry("controller")
+#: fcomp's registry of controllers (:mod:`fcomp.registry`, entry point ``fcomp.controllers``),
+#: filled here.
+CONTROLLERS: Registry[type[Controller]] = registry.CONTROLLERS
 for _cls in (PIDController, PIDFeedforwardController, LuGreObserverController, EKFController,
              MPCController):
     CONTROLLERS.register(_cls.name, _cls)

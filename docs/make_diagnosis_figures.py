@@ -26,7 +26,7 @@ import numpy as np
 
 import fcomp.datasets as datasets
 from fcomp.diagnosis import Diagnosis
-from fcomp.diagnosis.report import figures
+from fcomp.diagnosis.figures import figures
 from fcomp.measurement import Measurement
 from fcomp.synthetic import generate
 

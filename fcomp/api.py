@@ -33,8 +33,7 @@ from fcomp.measurement import Measurement
 from fcomp.modelfile import is_model_file, load_model
 from fcomp.models import FrictionModel, make_model
 from fcomp.paramsets import ParameterSet
-from plants import PLANTS
-from plants.comparison import PlantComparison, compare_plant
+from fcomp.registry import PLANT_TOOLS, PLANTS
 
 Data = Measurement | str | Path
 
@@ -89,6 +88,7 @@ def compare(model: str | FrictionModel, data: Data | Sequence[Data], *, fit: boo
     comp = compare_force(model, meas, fit=fit, mass=mass, split=split, cutoff_hz=cutoff_hz)
     if plant is None:
         return comp
+    compare_plant = PLANT_TOOLS.get("compare_plant")
     return replace(comp, plant=[compare_plant(m, plant, comp.result.model, params=plant_params)
                                 for m in records])
 
@@ -127,5 +127,18 @@ def simulate(plant: str, friction: str | FrictionModel,
     return run
 
 
-__all__ = ["Comparison", "Diagnosis", "FrictionFit", "Measurement", "PlantComparison", "compare",
-           "compare_plant", "diagnose", "fit", "make_model", "read", "simulate"]
+#: The plant-domain names this module offers, defined by the plants (:mod:`plants.comparison`)
+#: and reached through their registry.
+_PLANT_NAMES = ("PlantComparison", "compare_plant")
+
+
+def __getattr__(name: str) -> Any:
+    """``PlantComparison`` and ``compare_plant``, from the plants' registry."""
+    if name in _PLANT_NAMES:
+        return PLANT_TOOLS.get(name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+__all__ = ["Comparison", "Diagnosis", "FrictionFit", "Measurement",  # noqa: F822 (__getattr__)
+           "PlantComparison", "compare", "compare_plant", "diagnose", "fit", "make_model", "read",
+           "simulate"]

@@ -17,12 +17,12 @@ from typing import Any
 import numpy as np
 from matplotlib.figure import Figure
 
-from fcomp.diagnosis.report import fig_plant
 from fcomp.errors import FcompError
+from fcomp.figures import fig_plant
 from fcomp.measurement import Measurement
 from fcomp.models import FrictionModel
 from fcomp.paramsets import ParameterSet
-from plants import PLANTS
+from fcomp.registry import PLANTS
 
 
 @dataclass(frozen=True, repr=False)

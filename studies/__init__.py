@@ -11,10 +11,13 @@ from __future__ import annotations
 
 import importlib
 
+from fcomp import registry
 from fcomp.registry import Registry
 from studies.base import Study, StudyConfig, StudyError
 
-STUDIES: Registry[Study] = Registry("study")
+#: fcomp's registry of studies (:mod:`fcomp.registry`, entry point ``fcomp.studies``),
+#: filled here.
+STUDIES: Registry[Study] = registry.STUDIES
 
 #: Study modules of the package, in the order ``all`` runs them (``all`` itself last).
 _MODULES = (

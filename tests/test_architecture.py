@@ -1,8 +1,9 @@
 """Architecture: the layers of ``pyproject.toml`` (import-linter) and no import cycles.
 
-The packages are layered ``studies -> controllers -> plants -> fcomp`` (the CLI,
-``fcomp.cli``, on top of all), and inside ``fcomp`` numerics -> data ->
-models/effects -> identification -> diagnosis -> cli (``[tool.importlinter]``).
+The packages are layered ``studies -> controllers -> plants -> fcomp`` (no exceptions: the
+CLI and the API reach the packages above through ``fcomp.registry``), and inside ``fcomp``
+numerics -> data -> models/effects -> identification -> diagnosis -> cli
+(``[tool.importlinter]``).
 The cycle check counts every import, also those inside functions.
 """
 

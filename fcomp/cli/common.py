@@ -10,6 +10,7 @@ import sys
 import threading
 import time
 import warnings
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -17,6 +18,7 @@ from fcomp.effects import load_effects_module
 from fcomp.errors import FcompError, FcompWarning, render_terms
 from fcomp.models import FrictionModel, make_model
 from fcomp.outputs import InputSet, check_distinct, check_folder_target
+from fcomp.registry import COMMANDS
 
 #: Largest magnitude accepted for a number given on the command line (SI units).
 MAX_VALUE = 1e15
@@ -432,6 +434,17 @@ def _clock(seconds: float) -> str:
     m, s = divmod(int(seconds), 60)
     h, m = divmod(m, 60)
     return f"{h}:{m:02d}:{s:02d}" if h else f"{m}:{s:02d}"
+
+
+def provided(command: str) -> Callable[[argparse.Namespace], int]:
+    """The run of ``command``, which a package above fcomp provides
+    (:data:`fcomp.registry.COMMANDS`), looked up when the command runs: the options and help
+    of a command need no package above fcomp."""
+
+    def run(args: argparse.Namespace) -> int:
+        return COMMANDS.get(command)(args)
+
+    return run
 
 
 def add_closed_loop_run_options(p: argparse.ArgumentParser) -> None:

@@ -137,6 +137,7 @@ def run(args: argparse.Namespace) -> int:
     from fcomp.api import compare
     from fcomp.measurement import Measurement
     from fcomp.outputs import staged_folder
+    from fcomp.registry import PLANT_TOOLS, PLANTS
 
     out = json_target(args.json)
     report = report_dir(args.report)
@@ -146,16 +147,12 @@ def run(args: argparse.Namespace) -> int:
         raise FcompError(f"--mass must be a non-negative number of kg, got {args.mass:g}")
     plant_params: Any = args.plant_params
     if plant_params is not None and plant_params.lower().endswith(".toml"):
-        from plants.planfile import read_plant_file
-
-        pf = read_plant_file(plant_params)
+        pf = PLANT_TOOLS.get("read_plant_file")(plant_params)
         if args.plant not in (None, pf.kind):
             raise FcompError(f"--plant-params {plant_params}: a {pf.kind} plant, not "
                              f"{args.plant}")
         args.plant, plant_params = pf.kind, pf.parameter_set()
     if args.plant is not None:
-        from plants import PLANTS
-
         PLANTS.get(args.plant)  # an unknown name now, with the list of known ones
     extra = [args.params] if args.params and args.params.lower().endswith(".json") else []
     inputs = common.measurement_inputs(args.data)

@@ -23,16 +23,8 @@ instead of DAQP, which cannot be generated as C), checked against that form in P
 from __future__ import annotations
 
 import argparse
-import shlex
-from pathlib import Path
-from typing import Any
 
-from fcomp.cli import common
-from fcomp.cli.common import add_model_options, emit_result, finite_float, json_target
-from fcomp.errors import FcompError
-
-#: Controller options that are counts (integers).
-INTEGER_OPTIONS = ("horizon", "substeps", "qp_iterations")
+from fcomp.cli.common import add_model_options, finite_float, provided
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -64,94 +56,4 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--option", action="append", default=[], metavar="NAME=VALUE",
                    help="a controller option (observer_gain=30, bandwidth=50, ...); repeatable")
     add_model_options(p)
-    p.set_defaults(func=run)
-
-
-def control_model(args: argparse.Namespace) -> Any:
-    """The :class:`~controllers.plant_model.ControlModel` (plant and friction) of the options.
-
-    The hook where a plant file (``--plant-params``) and a model file
-    (``--friction FILE.json``) resolve: whatever they give, the export takes a
-    ``ControlModel``.
-    """
-    from controllers.plant_model import ControlModel
-    from plants import PLANTS
-    from plants.planfile import KINDS
-
-    if args.plant_params is not None:
-        from plants.planfile import read_plant_file
-
-        plant_file = read_plant_file(args.plant_params)
-        if args.plant not in (None, plant_file.kind):
-            raise FcompError(f"--plant-params {args.plant_params}: a {plant_file.kind} plant, "
-                             f"not {args.plant}")
-        params = args.params if args.params is not None else PLANTS.get(
-            plant_file.kind).default_params
-        return ControlModel(plant_file, common.friction_model(
-            args.friction, params, args, use="controller friction"), args.params)
-    plant = args.plant or "hydraulic"
-    if plant not in KINDS:
-        raise FcompError(f"--plant {plant!r}: the controllers run on "
-                         f"{' or '.join(sorted(KINDS))}")
-    params = args.params if args.params is not None else PLANTS.get(plant).default_params
-    friction = common.friction_model(args.friction, params, args,
-                                     use="controller friction")
-    return ControlModel(plant, friction, args.params)
-
-
-def summary(doc: dict[str, Any]) -> str:
-    lines = [f"export {doc['controller']} on {doc['plant']}: {len(doc['files'])} files in "
-             f"{doc['folder']}", f"  step: {doc['step']}"]
-    if doc["equivalent"] is None:
-        lines.append("  not compiled, checked or timed (see the warning)")
-    else:
-        lines.append(f"  equivalent to the Python controller ({doc['python_reference']}): "
-                     f"{'yes' if doc['equivalent'] else 'NO'} (max relative difference "
-                     f"{doc['max_rel_diff']:.3g} step by step, {doc['free_run_max_rel_diff']:.3g} "
-                     f"free-running, over {doc['steps_checked']} closed-loop steps)")
-        lines.append(f"  compiled step time: median {doc['step_time_median'] * 1e6:.3g} us, "
-                     f"max {doc['step_time_max'] * 1e6:.3g} us over {doc['timed_steps']} steps")
-    return "\n".join(lines)
-
-
-def run(args: argparse.Namespace) -> int:
-    from controllers import CONTROLLERS
-    from controllers.export import EXPORTABLE, export_controller
-    from controllers.tasks import TASKS
-    from fcomp.outputs import InputSet, check_folder_target, staged_folder
-
-    CONTROLLERS.get(args.controller)
-    if args.controller not in EXPORTABLE:
-        raise FcompError(f"export: controller {args.controller} is not exported (exported: "
-                         f"{', '.join(EXPORTABLE)})")
-    TASKS.get(args.task)
-    out = json_target(args.json)
-    if not args.output.strip():
-        raise FcompError("-o: no folder name given (an empty argument)")
-    folder = Path(args.output)
-    check_folder_target("-o", folder, "export")
-    inputs = InputSet()
-    if args.effects is not None:
-        inputs.file(args.effects, "--effects")
-    for option, spec in (("--plant-params", args.plant_params), ("--friction", args.friction)):
-        if spec is not None and spec.lower().endswith((".toml", ".json")):
-            inputs.file(spec, option)
-    common.check_outputs(inputs, [("--json", out)], [("-o", folder, "export")])
-    options: dict[str, Any] = dict(common.parse_assignments(args.option, option="--option"))
-    for k in INTEGER_OPTIONS:  # counts given on the command line as numbers
-        if k in options and float(options[k]).is_integer():
-            options[k] = int(options[k])
-    model = control_model(args)
-    command = "fcomp " + shlex.join(common.ARGV) if common.ARGV else "fcomp export"
-    with staged_folder(folder, "-o", "export", note=command) as tmp:
-        res = export_controller(args.controller, model, tmp, options=options, task=args.task,
-                                duration=args.duration, timing_steps=args.timing_steps)
-    for w in res.warnings:
-        common.warn("export", w.replace(str(tmp), str(folder)))
-    doc = res.as_dict()
-    doc["files"] = [str(folder / Path(f).name) for f in doc["files"]]
-    doc = {"controller": doc.pop("controller"), "plant": model.describe(),
-           "friction": model.friction.describe(), "folder": str(folder), **doc}
-    doc = common.with_warnings(doc)
-    emit_result(common.result_text(doc), args.json, out, summary(doc))
-    return 0
+    p.set_defaults(func=provided("export"))

@@ -17,7 +17,7 @@ def run(args: argparse.Namespace) -> int:
     import fcomp.paramsets as paramsets
     from fcomp.effects import EFFECTS
     from fcomp.models import MODELS
-    from plants import PLANTS
+    from fcomp.registry import CONTROLLERS, PLANTS, STUDIES
 
     groups = {
         "models": MODELS.names(),
@@ -25,18 +25,9 @@ def run(args: argparse.Namespace) -> int:
         "plants": PLANTS.names(),
         "params": [f"{n}: {paramsets.SOURCES.get(n, '')}" for n in paramsets.names()],
     }
-    try:
-        from controllers import CONTROLLERS
-
-        groups["controllers"] = CONTROLLERS.names()
-    except ImportError:
-        pass
-    try:
-        from studies import STUDIES
-
-        groups["studies"] = STUDIES.names()
-    except ImportError:
-        pass
+    for name, registry in (("controllers", CONTROLLERS), ("studies", STUDIES)):
+        if registry.names():  # none: a build without that package
+            groups[name] = registry.names()
     for name, items in groups.items():
         if args.what in ("all", name):
             print(f"{name}:")

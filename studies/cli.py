@@ -1,0 +1,70 @@
+"""The run of ``fcomp study NAME`` (options and help: :mod:`fcomp.cli.study`); importing this
+module registers it with the command line (:data:`fcomp.registry.COMMANDS`, entry point
+``fcomp.commands``)."""
+
+from __future__ import annotations
+
+import argparse
+import shlex
+import sys
+from pathlib import Path
+
+from fcomp.cli import common
+from fcomp.errors import FcompError
+from fcomp.outputs import InputSet
+from fcomp.parallel import check_scheduler
+from fcomp.registry import COMMANDS
+from studies import STUDIES
+from studies.base import STUDY_OPTIONS, StudyConfig, StudyError
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run ``fcomp study NAME``: check the options, run the study, name what it wrote."""
+    study = STUDIES.get(args.name)
+    given = {"plant_file": args.plant_params, "friction": args.friction,
+             "effects": args.effects}
+    for key, option in STUDY_OPTIONS.items():
+        value = given[key]
+        if value is None:
+            continue
+        if key not in study.options:
+            takers = [n for n in STUDIES.names() if key in STUDIES.get(n).options]
+            raise FcompError(f"{option} applies to the {' and '.join(takers)} study")
+        if not value.strip():
+            raise FcompError(f"{option}: no value given (an empty argument)")
+    if args.plant_params is not None and not args.plant_params.lower().endswith(".toml"):
+        raise FcompError(f"--plant-params {args.plant_params}: a plant file ends in .toml")
+    scheduler = check_scheduler(args.scheduler)
+    if args.workers is not None and args.workers < 1:
+        raise FcompError(f"--workers must be a positive integer, got {args.workers}")
+    if args.out is not None and not args.out.strip():
+        raise FcompError("--out: no folder name given (an empty argument)")
+    out = Path(args.out) if args.out else Path(f"study-{args.name}")
+    inputs = InputSet()
+    for option, spec in (("--plant-params", args.plant_params), ("--friction", args.friction)):
+        if spec is not None and spec.lower().endswith((".toml", ".json")):
+            inputs.file(spec, option)
+    if args.effects is not None:
+        inputs.file(args.effects, "--effects")
+    common.check_outputs(inputs, [], [("--out", out, "study")])  # check_folder_target too
+    words = ["fcomp", "study", args.name, "--out", str(out)] + (["--fast"] if args.fast else [])
+    for key, option in STUDY_OPTIONS.items():
+        if given[key] is not None:
+            words += [option, given[key]]
+    config = StudyConfig(out=out, fast=args.fast, command=shlex.join(words), out_label="--out",
+                         scheduler=scheduler, workers=args.workers,
+                         progress=not args.no_progress, plant_file=args.plant_params,
+                         friction=args.friction, effects=args.effects)
+    for warning in study.check(config):  # bad inputs: one line, before anything is written
+        common.warn("measurement-terms", warning, "--friction")
+    try:
+        study.main(config)
+    except StudyError as exc:
+        sys.stderr.write(f"fcomp: error: {exc}\n")
+        return 1
+    reports = " and ".join(str(out / f) for f in study.report_files)
+    print(f"wrote {out / 'summary.json'}, {reports}")
+    return 0
+
+
+COMMANDS.register("study", run)

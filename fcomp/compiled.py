@@ -14,6 +14,10 @@ in: one library serves every parameter value.
 Without a compiler, or with ``FCOMP_JIT=0``, the same step runs in CasADi's
 virtual machine through ``mapaccum`` (slower, identical results).
 
+Drivers longer than a few lines are C files shipped with the package
+(``fcomp/csrc/*.c``, read with :mod:`importlib.resources`): :func:`c_source`
+fills their ``@NAME@`` placeholders (sizes, function names, coefficients).
+
 :func:`load_c` compiles a plain C kernel (no CasADi function: the fits' zero-phase
 filter, :mod:`fcomp.reconstruction`) through the same cache; its callers run their
 numpy or scipy equivalent without a compiler.
@@ -36,6 +40,7 @@ from __future__ import annotations
 import ctypes
 import hashlib
 import os
+import re
 import shutil
 import stat
 import subprocess
@@ -44,6 +49,7 @@ import warnings
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from functools import cache
+from importlib import resources
 from pathlib import Path
 from typing import Any
 
@@ -172,6 +178,25 @@ def compiler() -> str | None:
         if cand and shutil.which(cand):
             return cand
     return None
+
+
+#: A placeholder of a C template: ``@NAME@`` (capitals, digits, underscores).
+_PLACEHOLDER = re.compile(r"@([A-Z][A-Z0-9_]*)@")
+
+
+def c_source(name: str, values: Mapping[str, str]) -> str:
+    """The C template ``fcomp/csrc/NAME`` (package data) with every placeholder ``@KEY@``
+    replaced by ``values[KEY]`` (C text: a number, an array initialiser, a name).
+
+    Raises :class:`ValueError` when the template has a placeholder ``values`` does not fill,
+    or ``values`` fills one the template does not have (a stale name on either side).
+    """
+    text = resources.files("fcomp").joinpath("csrc", name).read_text(encoding="utf-8")
+    found = set(_PLACEHOLDER.findall(text))
+    if found != set(values):
+        raise ValueError(f"C template {name}: placeholders {sorted(found)} but values for "
+                         f"{sorted(values)}")
+    return _PLACEHOLDER.sub(lambda m: values[m.group(1)], text)
 
 
 def _build(step: ca.Function, nx: int, nu: int) -> ctypes.CDLL | None:

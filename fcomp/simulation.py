@@ -64,11 +64,12 @@ a closed loop (:class:`Stepper`) bounds each sample.
 
 Progress
 --------
-Inside ``with progress(callback):`` long runs report ``callback(fraction,
-t)`` as they go (the command line shows it on a terminal); the run is then
-integrated in pieces of whole sample intervals, which changes nothing in
-the RODAS4 result (its step size carries over, its decisions are made per
-interval).
+Inside ``with fcomp.progress.reporting(callback):`` long runs report
+``callback(done, total)`` in seconds of simulated time from the start of the
+run (:mod:`fcomp.progress`; the command line shows it on a terminal through
+:func:`progress`); the run is then integrated in pieces of whole sample
+intervals, which changes nothing in the RODAS4 result (its step size carries
+over, its decisions are made per interval).
 
 Closed loops
 ------------
@@ -97,6 +98,7 @@ from scipy.linalg import lu_factor, lu_solve
 
 from fcomp.compiled import c_source, load_library
 from fcomp.errors import ConvergenceError, FcompError, term
+from fcomp.progress import receiver, report, reporting
 from fcomp.registry import Registry
 from fcomp.rosenbrock import (
     RODAS4,
@@ -106,6 +108,7 @@ from fcomp.rosenbrock import (
     rosenbrock_stages,
     rosenbrock_step,
 )
+from fcomp.stepper import SampledStepper
 
 #: The advice when a run needs more steps than allowed.
 _RAISE_OR_LOOSEN = f"raise {term('max_steps')}, or loosen {term('rtol')}/{term('atol')}"
@@ -113,24 +116,15 @@ _RAISE_OR_LOOSEN = f"raise {term('max_steps')}, or loosen {term('rtol')}/{term('
 #: Schemes of :meth:`OdeModel.discrete_step` (fixed steps, input held).
 SCHEMES = ("rodas4", "linearly-implicit-euler")
 
-#: ``callback(fraction, t)`` of the innermost :func:`progress` block, or ``None``.
-_PROGRESS: list[Callable[[float, float], None]] = []
-
 
 @contextmanager
 def progress(callback: Callable[[float, float], None]) -> Iterator[None]:
-    """Report the progress of the runs inside the block: ``callback(fraction done, t in s)``."""
-    _PROGRESS.append(callback)
-    try:
+    """Report the progress of the runs inside the block as ``callback(fraction done, t in s)``:
+    :func:`fcomp.progress.reporting` with the engine's units (seconds of simulated time
+    from the start of the run, ``t``) turned into a fraction. The command line's display
+    takes this form; a new caller takes :func:`fcomp.progress.reporting` directly."""
+    with reporting(lambda done, total: callback(done / total, done)):
         yield
-    finally:
-        _PROGRESS.pop()
-
-
-def report_progress(fraction: float, t: float) -> None:
-    """Tell the innermost :func:`progress` block how far the run is (no-op outside one)."""
-    if _PROGRESS:
-        _PROGRESS[-1](fraction, t)
 
 
 def step_budget(tol: Tolerances, stats: Stats, t: float, name: str) -> Tolerances:
@@ -719,7 +713,7 @@ def integrate(
     integ = make_integrator(model, method)
     dt = np.diff(t)
     pv = np.asarray(p, float)
-    if not _PROGRESS:
+    if receiver() is None:
         X, stats, _h = integ.run(x0, U[:-1], dU, dt, pv, tolerances, tolerances.h0)
     else:  # in pieces of whole intervals, reporting as it goes (same result)
         n = dt.size
@@ -734,13 +728,18 @@ def integrate(
             Xp, st, h = integ.run(X[a], U[a:b], dU[a:b], dt[a:b], pv, tol, h, float(t[a]))
             X[a + 1:b + 1] = Xp[1:]
             stats.add(st)
-            report_progress(b / n, float(t[b]))
+            report(float(t[b] - t[0]), float(t[-1] - t[0]))
     return Trajectory(t=t, X=X, U=U, stats=stats, method=method, tolerances=tolerances,
                       hold=hold)
 
 
-class Stepper:
+class Stepper(SampledStepper):
     """Advance a model one controller sample at a time, input held (sampled-data loop).
+
+    The stepper contract of :mod:`fcomp.stepper` for the engine: ``advance(u, dt)``
+    integrates the model over ``dt`` with ``u`` held (RODAS4's step size carried from
+    interval to interval), and ``step(u)`` is ``advance(u, dt)`` over the sample time
+    given at creation.
 
     >>> st = plant.stepper(dt=1e-3)          # doctest: +SKIP
     >>> st.reset()                           # default initial state
@@ -752,6 +751,8 @@ class Stepper:
     ----------
     t, x
         Current time (s) and state.
+    dt
+        The sample time of :meth:`step` (s).
     stats
         Work done since the last :meth:`reset`.
     """
@@ -766,43 +767,35 @@ class Stepper:
         self.tolerances = tolerances
         self.integrator = make_integrator(model, method)
         self._x0 = np.asarray(x0, dtype=float).copy()
-        self._dt = np.array([self.dt])
         self._dU = np.zeros((1, model.nu))
         self.reset()
+
+    @property
+    def name(self) -> str:
+        return self.model.name
 
     @property
     def state_names(self) -> tuple[str, ...]:
         return self.model.state_names
 
-    def reset(self, x0: np.ndarray | None = None) -> np.ndarray:
-        """Start again at ``t = 0`` from ``x0`` (default: the initial state given at creation)."""
-        x = self._x0 if x0 is None else np.asarray(x0, dtype=float).ravel()
-        if x.size != len(self.state_names) or not np.all(np.isfinite(x)):
-            raise FcompError(f"initial state of {self.model.name} must be "
-                             f"{len(self.state_names)} finite values "
-                             f"({', '.join(self.state_names)})")
-        self.x = x.copy()
-        self.t = 0.0
-        self.h = self.tolerances.h0
-        self.stats = Stats()
-        self._start(self.x)
-        return self.x.copy()
+    @property
+    def input_names(self) -> tuple[str, ...]:
+        return self.model.input_names
+
+    def initial_state(self) -> np.ndarray:
+        """The initial state given at creation."""
+        return self._x0
 
     def _start(self, x: np.ndarray) -> None:
-        """Hook: set up anything beyond the state at :meth:`reset`."""
+        self.h = self.tolerances.h0
+        self.stats = Stats()
 
-    def _advance(self, u: np.ndarray) -> np.ndarray:
-        """Hook: the state one sample later with ``u`` held."""
-        X, st, self.h = self.integrator.run(self.x, u[None, :], self._dU, self._dt, self.p,
-                                            self.tolerances, self.h, self.t)
+    def _advance(self, u: np.ndarray, dt: float) -> np.ndarray:
+        X, st, self.h = self.integrator.run(self.x, u[None, :], self._dU, np.array([dt]),
+                                            self.p, self.tolerances, self.h, self.t)
         self.stats.add(st)
         return X[-1].copy()
 
     def step(self, u: Any) -> np.ndarray:
-        """Hold ``u`` for one sample; return the state at the end of it."""
-        uu = np.asarray(u, dtype=float).reshape(self.model.nu)
-        if not np.all(np.isfinite(uu)):
-            raise FcompError(f"input of {self.model.name} at t = {self.t:.6g} s is not finite")
-        self.x = self._advance(uu)
-        self.t += self.dt
-        return self.x.copy()
+        """Hold ``u`` for one sample time :attr:`dt`; the state at the end of it."""
+        return self.advance(u, self.dt)

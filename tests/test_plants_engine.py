@@ -221,3 +221,36 @@ def test_kernel_cache_is_bounded_and_shared_by_structure() -> None:
     assert _model_functions.cache_info().currsize == KERNEL_CACHE_SIZE
     clear_kernel_cache()
     assert _model_functions.cache_info().currsize == 0
+
+
+def test_the_three_steppers_share_one_contract(force_rig) -> None:
+    """Engine, discrete-memory plant and hysteresis model: one base, one reset/advance."""
+    from fcomp.simulation import Stepper
+    from fcomp.stepper import SampledStepper
+    from plants.discrete_memory import MemoryStepper
+
+    rig = PLANTS.get("presliding-rig")(make_model("nmlgm-hysteresis", params="seed000-cylinder1"))
+    hyst = make_model("nmlgm-hysteresis", params="seed000-cylinder1").stepper()
+    steppers = [force_rig.stepper(1e-3), rig.stepper(1e-3), hyst]
+    assert [type(s) for s in steppers[:2]] == [Stepper, MemoryStepper]
+    inputs = ([5.0], rig.scalar_input(np.array([0.01]))[0], [0.01, 0.0, 0.0, 0.0, 0.0])
+    for st, u in zip(steppers, inputs, strict=True):
+        assert isinstance(st, SampledStepper)
+        x0 = st.reset()
+        assert st.t == 0.0 and x0.shape == (len(st.state_names),)
+        x1 = st.advance(u, 2e-3)
+        assert st.t == 2e-3 and np.all(np.isfinite(x1)) and not np.array_equal(x1, x0)
+        with pytest.raises(FcompError, match="initial state"):
+            st.reset(np.zeros(len(st.state_names) + 1))
+        with pytest.raises(FcompError, match="values"):
+            st.advance([*u, 0.0], 1e-3)
+        with pytest.raises(FcompError, match="not finite"):
+            st.advance([np.nan] * len(st.input_names), 1e-3)
+        with pytest.raises(FcompError, match="positive"):
+            st.advance(u, 0.0)
+    # the shorter forms are advance over the sample time / with named signals
+    a, b = force_rig.stepper(1e-3), force_rig.stepper(1e-3)
+    np.testing.assert_array_equal(a.step(np.array([3.0])), b.advance([3.0], 1e-3))
+    h2 = make_model("nmlgm-hysteresis", params="seed000-cylinder1").stepper()
+    hyst.reset()
+    np.testing.assert_array_equal(hyst.step(1e-3, 0.01, 0.2), h2.advance([0.01, 0.2, 0, 0, 0], 1e-3))

@@ -312,8 +312,9 @@ def stepping_loop(step: ca.Function, *, compiled: bool = True, chunk: int = 4096
     dll = _build(step, nx, nu) if compiled else None
     if dll is not None:
         fn = dll.fcomp_loop
-        dp = ctypes.POINTER(ctypes.c_double)
-        fn.argtypes = [ctypes.c_int, dp, dp, dp, dp, dp]
+        # addresses as plain integers: a ``data_as`` pointer object costs microseconds a
+        # call, which a loop of one sample (a stepper's interval) pays on every call
+        fn.argtypes = [ctypes.c_int] + [ctypes.c_void_p] * 5
         fn.restype = ctypes.c_int
 
         def run(x0: np.ndarray, U: np.ndarray, dt: np.ndarray, p: np.ndarray) -> np.ndarray:
@@ -323,7 +324,8 @@ def stepping_loop(step: ca.Function, *, compiled: bool = True, chunk: int = 4096
             dtc = np.ascontiguousarray(dt, dtype=float)
             pc = np.ascontiguousarray(p, dtype=float)
             X = np.empty((n + 1, nx))
-            err = fn(n, *(a.ctypes.data_as(dp) for a in (x0c, Uc, dtc, pc, X)))
+            err = fn(n, x0c.ctypes.data, Uc.ctypes.data, dtc.ctypes.data, pc.ctypes.data,
+                     X.ctypes.data)
             if err:
                 raise RuntimeError(f"compiled step failed at sample {err}")
             return X

@@ -137,7 +137,7 @@ class SampledStepper(ABC):
         if uu.size != len(self.input_names):
             raise FcompError(f"input of {self.name} must be {len(self.input_names)} values "
                              f"({', '.join(self.input_names)}), got {u!r}")
-        if not np.all(np.isfinite(uu)):
+        if not all(map(math.isfinite, uu.tolist())):  # a few values: faster than np.isfinite
             raise FcompError(f"input of {self.name} ({', '.join(self.input_names)}) at "
                              f"t = {self.t:.6g} s is not finite: {uu}")
         self.x = self._advance(uu, dt)

@@ -908,8 +908,8 @@ class HysteresisStepper(SampledStepper):
                        s=self.side)
 
     def _advance(self, u: np.ndarray, dt: float) -> np.ndarray:
-        sig = self._signals(*(float(w) for w in u))
-        g, zs = self.model.bristle_inputs(list(self.x), sig, self.P)
+        sig = self._signals(*u.tolist())
+        g, zs = self.model.bristle_inputs(self.x.tolist(), sig, self.P)
         x = self.x.copy()
         if self._cstep is not None:
             sigv = np.array([[sig.v, sig.a, sig.x, sig.p1, sig.p2, sig.s]])

@@ -3,10 +3,10 @@
 Hot loops (friction along a motion, fitting, plant simulation) advance a
 state with a CasADi *step function* ``step(x, u, dt, p) -> x_next`` built from
 the model equations. :func:`stepping_loop` turns such a function into a
-native loop: CasADi generates C code for the step, a small C driver calls it
-for every sample, the system C compiler (``$CC``, ``cc``, ``gcc`` or
-``clang``) builds a shared library, and :mod:`ctypes` calls it on numpy
-arrays. Libraries are cached under ``$FCOMP_CACHE`` (default
+native loop: CasADi generates C code for the step, a small C driver
+(``fcomp/csrc/stepping_loop.c``) calls it for every sample, the system C
+compiler (``$CC``, ``cc``, ``gcc`` or ``clang``) builds a shared library, and
+:mod:`ctypes` calls it on numpy arrays. Libraries are cached under ``$FCOMP_CACHE`` (default
 ``~/.cache/fcomp``) by the hash of the generated source, so each model
 structure is compiled once per machine. Parameters are inputs, never baked
 in: one library serves every parameter value.
@@ -57,26 +57,6 @@ import casadi as ca
 import numpy as np
 
 from fcomp.errors import FcompError, FcompWarning
-
-_DRIVER = r"""
-#include <string.h>
-int fcomp_loop(int n, const double* x0, const double* u, const double* dt,
-               const double* p, double* X) {
-  casadi_int sz_arg, sz_res, sz_iw, sz_w;
-  STEP_work(&sz_arg, &sz_res, &sz_iw, &sz_w);
-  const casadi_real* arg[sz_arg > 4 ? sz_arg : 4];
-  casadi_real* res[sz_res > 1 ? sz_res : 1];
-  casadi_int iw[sz_iw + 1];
-  casadi_real w[sz_w + 1];
-  memcpy(X, x0, NX * sizeof(double));
-  for (int k = 0; k < n; ++k) {
-    arg[0] = X + k * NX; arg[1] = u + k * NU; arg[2] = dt + k; arg[3] = p;
-    res[0] = X + (k + 1) * NX;
-    if (STEP(arg, res, iw, w, 0)) return k + 1;
-  }
-  return 0;
-}
-"""
 
 #: A :func:`build_library` prelude that keeps CasADi's functions and helpers inside the
 #: library (hidden visibility): the compiler may then inline them into the driver, which
@@ -200,7 +180,7 @@ def c_source(name: str, values: Mapping[str, str]) -> str:
 
 
 def _build(step: ca.Function, nx: int, nu: int) -> ctypes.CDLL | None:
-    driver = _DRIVER.replace("STEP", step.name()).replace("NX", str(nx)).replace("NU", str(nu))
+    driver = c_source("stepping_loop.c", {"STEP": step.name(), "NX": str(nx), "NU": str(nu)})
     return load_library(step, driver)
 
 

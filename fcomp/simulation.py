@@ -75,8 +75,9 @@ Closed loops
 ------------
 :class:`Stepper` advances a model by one controller sample with the input
 held: ``reset(x0)``, then ``step(u) -> x`` for every sample (the step size
-carries over from sample to sample). The plants build it with
-:meth:`plants.base.OdePlant.stepper`.
+carries over from sample to sample), or ``advance(u, dt)`` for an interval of
+any length -- the stepper contract of :mod:`fcomp.stepper`. The plants build
+it with :meth:`plants.base.OdePlant.stepper`.
 """
 
 from __future__ import annotations

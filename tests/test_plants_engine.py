@@ -205,6 +205,8 @@ def test_compiled_driver_is_the_template_filled_from_the_tableau() -> None:
         c_source("rosenbrock_step.c", {k: v for k, v in values.items() if k != "RA"})
     with pytest.raises(ValueError, match="placeholders"):
         c_source("rosenbrock_step.c", {**values, "EXTRA": "1"})
+    loop = c_source("stepping_loop.c", {"STEP": "step", "NX": "2", "NU": "1"})
+    assert "@" not in loop and "step(arg, res, iw, w, 0)" in loop
 
 
 def test_kernel_cache_is_bounded_and_shared_by_structure() -> None:

@@ -3,16 +3,20 @@
 Hot loops (friction along a motion, fitting, plant simulation) advance a
 state with a CasADi *step function* ``step(x, u, dt, p) -> x_next`` built from
 the model equations. :func:`stepping_loop` turns such a function into a
-native loop: CasADi generates C code for the step, a small C driver calls it
-for every sample, the system C compiler (``$CC``, ``cc``, ``gcc`` or
-``clang``) builds a shared library, and :mod:`ctypes` calls it on numpy
-arrays. Libraries are cached under ``$FCOMP_CACHE`` (default
+native loop: CasADi generates C code for the step, a small C driver
+(``fcomp/csrc/stepping_loop.c``) calls it for every sample, the system C
+compiler (``$CC``, ``cc``, ``gcc`` or ``clang``) builds a shared library, and
+:mod:`ctypes` calls it on numpy arrays. Libraries are cached under ``$FCOMP_CACHE`` (default
 ``~/.cache/fcomp``) by the hash of the generated source, so each model
 structure is compiled once per machine. Parameters are inputs, never baked
 in: one library serves every parameter value.
 
 Without a compiler, or with ``FCOMP_JIT=0``, the same step runs in CasADi's
 virtual machine through ``mapaccum`` (slower, identical results).
+
+Drivers longer than a few lines are C files shipped with the package
+(``fcomp/csrc/*.c``, read with :mod:`importlib.resources`): :func:`c_source`
+fills their ``@NAME@`` placeholders (sizes, function names, coefficients).
 
 :func:`load_c` compiles a plain C kernel (no CasADi function: the fits' zero-phase
 filter, :mod:`fcomp.reconstruction`) through the same cache; its callers run their
@@ -36,6 +40,7 @@ from __future__ import annotations
 import ctypes
 import hashlib
 import os
+import re
 import shutil
 import stat
 import subprocess
@@ -44,6 +49,7 @@ import warnings
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from functools import cache
+from importlib import resources
 from pathlib import Path
 from typing import Any
 
@@ -51,26 +57,6 @@ import casadi as ca
 import numpy as np
 
 from fcomp.errors import FcompError, FcompWarning
-
-_DRIVER = r"""
-#include <string.h>
-int fcomp_loop(int n, const double* x0, const double* u, const double* dt,
-               const double* p, double* X) {
-  casadi_int sz_arg, sz_res, sz_iw, sz_w;
-  STEP_work(&sz_arg, &sz_res, &sz_iw, &sz_w);
-  const casadi_real* arg[sz_arg > 4 ? sz_arg : 4];
-  casadi_real* res[sz_res > 1 ? sz_res : 1];
-  casadi_int iw[sz_iw + 1];
-  casadi_real w[sz_w + 1];
-  memcpy(X, x0, NX * sizeof(double));
-  for (int k = 0; k < n; ++k) {
-    arg[0] = X + k * NX; arg[1] = u + k * NU; arg[2] = dt + k; arg[3] = p;
-    res[0] = X + (k + 1) * NX;
-    if (STEP(arg, res, iw, w, 0)) return k + 1;
-  }
-  return 0;
-}
-"""
 
 #: A :func:`build_library` prelude that keeps CasADi's functions and helpers inside the
 #: library (hidden visibility): the compiler may then inline them into the driver, which
@@ -174,8 +160,27 @@ def compiler() -> str | None:
     return None
 
 
+#: A placeholder of a C template: ``@NAME@`` (capitals, digits, underscores).
+_PLACEHOLDER = re.compile(r"@([A-Z][A-Z0-9_]*)@")
+
+
+def c_source(name: str, values: Mapping[str, str]) -> str:
+    """The C template ``fcomp/csrc/NAME`` (package data) with every placeholder ``@KEY@``
+    replaced by ``values[KEY]`` (C text: a number, an array initialiser, a name).
+
+    Raises :class:`ValueError` when the template has a placeholder ``values`` does not fill,
+    or ``values`` fills one the template does not have (a stale name on either side).
+    """
+    text = resources.files("fcomp").joinpath("csrc", name).read_text(encoding="utf-8")
+    found = set(_PLACEHOLDER.findall(text))
+    if found != set(values):
+        raise ValueError(f"C template {name}: placeholders {sorted(found)} but values for "
+                         f"{sorted(values)}")
+    return _PLACEHOLDER.sub(lambda m: values[m.group(1)], text)
+
+
 def _build(step: ca.Function, nx: int, nu: int) -> ctypes.CDLL | None:
-    driver = _DRIVER.replace("STEP", step.name()).replace("NX", str(nx)).replace("NU", str(nu))
+    driver = c_source("stepping_loop.c", {"STEP": step.name(), "NX": str(nx), "NU": str(nu)})
     return load_library(step, driver)
 
 
@@ -287,8 +292,9 @@ def stepping_loop(step: ca.Function, *, compiled: bool = True, chunk: int = 4096
     dll = _build(step, nx, nu) if compiled else None
     if dll is not None:
         fn = dll.fcomp_loop
-        dp = ctypes.POINTER(ctypes.c_double)
-        fn.argtypes = [ctypes.c_int, dp, dp, dp, dp, dp]
+        # addresses as plain integers: a ``data_as`` pointer object costs microseconds a
+        # call, which a loop of one sample (a stepper's interval) pays on every call
+        fn.argtypes = [ctypes.c_int] + [ctypes.c_void_p] * 5
         fn.restype = ctypes.c_int
 
         def run(x0: np.ndarray, U: np.ndarray, dt: np.ndarray, p: np.ndarray) -> np.ndarray:
@@ -298,7 +304,8 @@ def stepping_loop(step: ca.Function, *, compiled: bool = True, chunk: int = 4096
             dtc = np.ascontiguousarray(dt, dtype=float)
             pc = np.ascontiguousarray(p, dtype=float)
             X = np.empty((n + 1, nx))
-            err = fn(n, *(a.ctypes.data_as(dp) for a in (x0c, Uc, dtc, pc, X)))
+            err = fn(n, x0c.ctypes.data, Uc.ctypes.data, dtc.ctypes.data, pc.ctypes.data,
+                     X.ctypes.data)
             if err:
                 raise RuntimeError(f"compiled step failed at sample {err}")
             return X

@@ -19,7 +19,10 @@ through here:
 A job is a picklable function and argument: it carries everything it needs,
 so a result does not depend on where it ran (the tests compare a cluster's
 results with the local ones). Results come back in the order of the jobs;
-``progress(done, total)`` is called as they arrive.
+``progress(done, total)`` (a :class:`fcomp.progress.ProgressCallback`, counting
+jobs) is called as they arrive. The commands' progress bars (:func:`progress_bar`,
+:func:`ticker`, :class:`ProgressRelay`, :func:`relay_progress`) are those of
+:mod:`fcomp.progress`, importable from here as well.
 """
 
 from __future__ import annotations
@@ -31,6 +34,14 @@ from contextlib import AbstractContextManager, contextmanager
 from typing import Any, TypeVar
 
 from fcomp.errors import FcompError, term
+from fcomp.progress import (
+    ProgressCallback,
+    ProgressRelay,
+    RelayedBar,
+    progress_bar,
+    relay_progress,
+    ticker,
+)
 from fcomp.usercode import load_sources, user_sources
 
 #: The BLAS libraries of this process (:mod:`threadpoolctl`), found at the first
@@ -134,7 +145,7 @@ def process_pool(workers: int, *, spawn: bool = False) -> ProcessPoolExecutor:
 
 def run_tasks(fn: Callable[[T], R], items: Sequence[T], *, workers: int | None = None,
               scheduler: str | None = None,
-              progress: Callable[[int, int], None] | None = None) -> list[R]:
+              progress: ProgressCallback[int] | None = None) -> list[R]:
     """``[fn(item) for item in items]``, run in parallel (see the module docstring)."""
     items = list(items)
     total = len(items)
@@ -153,128 +164,6 @@ def run_tasks(fn: Callable[[T], R], items: Sequence[T], *, workers: int | None =
             if progress:
                 progress(done, total)
     return results
-
-
-#: Where this process's progress bars go instead of the terminal: a queue read by the
-#: :class:`ProgressRelay` of the parent process (set in a worker by :func:`relay_progress`).
-_RELAY: Any = None
-
-
-def relay_progress(queue: Any) -> None:
-    """Send the progress bars of this process (:func:`progress_bar`) to ``queue``, where the
-    parent's :class:`ProgressRelay` draws them; ``None`` draws them here again."""
-    global _RELAY
-    _RELAY = queue
-
-
-class RelayedBar:
-    """A progress bar of a worker process, drawn by the parent (:class:`ProgressRelay`): the
-    part of tqdm's interface the package uses (``update``, ``set_postfix_str``, ``close``, ``n``,
-    ``total``)."""
-
-    def __init__(self, queue: Any, label: str, total: int, unit: str) -> None:
-        self.queue = queue
-        self.key = f"{os.getpid()}:{id(self)}"
-        self.n = 0
-        self.total = total
-        queue.put(("open", self.key, label, total, unit))
-
-    def update(self, n: int = 1) -> None:
-        self.n += n
-        self.queue.put(("update", self.key, n))
-
-    def set_postfix_str(self, text: str) -> None:
-        self.queue.put(("postfix", self.key, text))
-
-    def close(self) -> None:
-        self.queue.put(("close", self.key))
-
-
-class ProgressRelay:
-    """Draw on this terminal the progress bars of worker processes (a context manager).
-
-    :attr:`queue` goes to the workers (a :mod:`multiprocessing` manager's queue, which
-    can be passed to a pool's jobs), whose :func:`progress_bar` calls then
-    arrive here after :func:`relay_progress`; a thread draws one tqdm bar per worker bar,
-    each on its own line. ``enabled=False`` (or stderr not a terminal): nothing is drawn and
-    :attr:`queue` is ``None``.
-    """
-
-    def __init__(self, *, enabled: bool = True) -> None:
-        import sys
-
-        self.enabled = enabled and sys.stderr.isatty()
-        self.queue: Any = None
-
-    def __enter__(self) -> ProgressRelay:
-        if self.enabled:
-            import multiprocessing
-            import threading
-
-            self._manager = multiprocessing.Manager()
-            self.queue = self._manager.Queue()
-            self._thread = threading.Thread(target=self._draw, daemon=True)
-            self._thread.start()
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        if self.queue is not None:
-            self.queue.put(None)
-            self._thread.join()
-            self._manager.shutdown()
-            self.queue = None
-
-    def _draw(self) -> None:
-        import sys
-
-        from tqdm import tqdm
-
-        bars: dict[str, Any] = {}
-        lines: list[str | None] = []  # the screen line of each open bar
-        while (msg := self.queue.get()) is not None:
-            kind, key = msg[0], msg[1]
-            if kind == "open":
-                line = lines.index(None) if None in lines else len(lines)
-                lines[line:line + 1] = [key]
-                bars[key] = tqdm(total=msg[3], desc=msg[2], unit=msg[4], file=sys.stderr,
-                                 position=line + 1, leave=False, dynamic_ncols=True)
-            elif key in bars and kind == "update":
-                bars[key].update(msg[2])
-            elif key in bars and kind == "postfix":
-                bars[key].set_postfix_str(msg[2])
-            elif key in bars and kind == "close":
-                bars.pop(key).close()
-                lines[lines.index(key)] = None
-        for bar in bars.values():
-            bar.close()
-
-
-def progress_bar(label: str, total: int, *, enabled: bool = True, unit: str = "run",
-                 tty_only: bool = True) -> Any:
-    """A tqdm progress bar on stderr, left off the screen at the end; shown only when
-    ``enabled`` (and, with ``tty_only``, stderr is a terminal). In a worker whose bars are
-    relayed (:func:`relay_progress`) the parent process draws it."""
-    import sys
-
-    from tqdm import tqdm
-
-    if enabled and _RELAY is not None:
-        return RelayedBar(_RELAY, label, total, unit)
-    show = enabled and (sys.stderr.isatty() or not tty_only)
-    return tqdm(total=total, desc=label, unit=unit, file=sys.stderr, leave=False,
-                disable=not show, dynamic_ncols=True)
-
-
-def ticker(bar: Any) -> Callable[[int, int], None]:
-    """A ``progress(done, total)`` callback (:func:`run_tasks`) advancing ``bar`` by one per
-    finished job; it serves several batches in turn (``done`` starts again from 1)."""
-    seen = [0]
-
-    def tick(done: int, total: int) -> None:
-        bar.update(done - seen[0] if done >= seen[0] else done)
-        seen[0] = done if done < total else 0
-
-    return tick
 
 
 __all__ = ["ProgressRelay", "RelayedBar", "check_scheduler", "dask_client", "executor",

@@ -31,6 +31,10 @@ Tableaus
 Step-size control (:class:`StepControl`): ``h_new = h*clip(safety*en^(-1/q),
 fac_min, fac_max)`` with ``en`` the RMS of the scaled error and ``q`` the
 tableau's controller order; the compiled driver receives the same constants.
+
+The compiled driver (``fcomp/csrc/rosenbrock_step.c``) is a C template whose
+coefficients are filled from a tableau and a control by :func:`c_coefficients`:
+the numbers are written once, here.
 """
 
 from __future__ import annotations
@@ -170,6 +174,31 @@ class StepControl:
 
 
 STEP_CONTROL = StepControl()
+
+
+def _c_array(rows: Any, width: int | None = None) -> str:
+    """A C initialiser of the numbers ``rows`` (``width``: rows padded with zeros to it)."""
+    if width is None:
+        return "{" + ", ".join(repr(float(v)) for v in rows) + "}"
+    return "{" + ", ".join(_c_array(list(r) + [0.0] * (width - len(r))) for r in rows) + "}"
+
+
+def c_coefficients(tab: RosenbrockTableau, control: StepControl) -> dict[str, str]:
+    """The method's placeholders of the compiled driver ``fcomp/csrc/rosenbrock_step.c`` as
+    C literals (:func:`fcomp.compiled.c_source`): the stage count ``NS``, the controller
+    order ``ORDER``, ``GAMMA``, the stage couplings ``RA``, ``RC`` (row ``i`` padded with
+    zeros to ``max(s - 1, 1)`` entries), the weights ``RM``, ``RE``, the stage times
+    ``ALPHA``, the sums ``GAMS`` (module docstring) and the control's ``SAFETY``,
+    ``FACMIN``, ``FACMAX`` (:class:`StepControl`). Floats are written by :func:`repr`, which
+    round-trips: the C constants are the Python ones, bit for bit."""
+    width = max(tab.stages - 1, 1)
+    return {
+        "NS": str(tab.stages), "ORDER": str(tab.order), "GAMMA": repr(tab.gamma),
+        "RA": _c_array(tab.a, width), "RC": _c_array(tab.c, width), "RM": _c_array(tab.m),
+        "RE": _c_array(tab.e), "ALPHA": _c_array(tab.alpha), "GAMS": _c_array(tab.gammas),
+        "SAFETY": repr(control.safety), "FACMIN": repr(control.fac_min),
+        "FACMAX": repr(control.fac_max),
+    }
 
 
 def rosenbrock_step(

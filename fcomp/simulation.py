@@ -31,7 +31,10 @@ Methods (:data:`METHODS`, selected by name like ``solve_ivp``'s)
     terms), so the method is exact for the held or linear input. The
     model's ``f`` and Jacobians are generated as C by CasADi and compiled
     with the adaptive loop over all samples (:func:`fcomp.compiled.load_library`):
-    no Python per step. Without a C compiler the same loop runs in Python
+    no Python per step. The loop is the C template ``fcomp/csrc/rosenbrock_step.c``
+    (package data), its coefficients filled from the tableau
+    (:func:`fcomp.rosenbrock.c_coefficients`); the kernels of the last
+    :data:`KERNEL_CACHE_SIZE` model structures are kept (:func:`clear_kernel_cache`). Without a C compiler the same loop runs in Python
     (same decisions, slower). The same RODAS4 step is also available as a
     CasADi expression (:func:`rosenbrock_step`), for the discrete-time model
     of :meth:`OdeModel.discrete_step`.
@@ -61,18 +64,20 @@ a closed loop (:class:`Stepper`) bounds each sample.
 
 Progress
 --------
-Inside ``with progress(callback):`` long runs report ``callback(fraction,
-t)`` as they go (the command line shows it on a terminal); the run is then
-integrated in pieces of whole sample intervals, which changes nothing in
-the RODAS4 result (its step size carries over, its decisions are made per
-interval).
+Inside ``with fcomp.progress.reporting(callback):`` long runs report
+``callback(done, total)`` in seconds of simulated time from the start of the
+run (:mod:`fcomp.progress`; the command line shows it on a terminal through
+:func:`progress`); the run is then integrated in pieces of whole sample
+intervals, which changes nothing in the RODAS4 result (its step size carries
+over, its decisions are made per interval).
 
 Closed loops
 ------------
 :class:`Stepper` advances a model by one controller sample with the input
 held: ``reset(x0)``, then ``step(u) -> x`` for every sample (the step size
-carries over from sample to sample). The plants build it with
-:meth:`plants.base.OdePlant.stepper`.
+carries over from sample to sample), or ``advance(u, dt)`` for an interval of
+any length -- the stepper contract of :mod:`fcomp.stepper`. The plants build
+it with :meth:`plants.base.OdePlant.stepper`.
 """
 
 from __future__ import annotations
@@ -92,16 +97,19 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.linalg import lu_factor, lu_solve
 
-from fcomp.compiled import load_library
+from fcomp.compiled import c_source, load_library
 from fcomp.errors import ConvergenceError, FcompError, term
+from fcomp.progress import receiver, report, reporting
 from fcomp.registry import Registry
 from fcomp.rosenbrock import (
     RODAS4,
     STEP_CONTROL,
+    c_coefficients,
     linearly_implicit_euler,
     rosenbrock_stages,
     rosenbrock_step,
 )
+from fcomp.stepper import SampledStepper
 
 #: The advice when a run needs more steps than allowed.
 _RAISE_OR_LOOSEN = f"raise {term('max_steps')}, or loosen {term('rtol')}/{term('atol')}"
@@ -109,24 +117,15 @@ _RAISE_OR_LOOSEN = f"raise {term('max_steps')}, or loosen {term('rtol')}/{term('
 #: Schemes of :meth:`OdeModel.discrete_step` (fixed steps, input held).
 SCHEMES = ("rodas4", "linearly-implicit-euler")
 
-#: ``callback(fraction, t)`` of the innermost :func:`progress` block, or ``None``.
-_PROGRESS: list[Callable[[float, float], None]] = []
-
 
 @contextmanager
 def progress(callback: Callable[[float, float], None]) -> Iterator[None]:
-    """Report the progress of the runs inside the block: ``callback(fraction done, t in s)``."""
-    _PROGRESS.append(callback)
-    try:
+    """Report the progress of the runs inside the block as ``callback(fraction done, t in s)``:
+    :func:`fcomp.progress.reporting` with the engine's units (seconds of simulated time
+    from the start of the run, ``t``) turned into a fraction. The command line's display
+    takes this form; a new caller takes :func:`fcomp.progress.reporting` directly."""
+    with reporting(lambda done, total: callback(done / total, done)):
         yield
-    finally:
-        _PROGRESS.pop()
-
-
-def report_progress(fraction: float, t: float) -> None:
-    """Tell the innermost :func:`progress` block how far the run is (no-op outside one)."""
-    if _PROGRESS:
-        _PROGRESS[-1](fraction, t)
 
 
 def step_budget(tol: Tolerances, stats: Stats, t: float, name: str) -> Tolerances:
@@ -319,197 +318,32 @@ class Integrator(ABC):
         """Integrate over the sample intervals (the contract in the class docstring)."""
 
 
-_DRIVER = r"""
-#include <math.h>
-#include <string.h>
-/* Adaptive Rosenbrock method over sample intervals (fcomp/simulation.py), its coefficients
-   from the tableau of fcomp/rosenbrock.py (RODAS4), the stage loop that of rosenbrock_stages.
-   The model: @F@(x, u, p) -> dx/dt and @J@(x, u, p) -> (df/dx, df/du), dense, column-major.
-   opts = {rtol, atol, h_min, max_steps}; info = {status, interval, t, h, accepted, rejected}
-   status: 0 ok, 1 step size below h_min, 2 too many steps, 3 non-finite model output. */
-#define NX @NX@
-#define NU @NU@
-#define NUB (NU > 0 ? NU : 1)
-#define NS @NS@
-#define NS1 (NS > 1 ? NS - 1 : 1)
-static const double GAM = @GAMMA@;
-static const double RA[NS][NS1] = @RA@;
-static const double RC[NS][NS1] = @RC@;
-static const double RM[NS] = @RM@;
-static const double RE[NS] = @RE@;
-static const double ALPHA[NS] = @ALPHA@;
-static const double GAMS[NS] = @GAMS@;
-
-static int lu_factor(double* A, int* piv) {
-  for (int k = 0; k < NX; ++k) {
-    int p = k;
-    double amax = fabs(A[k * NX + k]);
-    for (int i = k + 1; i < NX; ++i)
-      if (fabs(A[i * NX + k]) > amax) { amax = fabs(A[i * NX + k]); p = i; }
-    piv[k] = p;
-    if (!(amax > 0.0) || !isfinite(amax)) return 1;
-    if (p != k)
-      for (int j = 0; j < NX; ++j) { double t = A[k * NX + j]; A[k * NX + j] = A[p * NX + j]; A[p * NX + j] = t; }
-    const double inv = 1.0 / A[k * NX + k];
-    for (int i = k + 1; i < NX; ++i) {
-      const double l = (A[i * NX + k] *= inv);
-      if (l != 0.0)
-        for (int j = k + 1; j < NX; ++j) A[i * NX + j] -= l * A[k * NX + j];
-    }
-  }
-  return 0;
-}
-
-static void lu_solve(const double* A, const int* piv, double* b) {
-  for (int k = 0; k < NX; ++k)
-    if (piv[k] != k) { double t = b[k]; b[k] = b[piv[k]]; b[piv[k]] = t; }
-  for (int i = 1; i < NX; ++i) {
-    double s = b[i];
-    for (int j = 0; j < i; ++j) s -= A[i * NX + j] * b[j];
-    b[i] = s;
-  }
-  for (int i = NX - 1; i >= 0; --i) {
-    double s = b[i];
-    for (int j = i + 1; j < NX; ++j) s -= A[i * NX + j] * b[j];
-    b[i] = s / A[i * NX + i];
-  }
-}
-
-int fcomp_ode(int n, const double* x0, const double* U, const double* dU, const double* dt,
-              const double* p, const double* sc, const double* opts, double* h_io,
-              double* X, double* info) {
-  casadi_int a1, r1, i1, w1, a2, r2, i2, w2;
-  @F@_work(&a1, &r1, &i1, &w1);
-  @J@_work(&a2, &r2, &i2, &w2);
-  casadi_int sz_arg = a1 > a2 ? a1 : a2, sz_res = r1 > r2 ? r1 : r2;
-  casadi_int sz_iw = i1 > i2 ? i1 : i2, sz_w = w1 > w2 ? w1 : w2;
-  const casadi_real* arg[sz_arg > 3 ? sz_arg : 3];
-  casadi_real* res[sz_res > 2 ? sz_res : 2];
-  casadi_int iw[sz_iw + 1];
-  casadi_real w[sz_w + 1];
-  double x[NX], xn[NX], f0[NX], J[NX * NX], Ju[NX * NUB], ft[NX], M[NX * NX];
-  double K[NS][NX], Y[NX], fy[NX], uu[NUB];
-  int piv[NX];
-  const double rtol = opts[0], atol = opts[1], hmin = opts[2], max_steps = opts[3];
-  double h = *h_io, nacc = info[4], nrej = info[5], t = 0.0;
-  int status = 0, k = 0;
-  memcpy(x, x0, NX * sizeof(double));
-  memcpy(X, x0, NX * sizeof(double));
-  for (k = 0; k < n && status == 0; ++k) {
-    const double T = dt[k];
-    const double* u0 = U + k * NU;
-    const double* du = dU + k * NU;
-    int rejected = 0, fresh = 0;
-    t = 0.0;
-    while (T - t > 1e-12 * T) {
-      double hs = h;
-      int clipped = 0, bad = 0;
-      if (hs >= T - t || (T - t) - hs < 0.01 * hs) { hs = T - t; clipped = 1; }
-      if (!fresh) {  /* f and Jacobians at (t, x): once per accepted state */
-        for (int i = 0; i < NU; ++i) uu[i] = u0[i] + du[i] * t;
-        arg[0] = x; arg[1] = uu; arg[2] = p; res[0] = f0;
-        if (@F@(arg, res, iw, w, 0)) { status = 3; break; }
-        res[0] = J; res[1] = Ju;
-        if (@J@(arg, res, iw, w, 0)) { status = 3; break; }
-        for (int i = 0; i < NX; ++i) {
-          double s = 0.0;
-          for (int j = 0; j < NU; ++j) s += Ju[i + j * NX] * du[j];
-          ft[i] = s;
-          if (!isfinite(f0[i]) || !isfinite(s)) status = 3;
-          for (int j = 0; j < NX; ++j) if (!isfinite(J[i + j * NX])) status = 3;
-        }
-        if (status) break;
-        fresh = 1;
-      }
-      /* scaled iteration matrix  I/(h*gamma) - D^-1 J D,  D = diag(sc) */
-      for (int i = 0; i < NX; ++i)
-        for (int j = 0; j < NX; ++j)
-          M[i * NX + j] = (i == j ? 1.0 / (hs * GAM) : 0.0) - J[i + j * NX] * sc[j] / sc[i];
-      if (lu_factor(M, piv)) bad = 1;
-      for (int st = 0; st < NS && !bad; ++st) {
-        if (st == 0) {
-          memcpy(fy, f0, NX * sizeof(double));
-        } else {
-          for (int i = 0; i < NX; ++i) {
-            double y = x[i];
-            for (int j = 0; j < st; ++j) y += RA[st][j] * K[j][i];
-            Y[i] = y;
-          }
-          for (int i = 0; i < NU; ++i) uu[i] = u0[i] + du[i] * (t + ALPHA[st] * hs);
-          arg[0] = Y; arg[1] = uu; arg[2] = p; res[0] = fy;
-          if (@F@(arg, res, iw, w, 0)) { bad = 1; break; }
-        }
-        for (int i = 0; i < NX; ++i) {
-          double r = fy[i] + hs * GAMS[st] * ft[i];
-          for (int j = 0; j < st; ++j) r += RC[st][j] / hs * K[j][i];
-          K[st][i] = r / sc[i];
-        }
-        lu_solve(M, piv, K[st]);
-        for (int i = 0; i < NX; ++i) K[st][i] *= sc[i];
-      }
-      double en = 1e10;
-      if (!bad) {
-        double s = 0.0;
-        for (int i = 0; i < NX; ++i) {
-          double v = x[i], ek = 0.0;
-          for (int j = 0; j < NS; ++j) { v += RM[j] * K[j][i]; ek += RE[j] * K[j][i]; }
-          xn[i] = v;
-          const double e = ek / (atol * sc[i] + rtol * fmax(fabs(x[i]), fabs(v)));
-          s += e * e;
-          if (!isfinite(v)) bad = 1;
-        }
-        en = sqrt(s / NX);
-        if (bad || !isfinite(en)) en = 1e10;
-      }
-      double fac = @SAFETY@ * pow(en, -1.0 / @ORDER@);
-      if (!(fac <= @FACMAX@)) fac = @FACMAX@;
-      if (fac < @FACMIN@) fac = @FACMIN@;
-      if (en <= 1.0) {
-        memcpy(x, xn, NX * sizeof(double));
-        t += hs;
-        nacc += 1.0;
-        fresh = 0;
-        if (rejected) fac = fmin(fac, 1.0);
-        rejected = 0;
-        const double hn = hs * fac;
-        h = (clipped && fac >= 1.0) ? fmax(h, hn) : hn;
-      } else {
-        nrej += 1.0;
-        rejected = 1;
-        h = hs * fac;
-        if (h < hmin) { status = 1; break; }
-      }
-      if (nacc + nrej >= max_steps) { status = 2; break; }
-    }
-    if (status == 0) memcpy(X + (k + 1) * NX, x, NX * sizeof(double));
-  }
-  *h_io = h;
-  info[0] = status; info[1] = status ? k - 1 : n; info[2] = t; info[3] = h;
-  info[4] = nacc; info[5] = nrej;
-  return status;
-}
-"""
+#: Models whose compiled kernels are kept (least recently used dropped first).
+KERNEL_CACHE_SIZE = 64
 
 
-def _c_array(rows: Any, width: int | None = None) -> str:
-    if width is None:
-        return "{" + ", ".join(repr(float(v)) for v in rows) + "}"
-    return "{" + ", ".join(_c_array(list(r) + [0.0] * (width - len(r))) for r in rows) + "}"
+class _Structure:
+    """An :class:`OdeModel` hashed and compared by its structural key (``model.key``, else
+    the model's identity): the argument of the kernel caches, so that models with equal
+    keys share their kernels, built from the first one seen."""
+
+    __slots__ = ("key", "model")
+
+    def __init__(self, model: OdeModel) -> None:
+        self.model = model
+        self.key = model.key or (model.name, id(model))
+
+    def __hash__(self) -> int:
+        return hash(self.key)
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, _Structure) and self.key == other.key
 
 
-_MODELS: dict[tuple, OdeModel] = {}
-
-
-def _model_key(model: OdeModel) -> tuple:
-    key = model.key or (model.name, id(model))
-    _MODELS.setdefault(key, model)
-    return key
-
-
-@lru_cache(maxsize=64)
-def _model_functions(model_key: tuple) -> tuple[ca.Function, ca.Function]:
+@lru_cache(maxsize=KERNEL_CACHE_SIZE)
+def _model_functions(structure: _Structure) -> tuple[ca.Function, ca.Function]:
     """``f(x, u, p) -> dx`` and ``jac(x, u, p) -> (df/dx, df/du)`` (dense), C-friendly names."""
-    model = _MODELS[model_key]
+    model = structure.model
     x, u, p = model.symbols()
     f = model.rhs(x, u, p)
     F = ca.Function(f"fcomp_f_{model.tag}", [x, u, p], [f])
@@ -518,23 +352,15 @@ def _model_functions(model_key: tuple) -> tuple[ca.Function, ca.Function]:
     return F, Jf
 
 
-@lru_cache(maxsize=64)
-def _rodas_library(model_key: tuple) -> Any:
-    F, Jf = _model_functions(model_key)
-    model = _MODELS[model_key]
-    tab, ctl = TABLEAU, CONTROL
-    width = max(tab.stages - 1, 1)
-    repl = {
-        "@F@": F.name(), "@J@": Jf.name(), "@NX@": str(model.nx), "@NU@": str(model.nu),
-        "@NS@": str(tab.stages), "@ORDER@": str(tab.order), "@GAMMA@": repr(tab.gamma),
-        "@RA@": _c_array(tab.a, width), "@RC@": _c_array(tab.c, width),
-        "@RM@": _c_array(tab.m), "@RE@": _c_array(tab.e), "@ALPHA@": _c_array(tab.alpha),
-        "@GAMS@": _c_array(tab.gammas), "@SAFETY@": repr(ctl.safety),
-        "@FACMIN@": repr(ctl.fac_min), "@FACMAX@": repr(ctl.fac_max),
-    }
-    driver = _DRIVER
-    for k, v in repl.items():
-        driver = driver.replace(k, v)
+@lru_cache(maxsize=KERNEL_CACHE_SIZE)
+def _rodas_library(structure: _Structure) -> Any:
+    """The compiled adaptive loop of ``structure``'s model (``fcomp/csrc/rosenbrock_step.c``
+    filled with the model's functions and the tableau), or ``None`` without a compiler."""
+    F, Jf = _model_functions(structure)
+    model = structure.model
+    driver = c_source("rosenbrock_step.c", {
+        "F": F.name(), "J": Jf.name(), "NX": str(model.nx), "NU": str(model.nu),
+        **c_coefficients(TABLEAU, CONTROL)})
     dll = load_library([F, Jf], driver)
     if dll is None:
         return None
@@ -545,6 +371,13 @@ def _rodas_library(model_key: tuple) -> Any:
     return c_fn
 
 
+def clear_kernel_cache() -> None:
+    """Forget the kernels of every model (they are built again on next use; the compiled
+    libraries stay in the on-disk cache of :mod:`fcomp.compiled`)."""
+    _rodas_library.cache_clear()
+    _model_functions.cache_clear()
+
+
 class Rodas4(Integrator):
     """Adaptive RODAS4, compiled to C (see the module docstring)."""
 
@@ -552,9 +385,9 @@ class Rodas4(Integrator):
 
     def __init__(self, model: OdeModel, *, compiled: bool = True) -> None:
         super().__init__(model)
-        self.key = _model_key(model)
-        self.F, self.Jf = _model_functions(self.key)
-        self.c_fn = _rodas_library(self.key) if compiled else None
+        structure = _Structure(model)
+        self.F, self.Jf = _model_functions(structure)
+        self.c_fn = _rodas_library(structure) if compiled else None
         self._one: list[np.ndarray] | None = None  # buffers of one-interval calls (closed loops)
         self._one_ptrs: list[Any] = []
 
@@ -881,7 +714,7 @@ def integrate(
     integ = make_integrator(model, method)
     dt = np.diff(t)
     pv = np.asarray(p, float)
-    if not _PROGRESS:
+    if receiver() is None:
         X, stats, _h = integ.run(x0, U[:-1], dU, dt, pv, tolerances, tolerances.h0)
     else:  # in pieces of whole intervals, reporting as it goes (same result)
         n = dt.size
@@ -896,13 +729,18 @@ def integrate(
             Xp, st, h = integ.run(X[a], U[a:b], dU[a:b], dt[a:b], pv, tol, h, float(t[a]))
             X[a + 1:b + 1] = Xp[1:]
             stats.add(st)
-            report_progress(b / n, float(t[b]))
+            report(float(t[b] - t[0]), float(t[-1] - t[0]))
     return Trajectory(t=t, X=X, U=U, stats=stats, method=method, tolerances=tolerances,
                       hold=hold)
 
 
-class Stepper:
+class Stepper(SampledStepper):
     """Advance a model one controller sample at a time, input held (sampled-data loop).
+
+    The stepper contract of :mod:`fcomp.stepper` for the engine: ``advance(u, dt)``
+    integrates the model over ``dt`` with ``u`` held (RODAS4's step size carried from
+    interval to interval), and ``step(u)`` is ``advance(u, dt)`` over the sample time
+    given at creation.
 
     >>> st = plant.stepper(dt=1e-3)          # doctest: +SKIP
     >>> st.reset()                           # default initial state
@@ -914,6 +752,8 @@ class Stepper:
     ----------
     t, x
         Current time (s) and state.
+    dt
+        The sample time of :meth:`step` (s).
     stats
         Work done since the last :meth:`reset`.
     """
@@ -928,43 +768,35 @@ class Stepper:
         self.tolerances = tolerances
         self.integrator = make_integrator(model, method)
         self._x0 = np.asarray(x0, dtype=float).copy()
-        self._dt = np.array([self.dt])
         self._dU = np.zeros((1, model.nu))
         self.reset()
+
+    @property
+    def name(self) -> str:
+        return self.model.name
 
     @property
     def state_names(self) -> tuple[str, ...]:
         return self.model.state_names
 
-    def reset(self, x0: np.ndarray | None = None) -> np.ndarray:
-        """Start again at ``t = 0`` from ``x0`` (default: the initial state given at creation)."""
-        x = self._x0 if x0 is None else np.asarray(x0, dtype=float).ravel()
-        if x.size != len(self.state_names) or not np.all(np.isfinite(x)):
-            raise FcompError(f"initial state of {self.model.name} must be "
-                             f"{len(self.state_names)} finite values "
-                             f"({', '.join(self.state_names)})")
-        self.x = x.copy()
-        self.t = 0.0
-        self.h = self.tolerances.h0
-        self.stats = Stats()
-        self._start(self.x)
-        return self.x.copy()
+    @property
+    def input_names(self) -> tuple[str, ...]:
+        return self.model.input_names
+
+    def initial_state(self) -> np.ndarray:
+        """The initial state given at creation."""
+        return self._x0
 
     def _start(self, x: np.ndarray) -> None:
-        """Hook: set up anything beyond the state at :meth:`reset`."""
+        self.h = self.tolerances.h0
+        self.stats = Stats()
 
-    def _advance(self, u: np.ndarray) -> np.ndarray:
-        """Hook: the state one sample later with ``u`` held."""
-        X, st, self.h = self.integrator.run(self.x, u[None, :], self._dU, self._dt, self.p,
-                                            self.tolerances, self.h, self.t)
+    def _advance(self, u: np.ndarray, dt: float) -> np.ndarray:
+        X, st, self.h = self.integrator.run(self.x, u[None, :], self._dU, np.array([dt]),
+                                            self.p, self.tolerances, self.h, self.t)
         self.stats.add(st)
         return X[-1].copy()
 
     def step(self, u: Any) -> np.ndarray:
-        """Hold ``u`` for one sample; return the state at the end of it."""
-        uu = np.asarray(u, dtype=float).reshape(self.model.nu)
-        if not np.all(np.isfinite(uu)):
-            raise FcompError(f"input of {self.model.name} at t = {self.t:.6g} s is not finite")
-        self.x = self._advance(uu)
-        self.t += self.dt
-        return self.x.copy()
+        """Hold ``u`` for one sample time :attr:`dt`; the state at the end of it."""
+        return self.advance(u, self.dt)

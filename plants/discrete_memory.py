@@ -47,6 +47,7 @@ from fcomp.backend import NUMPY, Backend
 from fcomp.errors import FcompError, term
 from fcomp.models.base import FrictionModel, Signals
 from fcomp.parameters import ParamValues
+from fcomp.progress import report
 from fcomp.simulation import (
     DEFAULT_TOLERANCES,
     Stats,
@@ -55,7 +56,6 @@ from fcomp.simulation import (
     Trajectory,
     input_rates,
     make_integrator,
-    report_progress,
     step_budget,
 )
 
@@ -262,7 +262,7 @@ class MemoryCoupling:
             xt, h = self.advance(integ, hf, xt, U[k], dU[k], t[k + 1] - t[k], tolerances, h,
                                  stats, t[k], budget=tolerances)
             Xt[k + 1], Fz[k + 1] = xt, hf.F
-            report_progress((k + 1) / (t.size - 1), float(t[k + 1]))
+            report(float(t[k + 1] - t[0]), float(t[-1] - t[0]))
         X = self.from_twin(Xt, Fz)
         traj = Trajectory(t=t, X=X, U=U, stats=stats, method=method, tolerances=tolerances,
                           hold=hold)
@@ -282,8 +282,11 @@ class MemoryCoupling:
 class MemoryStepper(Stepper):
     """Closed-loop stepping of a plant with discrete-memory friction (input held per sample).
 
-    The interface of :class:`fcomp.simulation.Stepper` (``reset``, ``step``, ``t``, ``x``,
-    ``stats``); ``x`` holds the plant states with the memory's ``Fz``.
+    The stepper contract of :mod:`fcomp.stepper` (``reset``, ``advance``, ``t``, ``x``)
+    with :class:`fcomp.simulation.Stepper`'s ``step(u)`` and ``stats``; ``x`` holds the
+    plant states with the memory's ``Fz``. ``advance(u, dt)`` runs
+    :meth:`MemoryCoupling.advance`: the engine on the twin plant in coupling intervals,
+    the memory driven along the deflection after each.
     """
 
     def __init__(self, coupling: MemoryCoupling, dt: float, x0: np.ndarray, *,
@@ -293,15 +296,20 @@ class MemoryStepper(Stepper):
                          tolerances=tolerances)
 
     @property
+    def name(self) -> str:
+        return self.coupling.plant.name
+
+    @property
     def state_names(self) -> tuple[str, ...]:
         return self.coupling.plant.state_names
 
     def _start(self, x: np.ndarray) -> None:
+        super()._start(x)
         self.memory = self.coupling.start(x)
         self._xt = self.coupling.to_twin(x)
 
-    def _advance(self, u: np.ndarray) -> np.ndarray:
+    def _advance(self, u: np.ndarray, dt: float) -> np.ndarray:
         self._xt, self.h = self.coupling.advance(self.integrator, self.memory, self._xt, u,
-                                                 self._dU[0], self.dt, self.tolerances, self.h,
+                                                 self._dU[0], dt, self.tolerances, self.h,
                                                  self.stats, self.t)
         return self.coupling.from_twin(self._xt, self.memory.F)

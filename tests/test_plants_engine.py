@@ -185,3 +185,74 @@ def test_bad_options_are_one_line_errors(force_rig) -> None:
     with pytest.raises(FcompError, match="unknown state"):
         force_rig.simulate(1.0, 0.1, 100.0, x0={"q": 1.0})
     assert set(METHODS.names()) == {"rodas4", "radau", "bdf", "lsoda"}
+
+
+def test_compiled_driver_is_the_template_filled_from_the_tableau() -> None:
+    """The C loop is the shipped template with the tableau's own numbers (written once)."""
+    from importlib import resources
+
+    from fcomp.compiled import c_source
+    from fcomp.rosenbrock import RODAS4, STEP_CONTROL, c_coefficients
+
+    template = resources.files("fcomp").joinpath("csrc", "rosenbrock_step.c").read_text()
+    assert "@RA@" in template and "1.544" not in template  # no coefficient typed in C
+    values = {"F": "f", "J": "j", "NX": "2", "NU": "1", **c_coefficients(RODAS4, STEP_CONTROL)}
+    code = c_source("rosenbrock_step.c", values)
+    assert "@" not in code
+    assert f"GAM = {RODAS4.gamma!r};" in code and repr(RODAS4.a[1][0]) in code
+    assert f"{STEP_CONTROL.safety!r} * pow(en, -1.0 / {RODAS4.order})" in code
+    with pytest.raises(ValueError, match="placeholders"):
+        c_source("rosenbrock_step.c", {k: v for k, v in values.items() if k != "RA"})
+    with pytest.raises(ValueError, match="placeholders"):
+        c_source("rosenbrock_step.c", {**values, "EXTRA": "1"})
+    loop = c_source("stepping_loop.c", {"STEP": "step", "NX": "2", "NU": "1"})
+    assert "@" not in loop and "step(arg, res, iw, w, 0)" in loop
+
+
+def test_kernel_cache_is_bounded_and_shared_by_structure() -> None:
+    """Models of one structure share their kernels; the cache keeps a bounded number."""
+    from fcomp.simulation import KERNEL_CACHE_SIZE, _model_functions, clear_kernel_cache
+
+    clear_kernel_cache()
+    first = Rodas4(linear_model(A_TEST, B_TEST, "lin_cache"))
+    again = Rodas4(linear_model(A_TEST, B_TEST, "lin_cache"))
+    assert again.F is first.F and again.c_fn is first.c_fn
+    assert _model_functions.cache_info().maxsize == KERNEL_CACHE_SIZE
+    for i in range(KERNEL_CACHE_SIZE + 3):
+        Rodas4(linear_model(A_TEST, B_TEST, f"lin_cache_{i}"), compiled=False)
+    assert _model_functions.cache_info().currsize == KERNEL_CACHE_SIZE
+    clear_kernel_cache()
+    assert _model_functions.cache_info().currsize == 0
+
+
+def test_the_three_steppers_share_one_contract(force_rig) -> None:
+    """Engine, discrete-memory plant and hysteresis model: one base, one reset/advance."""
+    from fcomp.simulation import Stepper
+    from fcomp.stepper import SampledStepper
+    from plants.discrete_memory import MemoryStepper
+
+    rig = PLANTS.get("presliding-rig")(make_model("nmlgm-hysteresis", params="seed000-cylinder1"))
+    hyst = make_model("nmlgm-hysteresis", params="seed000-cylinder1").stepper()
+    steppers = [force_rig.stepper(1e-3), rig.stepper(1e-3), hyst]
+    assert [type(s) for s in steppers[:2]] == [Stepper, MemoryStepper]
+    inputs = ([5.0], rig.scalar_input(np.array([0.01]))[0], [0.01, 0.0, 0.0, 0.0, 0.0])
+    for st, u in zip(steppers, inputs, strict=True):
+        assert isinstance(st, SampledStepper)
+        x0 = st.reset()
+        assert st.t == 0.0 and x0.shape == (len(st.state_names),)
+        x1 = st.advance(u, 2e-3)
+        assert st.t == 2e-3 and np.all(np.isfinite(x1)) and not np.array_equal(x1, x0)
+        with pytest.raises(FcompError, match="initial state"):
+            st.reset(np.zeros(len(st.state_names) + 1))
+        with pytest.raises(FcompError, match="values"):
+            st.advance([*u, 0.0], 1e-3)
+        with pytest.raises(FcompError, match="not finite"):
+            st.advance([np.nan] * len(st.input_names), 1e-3)
+        with pytest.raises(FcompError, match="positive"):
+            st.advance(u, 0.0)
+    # the shorter forms are advance over the sample time / with named signals
+    a, b = force_rig.stepper(1e-3), force_rig.stepper(1e-3)
+    np.testing.assert_array_equal(a.step(np.array([3.0])), b.advance([3.0], 1e-3))
+    h2 = make_model("nmlgm-hysteresis", params="seed000-cylinder1").stepper()
+    hyst.reset()
+    np.testing.assert_array_equal(hyst.step(1e-3, 0.01, 0.2), h2.advance([0.01, 0.2, 0, 0, 0], 1e-3))

@@ -176,10 +176,11 @@ import numpy as np
 from fcomp.backend import NUMPY, Backend
 from fcomp.compiled import Loop
 from fcomp.errors import ConvergenceError, FcompError
-from fcomp.models.base import NotSymbolicError, Signals
+from fcomp.models.base import SIGNAL_NAMES, NotSymbolicError, Signals
 from fcomp.models.lugre_family import PRESETS, LuGreFamily, family_class, params_class
 from fcomp.models.stepping import midpoint_signals, step_loop
 from fcomp.parameters import ParamSet, ParamSpec, ParamValues, make_params_class, spec, with_recipe
+from fcomp.stepper import SampledStepper
 
 INF = math.inf
 
@@ -841,13 +842,16 @@ def _hysteresis_class(features: frozenset[str], viscous_name: str) -> type[Hyste
 
 
 # -------------------------------------------------------------------- stepper
-class HysteresisStepper:
+class HysteresisStepper(SampledStepper):
     """Stateful stepping of a hysteresis model, for plant simulation engines.
 
-    ``reset(state)``, then ``step(dt, v, a, x, p1, p2)`` per interval with the
-    signals held over ``dt`` (sampled data); :meth:`force` / :meth:`force_parts`
+    The stepper contract of :mod:`fcomp.stepper`: ``reset(state)``, then
+    ``advance(u, dt)`` per interval with the signals ``u = (v, a, x, p1, p2)``
+    (:attr:`input_names`; m/s, m/s^2, m, Pa, Pa) held over ``dt`` (sampled data), or
+    its named form ``step(dt, v, a, x, p1, p2)``; :meth:`force` / :meth:`force_parts`
     evaluate the friction at the current state. The same scheme as
-    :meth:`HysteresisFamily.integrate_motion`, one interval at a time.
+    :meth:`HysteresisFamily.integrate_motion`, one interval at a time: the carrier's
+    exponential step for the film and effect states, the memory's for ``z`` and ``F(z)``.
 
     Parameters
     ----------
@@ -856,6 +860,9 @@ class HysteresisStepper:
     values
         Flat parameter values overriding the model's.
     """
+
+    #: The held signals of :meth:`advance` (the side ``s`` follows from ``v``).
+    input_names = SIGNAL_NAMES[:5]
 
     def __init__(self, model: HysteresisFamily, values: Mapping[str, float] | None = None) -> None:
         if model.discrete_memory() is None:
@@ -873,15 +880,21 @@ class HysteresisStepper:
             self._cp = np.array([self.flat[k] for k in self.carrier.flat_params()], dtype=float)
         self.reset()
 
-    def reset(self, state: Sequence[float] | np.ndarray | None = None) -> None:
-        """Start from ``state`` (default :meth:`FrictionModel.initial_state`) with a virgin memory."""
-        x = self.model.initial_state() if state is None else np.asarray(state, dtype=float)
-        if x.shape != (self.model.n_states,):
-            raise ValueError(f"state must have {self.model.n_states} entries "
-                             f"{self.model.state_names}")
-        self.x = x.copy()
+    @property
+    def name(self) -> str:
+        return self.model.describe()
+
+    @property
+    def state_names(self) -> tuple[str, ...]:
+        return self.model.state_names
+
+    def initial_state(self) -> np.ndarray:
+        """:meth:`FrictionModel.initial_state`; :meth:`reset` starts with a virgin memory."""
+        return self.model.initial_state()
+
+    def _start(self, x: np.ndarray) -> None:
         self.side = 1.0
-        self.function.reset(self.x[0], self.x[self._iF])
+        self.function.reset(x[0], x[self._iF])
 
     @property
     def state(self) -> np.ndarray:
@@ -894,21 +907,24 @@ class HysteresisStepper:
         return Signals(v=float(v), a=float(a), x=float(x), p1=float(p1), p2=float(p2),
                        s=self.side)
 
-    def step(self, dt: float, v: float, a: float = 0.0, x: float = 0.0, p1: float = 0.0,
-             p2: float = 0.0) -> np.ndarray:
-        """Advance by ``dt`` (s) with ``v`` (m/s), ``a`` (m/s^2), ``x`` (m), ``p1, p2`` (Pa) held."""
-        if not dt > 0.0:
-            raise FcompError(f"step: dt must be positive, got {dt}")
-        sig = self._signals(v, a, x, p1, p2)
-        g, zs = self.model.bristle_inputs(list(self.x), sig, self.P)
+    def _advance(self, u: np.ndarray, dt: float) -> np.ndarray:
+        sig = self._signals(*u.tolist())
+        g, zs = self.model.bristle_inputs(self.x.tolist(), sig, self.P)
+        x = self.x.copy()
         if self._cstep is not None:
             sigv = np.array([[sig.v, sig.a, sig.x, sig.p1, sig.p2, sig.s]])
-            xc = self._cstep(self.x[self._cidx], sigv, np.array([dt]), self._cp)
-            self.x[self._cidx] = xc[-1]
-        self.function.step(dt, float(v), float(g), float(zs))
-        self.x[0] = self.function.z
-        self.x[self._iF] = self.function.F
-        return self.x.copy()
+            xc = self._cstep(x[self._cidx], sigv, np.array([dt]), self._cp)
+            x[self._cidx] = xc[-1]
+        self.function.step(dt, sig.v, float(g), float(zs))
+        x[0] = self.function.z
+        x[self._iF] = self.function.F
+        return x
+
+    def step(self, dt: float, v: float, a: float = 0.0, x: float = 0.0, p1: float = 0.0,
+             p2: float = 0.0) -> np.ndarray:
+        """:meth:`advance` over ``dt`` (s) with ``v`` (m/s), ``a`` (m/s^2), ``x`` (m),
+        ``p1, p2`` (Pa) held; the state at the end."""
+        return self.advance((v, a, x, p1, p2), dt)
 
     def force_parts(self, v: float, a: float = 0.0, x: float = 0.0, p1: float = 0.0,
                     p2: float = 0.0) -> tuple[float, float]:

@@ -28,7 +28,7 @@ from helpers import reference_lugre as ref
 
 from fcomp.backend import NUMPY
 from fcomp.effects import make_effect
-from fcomp.effects.catalogue import StructuralEffect
+from fcomp.effects.structural import StructuralEffect
 from fcomp.errors import UnknownNameError
 from fcomp.models import MODELS, FrictionModel, Signals, make_model
 from fcomp.models.lugre_family import PRESETS, LuGreFamily

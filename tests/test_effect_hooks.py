@@ -25,6 +25,7 @@ from fcomp.diagnosis import Diagnosis
 from fcomp.effects import CATALOGUE, EFFECTS, Effect, register_effect
 from fcomp.effects.record import DiagnosisForm, RecordView
 from fcomp.errors import FcompError
+from fcomp.models import make_model
 from fcomp.models.base import Signals
 from fcomp.parameters import ParamValues, make_params_class, spec
 from fcomp.synthetic import generate
@@ -196,6 +197,39 @@ def test_every_catalogue_effect_declares_needs_and_dynamic() -> None:
         assert EFFECTS.get(cls.name) is cls
         if cls.states:
             assert cls.dynamic, cls.name
+
+
+def test_an_effect_is_one_module_and_structure_reaches_models_one_way(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """Every catalogue effect lives in a module of its own, and a structural one hands
+    the LuGre family its term (``with_structure``): no effect module builds a model class
+    or sets a model's lineage."""
+    from fcomp.effects.structural import StructuralEffect
+    from fcomp.models.lugre_family import LuGreFamily, Structure
+
+    modules = [cls.__module__ for cls in CATALOGUE]
+    assert len(set(modules)) == len(modules)
+    for cls in CATALOGUE:
+        text = Path(__import__(cls.__module__, fromlist=["_"]).__file__).read_text()
+        for internal in ("_with_features", "with_hysteresis", "family_class",
+                         "hysteresis_class", ".lineage"):
+            assert internal not in text, (cls.name, internal)
+    calls: list[Structure] = []
+    original = LuGreFamily.with_structure
+
+    def spy(self: LuGreFamily, term: Structure) -> LuGreFamily:
+        calls.append(term)
+        return original(self, term)
+
+    monkeypatch.setattr(LuGreFamily, "with_structure", spy)
+    model = make_model("coulomb").with_effects(
+        "viscous", EFFECTS.get("presliding")({"sigma0": 1e5}), "stribeck",
+        "frictional-lag", "viscous-lead", "nonlocal-memory")
+    assert [t.effect for t in calls] == ["viscous", "presliding", "stribeck",
+                                         "frictional-lag", "viscous-lead", "nonlocal-memory"]
+    assert all(issubclass(EFFECTS.get(t.effect), StructuralEffect) for t in calls)
+    assert model.describe() == ("coulomb + viscous + presliding + stribeck + frictional-lag"
+                                " + viscous-lead + nonlocal-memory")
 
 
 def _named_effects(text: str, names: set[str]) -> list[tuple[int, str]]:

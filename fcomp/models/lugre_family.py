@@ -66,6 +66,11 @@ applied after every step of the sampled engine, where the deflection rate
 is ``v`` inside the band, so each step is exact for a held velocity; in the
 continuous right-hand side (plants) a deflection outside the band relaxes
 onto it over ``d_i`` of travel.
+
+Structural effects (:mod:`fcomp.effects.structural`: ``stribeck``,
+``presliding``, ...) switch features on through one public method,
+:meth:`LuGreFamily.with_structure`, given a :class:`Structure` (the
+features, the values of their parameters); the family makes the class.
 """
 
 from __future__ import annotations

@@ -16,7 +16,7 @@ from fcomp import datasets
 from fcomp.backend import NUMPY
 from fcomp.conditioning import Scales
 from fcomp.effects import EFFECTS, make_effect
-from fcomp.effects.catalogue import AREA_ERROR_BOUND, AreaError
+from fcomp.effects.area_error import AREA_ERROR_BOUND, AreaError
 from fcomp.effects.record import RecordView
 from fcomp.models import Signals, make_model
 from fcomp.models.lugre_family import PRESETS

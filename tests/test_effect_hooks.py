@@ -9,6 +9,7 @@ diagnosis modules name no effect.
 
 from __future__ import annotations
 
+import ast
 import math
 import uuid
 from pathlib import Path
@@ -24,6 +25,7 @@ from fcomp.diagnosis import Diagnosis
 from fcomp.effects import CATALOGUE, EFFECTS, Effect, register_effect
 from fcomp.effects.record import DiagnosisForm, RecordView
 from fcomp.errors import FcompError
+from fcomp.models import make_model
 from fcomp.models.base import Signals
 from fcomp.parameters import ParamValues, make_params_class, spec
 from fcomp.synthetic import generate
@@ -197,15 +199,63 @@ def test_every_catalogue_effect_declares_needs_and_dynamic() -> None:
             assert cls.dynamic, cls.name
 
 
+def test_an_effect_is_one_module_and_structure_reaches_models_one_way(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """Every catalogue effect lives in a module of its own, and a structural one hands
+    the LuGre family its term (``with_structure``): no effect module builds a model class
+    or sets a model's lineage."""
+    from fcomp.effects.structural import StructuralEffect
+    from fcomp.models.lugre_family import LuGreFamily, Structure
+
+    modules = [cls.__module__ for cls in CATALOGUE]
+    assert len(set(modules)) == len(modules)
+    for cls in CATALOGUE:
+        text = Path(__import__(cls.__module__, fromlist=["_"]).__file__).read_text()
+        for internal in ("_with_features", "with_hysteresis", "family_class",
+                         "hysteresis_class", ".lineage"):
+            assert internal not in text, (cls.name, internal)
+    calls: list[Structure] = []
+    original = LuGreFamily.with_structure
+
+    def spy(self: LuGreFamily, term: Structure) -> LuGreFamily:
+        calls.append(term)
+        return original(self, term)
+
+    monkeypatch.setattr(LuGreFamily, "with_structure", spy)
+    model = make_model("coulomb").with_effects(
+        "viscous", EFFECTS.get("presliding")({"sigma0": 1e5}), "stribeck",
+        "frictional-lag", "viscous-lead", "nonlocal-memory")
+    assert [t.effect for t in calls] == ["viscous", "presliding", "stribeck",
+                                         "frictional-lag", "viscous-lead", "nonlocal-memory"]
+    assert all(issubclass(EFFECTS.get(t.effect), StructuralEffect) for t in calls)
+    assert model.describe() == ("coulomb + viscous + presliding + stribeck + frictional-lag"
+                                " + viscous-lead + nonlocal-memory")
+
+
+def _named_effects(text: str, names: set[str]) -> list[tuple[int, str]]:
+    """``(line, name)`` of every string of ``text`` (a Python module) that is one of
+    ``names`` -- a literal, a piece of an f-string, or a quoted word in a docstring."""
+    found = [(node.lineno, node.value) for node in ast.walk(ast.parse(text))
+             if isinstance(node, ast.Constant) and node.value in names]
+    for i, line in enumerate(text.splitlines(), 1):
+        found += [(i, n) for n in names if f'"{n}"' in line or f"'{n}'" in line]
+    return sorted(set(found))
+
+
 def test_the_diagnosis_names_no_effect() -> None:
-    """Effect-specific logic lives on the effect classes, not in the diagnosis (``stribeck``
-    is also a model, the static baseline, and may be named as that)."""
+    """Effect-specific logic lives on the effects (their modules and attributes), not in
+    the diagnosis: no module of ``fcomp/diagnosis/`` names a registered effect (``stribeck``
+    is also a model, the static baseline, and may be named as that outside the
+    catalogue's view)."""
     from fcomp.models import MODELS
 
-    sources = {p.name: p.read_text() for p in (ROOT / "fcomp" / "diagnosis").glob("*.py")
-               if p.name in ("catalogue.py", "loop.py", "refit.py", "data.py", "regimes.py")}
-    for cls in CATALOGUE:
-        for fname, text in sources.items():
-            if cls.name in MODELS.names() and fname != "catalogue.py":
-                continue
-            assert f'"{cls.name}"' not in text, (cls.name, fname)
+    sources = sorted((ROOT / "fcomp" / "diagnosis").glob("*.py"))
+    assert len(sources) >= 12
+    named = []
+    for path in sources:
+        names = set(EFFECTS.names())
+        if path.name != "catalogue.py":
+            names -= set(MODELS.names())
+        named += [f"{path.name}:{line}: {name}"
+                  for line, name in _named_effects(path.read_text(), names)]
+    assert not named, named

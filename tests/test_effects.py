@@ -130,6 +130,23 @@ def test_force_offset_adds_a_constant(motion: dict) -> None:
     np.testing.assert_allclose(_run(model, motion).F - _run(base, motion).F, -2.5, atol=1e-12)
 
 
+def test_a_fits_offset_becomes_the_effect_that_holds_it() -> None:
+    """The effect a fit's ``offset`` becomes is the effect's own data (``fit_extra``), not a
+    name the comparison knows."""
+    from fcomp.diagnosis.compare import model_from_fit
+    from fcomp.effects import effect_holding
+
+    holder = effect_holding("offset")
+    assert holder is EFFECTS.get("force-offset") and "offset" in holder.Params.names()
+    doc = {"model": "coulomb-viscous", "effects": [holder.name],
+           "params": {"Fc": 10.0, "B": 50.0, "offset": 2.5, "mass": 3.0}}
+    model, mass = model_from_fit(doc)
+    assert mass == 3.0 and [e.name for e in model.effects] == [holder.name]
+    assert model.flat_params()["offset"] == 2.5
+    with pytest.raises(UnknownNameError):
+        effect_holding("no-such-extra")
+
+
 def test_inertia_error_adds_mass_times_acceleration(motion: dict) -> None:
     base = make_model("lugre", params="seed000-cylinder1")
     model = base.with_effects(make_effect("inertia-error", {"dm": 0.35}))
@@ -329,7 +346,7 @@ def test_dwell_time_forms_are_one_law_without_a_static_level() -> None:
 
 def test_position_box_is_never_narrower_than_a_seal_band() -> None:
     """A box narrower than a seal's contact band is not a property of the bore."""
-    from fcomp.effects.catalogue import SEAL_BAND, PositionDependenceParams
+    from fcomp.effects.position_dependence import SEAL_BAND, PositionDependenceParams
 
     specs = {n: PositionDependenceParams.spec_of(n) for n in ("wb", "eb")}
     assert specs["wb"].lower == 0.5 * SEAL_BAND and specs["eb"].lower == 0.2 * SEAL_BAND

@@ -28,7 +28,7 @@ from helpers import reference_lugre as ref
 
 from fcomp.backend import NUMPY
 from fcomp.effects import make_effect
-from fcomp.effects.catalogue import StructuralEffect
+from fcomp.effects.structural import StructuralEffect
 from fcomp.errors import UnknownNameError
 from fcomp.models import MODELS, FrictionModel, Signals, make_model
 from fcomp.models.lugre_family import PRESETS, LuGreFamily
@@ -626,3 +626,12 @@ def test_elasto_plastic_bristle_agrees_with_the_independent_generator_law(ba: fl
     F_ref = elasto_plastic(vm, np.full(t.size, Fc), k, ba, 1e-3)
     assert np.abs(run.F[:-1] - F_ref).max() < 1e-9 * Fc
     assert np.abs(run.F).max() <= Fc * (1 + 1e-12)
+
+
+def test_effects_by_name_go_through_with_effects() -> None:
+    """The constructor takes effect instances; names are resolved by ``with_effects`` alone."""
+    cls = type(make_model("lugre"))
+    with pytest.raises(ValueError, match="with_effects"):
+        cls(effects=["dwell-time"])  # type: ignore[list-item]
+    by_name = make_model("lugre").with_effects("dwell-time")
+    assert cls(effects=by_name.effects).describe() == by_name.describe() == "lugre + dwell-time"

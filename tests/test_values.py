@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from fcomp.effects import CATALOGUE, EFFECTS, make_effect
-from fcomp.effects.catalogue import StructuralEffect
+from fcomp.effects.structural import StructuralEffect
 from fcomp.models import MODELS, FrictionModel, make_model
 from fcomp.models.gms import gms_class
 from fcomp.models.lugre_family import family_class, params_class
@@ -133,13 +133,15 @@ def test_classes_made_on_the_fly_pickle_by_recipe() -> None:
 
 
 def test_parameter_classes_are_importable_and_typed() -> None:
-    from fcomp.effects import catalogue
+    import sys
+
     from fcomp.models import lugre_family
 
     assert lugre_family.LuGreParams is make_model("lugre").Params
     assert lugre_family.LuGreParams.__module__ == "fcomp.models.lugre_family"
-    for cls in CATALOGUE:
-        assert getattr(catalogue, cls.Params.__qualname__) is cls.Params
+    for cls in CATALOGUE:  # each in the effect's own module, beside its class
+        assert cls.Params.__module__ == cls.__module__
+        assert getattr(sys.modules[cls.__module__], cls.Params.__qualname__) is cls.Params
     fields = lugre_family.LuGreParams.__dataclass_fields__
     assert fields["Fc"].type == float | Directional   # direction-capable
     assert fields["sigma0"].type is float              # not direction-capable

@@ -5,8 +5,8 @@ models.md 1.8 and the user's own) is a candidate, and every one is treated
 through the same interface: the diagnosis hooks of
 :class:`~fcomp.effects.Effect` (its module docstring is the contract). This
 module holds no table and no case of any effect by name; what is particular
-to an effect sits on its class in :mod:`fcomp.effects.catalogue` (or the
-user's module). For each candidate this module says
+to an effect sits on its class, in its own module of :mod:`fcomp.effects`
+(:mod:`fcomp.effects.catalogue` lists them) or the user's module. For each candidate this module says
 
 * whether it applies to the current model and to the data
   (:func:`applicability`): the effect must change the model
@@ -14,7 +14,7 @@ user's module). For each candidate this module says
   measured and informative, steady-state points admit only effects that are
   not ``dynamic`` (and have no ``states``), and the effect itself may say why
   the record cannot show it (:meth:`~fcomp.effects.Effect.unsuitable`: a fitted
-  mass for a mass error, no start after a dwell for the dwell-time effect);
+  mass for a mass error, no start after a dwell for an ageing at rest);
 * what residual signature it explains and which experiment isolates it (the
   effect's ``signature`` and ``experiment``), and its physics (the effect
   class docstring), for reports (:func:`describe`);

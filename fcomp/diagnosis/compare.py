@@ -184,13 +184,13 @@ def model_from_fit(doc: Mapping[str, Any], model: FrictionModel | None = None,
     """The fitted model of a fit's JSON (``fcomp fit --json``) and its moving mass.
 
     ``doc`` gives ``model``, ``effects``, ``params`` and the parameters held
-    (``fixed``); ``mass`` becomes the returned mass and ``offset`` a
-    ``force-offset`` effect; direction-dependent values (``Fc_pos``, ...) make the
-    model directional. ``model`` (default: the model ``doc`` names) is the model
+    (``fixed``); ``mass`` becomes the returned mass and ``offset`` the effect that
+    holds it (:func:`fcomp.effects.effect_holding`); direction-dependent values
+    (``Fc_pos``, ...) make the model directional. ``model`` (default: the model ``doc`` names) is the model
     the values are put into. Raises :class:`FcompError` naming ``source`` for a
     document that is not a fit or values the model does not have.
     """
-    from fcomp.effects import make_effect
+    from fcomp.effects import effect_holding
     from fcomp.identification.estimator import directional_model
 
     if not isinstance(doc, Mapping) or not isinstance(doc.get("params"), Mapping) \
@@ -199,8 +199,9 @@ def model_from_fit(doc: Mapping[str, Any], model: FrictionModel | None = None,
                          "'model' and 'params'")
     mdl = make_model(doc["model"]) if model is None else model
     have = {e.name for e in mdl.effects}
+    offset_effect = effect_holding("offset")
     for e in doc.get("effects") or []:
-        if e not in have and e != "force-offset":
+        if e not in have and e != offset_effect.name:
             mdl = mdl.with_effects(e)
     values: dict[str, float] = {}
     for k, v in {**(doc.get("fixed") or {}), **doc["params"]}.items():
@@ -221,20 +222,20 @@ def model_from_fit(doc: Mapping[str, Any], model: FrictionModel | None = None,
                          f"{', '.join(unknown)}; was the fit of another model?")
     mdl = mdl.with_params(**values) if values else mdl
     if offset:
-        mdl = mdl.with_effects(make_effect("force-offset", {"offset": offset}))
+        mdl = mdl.with_effects(offset_effect({"offset": offset}))
     return mdl, mass
 
 
 def fitted_model(fit: Any) -> tuple[FrictionModel, float | None]:
     """The model of a fitted :class:`~fcomp.identification.FrictionFit` as :func:`compare`
-    takes it: its fitted values, a fitted ``offset`` as a ``force-offset`` effect, and the
-    fitted (or given) mass."""
-    from fcomp.effects import make_effect
+    takes it: its fitted values, a fitted ``offset`` as the effect that holds it
+    (:func:`fcomp.effects.effect_holding`), and the fitted (or given) mass."""
+    from fcomp.effects import effect_holding
 
     values = {**fit.held_, **fit.params_}
     model = fit.model_
     if values.get("offset"):
-        model = model.with_effects(make_effect("force-offset", {"offset": values["offset"]}))
+        model = model.with_effects(effect_holding("offset")({"offset": values["offset"]}))
     mass = values.get("mass", fit.mass)
     return model, (None if mass is None else float(mass))
 

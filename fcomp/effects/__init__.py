@@ -3,7 +3,8 @@
 ``model.with_effects("pressure-dependence", "dwell-time")`` adds effects by
 name; :func:`register_effect` adds a user's own (an :class:`Effect` subclass);
 :func:`load_effects_module` imports a user's ``.py`` file that registers
-effects (the CLI's ``--effects path/to/module.py``). Every registered effect
+effects (the CLI's ``--effects path/to/module.py``). Each effect of the
+catalogue is one module here (:mod:`fcomp.effects.catalogue` lists them). Every registered effect
 is a diagnosis candidate; its diagnosis hooks (:class:`Effect`) read a
 :class:`~fcomp.effects.record.RecordView` and may offer several forms
 (:class:`~fcomp.effects.record.DiagnosisForm`).
@@ -17,7 +18,7 @@ from pathlib import Path
 from fcomp.effects.base import EFFECTS, Effect, make_effect, register_effect, scale_levels
 from fcomp.effects.catalogue import CATALOGUE
 from fcomp.effects.record import DiagnosisForm, RecordView
-from fcomp.errors import FcompError, term
+from fcomp.errors import FcompError, UnknownNameError, term
 
 
 def experiment_for(effect: str, kind: str = "") -> str:
@@ -56,6 +57,22 @@ def effect_of_parameter(name: str) -> str | None:
     return None
 
 
+def effect_holding(extra: str) -> type[Effect]:
+    """The registered effect that holds the fit's extra term ``extra`` (``offset``, the
+    constant force of ``fcomp fit --offset``) as its own parameter: its ``fit_extra``.
+
+    Raises
+    ------
+    UnknownNameError
+        When no registered effect holds it.
+    """
+    for name in EFFECTS.names():
+        cls = EFFECTS.get(name)
+        if cls.fit_extra == extra:
+            return cls
+    raise UnknownNameError(f"no registered effect holds a fit's {extra!r}")
+
+
 def load_effects_module(path: str | Path) -> list[str]:
     """Import a user module (a ``.py`` file) that registers effects; return the new names.
 
@@ -82,6 +99,6 @@ def load_effects_module(path: str | Path) -> list[str]:
 
 
 __all__ = [
-    "CATALOGUE", "EFFECTS", "DiagnosisForm", "Effect", "RecordView", "effect_of_parameter",
-    "experiment_for", "load_effects_module", "make_effect", "register_effect", "scale_levels",
+    "CATALOGUE", "EFFECTS", "DiagnosisForm", "Effect", "RecordView", "effect_holding",
+    "effect_of_parameter", "experiment_for", "load_effects_module", "make_effect", "register_effect", "scale_levels",
 ]

@@ -25,7 +25,13 @@ An effect is a subclass of :class:`Effect` with
     optional, rig kind (the sidecar's ``kind``: ``pneumatic-cylinder``,
     ``hydraulic-cylinder``, ``friction-rig``, ``electromechanical-axis``) ->
     that experiment worded for such a rig, where it differs (no chambers to
-    vent on a motor-driven axis); :meth:`Effect.experiment_for` picks it;
+    vent on a motor-driven axis); :meth:`Effect.experiment_for` picks it (a
+    plain ``dict`` in the class body, made read-only when the class is made);
+``fit_extra``
+    optional, the name of an extra term of a fit (``offset``: the constant
+    force ``fcomp fit --offset`` estimates beside the model) that this effect
+    holds as its own parameter of that name: a fit's value of it becomes this
+    effect (:func:`fcomp.effects.effect_holding`);
 
 and overrides whichever hooks it needs, each written once against the
 backend ``be`` (so it works numerically and symbolically):
@@ -103,16 +109,22 @@ the held ones.
 
 *Structural* effects (terms of the LuGre family itself: ``stribeck``,
 ``viscous``, ``viscous-lead``, ``presliding``, ``frictional-lag``,
-``nonlocal-memory``) override :meth:`attach` to return the richer model
-instead of riding along.
+``nonlocal-memory``) derive from
+:class:`~fcomp.effects.structural.StructuralEffect`: attaching one returns the
+richer model of the family, built by the family's
+:meth:`~fcomp.models.lugre_family.LuGreFamily.with_structure`, instead of
+riding along.
+
+Each effect of the catalogue is one module of :mod:`fcomp.effects` (its law,
+its diagnosis hooks, its wording), listed in :mod:`fcomp.effects.catalogue`.
 
 The class docstring of each effect is its physical explanation: what it is
 and what it leaves in a residual when a model lacks it.
 
-This module imports nothing of :mod:`fcomp.models` (the models resolve
-effect names through :data:`EFFECTS` here), so models and effects form no
-import circle: the catalogue builds on the models, the models only on this
-base.
+This module imports nothing of :mod:`fcomp.models` (the models' ``with_effects``
+takes names and resolves them through :data:`EFFECTS` here), so models and
+effects form no import circle: the effects build on the models, the models
+only on this base.
 """
 
 from __future__ import annotations
@@ -153,6 +165,8 @@ class Effect(PlainValue):
     experiments: ClassVar[Mapping[str, str]] = MappingProxyType({})
     #: effects that give the same force over most motions (tried in its place: a tie)
     confounded: ClassVar[tuple[str, ...]] = ()
+    #: the extra term of a fit this effect holds as its own parameter of that name ("": none)
+    fit_extra: ClassVar[str] = ""
     #: signals the effect reads besides v (diagnosis checks the data has them)
     needs: ClassVar[tuple[str, ...]] = ()
     #: needs a motion (memory, acceleration): not a candidate for steady-state points
@@ -166,6 +180,9 @@ class Effect(PlainValue):
     def __init_subclass__(cls, **kwargs: Any) -> None:
         super().__init_subclass__(**kwargs)
         adopt_params(cls)
+        own = cls.__dict__.get("experiments")
+        if isinstance(own, dict):  # wording is data: read-only once the class is made
+            cls.experiments = MappingProxyType(dict(own))
 
     def __init__(self, params: ParamSet | Mapping[str, Any] | None = None, **config: Any) -> None:
         if params is None:
@@ -283,9 +300,9 @@ def scale_levels(L: dict, factor: Any, names: tuple[str, ...] = ("Fc", "Fs"),
     return out
 
 
-#: Effects by public name: the catalogue (:mod:`fcomp.effects.catalogue`) registers itself
-#: when imported (importing any module of :mod:`fcomp.effects` imports it), users with
-#: :func:`register_effect`.
+#: Effects by public name: the catalogue (:mod:`fcomp.effects.catalogue`, one module per
+#: effect) registers itself when imported (importing any module of :mod:`fcomp.effects`
+#: imports it), users with :func:`register_effect`.
 EFFECTS: Registry[type[Effect]] = Registry("effect")
 
 

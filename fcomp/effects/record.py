@@ -13,7 +13,8 @@ The estimates below are shared by the effects' guesses and by the fits
 above them: a least-squares slope, the columns of a regression a record can
 tell apart, the Stribeck hump (:func:`stribeck_start` starts the
 identification, :func:`stribeck_hump_start` the diagnosis's baseline and its
-``stribeck`` candidate).
+``stribeck`` candidate), the chambers whose pressure a record holds constant
+(:func:`constant_chambers`, for the laws in the pressures).
 """
 
 from __future__ import annotations
@@ -138,6 +139,11 @@ class DiagnosisForm:
     config: Mapping[str, Any] = field(default_factory=lambda: MappingProxyType({}))
     held: tuple[str, ...] = ()
 
+    @classmethod
+    def each(cls, forms: tuple[str, ...]) -> tuple[DiagnosisForm, ...]:
+        """One form per law of an effect's ``FORMS``, labelled and configured by its name."""
+        return tuple(cls(f, {"form": f}) for f in forms)
+
 
 # ------------------------------------------------------------------ estimates
 def ls_slope(r: np.ndarray, col: np.ndarray) -> float:
@@ -237,5 +243,33 @@ def stribeck_hump_start(v: np.ndarray, f: np.ndarray, Fc: float, B: float,
     return stribeck_start(v, f, Fc, B, v_min)
 
 
-__all__ = ["DiagnosisForm", "RecordView", "distinct_columns", "ls_slope", "stribeck_hump_start",
-           "stribeck_start"]
+
+# ------------------------------------------------------------------ chambers
+#: A chamber pressure whose 1st-99th percentile range over the samples weighed is at most
+#: this share of that of ``p1 + p2`` (or 1 kPa) is constant for the pressure laws: a vented
+#: chamber (``p2 = 0`` gauge) or one held by a regulator.
+CONSTANT_PRESSURE_SHARE = 0.02
+
+
+def constant_chambers(view: RecordView, mask: np.ndarray | None = None) -> list[str]:
+    """The chambers (``"p1"``, ``"p2"``) whose pressure is constant over ``mask`` (default
+    the training samples): identically zero (vented, or no column: 0 gauge) or varying by
+    at most :data:`CONSTANT_PRESSURE_SHARE` of the range of ``p1 + p2`` (at least 1 kPa).
+    A law's coefficient of such a pressure is a constant force or level: the record cannot
+    tell it from the friction level or a force offset."""
+    m = view.train if mask is None else mask
+    if not m.any():
+        return ["p1", "p2"]
+    p1, p2 = view.signal("p1")[m], view.signal("p2")[m]
+
+    def span(p: np.ndarray) -> float:
+        lo, hi = np.percentile(p, [1.0, 99.0])
+        return float(hi - lo)
+
+    tol = max(1000.0, CONSTANT_PRESSURE_SHARE * span(p1 + p2))
+    return [n for n, p in (("p1", p1), ("p2", p2))
+            if not np.any(p != p[0]) or span(p) <= tol]
+
+
+__all__ = ["CONSTANT_PRESSURE_SHARE", "DiagnosisForm", "RecordView", "constant_chambers",
+           "distinct_columns", "ls_slope", "stribeck_hump_start", "stribeck_start"]

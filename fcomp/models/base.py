@@ -73,6 +73,7 @@ from fcomp.parameters import ParamSet, ParamValues, PlainValue, adopt_params
 
 if TYPE_CHECKING:
     from fcomp.effects.base import Effect
+    from fcomp.models.lugre_family import Structure
 
 
 class NotSymbolicError(FcompError):
@@ -151,7 +152,10 @@ class DiscreteMemory(Protocol):
 
 class FeatureFamily(Protocol):
     """The capability of a model that belongs to a family of feature sets
-    (:meth:`FrictionModel.feature_family`): structural effects extend it."""
+    (:meth:`FrictionModel.feature_family`): structural effects extend it, through
+    :meth:`with_structure` alone."""
+
+    params: ParamSet
 
     @property
     def features(self) -> frozenset[str]:
@@ -168,8 +172,9 @@ class FeatureFamily(Protocol):
         """The model and the effects it was built from, in order (for :meth:`describe`)."""
         ...
 
-    def with_features(self, add: set[str], values: dict[str, float]) -> Any:
-        """The family's model with more features (new parameters from ``values``)."""
+    def with_structure(self, term: Structure) -> FrictionModel:
+        """The family's model with a structural term (which features, their values) added
+        (:meth:`fcomp.models.lugre_family.LuGreFamily.with_structure`)."""
         ...
 
     def describe(self) -> str: ...
@@ -200,7 +205,8 @@ class FrictionModel(PlainValue, ABC):
         The model's parameters (a ``Params`` instance or a mapping of flat
         names); defaults where omitted.
     effects
-        Effect instances (or names) composed onto the model.
+        Effect instances composed onto the model (:meth:`with_effects` adds them by
+        name too).
     """
 
     name: ClassVar[str] = ""
@@ -216,7 +222,7 @@ class FrictionModel(PlainValue, ABC):
     def __init__(
         self,
         params: ParamSet | Mapping[str, Any] | None = None,
-        effects: Sequence[Effect | str] = (),
+        effects: Sequence[Effect] = (),
     ) -> None:
         if params is None:
             params = self.Params()
@@ -227,12 +233,10 @@ class FrictionModel(PlainValue, ABC):
                 f"{self.name}: expected {self.Params.__name__}, got {type(params).__name__}"
             )
         self.params: ParamSet = params
-        # effect names are resolved in fcomp.effects.base (a module that imports no model);
-        # imported here, not at the top, because importing it registers the catalogue,
-        # which is built on the model modules and so cannot load before this one
-        from fcomp.effects.base import as_effect
-
-        self.effects: tuple[Effect, ...] = tuple(as_effect(e) for e in effects)
+        if any(isinstance(e, str) for e in effects):
+            raise ValueError(f"{self.name}: effects are given as instances here; "
+                             "add them by name with with_effects")
+        self.effects: tuple[Effect, ...] = tuple(effects)
         names = list(self.params.flat())
         for e in self.effects:
             for n in e.params.flat():
@@ -325,9 +329,13 @@ class FrictionModel(PlainValue, ABC):
     def with_effects(self, *effects: Effect | str) -> FrictionModel:
         """A new model with ``effects`` added (names or :class:`~fcomp.effects.Effect` objects).
 
-        Structural effects (``stribeck``, ``viscous``, ``viscous-lead``,
-        ``presliding``, ``frictional-lag``, ``nonlocal-memory``) turn the
-        model into the richer model of the family; the others are added on.
+        Each effect attaches itself (:meth:`~fcomp.effects.Effect.attach`): a
+        structural one (a term of the LuGre family) returns the richer model of
+        the family (:meth:`FeatureFamily.with_structure`), the others ride along.
+        A name is the registered effect of that name with its defaults: the names
+        are the effects' (:data:`fcomp.effects.EFFECTS`), resolved there, in the
+        one place this module meets the registry (imported here, not at the top:
+        importing it registers the catalogue, which is built on the model modules).
         """
         from fcomp.effects.base import as_effect
 

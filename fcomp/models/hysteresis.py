@@ -177,7 +177,7 @@ from fcomp.backend import NUMPY, Backend
 from fcomp.compiled import Loop
 from fcomp.errors import ConvergenceError, FcompError
 from fcomp.models.base import SIGNAL_NAMES, NotSymbolicError, Signals
-from fcomp.models.lugre_family import PRESETS, LuGreFamily, family_class, params_class
+from fcomp.models.lugre_family import PRESETS, LuGreFamily, Structure, family_class, params_class
 from fcomp.models.stepping import midpoint_signals, step_loop
 from fcomp.parameters import ParamSet, ParamSpec, ParamValues, make_params_class, spec, with_recipe
 from fcomp.stepper import SampledStepper
@@ -679,9 +679,9 @@ class HysteresisFamily(LuGreFamily):
             "fcomp.trajectory.friction_along_motion or model.stepper()"
         )
 
-    def with_features(self, add: set[str], values: dict[str, float]) -> LuGreFamily:
+    def _with_features(self, add: frozenset[str], values: Mapping[str, float]) -> LuGreFamily:
         """The family model with more features, keeping the hysteresis function."""
-        return with_hysteresis(super().with_features(add, values), self.hysteresis_values())
+        return with_hysteresis(super()._with_features(add, values), self.hysteresis_values())
 
     def hysteresis_values(self) -> dict[str, float]:
         """The hysteresis-function parameters (flat)."""
@@ -798,6 +798,16 @@ def with_hysteresis(model: LuGreFamily, values: Mapping[str, float]) -> Hysteres
     new = cls(cls.Params.from_flat(flat), effects=model.effects)
     new.lineage = model.lineage
     return new
+
+
+@dataclass(frozen=True)
+class HysteresisTerm(Structure):
+    """The hysteresis function ``F(z)`` in place of the bristle force ``sigma0*z``
+    (:func:`with_hysteresis`), as the ``nonlocal-memory`` effect adds it; ``values`` are
+    its parameters, ``features`` empty."""
+
+    def apply(self, model: LuGreFamily) -> LuGreFamily:
+        return with_hysteresis(model, self.values)
 
 
 class NMLGMHysteresis(HysteresisFamily):

@@ -66,11 +66,18 @@ applied after every step of the sampled engine, where the deflection rate
 is ``v`` inside the band, so each step is exact for a held velocity; in the
 continuous right-hand side (plants) a deflection outside the band relaxes
 onto it over ``d_i`` of travel.
+
+Structural effects (:mod:`fcomp.effects.structural`: ``stribeck``,
+``presliding``, ...) switch features on through one public method,
+:meth:`LuGreFamily.with_structure`, given a :class:`Structure` (the
+features, the values of their parameters); the family makes the class.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
+from dataclasses import dataclass
 from functools import cache
 from typing import Any, ClassVar
 
@@ -215,6 +222,32 @@ def _params_class(features: frozenset[str], viscous_name: str, cls_name: str,
     return with_recipe(cls, _params_class, features, viscous_name, cls_name, owner)
 
 
+@dataclass(frozen=True)
+class Structure:
+    """A term of the family as a structural effect adds it (:meth:`LuGreFamily.with_structure`).
+
+    Attributes
+    ----------
+    effect
+        The name of the effect that adds it (the model's :attr:`~LuGreFamily.lineage`).
+    features
+        The features it switches on (the table of the module docstring).
+    values
+        Values of their parameters by flat name; parameters not given keep the
+        model's value, new ones their default.
+    """
+
+    effect: str
+    features: frozenset[str]
+    values: Mapping[str, float]
+
+    def apply(self, model: LuGreFamily) -> LuGreFamily:
+        """``model`` with :attr:`features` switched on (a term that replaces one of the
+        family's terms instead, the hysteresis function of :mod:`fcomp.models.hysteresis`,
+        overrides this)."""
+        return model._with_features(self.features, self.values)
+
+
 class LuGreFamily(FrictionModel):
     """One model of the LuGre family, defined by its ``features`` (see module docstring)."""
 
@@ -237,26 +270,35 @@ class LuGreFamily(FrictionModel):
             st.append("vL")
         return tuple(st)
 
-    def with_features(self, add: set[str], values: dict[str, float]) -> LuGreFamily:
-        """The model with more features, new parameters from ``values`` (else defaults).
+    def with_structure(self, term: Structure) -> LuGreFamily:
+        """The model with the structural ``term`` an effect adds (:class:`Structure`).
 
-        Returns an instance of the registered model class whose feature set
-        matches, so ``lugre`` + ``frictional-lag`` *is* ``modified-lugre``.
+        The one way a term of the family reaches a model: a structural effect
+        (:mod:`fcomp.effects.structural`) says which features it switches on
+        and the values of their parameters, the family builds the model. The
+        result is an instance of the registered model class whose feature set
+        matches, so ``lugre`` + ``frictional-lag`` *is* ``modified-lugre``; its
+        :attr:`lineage` records the effect after the model it was built from.
         """
+        new = term.apply(self)
+        new.lineage = (*(self.lineage or (self.name,)), term.effect)
+        return new
+
+    def _with_features(self, add: frozenset[str], values: Mapping[str, float]) -> LuGreFamily:
+        """The model with more features, new parameters from ``values`` (else defaults)."""
         features = frozenset(self.features | add)
         cls = family_class(features, self.viscous_name)
         flat = dict(self.params.flat())
         flat.update(values)
         keep = set(cls.Params.names())
         flat = {k: v for k, v in flat.items() if k.removesuffix("_pos").removesuffix("_neg") in keep}
-        new = cls(cls.Params.from_flat(flat), effects=self.effects)
-        new.lineage = (*self.lineage, *sorted(add))
-        return new
+        return cls(cls.Params.from_flat(flat), effects=self.effects)
 
+    #: the model and the effects it was built from, in order (:meth:`describe`)
     lineage: tuple[str, ...] = ()
 
     def feature_family(self) -> LuGreFamily:
-        """The model itself: structural effects extend its feature set (:meth:`with_features`)."""
+        """The model itself: structural effects extend it (:meth:`with_structure`)."""
         return self
 
     @property

@@ -34,14 +34,7 @@ from contextlib import AbstractContextManager, contextmanager
 from typing import Any, TypeVar
 
 from fcomp.errors import FcompError, term
-from fcomp.progress import (
-    ProgressCallback,
-    ProgressRelay,
-    RelayedBar,
-    progress_bar,
-    relay_progress,
-    ticker,
-)
+from fcomp.progress import ProgressCallback
 from fcomp.usercode import load_sources, user_sources
 
 #: The BLAS libraries of this process (:mod:`threadpoolctl`), found at the first
@@ -166,5 +159,4 @@ def run_tasks(fn: Callable[[T], R], items: Sequence[T], *, workers: int | None =
     return results
 
 
-__all__ = ["ProgressRelay", "RelayedBar", "check_scheduler", "dask_client", "executor",
-           "process_pool", "progress_bar", "relay_progress", "run_tasks", "ticker"]
+__all__ = ["check_scheduler", "dask_client", "executor", "process_pool", "run_tasks"]

@@ -86,8 +86,6 @@ import ctypes
 import math
 import re
 from abc import ABC, abstractmethod
-from collections.abc import Callable, Iterator
-from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
 from functools import cached_property, lru_cache
 from typing import Any, ClassVar
@@ -99,7 +97,7 @@ from scipy.linalg import lu_factor, lu_solve
 
 from fcomp.compiled import c_source, load_library
 from fcomp.errors import ConvergenceError, FcompError, term
-from fcomp.progress import receiver, report, reporting
+from fcomp.progress import receiver, report
 from fcomp.registry import Registry
 from fcomp.rosenbrock import (
     RODAS4,
@@ -116,16 +114,6 @@ _RAISE_OR_LOOSEN = f"raise {term('max_steps')}, or loosen {term('rtol')}/{term('
 
 #: Schemes of :meth:`OdeModel.discrete_step` (fixed steps, input held).
 SCHEMES = ("rodas4", "linearly-implicit-euler")
-
-
-@contextmanager
-def progress(callback: Callable[[float, float], None]) -> Iterator[None]:
-    """Report the progress of the runs inside the block as ``callback(fraction done, t in s)``:
-    :func:`fcomp.progress.reporting` with the engine's units (seconds of simulated time
-    from the start of the run, ``t``) turned into a fraction. The command line's display
-    takes this form; a new caller takes :func:`fcomp.progress.reporting` directly."""
-    with reporting(lambda done, total: callback(done / total, done)):
-        yield
 
 
 def step_budget(tol: Tolerances, stats: Stats, t: float, name: str) -> Tolerances:

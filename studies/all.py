@@ -11,7 +11,7 @@ The studies are independent: they run side by side on a local process pool
 longest first (:attr:`studies.base.Study.cost`), each with its own parallel
 jobs inside; one worker runs them here in turn. Progress: a bar of finished
 studies on stderr and, on a terminal, each running study's own bar beneath it
-(:class:`fcomp.parallel.ProgressRelay`).
+(:class:`fcomp.progress.ProgressRelay`).
 """
 
 from __future__ import annotations
@@ -21,7 +21,8 @@ import time
 from dataclasses import dataclass
 from typing import Any
 
-from fcomp.parallel import ProgressRelay, progress_bar, relay_progress, run_tasks, ticker
+from fcomp.parallel import run_tasks
+from fcomp.progress import ProgressRelay, progress_bar, relay_progress, ticker
 from fcomp.report import Link
 from studies.base import Study, StudyConfig, StudyError, StudyOutput
 
@@ -39,7 +40,7 @@ class StudyJob:
     config
         Its configuration (output inside the staging folder of ``all``).
     progress
-        Queue of the parent's :class:`fcomp.parallel.ProgressRelay`, or ``None``.
+        Queue of the parent's :class:`fcomp.progress.ProgressRelay`, or ``None``.
     """
 
     name: str

@@ -73,7 +73,7 @@ from controllers.robustness import (
 from controllers.tasks import TASKS
 from fcomp.errors import FcompError
 from fcomp.models.base import FrictionModel
-from fcomp.parallel import progress_bar, ticker
+from fcomp.progress import progress_bar, ticker
 from studies.base import Study, StudyConfig, StudyOutput
 
 #: The built-in plants the study runs on (without a plant file).

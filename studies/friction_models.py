@@ -59,9 +59,9 @@ import numpy as np
 from fcomp.errors import FcompError
 from fcomp.measurement import Measurement
 from fcomp.models import FrictionModel, make_model
-from fcomp.parallel import progress_bar
 from fcomp.paramsets import get as get_paramset
 from fcomp.piston import chamber_volumes, piston_areas
+from fcomp.progress import progress_bar
 from studies.base import Study, StudyConfig, StudyOutput
 
 #: Parameter set of the study.

@@ -38,7 +38,8 @@ from typing import Any
 
 from fcomp.errors import FcompError
 from fcomp.measurement import Measurement
-from fcomp.parallel import progress_bar, run_tasks, ticker
+from fcomp.parallel import run_tasks
+from fcomp.progress import progress_bar, ticker
 from fcomp.report import Link
 from studies.base import Study, StudyConfig, StudyOutput
 

@@ -16,8 +16,8 @@ import numpy as np
 from fcomp.backend import NUMPY
 from fcomp.errors import FcompError
 from fcomp.models import FrictionModel, make_model
-from fcomp.parallel import progress_bar
 from fcomp.piston import piston_areas
+from fcomp.progress import progress_bar
 from fcomp.trajectory import friction_along_motion
 from plants.mechanics import end_stop_force
 from plants.presliding_rig import PreslidingRig

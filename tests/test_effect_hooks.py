@@ -91,7 +91,7 @@ def _user_effect(name: str, reason: str | None = None) -> type[Effect]:
 def test_a_user_effects_hooks_make_its_proposals(fitted) -> None:
     name = f"test-hooked-{uuid.uuid4().hex[:8]}"
     cls = register_effect(_user_effect(name))
-    ctx = fitted._context()
+    ctx = fitted._search.context()
     assert catalogue.applicability(name, ctx) is None
     props = catalogue.propose_all(name, ctx)
     assert [p.form for p in props] == ["plain", "both"]
@@ -145,7 +145,7 @@ def test_a_user_effects_needs_and_dynamic_are_judged(fitted) -> None:
 @pytest.mark.parametrize("baseline", ["lugre", "coulomb"])
 def test_every_catalogue_effects_hooks_run_on_a_record(record, baseline) -> None:
     d = Diagnosis(baseline, search=False, n_jobs=1, check_baseline=False).fit(record)
-    ctx = d._context()
+    ctx = d._search.context()
     view = ctx.view
     for cls in CATALOGUE:
         config = cls.diagnosis_config(view.scales)

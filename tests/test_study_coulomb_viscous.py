@@ -387,7 +387,7 @@ class _TTY(io.StringIO):
 def test_progress_of_a_worker_is_relayed_to_the_parent(monkeypatch) -> None:
     import queue
 
-    from fcomp.parallel import ProgressRelay, progress_bar, relay_progress, ticker
+    from fcomp.progress import ProgressRelay, progress_bar, relay_progress, ticker
 
     q: queue.Queue = queue.Queue()
     relay_progress(q)

@@ -23,7 +23,8 @@ from fcomp.errors import FcompError
 from fcomp.modelfile import is_model_file
 from fcomp.models import MODELS
 from fcomp.outputs import InputSet, staged_folder
-from fcomp.parallel import check_scheduler, progress_bar
+from fcomp.parallel import check_scheduler
+from fcomp.progress import progress_bar
 
 
 def _plant(args: argparse.Namespace) -> Any:

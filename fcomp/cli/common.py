@@ -363,11 +363,11 @@ class Progress:
         self._cm: Any = None
 
     def __enter__(self) -> Progress:
-        from fcomp.simulation import progress
+        from fcomp.progress import reporting
 
         self.start = self.last = time.monotonic()
         if self.enabled:
-            self._cm = progress(self.update)
+            self._cm = reporting(lambda done, total: self.update(done / total, done))
             self._cm.__enter__()
         return self
 

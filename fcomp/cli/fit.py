@@ -209,7 +209,8 @@ def fit_record(job: tuple[str, Any, dict[str, Any]]) -> dict[str, Any]:
 def _run_many(args: argparse.Namespace, model: Any, options: dict[str, Any],
               out: Path | None, scheduler: str | None) -> int:
     """Several records, fitted one by one in parallel; JSON ``{"model", "records": [...]}``."""
-    from fcomp.parallel import progress_bar, run_tasks
+    from fcomp.parallel import run_tasks
+    from fcomp.progress import progress_bar
 
     jobs = [(path, model, options) for path in args.data]
     bar = progress_bar(f"fit {args.model}", len(jobs), enabled=not args.no_progress,

@@ -60,7 +60,7 @@ from fcomp.effects import EFFECTS, Effect
 from fcomp.errors import FcompError
 from fcomp.measurement import Measurement
 from fcomp.models import FrictionModel, make_model
-from fcomp.parallel import progress_bar
+from fcomp.progress import progress_bar
 
 
 @dataclass(frozen=True)
@@ -129,8 +129,7 @@ def _quiet(what: str) -> None:
 @contextmanager
 def _bar(enabled: bool) -> Iterator[Tick]:
     """A progress callback drawing the diagnosis's bar on stderr (one tick a fit)."""
-    bar = progress_bar("diagnose", None, enabled=enabled, unit="fit",  # type: ignore[arg-type]
-                       tty_only=False)
+    bar = progress_bar("diagnose", None, enabled=enabled, unit="fit", tty_only=False)
 
     def tick(what: str) -> None:
         bar.set_postfix_str(what, refresh=False)

@@ -46,17 +46,19 @@ import stat
 import subprocess
 import tempfile
 import warnings
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Hashable, Mapping, Sequence
 from dataclasses import dataclass
 from functools import cache
 from importlib import resources
 from pathlib import Path
-from typing import Any
+from typing import Any, Generic, TypeVar
 
 import casadi as ca
 import numpy as np
 
 from fcomp.errors import FcompError, FcompWarning
+
+T = TypeVar("T")
 
 #: A :func:`build_library` prelude that keeps CasADi's functions and helpers inside the
 #: library (hidden visibility): the compiler may then inline them into the driver, which
@@ -333,3 +335,22 @@ def stepping_loop(step: ca.Function, *, compiled: bool = True, chunk: int = 4096
         return X
 
     return Loop(run_vm, False)
+
+
+class Keyed(Generic[T]):
+    """``value`` hashed and compared by ``key`` alone: the argument of a bounded kernel cache
+    (:func:`functools.lru_cache`), so that values with equal keys (models of one structure)
+    share their kernel, built from the first one seen, and the cache holds no more than
+    its size."""
+
+    __slots__ = ("key", "value")
+
+    def __init__(self, value: T, key: Hashable) -> None:
+        self.value = value
+        self.key = key
+
+    def __hash__(self) -> int:
+        return hash(self.key)
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, Keyed) and self.key == other.key

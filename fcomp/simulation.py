@@ -95,7 +95,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.linalg import lu_factor, lu_solve
 
-from fcomp.compiled import c_source, load_library
+from fcomp.compiled import Keyed, c_source, load_library
 from fcomp.errors import ConvergenceError, FcompError, term
 from fcomp.progress import receiver, report
 from fcomp.registry import Registry
@@ -310,28 +310,10 @@ class Integrator(ABC):
 KERNEL_CACHE_SIZE = 64
 
 
-class _Structure:
-    """An :class:`OdeModel` hashed and compared by its structural key (``model.key``, else
-    the model's identity): the argument of the kernel caches, so that models with equal
-    keys share their kernels, built from the first one seen."""
-
-    __slots__ = ("key", "model")
-
-    def __init__(self, model: OdeModel) -> None:
-        self.model = model
-        self.key = model.key or (model.name, id(model))
-
-    def __hash__(self) -> int:
-        return hash(self.key)
-
-    def __eq__(self, other: object) -> bool:
-        return isinstance(other, _Structure) and self.key == other.key
-
-
 @lru_cache(maxsize=KERNEL_CACHE_SIZE)
-def _model_functions(structure: _Structure) -> tuple[ca.Function, ca.Function]:
+def _model_functions(structure: Keyed[OdeModel]) -> tuple[ca.Function, ca.Function]:
     """``f(x, u, p) -> dx`` and ``jac(x, u, p) -> (df/dx, df/du)`` (dense), C-friendly names."""
-    model = structure.model
+    model = structure.value
     x, u, p = model.symbols()
     f = model.rhs(x, u, p)
     F = ca.Function(f"fcomp_f_{model.tag}", [x, u, p], [f])
@@ -341,11 +323,11 @@ def _model_functions(structure: _Structure) -> tuple[ca.Function, ca.Function]:
 
 
 @lru_cache(maxsize=KERNEL_CACHE_SIZE)
-def _rodas_library(structure: _Structure) -> Any:
+def _rodas_library(structure: Keyed[OdeModel]) -> Any:
     """The compiled adaptive loop of ``structure``'s model (``fcomp/csrc/rosenbrock_step.c``
     filled with the model's functions and the tableau), or ``None`` without a compiler."""
     F, Jf = _model_functions(structure)
-    model = structure.model
+    model = structure.value
     driver = c_source("rosenbrock_step.c", {
         "F": F.name(), "J": Jf.name(), "NX": str(model.nx), "NU": str(model.nu),
         **c_coefficients(TABLEAU, CONTROL)})
@@ -373,7 +355,8 @@ class Rodas4(Integrator):
 
     def __init__(self, model: OdeModel, *, compiled: bool = True) -> None:
         super().__init__(model)
-        structure = _Structure(model)
+        # models of equal keys share their kernels (else the model itself is the key)
+        structure = Keyed(model, model.key or (model.name, id(model)))
         self.F, self.Jf = _model_functions(structure)
         self.c_fn = _rodas_library(structure) if compiled else None
         self._one: list[np.ndarray] | None = None  # buffers of one-interval calls (closed loops)

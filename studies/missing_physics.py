@@ -196,7 +196,7 @@ def run_case(job: CaseJob) -> tuple[dict[str, Any], dict[str, bytes]]:
     Returns the case's results and its figures (PNG bytes by name): everything
     the report needs, so the case can run in another process.
     """
-    from fcomp.diagnosis.report import fig_before_after, fig_error_fall
+    from fcomp.diagnosis.figures import fig_before_after, fig_error_fall
     from fcomp.diagnosis.report import write_report as write_diagnosis
     from fcomp.report import render_png
 

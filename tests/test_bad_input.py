@@ -713,7 +713,7 @@ def test_bad_input(name: str, lab: Path, repeat_file: None, capsys: pytest.Captu
         import fcomp.simulation
 
         monkeypatch.setattr(fcomp.compiled, "_WARNED", set())
-        fcomp.simulation._rodas_library.cache_clear()
+        fcomp.simulation.clear_kernel_cache()
     old = {o: (lab / o).read_bytes() for o in case.outputs if (lab / o).is_file()}
     before = snapshot(lab)
     code, out, err = _run(shlex.split(case.args), capsys)

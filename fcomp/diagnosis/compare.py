@@ -45,7 +45,7 @@ from fcomp.models import FrictionModel, make_model
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-    from fcomp.diagnosis.report import View
+    from fcomp.diagnosis.figures import View
 
 
 @dataclass(frozen=True, repr=False)
@@ -146,7 +146,7 @@ class Comparison:
 
     def view(self) -> View:
         """What the figures draw: the record and this one model beside it."""
-        from fcomp.diagnosis.report import Series, View  # the report draws with matplotlib
+        from fcomp.diagnosis.figures import Series, View  # the figures draw with matplotlib
 
         return View(self.data, self.segmentation, self.judged, self.judged_label,
                     (Series(f"model: {self.model.describe()}", "final", self.result,
@@ -156,7 +156,7 @@ class Comparison:
     def plot(self, name: str | None = None) -> Figure | dict[str, Figure]:
         """One figure by name (``regimes``, ``residuals``, ``loops``, ``worst``,
         ``before_after``; ``plant`` for the plant domain), or all of them by name."""
-        from fcomp.diagnosis.report import comparison_figures
+        from fcomp.diagnosis.figures import comparison_figures
 
         figs = comparison_figures(self, only=name)
         return figs if name is None else figs[name]

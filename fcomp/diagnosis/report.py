@@ -15,11 +15,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, cast
 
 from fcomp.diagnosis.figures import (
-    Series,
-    View,
     check_fitted,
     comparison_figures,
-    fig_before_after,
     fig_error_fall,
     fig_regimes,
     figures,
@@ -361,7 +358,6 @@ def _write(rep: Report, directory: str | Path) -> Path:
 
 
 #: The figures (and their view) the results and the studies draw through this module.
-__all__ = ["Series", "View", "build_comparison_report", "build_fit_report", "build_report",
-           "comparison_figures", "comparison_html", "comparison_sections", "diagnosis_html",
-           "fig_before_after", "fig_error_fall", "figures", "short_reason",
-           "write_comparison_report", "write_fit_report", "write_report"]
+__all__ = ["build_comparison_report", "build_fit_report", "build_report", "comparison_html",
+           "comparison_sections", "diagnosis_html", "short_reason", "write_comparison_report",
+           "write_fit_report", "write_report"]

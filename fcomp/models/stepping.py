@@ -38,7 +38,7 @@ import casadi as ca
 import numpy as np
 
 from fcomp.backend import CASADI
-from fcomp.compiled import EXPORT, HIDDEN, MINMAX, Loop, load_library, stepping_loop
+from fcomp.compiled import EXPORT, HIDDEN, MINMAX, Keyed, Loop, load_library, stepping_loop
 from fcomp.models.base import SIGNAL_NAMES, FrictionModel, Signals
 from fcomp.parameters import ParamValues
 
@@ -97,20 +97,24 @@ def friction_step(model: FrictionModel, substeps: int = 1) -> ca.Function:
     return ca.Function("fcomp_friction_step", [x, sigv, dt, p], [xk])
 
 
-_MODEL_BY_KEY: dict[tuple, FrictionModel] = {}
+#: Most model structures whose compiled kernels are kept (each cache, least recently used out).
+KERNEL_CACHE_SIZE = 64
 
 
-@lru_cache(maxsize=64)
-def _loop(key: tuple, substeps: int, compiled: bool) -> Loop:
-    return stepping_loop(friction_step(_MODEL_BY_KEY[key], substeps), compiled=compiled)
+def _keyed(model: FrictionModel) -> Keyed[FrictionModel]:
+    """``model`` as the key of the kernel caches: by :func:`structure_key`."""
+    return Keyed(model, structure_key(model))
+
+
+@lru_cache(maxsize=KERNEL_CACHE_SIZE)
+def _loop(structure: Keyed[FrictionModel], substeps: int, compiled: bool) -> Loop:
+    return stepping_loop(friction_step(structure.value, substeps), compiled=compiled)
 
 
 def step_loop(model: FrictionModel, substeps: int = 1, compiled: bool = True) -> Loop:
     """The compiled loop ``(x0, M, dt, p) -> X`` of :func:`friction_step` (cached by
     :func:`structure_key`): ``M`` the interval-mean signals ``(N-1, 6)``."""
-    key = structure_key(model)
-    _MODEL_BY_KEY.setdefault(key, model)
-    return _loop(key, substeps, compiled)
+    return _loop(_keyed(model), substeps, compiled)
 
 
 def midpoint_signals(sig: Mapping[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
@@ -227,9 +231,9 @@ def _sided(name: str, inputs: list[ca.SX], out: ca.SX, side: ca.SX) -> list[ca.F
             for tag, val in (("pos", 1.0), ("neg", -1.0))]
 
 
-@lru_cache(maxsize=64)
-def _motion_kernel(key: tuple, substeps: int) -> MotionKernel | None:
-    model = _MODEL_BY_KEY[key]
+@lru_cache(maxsize=KERNEL_CACHE_SIZE)
+def _motion_kernel(structure: Keyed[FrictionModel], substeps: int) -> MotionKernel | None:
+    model = structure.value
     nx = model.n_states
     x = ca.SX.sym("x", nx)
     sig, sigv = Signals.symbolic()
@@ -271,6 +275,4 @@ def motion_kernel(model: FrictionModel, substeps: int = 1) -> MotionKernel | Non
     loop and numpy).
     """
     model.require_symbolic()
-    key = structure_key(model)
-    _MODEL_BY_KEY.setdefault(key, model)
-    return _motion_kernel(key, substeps)
+    return _motion_kernel(_keyed(model), substeps)

@@ -28,6 +28,7 @@ name                      what it is
 ``compare``               one model beside records (``Comparison``)
 ``compare_plant``         the plant domain (``PlantComparison``)
 ``diagnose``, ``Diagnosis`` the missing-physics search
+``AcceptanceRule``        the thresholds that accept an effect (``Diagnosis(rule=...)``)
 ``generate``              a synthetic record with hidden effects
 ========================= ==========================================================
 """
@@ -41,7 +42,7 @@ from fcomp.version import __version__
 
 if TYPE_CHECKING:
     from fcomp.api import PlantComparison, compare, compare_plant, diagnose, fit, read, simulate
-    from fcomp.diagnosis import Comparison, Diagnosis
+    from fcomp.diagnosis import AcceptanceRule, Comparison, Diagnosis
     from fcomp.effects import Effect, make_effect, register_effect
     from fcomp.identification import FrictionFit
     from fcomp.measurement import Measurement
@@ -57,6 +58,7 @@ _API: dict[str, str] = {
     "make_effect": "fcomp.effects", "register_effect": "fcomp.effects", "Effect": "fcomp.effects",
     "Measurement": "fcomp.measurement", "friction_along_motion": "fcomp.trajectory",
     "FrictionFit": "fcomp.identification", "Diagnosis": "fcomp.diagnosis",
+    "AcceptanceRule": "fcomp.diagnosis",
     "Comparison": "fcomp.diagnosis", "compare": "fcomp.api",
     "compare_plant": "fcomp.api", "PlantComparison": "fcomp.api",
     "fit": "fcomp.api", "diagnose": "fcomp.api", "simulate": "fcomp.api", "read": "fcomp.api",
@@ -64,7 +66,7 @@ _API: dict[str, str] = {
 }
 
 __all__ = [
-    "Comparison", "Diagnosis", "Effect", "FrictionFit", "FrictionModel", "Measurement",
+    "AcceptanceRule", "Comparison", "Diagnosis", "Effect", "FrictionFit", "FrictionModel", "Measurement",
     "PlantComparison", "__version__", "compare", "compare_plant", "diagnose", "fit",
     "friction_along_motion", "generate", "load_model", "make_effect", "make_model", "read",
     "register_effect", "simulate",

@@ -10,8 +10,17 @@ The pieces, one concept per module:
 * :mod:`.compare` -- errors per regime, worst segments, plant domain;
 * :mod:`.features` -- residual features and their held-out strength;
 * :mod:`.catalogue` -- candidates, signatures, data-driven starts;
-* :mod:`.loop` -- :class:`Diagnosis`, the add / refit / score loop;
-* :mod:`.report` -- the self-contained HTML report.
+* :mod:`.rule` -- the acceptance rule, a frozen value judging two fits;
+* :mod:`.workers` -- the candidate refits on an executor handed in;
+* :mod:`.search` -- the steps: add, refit, judge; :mod:`.revision` -- the
+  checks after them (backward, swaps, confounded partners);
+* :mod:`.verdict` -- structure left in the final residual, as data;
+* :mod:`.result` -- the frozen :class:`~.result.DiagnosisResult`;
+* :mod:`.wording` -- the sentences of the rule and the verdict;
+* :mod:`.writers` -- the JSON and the model file; :mod:`.report`,
+  :mod:`.figures` -- the self-contained HTML report and its figures;
+* :mod:`.loop` -- :class:`Diagnosis`: the configuration, and the pipeline
+  data -> search -> result -> baseline check.
 
 >>> from fcomp.diagnosis import Diagnosis                       # doctest: +SKIP
 >>> d = Diagnosis("lugre").fit(measurement)                     # doctest: +SKIP
@@ -20,8 +29,12 @@ The pieces, one concept per module:
 
 from fcomp.diagnosis.compare import Comparison, compare
 from fcomp.diagnosis.data import DiagnosisData, prepare
-from fcomp.diagnosis.loop import Candidate, Diagnosis, Step
+from fcomp.diagnosis.loop import Candidate, Diagnosis, DiagnosisConfig, Step
 from fcomp.diagnosis.residuals import regime_errors
+from fcomp.diagnosis.result import DiagnosisResult
+from fcomp.diagnosis.rule import AcceptanceRule
+from fcomp.diagnosis.verdict import VerdictRule
 
-__all__ = ["Candidate", "Comparison", "Diagnosis", "DiagnosisData", "Step", "compare",
-           "prepare", "regime_errors"]
+__all__ = ["AcceptanceRule", "Candidate", "Comparison", "Diagnosis", "DiagnosisConfig",
+           "DiagnosisData", "DiagnosisResult", "Step", "VerdictRule", "compare", "prepare",
+           "regime_errors"]

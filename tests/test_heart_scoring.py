@@ -11,7 +11,7 @@ from scipy import integrate, stats
 
 from fcomp.diagnosis.data import prepare, sessions
 from fcomp.diagnosis.loop import _same_findings
-from fcomp.diagnosis.refit import prediction_band, scored_residual, tolerant_residual
+from fcomp.diagnosis.scoring import prediction_band, scored_residual, tolerant_residual
 from fcomp.measurement import Measurement
 
 

@@ -538,6 +538,5 @@ class Refit:
                          fit.converged, context, units=units) + held
 
 
-
 def _rms(r: np.ndarray) -> float:
     return float(np.sqrt(np.mean(r**2))) if r.size else math.nan

@@ -620,7 +620,7 @@ def motion_ensemble(t: np.ndarray, x: np.ndarray, cond: Conditioning, k: int = E
     the turning point of a slow loop, a start placed between two counts --
     they differ, by what the measurement leaves open. A model's predictions
     along them bound what it could be expected to predict
-    (:func:`fcomp.diagnosis.refit.tolerant_residual`).
+    (:func:`fcomp.diagnosis.scoring.tolerant_residual`).
     """
     if cond.x_resolution is None or cond.x_noise is None:
         return []

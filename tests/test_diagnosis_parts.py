@@ -321,7 +321,7 @@ def test_the_floor_of_a_tolerant_residual_matches_a_monte_carlo() -> None:
     itself on simulated noise, for bands from none to four noise deviations wide (a
     static law's band at rest is many deviations wide, and its residual there falls
     below the noise floor though nothing is left to explain)."""
-    from fcomp.diagnosis.refit import tolerant_residual
+    from fcomp.diagnosis.scoring import tolerant_residual
 
     rng = np.random.default_rng(4)
     sigma, n = 2.5, 200_000

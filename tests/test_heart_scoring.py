@@ -10,8 +10,8 @@ import pytest
 from scipy import integrate, stats
 
 from fcomp.diagnosis.data import prepare, sessions
-from fcomp.diagnosis.refit import prediction_band, scored_residual, tolerant_residual
 from fcomp.diagnosis.result import same_findings as _same_findings
+from fcomp.diagnosis.scoring import prediction_band, scored_residual, tolerant_residual
 from fcomp.measurement import Measurement
 
 

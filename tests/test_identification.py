@@ -405,6 +405,50 @@ def test_fit_records_recovers_one_vector_from_masked_samples_of_two_records() ->
         fit_records(model, [Record(d1)], ["Fq"])
 
 
+def test_records_carry_weights_held_extras_and_block_averages() -> None:
+    """A record's weights scale its residual and Jacobian rows by ``sqrt(w)``; holding the
+    mass takes its term out of the target; a block-averaged record keeps the blocks whose
+    samples are all masked; ``fit_records`` with staged names and probes on a coarse copy
+    still recovers the vector."""
+    from fcomp.identification import Record, fit_records
+    from fcomp.identification.problem import ParameterVector
+    from fcomp.identification.records import RecordsProblem, fit_specs
+
+    truth = LuGreRef(5.0, 8.0, 0.01, 2.0, 1e5, 50.0, 30.0)
+    meas, _ = reference_record(truth, 3.0, 0.02)
+    d = fit_data(Measurement({k: meas[k] for k in ("t", "x", "v", "a")}
+                             | {"F_ext": meas["F"] + 2.5 * meas["a"]}, {"name": "one"}))
+    model = make_model("lugre", params={"Fc": 4.0, "Fs": 7.0, "vs": 0.01, "n": 2.0,
+                                        "sigma0": 1e5, "sigma1": 50.0, "sigma2": 20.0})
+    mask = np.arange(d.n) % 3 != 0
+    w = np.linspace(0.1, 1.0, d.n)
+    names = ["Fc", "sigma2", "mass"]
+    start = {**model.flat_params(), "mass": 1.0}
+    pv = ParameterVector.build(names, start, fit_specs(model, names))
+    theta = pv.start
+    r0, G0 = RecordsProblem(model, [Record(d, mask)], pv)(theta, True)
+    r1, G1 = RecordsProblem(model, [Record(d, mask, w)], pv)(theta, True)
+    assert G0 is not None and G1 is not None
+    np.testing.assert_allclose(r1, r0 * np.sqrt(w[mask]), rtol=1e-12)
+    np.testing.assert_allclose(G1, G0 * np.sqrt(w[mask])[:, None], rtol=1e-12)
+    held = Record(d, mask).holding({"mass": 2.5})
+    assert held.data.inertia is None and d.inertia is not None
+    np.testing.assert_allclose(held.data.y, d.y - 2.5 * d.inertia)
+    first = d.sig["t"] < 1.5
+    coarse = Record(d, first, w).averaged(4)
+    assert coarse.data.n == math.ceil(d.n / 4) and coarse.weights is not None
+    assert coarse.mask is not None and coarse.mask.sum() == first.sum() // 4
+    whole = Record(d, mask)
+    assert whole.averaged(1) is whole
+    res = fit_records(model, [Record(d)], ["Fc", "Fs", "n", "sigma2", "mass"],
+                      starts=[{"sigma2": 10.0}, {"sigma2": 40.0}, {"sigma2": 20.0, "Fc": 3.0}],
+                      probe_nfev=6, probe_records=[Record(d).averaged(2)], staged=["n"],
+                      bounds={"mass": (0.0, 10.0), "n": (0.5, 4.0)}, max_nfev=60)
+    want = {"Fc": 5.0, "Fs": 8.0, "n": 2.0, "sigma2": 30.0, "mass": 2.5}
+    for n, v in want.items():
+        assert res.values[n] == pytest.approx(v, rel=0.03), n
+
+
 def test_strategies_are_chosen_by_capability_and_pluggable() -> None:
     from fcomp.identification import (
         DiscreteMemoryStrategy,

@@ -258,7 +258,7 @@ def find(residual: np.ndarray, prediction: np.ndarray, data: DiagnosisData,
 
     See the module docstring (steps 1-3, without the size rule, which needs the
     noise floor once the lines are out). ``weights`` (0 to 1 per sample, the fits'
-    :func:`~fcomp.diagnosis.refit.sample_weights`) gate the residual where the model
+    :func:`~fcomp.diagnosis.scoring.sample_weights`) gate the residual where the model
     could not place its prediction: the spectra and the tests see ``sqrt(w) * r``, the
     sinusoids are fitted to ``r`` by weighted least squares. ``since`` (seconds since
     the last start or reversal) lets the test of :func:`_same_at_all_speeds` tell a ring

@@ -240,7 +240,7 @@ def noise_floor(data: DiagnosisData, seg: Segmentation) -> NoiseFloor:
 def tolerant_noise_share(width: np.ndarray, sigma: float) -> float:
     """Mean share of the noise variance the tolerant residual keeps across a band (-).
 
-    The tolerant residual (:func:`fcomp.diagnosis.refit.tolerant_residual`) is
+    The tolerant residual (:func:`fcomp.diagnosis.scoring.tolerant_residual`) is
     the distance of the measurement from the band ``width`` the model could be
     expected to predict, so where the band is wide even pure noise leaves less
     than ``sigma``. For a measurement ``c + e``, ``e ~ N(0, sigma^2)``, ``c`` at the

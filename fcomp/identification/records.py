@@ -1,29 +1,36 @@
 """One parameter vector fitted to the masked samples of several records: the fitting engine's core.
 
 A fit adjusts the flat parameters ``theta`` (model names, plus the extras
-``mass`` and ``offset``) to minimise
+``mass``, ``offset`` and ``lag``) to minimise
 
-    sum over records r, over its masked samples k:  (y_rk - F_hat_rk(theta))^2,
+    sum over records r, over its masked samples k:  w_rk*(y_rk - F_hat_rk(theta))^2,
 
 where ``F_hat_r`` is the model simulated from rest along record ``r``'s
 measured motion (:class:`~fcomp.identification.dynamic.TrajectoryProblem`:
-the gradient strategy the model's capabilities allow) and ``y_r`` its target
-(:class:`~fcomp.identification.target.FitData`). Residuals and Jacobians of
-the records are stacked (:class:`RecordsProblem`) and handed to the bounded
-trust-region solve of :func:`~fcomp.identification.problem.solve`.
+the gradient strategy the model's capabilities allow), ``y_r`` its target
+(:class:`~fcomp.identification.target.FitData`) and ``w_rk`` the weight of
+the sample (1 by default). Residuals and Jacobians of the records, scaled by
+``sqrt(w_rk)``, are stacked (:class:`RecordsProblem`) and handed to the
+bounded trust-region solve of :func:`~fcomp.identification.problem.solve`.
+A record may carry extras held at known values (:meth:`Record.holding`: the
+target carries the held term) and may be averaged over blocks of samples
+(:meth:`Record.averaged`) to fit a long record on a shorter copy.
 
+:func:`fit_records` is the entry point for several records: given the
+parameter list, the starts, the bounds and the scales, it probes the starts
+(:func:`best_start`: short solves, raced by successive halving), continues
+from the best, optionally in two stages (shape exponents held first), and
+returns the values reached and the solution.
 :class:`~fcomp.identification.estimator.FrictionFit` runs its trajectory
-stages through :class:`RecordsProblem` with one record; :func:`fit_records` is
-the public entry point for several (the diagnosis refits candidate models on
-the training samples of several experiments with it): given the parameter
-list, the starts, the bounds and the scales, it returns the values reached
-and the solution.
+stages through :class:`RecordsProblem` with one record; the diagnosis
+(:class:`fcomp.diagnosis.refit.Refit`) refits every candidate model through
+:func:`fit_records` on the training samples of several experiments, weighted.
 """
 
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Collection, Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -31,7 +38,7 @@ import numpy as np
 from fcomp.errors import FcompError
 from fcomp.identification.dynamic import EXTRAS, Dependent, TrajectoryProblem
 from fcomp.identification.problem import ParameterVector, Solution, solve
-from fcomp.identification.target import FitData
+from fcomp.identification.target import FitData, block_mean
 from fcomp.models.base import FrictionModel
 from fcomp.parameters import ParamSpec, spec
 
@@ -48,7 +55,7 @@ EXTRA_SPECS: dict[str, ParamSpec] = {
 
 @dataclass(frozen=True)
 class Record:
-    """One record of a fit: its data and the samples that enter the residual.
+    """One record of a fit: its data, the samples that enter the residual and their weights.
 
     Attributes
     ----------
@@ -56,22 +63,50 @@ class Record:
         Signals and target (:func:`~fcomp.identification.target.fit_data`).
     mask
         Boolean, one per sample: the samples in the residual (default all).
-        The model is always simulated over the whole record, from rest.
+        The model is always simulated over the whole record.
+    weights
+        One per sample (default all 1): the weight ``w_k`` of the sample's
+        squared residual (:class:`RecordsProblem`); read at the masked samples.
     """
 
     data: FitData
     mask: np.ndarray | None = None
+    weights: np.ndarray | None = None
+
+    def holding(self, held: Mapping[str, float]) -> Record:
+        """This record with the extras ``held`` (name -> value) held: the target carries
+        each held term, ``y - value*column``, and none is left to fit
+        (:meth:`~fcomp.identification.target.FitData.holding`)."""
+        d = self.data
+        for name, value in held.items():
+            d = d.holding(name, value)
+        return dataclasses.replace(self, data=d)
+
+    def averaged(self, q: int) -> Record:
+        """This record averaged over blocks of ``q`` samples
+        (:meth:`~fcomp.identification.target.FitData.averaged`): a block is in the
+        mask when all its samples are, and weighs the mean of their weights."""
+        if q <= 1:
+            return self
+        mask = None if self.mask is None else block_mean(self.mask.astype(float), q) > 0.999
+        weights = None if self.weights is None else block_mean(self.weights, q)
+        return Record(self.data.averaged(q), mask, weights)
 
 
 class RecordsProblem:
-    """Stacked residuals ``y - F_hat`` and Jacobians ``dF_hat/dtheta`` of several records.
+    """Stacked residuals and Jacobians ``dF_hat/dtheta`` of several records, weighted.
+
+    The residual of record ``r`` at its masked sample ``k`` is
+    ``sqrt(w_rk)*(y_rk - F_hat_rk(theta))`` and its Jacobian row
+    ``sqrt(w_rk)*dF_hat_rk/dtheta`` (``w_rk = 1`` for a record without weights),
+    so the sum of squares is ``sum w_rk*(y_rk - F_hat_rk)^2``.
 
     Parameters
     ----------
     model
         The friction model (with effects).
     records
-        The records and their masks.
+        The records, their masks and weights.
     pv
         The fitted parameters.
     substeps
@@ -88,15 +123,21 @@ class RecordsProblem:
         self.pv = pv
         self.problems = [TrajectoryProblem(model, r.data, pv, mask=r.mask, substeps=substeps,
                                            dependent=dependent) for r in records]
+        #: ``sqrt(w)`` of each record's masked samples (None: unweighted)
+        self.roots = [None if r.weights is None else np.sqrt(r.weights[p.mask])
+                      for r, p in zip(records, self.problems, strict=True)]
 
     def __call__(self, theta: np.ndarray,
                  need_jac: bool = True) -> tuple[np.ndarray, np.ndarray | None]:
-        if len(self.problems) == 1:
+        if len(self.problems) == 1 and self.roots[0] is None:
             return self.problems[0](theta, need_jac)
         rs: list[np.ndarray] = []
         Gs: list[np.ndarray] = []
-        for p in self.problems:
+        for p, w in zip(self.problems, self.roots, strict=True):
             r, G = p(theta, need_jac)
+            if w is not None:
+                r = r * w
+                G = None if G is None else G * w[:, None]
             rs.append(r)
             if G is not None:
                 Gs.append(G)
@@ -119,13 +160,32 @@ class RecordsProblem:
         return sum(p.evaluations for p in self.problems) // len(self.problems)
 
 
+def fit_specs(model: FrictionModel, names: Sequence[str],
+              bounds: Mapping[str, tuple[float, float]] | None = None) -> dict[str, ParamSpec]:
+    """The specs of ``names`` (model parameters and :data:`EXTRA_SPECS`), ``bounds`` (name ->
+    ``(lower, upper)``, closed) replacing their own boxes."""
+    all_specs = {**model.param_specs(), **EXTRA_SPECS}
+    specs = {n: all_specs[n] for n in names}
+    for n, (lo, hi) in (bounds or {}).items():
+        if n in specs:
+            specs[n] = dataclasses.replace(specs[n], lower=float(lo), upper=float(hi),
+                                           lower_open=False)
+    return specs
+
+
 def solve_records(model: FrictionModel, records: Sequence[Record], pv: ParameterVector, *,
                   max_nfev: int, substeps: int = 1, dependent: Sequence[Dependent] = (),
-                  what: str = "") -> tuple[Solution, RecordsProblem]:
-    """The bounded least-squares solve of :class:`RecordsProblem` from ``pv.start``."""
+                  what: str = "", compress: bool | None = None
+                  ) -> tuple[Solution, RecordsProblem]:
+    """The bounded least-squares solve of :class:`RecordsProblem` from ``pv.start``.
+
+    ``compress`` reduces every evaluation to ``p + 1`` rows
+    (:func:`~fcomp.identification.problem.compressed`); ``None``: where the
+    Jacobian comes with every evaluation at no extra cost.
+    """
     prob = RecordsProblem(model, records, pv, substeps=substeps, dependent=dependent)
     sol = solve(pv, prob, max_nfev=max_nfev, what=what or f"fit of {model.describe()}",
-                compress=prob.jacobian_is_free)
+                compress=prob.jacobian_is_free if compress is None else compress)
     return sol, prob
 
 
@@ -136,13 +196,13 @@ class RecordsFit:
     Attributes
     ----------
     model
-        The model with the fitted values (``mass``/``offset`` excluded).
+        The model with the fitted values (the extras excluded).
     values
         Fitted name -> value (the extras included).
     start
         The start the final solve began from (name -> value).
     cost
-        Sum of squared residuals over the masked samples (N^2).
+        Weighted sum of squared residuals over the masked samples (N^2).
     converged, message
         The solver's verdict.
     nfev
@@ -176,14 +236,20 @@ def fit_records(
     | None = None,
     max_nfev: int = 200,
     probe_nfev: int | None = None,
+    probe_records: Sequence[Record] | None = None,
     keep_going: Callable[[float], bool] | None = None,
+    staged: Collection[str] = (),
     substeps: int = 1,
+    compress: bool | None = None,
 ) -> RecordsFit:
     """Fit the parameters ``names`` of ``model`` to the masked samples of several records.
 
-    Minimises the stacked squared force error of the module docstring over one
-    parameter vector, by bounded trust-region least squares with the gradient
-    strategy the model's capabilities allow.
+    Minimises the stacked, weighted squared force error of the module docstring
+    over one parameter vector, by bounded trust-region least squares with the
+    gradient strategy the model's capabilities allow. With several starts and
+    ``probe_nfev`` every start is probed first (:func:`best_start`, raced by
+    successive halving) and the best continues; names in ``staged`` are held
+    at their start values until a last solve frees them.
 
     Parameters
     ----------
@@ -191,18 +257,20 @@ def fit_records(
         The friction model (any effects); its values are the start of every
         name a start does not give, and the values of everything not fitted.
     records
-        The records (:class:`Record`: data and mask of the samples in the residual).
+        The records (:class:`Record`: data, mask of the samples in the
+        residual, weights). Extras held at known values are taken out of the
+        records beforehand (:meth:`Record.holding`).
     names
         Flat names to fit: model parameters and the extras ``mass`` (every
-        record must then carry a driving force, ``FitData.inertia``) and
-        ``offset``. A model parameter named like an extra is fitted as the
-        extra: set the model's own to 0 first.
+        record must then carry a driving force, ``FitData.inertia``),
+        ``offset`` and ``lag`` (a driving force's rate). A model parameter
+        named like an extra is fitted as the extra: set the model's own to 0
+        first.
     starts
         Start points, each a mapping of names to values (missing names: the
-        model's values; ``mass``, ``offset``: 0). With several starts and
-        ``probe_nfev`` every start gets a short solve of ``probe_nfev``
-        evaluations and the best continues; without ``probe_nfev`` the first
-        start is used.
+        model's values; extras: 0). With several starts and ``probe_nfev``
+        every start gets a short solve of ``probe_nfev`` evaluations and the
+        best continues; without ``probe_nfev`` the first start is used.
     bounds
         Name -> ``(lower, upper)`` replacing the box of the parameter's
         :class:`~fcomp.parameters.ParamSpec` (closed bounds).
@@ -210,14 +278,25 @@ def fit_records(
         Name -> typical magnitude (the solver's ``x_scale``), or a function of
         the start giving them; default ``|start|``.
     max_nfev
-        Evaluation budget of the final solve.
+        Evaluation budget of each full solve.
     probe_nfev
         Budget of each probe (several starts).
+    probe_records
+        The records the probes run on (default ``records``), e.g. copies
+        averaged over blocks (:meth:`Record.averaged`): the probes only rank
+        the starts.
     keep_going
         Called with the best probe's cost; ``False`` stops there (the result
         then has ``probed_only`` set and ``converged`` false).
+    staged
+        Names held at their start values in a first stage and fitted with the
+        others in a second (shape exponents, whose flat valleys a first stage
+        keeps the fit out of). Unused when every name is staged.
     substeps
         Integration steps per sample interval.
+    compress
+        Reduce every evaluation to ``p + 1`` rows (:func:`solve_records`);
+        default: where the Jacobian comes free.
 
     Returns
     -------
@@ -236,36 +315,38 @@ def fit_records(
                          f"known: {', '.join(flat)}")
     base = {**flat, **{n: 0.0 for n in EXTRAS if n in names}}
     start_list = [dict(base, **s) for s in starts] or [dict(base)]
-    all_specs = {**model.param_specs(), **EXTRA_SPECS}
-    specs = {n: all_specs[n] for n in names}
-    for n, (lo, hi) in (bounds or {}).items():
-        if n in specs:
-            specs[n] = dataclasses.replace(specs[n], lower=float(lo), upper=float(hi),
-                                           lower_open=False)
+    specs = fit_specs(model, names, bounds)
+    first = [n for n in names if n not in staged] or names
 
-    def vector(start: Mapping[str, float]) -> ParameterVector:
-        sc = scales(start) if callable(scales) else scales
-        return ParameterVector.build(names, start, specs, sc)
+    def run(fitted: list[str], st: Mapping[str, float], budget: int,
+            recs: Sequence[Record]) -> tuple[Solution, int]:
+        sc = scales(st) if callable(scales) else scales
+        pv = ParameterVector.build(fitted, st, specs, sc)
+        sol, prob = solve_records(model, recs, pv, max_nfev=budget, substeps=substeps,
+                                  compress=compress)
+        return sol, prob.evaluations
 
-    nfev = 0
-    chosen = start_list[0]
-    if len(start_list) > 1 and probe_nfev:
-        def probe(st: dict[str, float], k: int) -> tuple[Solution, int]:
-            sol, prob = solve_records(model, records, vector(st), max_nfev=k,
-                                      substeps=substeps)
-            return sol, prob.evaluations
+    def resume(st: dict[str, float], sol: Solution) -> dict[str, float]:
+        return dict(st, **dict(zip(first, map(float, sol.theta), strict=True)))
 
-        cost, sol, st, k = best_start(start_list, probe, probe_nfev, model.describe())
-        nfev += k
-        chosen = dict(st, **dict(zip(names, map(float, sol.theta), strict=True)))
+    probing = len(start_list) > 1 and bool(probe_nfev)
+    budget = probe_nfev if probe_nfev and probing else max_nfev
+    tried = start_list if probing else start_list[:1]
+    on = (probe_records or records) if probing else records
+    cost, sol, st, nfev = best_start(tried, lambda s, k: run(first, s, k, on), budget,
+                                     model.describe(), resume=resume)
+    chosen = resume(st, sol)
+    if probing:
         if keep_going is not None and not keep_going(cost):
             return _result(model, names, chosen, st, sol, nfev, probed_only=True)
-    sol, prob = solve_records(model, records, vector(chosen), max_nfev=max_nfev,
-                              substeps=substeps)
-    nfev += prob.evaluations
+        sol, k = run(first, chosen, max_nfev, records)
+        nfev += k
+        chosen = resume(chosen, sol)
+    if first != names:
+        sol, k = run(names, chosen, max_nfev, records)
+        nfev += k
     return _result(model, names, dict(zip(names, map(float, sol.theta), strict=True)), chosen,
                    sol, nfev)
-
 
 
 def best_start(starts: Sequence[dict[str, float]],

@@ -33,6 +33,7 @@ import numpy as np
 
 from fcomp.errors import FcompError
 from fcomp.measurement import ORIENTATIONS, G, Measurement
+from fcomp.models.base import side_of
 from fcomp.trajectory import prepare_signals
 
 
@@ -87,6 +88,20 @@ class FitData:
         return FitData(sig, self.y[mask], inertia, self.source, self.mass, self.label,
                        self.band_hz, rate)
 
+    def averaged(self, q: int) -> FitData:
+        """This record averaged over blocks of ``q`` samples (:func:`block_mean`): every
+        signal, the target and the extra columns; the sides ``s`` follow the averaged
+        velocity. Block means preserve displacement, so a long record can be fitted on
+        a shorter copy."""
+        if q <= 1:
+            return self
+        sig = {k: block_mean(v, q) for k, v in self.sig.items() if k != "s"}
+        sig["s"] = side_of(sig["v"])
+        inertia = None if self.inertia is None else block_mean(self.inertia, q)
+        rate = None if self.drive_rate is None else block_mean(self.drive_rate, q)
+        return FitData(sig, block_mean(self.y, q), inertia, self.source, self.mass, self.label,
+                       self.band_hz, rate)
+
     def holding(self, name: str, value: float) -> FitData:
         """This target with the fitted extra ``name`` held at ``value``: ``y - value*column``
         and no column left to fit (unchanged where this target has no such column)."""
@@ -119,6 +134,16 @@ class FitData:
         from fcomp.reconstruction import band_limit
 
         return band_limit(self.sig["t"], F, self.band_hz)
+
+
+def block_mean(arr: np.ndarray, q: int) -> np.ndarray:
+    """Means of ``arr`` over consecutive blocks of ``q`` samples (the last block may be
+    shorter): ``b_j = mean(arr[j*q:(j+1)*q])``; ``arr`` itself for ``q <= 1``."""
+    if q <= 1:
+        return arr
+    m = arr.size // q
+    head = arr[: m * q].reshape(m, q).mean(axis=1)
+    return np.concatenate([head, [arr[m * q:].mean()]]) if arr.size % q else head
 
 
 def motion(meas: Measurement, cutoff_hz: float = 10.0

@@ -236,7 +236,7 @@ def propose(name: str, ctx: Context, form: str | None = None) -> Proposal:
 
 def _at_bound(ctx: Context, values: dict[str, float]) -> list[str]:
     """Names of the current fit's parameters that sit on a bound of their data box."""
-    from fcomp.diagnosis.refit import data_bounds
+    from fcomp.diagnosis.boxes import data_bounds
 
     model = ctx.current.model
     out = []
@@ -337,7 +337,8 @@ def _static_stage(model: FrictionModel, data: DiagnosisData, seg: Segmentation,
     :data:`fcomp.diagnosis.refit.STAGED`); effect parameters keep their values.
     Returns the fitted values (empty when there are too few points).
     """
-    from fcomp.diagnosis.refit import data_bounds, fixed_names
+    from fcomp.diagnosis.boxes import data_bounds
+    from fcomp.diagnosis.refit import fixed_names
     from fcomp.identification.problem import ParameterVector
     from fcomp.identification.static import SteadyStateMap, fit_steady_state, steady_state_points
 

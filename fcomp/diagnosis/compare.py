@@ -58,7 +58,7 @@ class Comparison:
         The model compared (with the values it was compared with).
     rms
         RMS error over the judged samples: the scored residual
-        (:func:`~fcomp.diagnosis.refit.scored_residual`, the logarithmic score of
+        (:func:`~fcomp.diagnosis.scoring.scored_residual`, the logarithmic score of
         the model's prediction band with the noise floor, in N), which equals the
         plain error where the motion fixes the prediction and charges a band the
         model cannot place. The same measure decides in :mod:`.loop`.
@@ -296,7 +296,7 @@ def compare(model: str | FrictionModel, data: Measurement | Sequence[Measurement
         refit = Refit(d, sp, seg.d_pre, max_samples=COMPARE_SAMPLES, noise=floor)
         res = refit.result(mdl, values, 0)
         judged, label = seg.valid, "usable"
-    r = res.residual  # scored (:func:`.refit.scored_residual`): what decides
+    r = res.residual  # scored (:func:`.scoring.scored_residual`): what decides
     plain, located = res.plain_residual, res.located
     rms = float(np.sqrt(np.mean(r[judged] ** 2))) if judged.any() else math.nan
     width = max(10, int(round(0.25 / d.scales.dt)))

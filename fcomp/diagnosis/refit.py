@@ -44,12 +44,11 @@ from typing import Any
 
 import numpy as np
 
-from fcomp.diagnosis.boxes import BoxState, DataBoxes, data_bounds
+from fcomp.diagnosis.boxes import BoxState, DataBoxes
 from fcomp.diagnosis.data import DiagnosisData, Experiment
 from fcomp.diagnosis.scoring import (
     prediction_band,
     sample_weights,
-    score_noise_share,
     scored_residual,
     timing_windows,
 )
@@ -73,8 +72,7 @@ from fcomp.trajectory import friction_along_motion
 #: Names other modules import from here: the weights and the noise share of the scores
 #: (:mod:`.scoring`) and the data boxes (:mod:`.boxes`).
 __all__ = ["CANDIDATE_SAMPLES", "MIN_GAIN", "PROBE_NFEV", "PROBE_SAMPLES", "RIG_EXTRAS",
-           "STAGED", "FitResult", "Refit", "data_bounds", "fixed_names", "sample_weights",
-           "score_noise_share", "scored_residual"]
+           "STAGED", "FitResult", "Refit", "fixed_names"]
 
 #: Evaluations of each short probe fit when there are several starts.
 PROBE_NFEV = 20

@@ -39,8 +39,9 @@ from scipy import stats
 from fcomp.diagnosis.data import DiagnosisData
 from fcomp.diagnosis.features import drift_fall, paired_trimmed_rms
 from fcomp.diagnosis.noise import effective_sample_size
-from fcomp.diagnosis.refit import FitResult, score_noise_share
+from fcomp.diagnosis.refit import FitResult
 from fcomp.diagnosis.regimes import REGIMES, Segmentation
+from fcomp.diagnosis.scoring import score_noise_share
 from fcomp.diagnosis.split import Split
 from fcomp.errors import FcompError
 
@@ -120,7 +121,7 @@ class Ground:
         return known[1]
 
     def timing_share(self, fit: FitResult, where: np.ndarray) -> float:
-        """:func:`.refit.score_noise_share` of ``fit``'s timing band at the samples ``where``."""
+        """:func:`.scoring.score_noise_share` of ``fit``'s timing band at the samples ``where``."""
         if fit.timing_spread is None or not where.size:
             return 1.0
         return score_noise_share(fit.timing_spread[where], self.noise)

@@ -29,8 +29,9 @@ from dataclasses import dataclass, field
 import fcomp.diagnosis.catalogue as catalogue
 import fcomp.diagnosis.disturbance as disturbance
 from fcomp.diagnosis.noise import NoiseFloor, effective_sample_size, noise_floor
-from fcomp.diagnosis.refit import RIG_EXTRAS, FitResult, Refit, sample_weights
+from fcomp.diagnosis.refit import RIG_EXTRAS, FitResult, Refit
 from fcomp.diagnosis.rule import AcceptanceRule, Ground, Judgement, delta_bic
+from fcomp.diagnosis.scoring import sample_weights
 from fcomp.diagnosis.wording import judgement_text
 from fcomp.diagnosis.workers import Tick, refit_all
 from fcomp.effects import EFFECTS, Effect

@@ -8,7 +8,7 @@ residual is ``unexplained-structure`` when
   held-out mean square *and* the part it explains is at least
   ``max(structure_rms*noise_floor, structure_level*force_scale)`` (RMS);
 * the residual near starts and reversals (weighted as the fits weigh it:
-  :func:`.refit.sample_weights`) repeats as a function of the time since the
+  :func:`.scoring.sample_weights`) repeats as a function of the time since the
   event (:func:`.features.event_structure`), or, not in phase, lifts the RMS
   there above ``event_excess`` noise floors, or rings there (a narrow band of
   power quiet stretches lack, :func:`.features.event_ring`);
@@ -39,8 +39,9 @@ from fcomp.diagnosis.features import (
     residual_structure,
     trimmed_rms,
 )
-from fcomp.diagnosis.refit import FitResult, sample_weights
+from fcomp.diagnosis.refit import FitResult
 from fcomp.diagnosis.rule import Ground
+from fcomp.diagnosis.scoring import sample_weights
 from fcomp.errors import FcompError
 from fcomp.identification.plausibility import FitWarning
 
@@ -124,7 +125,7 @@ def conclude(fit: FitResult, ground: Ground, lines: Sequence[Disturbance],
     data, seg, split, nf = ground.data, ground.segmentation, ground.split, ground.noise
     rms_final = fit.rms_test
     # where structure is left: the tolerant residual (a shape the model could place);
-    # how large the error is: the scored residual (:func:`.refit.scored_residual`)
+    # how large the error is: the scored residual (:func:`.scoring.scored_residual`)
     located = fit.located
     features = residual_structure(located, data, seg, split.train, split.test)
     # what counts: a structure as large as the noise and as a small share of the

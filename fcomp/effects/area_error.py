@@ -22,7 +22,7 @@ if TYPE_CHECKING:
 
 #: Largest area error the diagnosis fits (m^2): 5 % of the piston area of a 100 mm bore.
 #: The fit's box is this (``m^2`` has no data scale in
-#: :func:`fcomp.diagnosis.refit.data_bounds`: its +-20 unit scales are +-20 m^2).
+#: :func:`fcomp.diagnosis.boxes.data_bounds`: its +-20 unit scales are +-20 m^2).
 AREA_ERROR_BOUND = 0.05 * math.pi / 4 * 0.1**2
 
 AreaErrorParams = make_params_class("AreaErrorParams", [

@@ -11,7 +11,6 @@ from pathlib import Path
 
 from fcomp.cli import common
 from fcomp.errors import FcompError
-from fcomp.outputs import InputSet
 from fcomp.parallel import check_scheduler
 from fcomp.registry import COMMANDS
 from studies import STUDIES
@@ -40,12 +39,7 @@ def run(args: argparse.Namespace) -> int:
     if args.out is not None and not args.out.strip():
         raise FcompError("--out: no folder name given (an empty argument)")
     out = Path(args.out) if args.out else Path(f"study-{args.name}")
-    inputs = InputSet()
-    for option, spec in (("--plant-params", args.plant_params), ("--friction", args.friction)):
-        if spec is not None and spec.lower().endswith((".toml", ".json")):
-            inputs.file(spec, option)
-    if args.effects is not None:
-        inputs.file(args.effects, "--effects")
+    inputs = common.plant_inputs(args)
     common.check_outputs(inputs, [], [("--out", out, "study")])  # check_folder_target too
     words = ["fcomp", "study", args.name, "--out", str(out)] + (["--fast"] if args.fast else [])
     for key, option in STUDY_OPTIONS.items():

@@ -20,7 +20,7 @@ from fcomp.cli.common import emit_result, json_target, report_dir, result_text
 from fcomp.errors import FcompError
 from fcomp.modelfile import is_model_file, seal_friction
 from fcomp.models import MODELS
-from fcomp.outputs import InputSet, staged_folder
+from fcomp.outputs import staged_folder
 from fcomp.parallel import check_scheduler
 from fcomp.progress import progress_bar
 from fcomp.report import Report
@@ -191,12 +191,7 @@ def run(args: argparse.Namespace) -> int:
     scheduler = check_scheduler(args.scheduler)
     if args.workers is not None and args.workers < 1:
         raise FcompError(f"--workers must be a positive integer, got {args.workers}")
-    inputs = InputSet()
-    for option, spec in (("--plant-params", args.plant_params), ("--friction", args.friction)):
-        if spec is not None and spec.lower().endswith((".toml", ".json")):
-            inputs.file(spec, option)
-    if args.effects is not None:
-        inputs.file(args.effects, "--effects")
+    inputs = common.plant_inputs(args)
     common.check_outputs(inputs, [("--json", out)], [("--report", folder, "report")])
     plan = _plan(args)
     jobs = plan.jobs()

@@ -287,6 +287,18 @@ def check_outputs(inputs: InputSet, files: list[tuple[str, Path | None]],
     check_distinct(listed)
 
 
+def plant_inputs(args: argparse.Namespace) -> InputSet:
+    """The files a plant command reads besides its records: ``--plant-params`` and
+    ``--friction`` when they name a ``.toml``/``.json`` file, and the ``--effects`` module."""
+    inputs = InputSet()
+    for option, spec in (("--plant-params", args.plant_params), ("--friction", args.friction)):
+        if spec is not None and spec.lower().endswith((".toml", ".json")):
+            inputs.file(spec, option)
+    if args.effects is not None:
+        inputs.file(args.effects, "--effects")
+    return inputs
+
+
 def measurement_inputs(paths: list[str], option: str = "DATA") -> InputSet:
     """The input set of measurement files; refuses the same file given twice."""
     from fcomp.measurement import measurement_paths

@@ -168,6 +168,40 @@ def default_cutoff(t: np.ndarray, x: np.ndarray) -> float:
     return band(fs, speed_scale(t, x), lambda fc: derived_velocity_noise(sx, fc, fs))
 
 
+def bristle_stiffness(x: np.ndarray, v: np.ndarray, f: np.ndarray, g: float) -> float | None:
+    """``sigma0`` (N/m) a record shows: from the displacement to the force zero crossing
+    after its reversals, ``ln(2)*g/dx`` (the LuGre bristle's exponential approach to the new
+    level ``g``, N, reaches the crossing after ``dx = ln(2)*g/sigma0``), median over reversals.
+
+    A reversal counts when the force sat on the other side by at least ``g/2`` before it
+    (a full swing). Returns ``None`` when the data hold no such reversal. The diagnosis
+    reads the presliding length off it, the identification the start of ``sigma0``.
+    """
+    s = np.sign(v)
+    rev = np.nonzero((s[1:] != 0) & (s[:-1] != 0) & (s[1:] != s[:-1]))[0] + 1
+    estimates = []
+    for k in map(int, rev):
+        new = float(s[k])
+        if new * f[k - 1] > -0.5 * g:  # the force did not sit on the other side: no full swing
+            continue
+        j = k
+        stop = min(int(f.size), k + 10_000)
+        while j < stop and s[j] == new and new * f[j] < 0.0:
+            j += 1
+        if j >= stop or s[j] != new:
+            continue
+        # interpolate the zero crossing between j-1 and j
+        f0, f1 = f[j - 1], f[j]
+        w = f0 / (f0 - f1) if f1 != f0 else 1.0
+        xc = x[j - 1] + w * (x[j] - x[j - 1])
+        dx = abs(xc - x[k - 1])
+        if dx > 0:
+            estimates.append(math.log(2.0) * g / dx)
+    if not estimates:
+        return None
+    return float(np.median(estimates))
+
+
 def quiet_runs(x: np.ndarray, tol: float, min_len: int, edge_tol: float
                ) -> tuple[np.ndarray, list[tuple[int, int]]]:
     """Rest and slow creep read off a position: ``(rest mask, creep runs)``.

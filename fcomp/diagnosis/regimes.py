@@ -11,7 +11,7 @@ data (:class:`~fcomp.conditioning.Scales`), not from constants tuned to a rig:
     of the speed scale, and one position-resolution step per 20 samples.
 ``d_pre``
     presliding length: ``Fc/sigma0`` with ``sigma0`` read off the force zero
-    crossings after reversals (:func:`fcomp.identification.guess.bristle_stiffness`,
+    crossings after reversals (:func:`fcomp.conditioning.bristle_stiffness`,
     ``d_pre = dx_half/ln 2``), clamped to [2 resolutions, 5 % of the stroke].
     The force settles on the new side within about ``3*d_pre``.
 ``t_dwell``
@@ -45,8 +45,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from fcomp.conditioning import bristle_stiffness
 from fcomp.diagnosis.data import DiagnosisData
-from fcomp.identification.guess import bristle_stiffness
 
 REGIMES: tuple[str, ...] = ("pre-sliding", "reversal", "sliding", "dwell/break-away")
 PRESLIDING, REVERSAL, SLIDING, DWELL = range(4)

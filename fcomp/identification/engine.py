@@ -32,14 +32,10 @@ from typing import Any
 import numpy as np
 from scipy.special import stdtrit
 
+from fcomp.conditioning import bristle_stiffness
 from fcomp.errors import ConvergenceError, FcompError, term
 from fcomp.identification.dynamic import EXTRAS, Dependent
-from fcomp.identification.guess import (
-    bristle_stiffness,
-    default_v_min,
-    linear_start,
-    stribeck_start,
-)
+from fcomp.identification.guess import default_v_min, linear_start, stribeck_start
 from fcomp.identification.hysteresis_fit import EXTERNAL, INTERNAL
 from fcomp.identification.problem import ParameterVector, Solution, base_name, side_suffix
 from fcomp.identification.records import EXTRA_SPECS, Record, RecordsProblem, solve_records

@@ -22,7 +22,6 @@ model's current values.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -90,31 +89,3 @@ def linear_start(d: FitData, v_min: float, *, offset: bool, directional: bool,
     return LinearStart(Fc, B, mass, off, fric)  # type: ignore[arg-type]
 
 
-def bristle_stiffness(x: np.ndarray, v: np.ndarray, f: np.ndarray, g: float) -> float | None:
-    """``sigma0`` (N/m) from the displacement to the force zero crossing after reversals.
-
-    Returns ``None`` when the data hold no usable reversal.
-    """
-    s = np.sign(v)
-    rev = np.nonzero((s[1:] != 0) & (s[:-1] != 0) & (s[1:] != s[:-1]))[0] + 1
-    estimates = []
-    for k in map(int, rev):
-        new = float(s[k])
-        if new * f[k - 1] > -0.5 * g:  # the force did not sit on the other side: no full swing
-            continue
-        j = k
-        stop = min(int(f.size), k + 10_000)
-        while j < stop and s[j] == new and new * f[j] < 0.0:
-            j += 1
-        if j >= stop or s[j] != new:
-            continue
-        # interpolate the zero crossing between j-1 and j
-        f0, f1 = f[j - 1], f[j]
-        w = f0 / (f0 - f1) if f1 != f0 else 1.0
-        xc = x[j - 1] + w * (x[j] - x[j - 1])
-        dx = abs(xc - x[k - 1])
-        if dx > 0:
-            estimates.append(math.log(2.0) * g / dx)
-    if not estimates:
-        return None
-    return float(np.median(estimates))

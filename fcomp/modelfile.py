@@ -42,7 +42,6 @@ from fcomp.errors import FcompError, FcompWarning, FileFormatError, UnknownNameE
 from fcomp.models import MODELS, FrictionModel, make_model
 from fcomp.models.document import (
     FORMAT,
-    MEASUREMENT_EFFECTS,
     MEASUREMENT_PARAMS,
     VERSION,
     model_document,
@@ -339,7 +338,7 @@ def _build(doc: Mapping[str, Any], params: dict[str, float], label: str) -> Fric
     consumed: set[str] = set()
     for i, entry in enumerate(_list(doc.get("effects", []), label, "effects")):
         cls, config = _effect_class(entry, label, f"effects[{i}]")
-        if cls.name in MEASUREMENT_EFFECTS:
+        if cls.of_measurement:
             raise FileFormatError(f"{label}: effect {cls.name!r} describes the measurement: "
                                   "it belongs in measurement_terms.effects")
         effect = _effect(cls, params, config, label, f"effects[{i}]")

@@ -27,6 +27,9 @@ An effect is a subclass of :class:`Effect` with
     that experiment worded for such a rig, where it differs (no chambers to
     vent on a motor-driven axis); :meth:`Effect.experiment_for` picks it (a
     plain ``dict`` in the class body, made read-only when the class is made);
+``of_measurement``
+    optional, ``True`` for an effect of the measurement, not of the seal (a force
+    offset, an inertia error): a model file keeps it among its measurement terms;
 ``fit_extra``
     optional, the name of an extra term of a fit (``offset``: the constant
     force ``fcomp fit --offset`` estimates beside the model) that this effect
@@ -167,6 +170,9 @@ class Effect(PlainValue):
     confounded: ClassVar[tuple[str, ...]] = ()
     #: the extra term of a fit this effect holds as its own parameter of that name ("": none)
     fit_extra: ClassVar[str] = ""
+    #: it describes the measurement, not the seal (a model file keeps it in
+    #: ``measurement_terms``; plant friction and compensators drop it)
+    of_measurement: ClassVar[bool] = False
     #: signals the effect reads besides v (diagnosis checks the data has them)
     needs: ClassVar[tuple[str, ...]] = ()
     #: needs a motion (memory, acceleration): not a candidate for steady-state points

@@ -41,6 +41,7 @@ class ForceOffset(Effect):
     confounded = ("direction-asymmetry", "area-error")
     #: a fit's ``offset`` (``fcomp fit --offset``) is this effect's parameter
     fit_extra = "offset"
+    of_measurement = True
     signature = "residual with a constant non-zero mean in both directions"
     experiment = "a zero reading of the force measurement at rest with nothing driving or " \
         "loading the actuator"

@@ -35,6 +35,7 @@ class InertiaError(Effect):
 
     name = "inertia-error"
     Params = InertiaErrorParams
+    of_measurement = True
     # sigma2*T*a while sliding is dm*a there; a force reconstructed from the pressures is
     # F + m*a, so an area error carries a share of m*a too
     confounded = ("viscous-lead", "area-error")

@@ -49,8 +49,6 @@ if TYPE_CHECKING:
 FORMAT = "fcomp-model"
 #: The version this release writes (and the newest it reads).
 VERSION = 1
-#: Effects that describe the measurement, not the seal.
-MEASUREMENT_EFFECTS: tuple[str, ...] = ("force-offset", "inertia-error")
 #: Values of a fit or diagnosis that describe the measurement (name -> unit).
 MEASUREMENT_PARAMS: dict[str, str] = {"mass": "kg", "offset": "N", "lag": "s"}
 #: What ``measurement_terms`` is, written into every file that has some.
@@ -138,7 +136,7 @@ def model_document(model: FrictionModel, *, stderr: Mapping[str, float] | None =
     dropped: set[str] = set()
     for e in model.effects:
         entry = _effect_entry(e)
-        if e.name in MEASUREMENT_EFFECTS:
+        if e.of_measurement:
             own = e.params.flat()
             entry["params"] = {k: number(v, f"params.{k}") for k, v in own.items()}
             dropped |= set(own)

@@ -90,6 +90,12 @@ ORIENTATIONS = {"horizontal": 0.0, "vertical-up": 1.0, "vertical-down": -1.0}
 G = 9.80665
 #: Largest plausible value of each length in ``[rig]`` (m); larger ones are taken as mm.
 MAX_LENGTH = {"bore": 2.0, "rod": 2.0, "stroke": 20.0}
+#: Largest plausible moving mass in ``[rig]`` (kg): beyond it the value is a unit mistake or
+#: corrupted (and a force ``m*a`` of it overflows the computations).
+MAX_MASS = 1.0e6
+#: Shortest time step of a record (s): no rig logs faster than a gigahertz; shorter steps are
+#: stamps in another unit or corrupted (and a rate of ``1/dt`` overflows the filters).
+MIN_STEP = 1.0e-9
 #: A non-zero pressure column whose largest magnitude is below this (Pa) is bar or MPa.
 MIN_PRESSURE_SCALE = 50.0
 U_UNITS = ("A", "V")
@@ -327,6 +333,9 @@ class Measurement:
                         f"{self.label}: sidecar rig.{key} must be a non-negative number in SI "
                         f"units, got {_plain(val)}"
                     )
+        if "mass" in rig and rig["mass"] > MAX_MASS:
+            raise FcompError(f"{self.label}: sidecar rig.mass = {_plain(rig['mass'])} kg is "
+                             f"implausible (more than {MAX_MASS:g} kg); the mass is in kg (SI)")
         for key, limit in MAX_LENGTH.items():
             if key in rig and rig[key] > limit:
                 raise FcompError(
@@ -502,6 +511,11 @@ def check_values(columns: Mapping[str, np.ndarray], label: str,
             i = int(np.argmax(dt <= 0))
             raise FcompError(f"{label}: time is not strictly increasing at row {row(i + 1)} "
                              f"(t = {float(t[i + 1])!r} s)")
+        if np.any(dt < MIN_STEP):
+            i = int(np.argmax(dt < MIN_STEP))
+            raise FcompError(f"{label}: the time step at row {row(i + 1)} is "
+                             f"{float(dt[i]):g} s, shorter than {MIN_STEP:g} s: no rig logs "
+                             "that fast; check that column 't' is in seconds")
 
 
 def _plain(value: Any) -> str:

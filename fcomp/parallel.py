@@ -28,6 +28,7 @@ jobs) is called as they arrive. The commands' progress bars (:func:`progress_bar
 from __future__ import annotations
 
 import os
+import signal
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import Executor, ProcessPoolExecutor, as_completed
 from contextlib import AbstractContextManager, contextmanager
@@ -121,19 +122,53 @@ def executor(scheduler: str | None = None, workers: int | None = None
     if n == 1:
         yield None
         return
-    with process_pool(n) as pool:
+    with stopping(process_pool(n)) as pool:
         yield pool
 
 
 def process_pool(workers: int, *, spawn: bool = False) -> ProcessPoolExecutor:
     """A local process pool whose workers first execute the user's own code (``--effects``
     files, :func:`fcomp.usercode.load_sources`); ``spawn`` starts them fresh (the default
-    on macOS and Windows) rather than forked."""
+    on macOS and Windows) rather than forked. Its workers leave Ctrl-C and SIGTERM to the
+    parent (:func:`stopping`)."""
     import multiprocessing
 
     ctx = multiprocessing.get_context("spawn") if spawn else None
     return ProcessPoolExecutor(max_workers=workers, mp_context=ctx,
-                               initializer=load_sources, initargs=(user_sources(),))
+                               initializer=_worker_start, initargs=(user_sources(),))
+
+
+def _worker_start(sources: tuple[tuple[str, str, str], ...]) -> None:
+    """A local worker's first act: Ctrl-C at a terminal reaches every process of the group,
+    and the parent alone answers it (it stops the workers, :func:`stopping`: no traceback
+    from each); SIGTERM ends the worker at once, whatever a forked parent installed. Then
+    the user's files are executed (:func:`fcomp.usercode.load_sources`)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    load_sources(sources)
+
+
+@contextmanager
+def stopping(pool: ProcessPoolExecutor) -> Iterator[ProcessPoolExecutor]:
+    """``pool``, shut down on leaving: after its work, waiting for it; on an interrupt or an
+    error, at once -- pending jobs cancelled and the workers ended, not waited for (a refit
+    can take many seconds)."""
+    try:
+        yield pool
+    except BaseException:
+        stop(pool)
+        raise
+    pool.shutdown()
+
+
+def stop(pool: Executor) -> None:
+    """Cancel ``pool``'s pending jobs and end its local workers now (a Dask client's jobs are
+    cancelled; its workers are the cluster's)."""
+    procs = list((getattr(pool, "_processes", None) or {}).values())
+    pool.shutdown(wait=False, cancel_futures=True)
+    for proc in procs:
+        if proc.is_alive():
+            proc.terminate()
 
 
 def run_tasks(fn: Callable[[T], R], items: Sequence[T], *, workers: int | None = None,
@@ -159,4 +194,5 @@ def run_tasks(fn: Callable[[T], R], items: Sequence[T], *, workers: int | None =
     return results
 
 
-__all__ = ["check_scheduler", "dask_client", "executor", "process_pool", "run_tasks"]
+__all__ = ["check_scheduler", "dask_client", "executor", "process_pool", "run_tasks", "stop",
+           "stopping"]

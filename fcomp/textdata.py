@@ -116,9 +116,14 @@ def parse_rows(label: str, rows: list[tuple[int, str]], delimiter: str | None,
         for j, cell in enumerate(cells):
             try:
                 float(cell)
+                number = "_" not in cell  # Python reads 1_000; a data file must not
             except ValueError:
+                number = False
+            if not number:
                 col = f"column {names[j]!r}" if names is not None else f"column {j + 1}"
-                problem = f"{cell!r} is not a number" if cell else "the value is missing"
+                problem = (f"{cell!r} is not a number" if cell else "the value is missing") + (
+                    " (digit separators are not read: write 1000, not 1_000)" if "_" in cell
+                    else "")
                 raise FcompError(f"{label}: cannot read as {what}: row {n}, {col}: "
                                  f"{problem}") from None
     raise FcompError(f"{label}: cannot read as {what}")  # pragma: no cover - loadtxt disagreed

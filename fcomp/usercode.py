@@ -50,8 +50,8 @@ def run_module(path: Path, module_name: str, what: str) -> ModuleType:
     except SyntaxError as exc:
         sys.modules.pop(spec.name, None)
         SOURCES.pop(module_name, None)
-        raise FcompError(f"{path} line {exc.lineno}: the {what} has a syntax error "
-                         f"({exc.msg})") from None
+        where = f"{path} line {exc.lineno}" if exc.lineno else str(path)
+        raise FcompError(f"{where}: the {what} has a syntax error ({exc.msg})") from None
     except BaseException as exc:  # SystemExit too: a plugin must not end the command
         sys.modules.pop(spec.name, None)
         SOURCES.pop(module_name, None)

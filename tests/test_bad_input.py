@@ -118,6 +118,9 @@ def _write_lab(lab: Path) -> None:
         "empty_cell.csv": _lines(good, 7, 2, ""),
         "huge.csv": _lines(good, 9, 4, "1e300"),
         "ns_time.csv": "t,F\n" + "".join(f"{1.7e18 + k * 1e6!r},1.0\n" for k in range(5)),
+        "tiny_steps.csv": "t,x,F\n" + "".join(f"{k * 1e-300!r},{1e-4 * k},1.0\n"
+                                               for k in range(50)),
+        "underscore.csv": "t,x,F\n0,0,1\n0.01,1_000,1\n",
         "gap_nan.csv": good.replace("\n", "\n\n", 4).replace(
             good.splitlines()[9], good.splitlines()[9].rsplit(",", 1)[0] + ",nan"),
         "ragged.csv": _lines(good, 5, 4, "1,2"),
@@ -147,6 +150,7 @@ def _write_lab(lab: Path) -> None:
         "bintoml.csv": good, "bintoml.toml": b"\x00\xff\x00",
         "rigtable.csv": good, "rigtable.toml": "rig = 3\n",
         "mass_inf.csv": good, "mass_inf.toml": "[rig]\nmass = inf\n",
+        "mass_huge.csv": good, "mass_huge.toml": "[rig]\nmass = 1e308\n",
         "patm_bar.csv": good, "patm_bar.toml": "p_atm = 1.013\n",
         "typo.csv": good, "typo.toml": "[rig]\nmas = 2.0\n",
         "absneg.csv": "t,x,p1\n0,0,-1000\n1,0.01,200000\n",
@@ -174,6 +178,8 @@ def _write_lab(lab: Path) -> None:
         "eff_exitmsg.py": "import sys\n\nsys.exit('bye')\n",
         "eff_raise.py": '"""Broken."""\n\nraise RuntimeError("boom")\n',
         "eff_syntax.py": "def broken(:\n    pass\n",
+        "eff_nul.py": b"x = 1\x00\n",
+        "eff_ctrlc.py": "raise KeyboardInterrupt\n",
         "eff_import.py": "import no_such_package_xyz\n",
         "eff_dup.py": _effect("viscous"),
         "eff_zdiv.py": _effect(f"zdiv-{TAG}", "1 / 0"),
@@ -521,6 +527,19 @@ CASES: dict[str, Case] = {
     "sidecar-binary": Case("fit bintoml.csv --model coulomb", match="binary"),
     "sidecar-rig-not-table": Case("fit rigtable.csv --model coulomb", match="must be a table"),
     "sidecar-mass-inf": Case("fit mass_inf.csv --model coulomb", match="got inf"),
+    "sidecar-mass-huge": Case("fit mass_huge.csv --model coulomb",
+                              match="rig.mass = 1e+308 kg is implausible"),
+    # stamps 1e-300 s apart ended in an OverflowError inside the conditioning
+    "read-tiny-time-steps-compare": Case("compare tiny_steps.csv --model coulomb",
+                                         match="shorter than 1e-09 s: no rig logs that fast"),
+    "read-tiny-time-steps-diagnose": Case("diagnose tiny_steps.csv --baseline coulomb",
+                                          match="shorter than 1e-09 s"),
+    "read-tiny-time-steps-fit": Case("fit tiny_steps.csv --model coulomb",
+                                     match="check that column 't' is in seconds"),
+    "read-digit-separator": Case("compare underscore.csv --model coulomb",
+                                 match="row 3, column 'x': '1_000' is not a number (digit "
+                                       "separators are not read"),
+    "sweep-negative-seed": Case("sweep --seed -1", match="--seed must be a non-negative integer"),
     "sidecar-p-atm-in-bar": Case("fit patm_bar.csv --model coulomb",
                                  match="p_atm = 1.013 is not an atmospheric pressure in Pa"),
     "warn-sidecar-typo": Case("fit typo.csv --model coulomb-viscous --json typo.json", code=0,
@@ -579,6 +598,12 @@ CASES: dict[str, Case] = {
                                     "failed: RuntimeError: boom"),
     "effects-syntax-error": Case(f"{FIT} --effects eff_syntax.py",
                                  match="eff_syntax.py line 1: the effects module has a syntax"),
+    # a NUL byte has no line: the file is named alone (it said "line None")
+    "effects-nul-byte": Case(f"{FIT} --effects eff_nul.py",
+                             match="eff_nul.py: the effects module has a syntax error"),
+    # a plugin raising KeyboardInterrupt itself is its error (exit 2, file and line), not Ctrl-C
+    "effects-raises-keyboard-interrupt": Case(f"{FIT} --effects eff_ctrlc.py",
+                                              match="eff_ctrlc.py line 1"),
     "effects-import-error": Case(f"{FIT} --effects eff_import.py",
                                  match="No module named 'no_such_package_xyz'"),
     "effects-duplicate-name": Case(f"{FIT} --effects eff_dup.py",
@@ -974,6 +999,32 @@ def test_long_run_shows_progress_and_a_signal_leaves_nothing(lab: Path, sig: int
     assert proc.returncode == code
     assert seen.decode().rsplit("\x1b[K", 1)[-1].strip() == line, seen
     assert snapshot(lab) == before
+
+
+@pytest.mark.slow
+def test_ctrl_c_during_parallel_work_is_one_line(tmp_path: Path) -> None:
+    """Ctrl-C sent to the whole process group, as a terminal sends it, while a diagnosis
+    refits its candidates in worker processes: ``fcomp: interrupted``, exit 130, and not a
+    line from the workers (each used to print its traceback: 126 lines); nothing written."""
+    from fcomp.synthetic import generate
+
+    generate(["pressure-dependence"], base="lugre", duration=20.0, seed=1
+             ).measurement.write(tmp_path / "long.csv")
+    before = snapshot(tmp_path)
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "fcomp.cli.main", "diagnose", "long.csv", "--baseline", "lugre",
+         "--jobs", "2", "--no-progress", "--json", "d.json"],
+        cwd=tmp_path, env=_env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+        start_new_session=True,  # a group of its own, as a terminal's foreground job
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    time.sleep(8.0)  # the workers started and refitting (earlier, the answer is the same)
+    sent = time.monotonic()
+    os.killpg(proc.pid, signal.SIGINT)
+    out, err = proc.communicate(timeout=120)
+    print(f"stopped {time.monotonic() - sent:.1f} s after Ctrl-C")
+    assert proc.returncode == 130, err.decode()
+    assert err.decode().strip() == "fcomp: interrupted" and out == b""
+    assert snapshot(tmp_path) == before
 
 
 def test_messages_show_plain_numbers() -> None:

@@ -189,6 +189,8 @@ def run(args: argparse.Namespace) -> int:
     out = json_target(args.json)
     folder = report_dir(args.report)
     scheduler = check_scheduler(args.scheduler)
+    if args.seed < 0:
+        raise FcompError(f"--seed must be a non-negative integer, got {args.seed}")
     if args.workers is not None and args.workers < 1:
         raise FcompError(f"--workers must be a positive integer, got {args.workers}")
     inputs = common.plant_inputs(args)

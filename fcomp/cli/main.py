@@ -80,20 +80,33 @@ class _Terminated(KeyboardInterrupt):
     """SIGTERM, raised like Ctrl-C so that staged outputs are cleaned up."""
 
 
+class _Interrupted(KeyboardInterrupt):
+    """SIGINT (Ctrl-C): told apart from a ``KeyboardInterrupt`` a plugin raises itself."""
+
+
 @contextmanager
-def _sigterm_interrupts() -> Iterator[None]:
+def _signals_interrupt() -> Iterator[None]:
+    """SIGTERM and SIGINT raise :class:`_Terminated` and :class:`_Interrupted` inside the block."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
 
-    def handler(signum: int, frame: Any) -> None:
+    def terminated(signum: int, frame: Any) -> None:
         raise _Terminated()
 
-    old = signal.signal(signal.SIGTERM, handler)
+    def interrupted(signum: int, frame: Any) -> None:
+        raise _Interrupted()
+
+    old = signal.signal(signal.SIGTERM, terminated)
+    # Ctrl-C as Python takes it by default; a process started with it ignored keeps ignoring
+    old_int = signal.getsignal(signal.SIGINT)
+    if old_int is signal.default_int_handler:
+        signal.signal(signal.SIGINT, interrupted)
     try:
         yield
     finally:
         signal.signal(signal.SIGTERM, old)
+        signal.signal(signal.SIGINT, old_int)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -101,7 +114,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     common.ARGV = list(sys.argv[1:] if argv is None else argv)
     common.WARNINGS.clear()
-    with warnings.catch_warnings(record=True) as caught, _sigterm_interrupts():
+    with warnings.catch_warnings(record=True) as caught, _signals_interrupt():
         common.PYTHON_WARNINGS = caught
         try:
             code = _run(args)
@@ -131,7 +144,11 @@ def _run(args: argparse.Namespace) -> int:
     except _Terminated:
         sys.stderr.write("fcomp: terminated\n")
         return 143
-    except KeyboardInterrupt:
+    except KeyboardInterrupt as exc:
+        # raised by the user's code itself, not by Ctrl-C: an error of that code
+        culprit = None if isinstance(exc, _Interrupted) else blame(exc)
+        if culprit is not None:
+            return _error(culprit)
         sys.stderr.write("fcomp: interrupted\n")
         return 130
     except SystemExit as exc:  # only the user's code would: it must not end the command
@@ -139,7 +156,9 @@ def _run(args: argparse.Namespace) -> int:
     except RecursionError as exc:
         return _error(blame(exc) or "the computation recursed too deeply (RecursionError)")
     except MemoryError:
-        return _error("out of memory; lower --rate or --duration, or use smaller data")
+        fewer = ("lower --rate or --duration" if hasattr(args, "rate") and hasattr(args, "duration")
+                 else "use fewer or shorter records")
+        return _error(f"out of memory; {fewer}")
     except Exception as exc:
         culprit = blame(exc)
         if culprit is not None:

@@ -21,7 +21,7 @@ from contextlib import contextmanager
 import fcomp.diagnosis.catalogue as catalogue
 from fcomp.diagnosis.refit import FitResult, Refit
 from fcomp.errors import FcompError
-from fcomp.parallel import executor, process_pool
+from fcomp.parallel import executor, process_pool, stopping
 
 #: Evaluation budget of a refit without exact sensitivities (finite differences).
 NONSYMBOLIC_NFEV = 8
@@ -55,13 +55,10 @@ def worker_pool(n_jobs: int | None, scheduler: str | None, candidates: int
         with executor(scheduler) as pool:
             yield pool
         return
-    pool = process_pool(n_workers(n_jobs), spawn=True)
-    try:
+    with stopping(process_pool(n_workers(n_jobs), spawn=True)) as pool:
         for _ in range(n_workers(n_jobs)):
             pool.submit(_ready)
         yield pool
-    finally:
-        pool.shutdown()
 
 
 def _ready() -> None:

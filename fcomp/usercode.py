@@ -46,6 +46,10 @@ def run_module(path: Path, module_name: str, what: str) -> ModuleType:
                                                                  errors="replace"))
         spec.loader.exec_module(module)
     except KeyboardInterrupt:
+        # Ctrl-C, or the file raised it: either way it is not loaded, and must not be
+        # executed again in the worker processes of a later command of this process
+        sys.modules.pop(spec.name, None)
+        SOURCES.pop(module_name, None)
         raise
     except SyntaxError as exc:
         sys.modules.pop(spec.name, None)

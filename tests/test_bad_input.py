@@ -1001,6 +1001,19 @@ def test_long_run_shows_progress_and_a_signal_leaves_nothing(lab: Path, sig: int
     assert snapshot(lab) == before
 
 
+def test_a_plugin_that_failed_to_load_is_not_run_again_in_workers(
+        lab: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]) -> None:
+    """A module that raised ``KeyboardInterrupt`` while loading is forgotten like one that
+    raised anything else: a later command's worker processes (and Dask workers) would run it
+    again and die (it hung a Dask run in the test suite)."""
+    from fcomp.usercode import user_sources
+
+    monkeypatch.chdir(lab)
+    assert main(shlex.split(f"{FIT} --effects eff_ctrlc.py")) == 2
+    assert "eff_ctrlc.py line 1" in capsys.readouterr().err
+    assert not [s for s in user_sources() if s[1].endswith("eff_ctrlc.py")]
+
+
 @pytest.mark.slow
 def test_ctrl_c_during_parallel_work_is_one_line(tmp_path: Path) -> None:
     """Ctrl-C sent to the whole process group, as a terminal sends it, while a diagnosis

@@ -1,8 +1,8 @@
 """Progress of long work: one callback protocol, one way to report it, one bar.
 
-Every long piece of work in fcomp -- a simulation over many samples, a batch
-of parallel jobs (:func:`fcomp.parallel.run_tasks`), a diagnosis's fits --
-tells its progress the same way: a :class:`ProgressCallback`
+Every long piece of work in fcomp with a known total -- a simulation over many
+samples, a batch of parallel jobs (:func:`fcomp.parallel.run_tasks`) -- tells
+its progress the same way: a :class:`ProgressCallback`
 ``callback(done, total)`` is called with the amount of work done so far out of
 ``total``, in the units of the work (jobs for a batch, seconds of simulated
 time from the start of the run for a simulation), so ``done/total`` is the
@@ -18,6 +18,9 @@ fraction done.
   process whose bars are relayed, one drawn by the parent,
   :class:`ProgressRelay`); :func:`ticker` is the callback that advances a bar
   by the jobs done.
+* **Work without a total** (a diagnosis's fits: how many depends on what it
+  finds) counts one unit at a time, saying which: a :data:`Tick`
+  ``tick(what)``, drawn by :func:`counter` (:func:`quiet` draws nothing).
 
 A bar offers ``update(n)``, ``set_postfix_str(text, refresh=True)``,
 ``close()``, ``n`` and ``total`` (tqdm's names) whichever kind it is.
@@ -27,7 +30,7 @@ from __future__ import annotations
 
 import os
 import sys
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from typing import Any, Protocol, TypeVar
 
@@ -190,5 +193,30 @@ def progress_bar(label: str, total: int | None, *, enabled: bool = True, unit: s
                 disable=not show, dynamic_ncols=True)
 
 
-__all__ = ["ProgressCallback", "ProgressRelay", "RelayedBar", "progress_bar", "receiver",
+#: One unit of work done, named (``tick("refit of dwell-time")``): work without a total.
+Tick = Callable[[str], None]
+
+
+def quiet(what: str) -> None:
+    """A :data:`Tick` that shows nothing."""
+
+
+@contextmanager
+def counter(label: str, *, enabled: bool = True, unit: str = "run",
+            tty_only: bool = True) -> Iterator[Tick]:
+    """A :data:`Tick` advancing a :func:`progress_bar` without a total by one, with what was
+    done beside it; the bar is closed on leaving."""
+    bar = progress_bar(label, None, enabled=enabled, unit=unit, tty_only=tty_only)
+
+    def tick(what: str) -> None:
+        bar.set_postfix_str(what, refresh=False)
+        bar.update(1)
+
+    try:
+        yield tick
+    finally:
+        bar.close()
+
+
+__all__ = ["ProgressCallback", "Tick", "counter", "quiet", "ProgressRelay", "RelayedBar", "progress_bar", "receiver",
            "relay_progress", "report", "reporting", "ticker"]

@@ -45,20 +45,15 @@ def run_module(path: Path, module_name: str, what: str) -> ModuleType:
         SOURCES[module_name] = (str(path), Path(path).read_text(encoding="utf-8",
                                                                  errors="replace"))
         spec.loader.exec_module(module)
-    except KeyboardInterrupt:
-        # Ctrl-C, or the file raised it: either way it is not loaded, and must not be
-        # executed again in the worker processes of a later command of this process
-        sys.modules.pop(spec.name, None)
-        SOURCES.pop(module_name, None)
-        raise
-    except SyntaxError as exc:
-        sys.modules.pop(spec.name, None)
-        SOURCES.pop(module_name, None)
-        where = f"{path} line {exc.lineno}" if exc.lineno else str(path)
-        raise FcompError(f"{where}: the {what} has a syntax error ({exc.msg})") from None
     except BaseException as exc:  # SystemExit too: a plugin must not end the command
+        # not loaded, whatever stopped it: never executed again in a later worker process
         sys.modules.pop(spec.name, None)
         SOURCES.pop(module_name, None)
+        if isinstance(exc, KeyboardInterrupt):  # Ctrl-C, or the file raised it
+            raise
+        if isinstance(exc, SyntaxError):
+            at = f"{path} line {exc.lineno}" if exc.lineno else str(path)
+            raise FcompError(f"{at}: the {what} has a syntax error ({exc.msg})") from None
         where = locate(exc) or str(path)
         raise FcompError(f"{where}: importing the {what} failed: {_describe(exc)}") from None
     return module

@@ -349,6 +349,15 @@ def with_warnings(doc: dict[str, Any]) -> dict[str, Any]:
     return {**doc, "warnings": items}
 
 
+def write_measurement(meas: Any, out: Path) -> tuple[Path, Path]:
+    """Write ``meas`` to ``out`` (CSV and sidecar), the command's warnings so far in the
+    sidecar; the two paths written."""
+    ws = current_warnings()
+    if ws:
+        meas.meta["warnings"] = ws
+    return meas.write(out)
+
+
 def current_warnings() -> list[dict[str, Any]]:
     """The warnings so far, Python warnings caught on the way included."""
     for w in PYTHON_WARNINGS or []:

@@ -27,11 +27,11 @@ import argparse
 
 from fcomp.cli.common import (
     check_outputs,
-    current_warnings,
     finite_float,
     output_path,
     warn,
     warn_sidecar,
+    write_measurement,
 )
 
 
@@ -102,9 +102,6 @@ def run(args: argparse.Namespace) -> int:
         warn("rows-dropped", f"{args.src}: {dropped} row(s) with a repeated time stamp dropped "
              "(the first of each kept; counts in the sidecar's [source])")
     warn_sidecar(meas)
-    ws = current_warnings()
-    if ws:
-        meas.meta["warnings"] = ws
-    csv, toml = meas.write(out)
+    csv, toml = write_measurement(meas, out)
     print(f"wrote {csv} and {toml} ({len(meas)} samples, columns {', '.join(meas.columns)})")
     return 0

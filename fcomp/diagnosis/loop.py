@@ -32,11 +32,11 @@ records the step, so the error-fall chart shows it.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import math
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from concurrent.futures import Executor
-from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -54,13 +54,13 @@ from fcomp.diagnosis.rule import AcceptanceRule, Ground
 from fcomp.diagnosis.search import Candidate, Search, Step
 from fcomp.diagnosis.split import STRATEGIES, Split, make_split
 from fcomp.diagnosis.verdict import VERDICTS, VerdictRule
-from fcomp.diagnosis.workers import Tick, worker_pool
+from fcomp.diagnosis.workers import worker_pool
 from fcomp.diagnosis.writers import model_file, signals, to_dict
 from fcomp.effects import EFFECTS, Effect
 from fcomp.errors import FcompError
 from fcomp.measurement import Measurement
-from fcomp.models import FrictionModel, make_model
-from fcomp.progress import progress_bar
+from fcomp.models import MODELS, FrictionModel, make_model
+from fcomp.progress import Tick, counter, quiet
 
 
 @dataclass(frozen=True)
@@ -106,39 +106,21 @@ class DiagnosisConfig:
             raise FcompError(f"verdict_rule must be a VerdictRule, got {self.verdict_rule!r}")
         for n in [*self.names, *self.add]:
             EFFECTS.get(n if isinstance(n, str) else n.name)  # unknown names fail here
+        if isinstance(self.baseline, str):
+            MODELS.get(self.baseline)  # an unknown name fails here, with the known ones
+        elif not isinstance(self.baseline, FrictionModel):
+            raise FcompError(f"baseline must be a model name or a FrictionModel, got "
+                             f"{self.baseline!r}")
 
     @property
     def model(self) -> FrictionModel:
-        """The baseline model."""
-        model = make_model(self.baseline) if isinstance(self.baseline, str) else self.baseline
-        if not isinstance(model, FrictionModel):
-            raise FcompError(f"baseline must be a model name or a FrictionModel, got "
-                             f"{self.baseline!r}")
-        return model
+        """The baseline model (built from its name on each call)."""
+        return make_model(self.baseline) if isinstance(self.baseline, str) else self.baseline
 
     @property
     def names(self) -> list[str]:
         """The candidate effects (default: every registered effect now)."""
         return list(self.effects) if self.effects is not None else EFFECTS.names()
-
-
-def _quiet(what: str) -> None:
-    """A progress callback that shows nothing."""
-
-
-@contextmanager
-def _bar(enabled: bool) -> Iterator[Tick]:
-    """A progress callback drawing the diagnosis's bar on stderr (one tick a fit)."""
-    bar = progress_bar("diagnose", None, enabled=enabled, unit="fit", tty_only=False)
-
-    def tick(what: str) -> None:
-        bar.set_postfix_str(what, refresh=False)
-        bar.update(1)
-
-    try:
-        yield tick
-    finally:
-        bar.close()
 
 
 def diagnose(config: DiagnosisConfig, data: Measurement | Sequence[Measurement] | DiagnosisData,
@@ -213,16 +195,14 @@ def baseline_check(config: DiagnosisConfig, result: DiagnosisResult, pool: Execu
                                  "the noise"})
     why = "asked for" if config.check_baseline is True else "; ".join(doubts)
     other_name = other_baseline(result.baseline_fit.model, result.ground)
-    other = None
+    other = None  # none applies, or it does not fit these data
     if other_name is not None:
         second = dataclasses.replace(config, baseline=other_name, add=(), check_baseline=False)
-        with _bar(progress) as tick:
+        with counter("diagnose", enabled=progress, unit="fit", tty_only=False) as tick:
             tick(f"baseline check: {other_name}")
-            try:
+            with contextlib.suppress(FcompError):
                 other = dataclasses.replace(diagnose(second, result.ground.data, pool, tick)[0],
                                             check={"ran": False, "why": "not asked for"})
-            except FcompError:
-                other = None
     return dataclasses.replace(result, other=other, check={
         "ran": other is not None,
         "why": why if other is not None else "no baseline of the other kind fits these data"})
@@ -371,14 +351,14 @@ class Diagnosis(FittedAttributes):
     def fit(self, data: Measurement | Sequence[Measurement] | DiagnosisData) -> Diagnosis:
         """Run the diagnosis on ``data`` (one or several measurements); returns ``self``."""
         config = self.config
-        config.model  # noqa: B018 -- a bad baseline fails before any work
         self.__dict__.pop("result_", None)
         with worker_pool(config.n_jobs, config.scheduler,
                          len(config.names) if config.search else 0) as pool:
-            with _bar(self.progress) as tick:
+            with counter("diagnose", enabled=self.progress, unit="fit",
+                         tty_only=False) as tick:
                 result, search = diagnose(config, data, pool, tick)
             result = baseline_check(config, result, pool, self.progress)
-        search.pool, search.tick = None, _quiet
+        search.pool, search.tick = None, quiet
         self._search = search
         self.result_ = result
         return self

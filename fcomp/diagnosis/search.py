@@ -33,11 +33,12 @@ from fcomp.diagnosis.refit import RIG_EXTRAS, FitResult, Refit
 from fcomp.diagnosis.rule import AcceptanceRule, Ground, Judgement, delta_bic
 from fcomp.diagnosis.scoring import sample_weights
 from fcomp.diagnosis.wording import judgement_text
-from fcomp.diagnosis.workers import Tick, refit_all
+from fcomp.diagnosis.workers import refit_all
 from fcomp.effects import EFFECTS, Effect
 from fcomp.errors import FcompError
 from fcomp.identification.plausibility import FitWarning
 from fcomp.models import FrictionModel
+from fcomp.progress import Tick
 
 #: The baseline and each accepted model are refitted with this many times the budget.
 POLISH_NFEV = 4

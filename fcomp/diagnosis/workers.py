@@ -14,22 +14,20 @@ from __future__ import annotations
 
 import os
 import time
-from collections.abc import Callable, Iterator, Mapping, MutableMapping, Sequence
+from collections.abc import Iterator, Mapping, MutableMapping, Sequence
 from concurrent.futures import Executor, as_completed
 from contextlib import contextmanager
 
 import fcomp.diagnosis.catalogue as catalogue
 from fcomp.diagnosis.refit import FitResult, Refit
 from fcomp.errors import FcompError
-from fcomp.parallel import executor, process_pool, stopping
+from fcomp.parallel import executor, process_pool, stop, stopping
+from fcomp.progress import Tick
 
 #: Evaluation budget of a refit without exact sensitivities (finite differences).
 NONSYMBOLIC_NFEV = 8
 #: How often (s) a step waiting on its local worker processes checks they are alive.
 WATCH_SECONDS = 10.0
-
-#: A progress callback: told what was just done (one unit of work).
-Tick = Callable[[str], None]
 
 
 def n_workers(n_jobs: int | None) -> int:
@@ -48,15 +46,16 @@ def worker_pool(n_jobs: int | None, scheduler: str | None, candidates: int
     first step's critical path). ``None`` -- refit here -- for fewer than two
     ``candidates`` or one process.
     """
-    if candidates < 2 or (n_workers(n_jobs) < 2 and not scheduler):
+    n = n_workers(n_jobs)
+    if candidates < 2 or (n < 2 and not scheduler):
         yield None
         return
     if scheduler:
         with executor(scheduler) as pool:
             yield pool
         return
-    with stopping(process_pool(n_workers(n_jobs), spawn=True)) as pool:
-        for _ in range(n_workers(n_jobs)):
+    with stopping(process_pool(n, spawn=True)) as pool:
+        for _ in range(n):
             pool.submit(_ready)
         yield pool
 
@@ -128,7 +127,7 @@ def refit_all(refit: Refit, proposals: Sequence[catalogue.Proposal], current: Fi
                     results[i] = refit_candidate(refit, proposals[i], current)
                     tick(proposals[i].effect)
                 pending.clear()
-                live.shutdown(wait=False, cancel_futures=True)
+                stop(live)
                 pool = None
     else:
         for i, prop in enumerate(proposals):

@@ -11,11 +11,11 @@ import numpy as np
 from fcomp.cli.common import (
     Progress,
     check_outputs,
-    current_warnings,
     friction_model,
     output_path,
     parse_assignments,
     warn,
+    write_measurement,
 )
 from fcomp.errors import FcompError
 from fcomp.inputs import parse_input, sampling_warning
@@ -75,10 +75,7 @@ def run(args: argparse.Namespace) -> int:
         result = plant.simulate(u, args.duration, args.rate, x0=x0, **engine)
     _cavitation(plant, result)
     result.meta.setdefault("simulation", {})["input"] = args.input
-    ws = current_warnings()
-    if ws:
-        result.meta["warnings"] = ws
-    csv, toml = result.write(out)
+    csv, toml = write_measurement(result, out)
     print(f"wrote {csv} and {toml} ({len(result)} samples)")
     return 0
 

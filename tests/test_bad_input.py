@@ -151,6 +151,10 @@ def _write_lab(lab: Path) -> None:
         "rigtable.csv": good, "rigtable.toml": "rig = 3\n",
         "mass_inf.csv": good, "mass_inf.toml": "[rig]\nmass = inf\n",
         "mass_huge.csv": good, "mass_huge.toml": "[rig]\nmass = 1e308\n",
+        "name_num.csv": good, "name_num.toml": "name = 5\n",
+        "exp_key.csv": good, "exp_key.toml": "experiment = 1.5\n[rig]\nmass = 1.0\n",
+        "top_mass.csv": good, "top_mass.toml": "mass = 1.0\n",
+        "huge_fit.json": '{"model": "coulomb-viscous", "params": {"Fc": 1.0, "B": 1e308}}\n',
         "patm_bar.csv": good, "patm_bar.toml": "p_atm = 1.013\n",
         "typo.csv": good, "typo.toml": "[rig]\nmas = 2.0\n",
         "absneg.csv": "t,x,p1\n0,0,-1000\n1,0.01,200000\n",
@@ -180,6 +184,7 @@ def _write_lab(lab: Path) -> None:
         "eff_syntax.py": "def broken(:\n    pass\n",
         "eff_nul.py": b"x = 1\x00\n",
         "eff_ctrlc.py": "raise KeyboardInterrupt\n",
+        "eff_osexit.py": "import os\nos._exit(0)\n",
         "eff_import.py": "import no_such_package_xyz\n",
         "eff_dup.py": _effect("viscous"),
         "eff_zdiv.py": _effect(f"zdiv-{TAG}", "1 / 0"),
@@ -281,7 +286,15 @@ CASES: dict[str, Case] = {
                                          match="input file"),
     "fit-json-csv-suffix": Case(f"{FIT} --json result.csv", match="name it .json"),
     "fit-json-is-dir": Case(f"{FIT} --json data_dir", match="is a directory"),
-    "fit-json-missing-folder": Case(f"{FIT} --json nowhere/fit.json", match="does not exist"),
+    # one rule for missing output folders (issue 27): every output creates them
+    "fit-json-missing-folder": Case(f"{FIT} --json nowhere/fit.json", code=0,
+                                    outputs=("nowhere/fit.json", "nowhere")),
+    "compare-json-missing-folder": Case("compare good.csv --model coulomb --json a/b/c.json",
+                                        code=0, outputs=("a/b/c.json", "a/b", "a"),
+                                        warnings=("default-params",)),
+    "fit-save-model-missing-folder": Case(f"{FIT} --save-model m/fit.json", code=0,
+                                          outputs=("m/fit.json", "m")),
+    "fit-json-under-a-file": Case(f"{FIT} --json good.csv/fit.json", match="is a file"),
     "fit-json-empty": Case(f"{FIT} --json ''", match="no file name"),
     "diagnose-json-onto-csv": Case(f"{DIAG} --json good.csv", match="input file"),
     "diagnose-json-onto-sidecar": Case(f"{DIAG} --json good.toml", match="sidecar"),
@@ -529,6 +542,19 @@ CASES: dict[str, Case] = {
     "sidecar-mass-inf": Case("fit mass_inf.csv --model coulomb", match="got inf"),
     "sidecar-mass-huge": Case("fit mass_huge.csv --model coulomb",
                               match="rig.mass = 1e+308 kg is implausible"),
+    "sidecar-name-number": Case("fit name_num.csv --model coulomb", match="name = 5 must be text"),
+    "sidecar-column-name-as-key": Case("fit exp_key.csv --model coulomb-viscous --json ek.json",
+                                       code=0, outputs=("ek.json",), warnings=("unknown-key",)),
+    "sidecar-rig-key-at-top": Case("fit top_mass.csv --model coulomb-viscous --json tm.json",
+                                   code=0, outputs=("tm.json",), warnings=("unknown-key",)),
+    "import-csv-sidecar-rod-ge-bore": Case(
+        "import csv good.csv --map t=t,x=x,v=v,a=a,F=F --sidecar rod_big.toml -o i.csv",
+        match="rod_big.toml: sidecar rig.rod (0.03 m) must be smaller"),
+    "import-csv-map-number-overflows": Case(
+        "import csv good.csv --map t=t,x=x,v=v,a=a,F=F*1e400 -o i.csv",
+        match="the number 1e400 in the mapping is not a finite number"),
+    "compare-params-huge-values": Case("compare good.csv --model coulomb-viscous "
+                                       "--params huge_fit.json", match="B = 1e+308"),
     # stamps 1e-300 s apart ended in an OverflowError inside the conditioning
     "read-tiny-time-steps-compare": Case("compare tiny_steps.csv --model coulomb",
                                          match="shorter than 1e-09 s: no rig logs that fast"),
@@ -604,6 +630,9 @@ CASES: dict[str, Case] = {
     # a plugin raising KeyboardInterrupt itself is its error (exit 2, file and line), not Ctrl-C
     "effects-raises-keyboard-interrupt": Case(f"{FIT} --effects eff_ctrlc.py",
                                               match="eff_ctrlc.py line 1"),
+    "effects-os-exit": Case(f"{FIT} --effects eff_osexit.py",
+                            match="eff_osexit.py line 2: importing the effects module failed: "
+                                  "it called os._exit(0)"),
     "effects-import-error": Case(f"{FIT} --effects eff_import.py",
                                  match="No module named 'no_such_package_xyz'"),
     "effects-duplicate-name": Case(f"{FIT} --effects eff_dup.py",
@@ -764,9 +793,11 @@ def test_bad_input(name: str, lab: Path, repeat_file: None, capsys: pytest.Captu
         assert sorted({w["code"] for w in recorded}) == sorted(case.warnings), recorded
         assert len(warned) == len(recorded), (warned, recorded)
     finally:  # restore the lab for the next case
-        for o in case.outputs:
+        for o in case.outputs:  # files first, then the folders created for them
             if o in old:
                 (lab / o).write_bytes(old[o])
+            elif (lab / o).is_dir():
+                (lab / o).rmdir()
             else:
                 (lab / o).unlink(missing_ok=True)
 
@@ -919,6 +950,25 @@ def test_measurement_write_interrupted_keeps_the_old_pair(
     before = snapshot(lab)
     code, _, err = _run([*shlex.split(SIM), "-o", "sim.csv"], capsys)
     assert (code, err) == (130, "fcomp: interrupted\n")
+    assert snapshot(lab) == before
+
+
+def test_unwritable_folder_names_the_output_not_its_temporary(
+        lab: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch) -> None:
+    """A read-only output folder (simulated: root writes anywhere) is reported with the file
+    asked for, never the hidden temporary name fcomp writes first."""
+    import fcomp.outputs
+
+    def mkstemp(prefix: str = "", suffix: str = "", dir: str | None = None) -> tuple[int, str]:
+        name = os.path.join(dir or ".", f"{prefix}abc123{suffix}")
+        raise PermissionError(13, "Permission denied", name)
+
+    monkeypatch.setattr(fcomp.outputs.tempfile, "mkstemp", mkstemp)
+    monkeypatch.chdir(lab)
+    before = snapshot(lab)
+    code, _, err = _run([*shlex.split(FIT), "--json", "ro.json"], capsys)
+    assert code == 2
+    assert err == "fcomp: error: ro.json: cannot write (Permission denied); nothing was written\n"
     assert snapshot(lab) == before
 
 

@@ -169,8 +169,7 @@ def model_target(path: str | None) -> Path | None:
         raise FcompError(f"--save-model {path}: a model file ends in .json")
     if out.is_dir():
         raise FcompError(f"--save-model {path}: is a directory")
-    if not out.parent.is_dir():
-        raise FcompError(f"--save-model {path}: folder {out.parent} does not exist")
+    _writable_folder("--save-model", path)
     return out
 
 
@@ -237,8 +236,9 @@ def json_target(path: str | None) -> Path | None:
     Raises
     ------
     FcompError
-        If ``path`` is empty, a directory, or its folder does not exist (checked before any work, so a failure never leaves a
-        half-written result).
+        If ``path`` is empty, a directory, or under a file (checked before any work, so a
+        failure never leaves a half-written result). Missing folders are created, as for
+        every output (and removed again if the run fails).
     """
     if path is None or path == "-":
         return None
@@ -247,11 +247,18 @@ def json_target(path: str | None) -> Path | None:
     out = Path(path)
     if out.is_dir():
         raise FcompError(f"--json {path}: is a directory")
-    if not out.parent.exists():
-        raise FcompError(f"--json {path}: folder {out.parent} does not exist")
-    if not out.parent.is_dir():
-        raise FcompError(f"--json {path}: {out.parent} is not a folder")
+    _writable_folder("--json", path)
     return out
+
+
+def _writable_folder(option: str, path: str) -> None:
+    """Refuse an output file under a file; a missing folder is fine (every output creates
+    its missing folders, :func:`fcomp.outputs.write_files`)."""
+    parent = Path(path).parent
+    while not parent.exists() and parent != parent.parent:
+        parent = parent.parent
+    if not parent.is_dir():
+        raise FcompError(f"{option} {path}: {parent} is a file, not a folder")
 
 
 def report_dir(path: str | None, option: str = "--report") -> Path | None:

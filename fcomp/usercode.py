@@ -98,8 +98,8 @@ class _HardExit(SystemExit):
 def _no_hard_exit() -> Iterator[None]:
     """While a user file runs, ``os._exit`` raises :class:`_HardExit` instead of ending the
     process on the spot (with nothing written and nothing said)."""
-    def refuse(code: int) -> NoReturn:
-        raise _HardExit(code)
+    def refuse(status: int) -> NoReturn:
+        raise _HardExit(status)
 
     real = os._exit
     os._exit = refuse

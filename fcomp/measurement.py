@@ -137,6 +137,32 @@ class Measurement:
         return (f"<Measurement {self.label!r}: {len(self)} samples{span}, columns "
                 f"{', '.join(self.columns)}>")
 
+    def _repr_html_(self) -> str:
+        """Jupyter's view: every column with its unit and range, the sidecar's rig, and the
+        position and force against time."""
+        from matplotlib.figure import Figure
+
+        from fcomp.report import notebook_html
+
+        units = self.units()
+        rows: list[list[str]] = [["column", "unit", "min", "max"]]
+        rows += [[k, units.get(k, ""), f"{float(np.min(v)):.4g}", f"{float(np.max(v)):.4g}"]
+                 for k, v in self.columns.items() if v.size]
+        rig = self.meta.get("rig") if isinstance(self.meta.get("rig"), Mapping) else {}
+        rows += [[f"rig.{k}", "", str(v), ""] for k, v in (rig or {}).items()]
+        shown = [(k, f, u) for k, f, u in (("x", 1e3, "mm"), ("F", 1.0, "N"),
+                                           ("F_ext", 1.0, "N")) if k in self.columns]
+        fig = None
+        if shown and len(self) > 1:
+            fig = Figure(figsize=(7.0, 1.8 * len(shown)))
+            for i, (k, f, u) in enumerate(shown):
+                ax = fig.add_subplot(len(shown), 1, i + 1)
+                ax.plot(self["t"], self[k] * f, lw=0.8)
+                ax.set_ylabel(f"{k} ({u})")
+            fig.axes[-1].set_xlabel("t (s)")
+            fig.tight_layout()
+        return notebook_html(f"Measurement {self.label}: {len(self)} samples", rows, fig)
+
     # ----------------------------------------------------------------- pandas
     def units(self) -> dict[str, str]:
         """The unit of every column: SI for the columns of the format (``u``: the sidecar's

@@ -791,7 +791,8 @@ def test_bad_input(name: str, lab: Path, repeat_file: None, capsys: pytest.Captu
             assert o in after and after[o] != old.get(o), f"{o} not written"
         recorded = _recorded_warnings(lab, case.outputs)
         assert sorted({w["code"] for w in recorded}) == sorted(case.warnings), recorded
-        assert len(warned) == len(recorded), (warned, recorded)
+        codes = [w["code"] for w in recorded]  # several of one code: one counted line
+        assert len(warned) == len(set(codes)) + (len(set(codes)) < len(codes)), (warned, recorded)
     finally:  # restore the lab for the next case
         for o in case.outputs:  # files first, then the folders created for them
             if o in old:

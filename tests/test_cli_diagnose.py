@@ -50,8 +50,15 @@ def test_contract_json_and_report(pressure_csv: Path, tmp_path: Path, capsys) ->
     assert html.count('<img src="data:image/png;base64,') >= 7
     assert not re.search(r'(src|href)="https?://', html)  # self-contained
     assert "Chamber pressure energises lip seals" in html  # the physics of the added effect
-    printed = capsys.readouterr().out
+    captured = capsys.readouterr()
+    printed = captured.out
     assert "verdict: explained" in printed and "pressure-dependence" in printed
+    # the conclusion first; warnings only on stderr, in the one form
+    assert printed.startswith("Conclusion: lugre misses pressure-dependence; with them the "
+                              "held-out RMS falls")
+    assert printed.splitlines()[1].startswith("How sure: ")
+    assert "warning" not in printed
+    assert all(ln.startswith("fcomp: warning: ") for ln in captured.err.splitlines())
 
 
 def test_json_to_stdout(pressure_csv: Path, capsys) -> None:
@@ -132,9 +139,9 @@ def test_bad_input_one_line_exit_2(pressure_csv: Path, tmp_path: Path, capsys) -
     _one_line_error(capsys, [*base, "--baseline", "lugrex"], "unknown friction model 'lugrex'")
     _one_line_error(capsys, [*base, "--baseline", "lugre", "--add", "magic"],
                     "unknown effect 'magic'")
-    _one_line_error(capsys, [*base, "--baseline", "lugre", "--json",
-                             str(tmp_path / "missing" / "o.json")], "does not exist")
     (tmp_path / "afile").write_text("x")
+    _one_line_error(capsys, [*base, "--baseline", "lugre", "--json",
+                             str(tmp_path / "afile" / "o.json")], "is a file")
     _one_line_error(capsys, [*base, "--baseline", "lugre", "--report", str(tmp_path / "afile")],
                     "not a directory")
     _one_line_error(capsys, [*base, "--baseline", "lugre", "--effects",

@@ -114,7 +114,7 @@ def test_mass_estimated_and_offset(rig_csv: Path, tmp_path: Path,
     (["fit", "DATA", "--model", "no-such-model"], "no-such-model"),
     (["fit", "DATA", "--model", "lugre", "--fix", "sigma0"], "expected NAME=VALUE"),
     (["fit", "DATA", "--model", "lugre", "--free", "Fc,bogus"], "bogus"),
-    (["fit", "DATA", "--model", "lugre", "--json", "/no/such/dir/out.json"], "does not exist"),
+    (["fit", "DATA", "--model", "lugre", "--json", "/dev/null/out.json"], "is a file"),
     (["fit", "DATA", "--model", "lugre", "--max-nfev", "0"], "--max-nfev"),
     (["fit", "DATA", "--model", "lugre", "--method", "samples"], "is dynamic"),
 ])

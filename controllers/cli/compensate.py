@@ -48,10 +48,13 @@ def _plant(args: argparse.Namespace) -> Any:
 
 
 def summary(doc: dict[str, Any]) -> str:
-    """The ratios per controller and task, as printed."""
+    """The conclusion (:func:`controllers.conclusions.of_compensation`), then the ratios
+    per controller and task, as printed."""
+    from controllers.conclusions import of_compensation
+
     base = doc["baseline"]
     others = [m for m in doc["models"] if m != base]
-    lines = [f"compensate on {doc['plant']['name']} ({doc['plant']['kind']}), true friction "
+    lines = [*of_compensation(doc).lines(), "",f"compensate on {doc['plant']['name']} ({doc['plant']['kind']}), true friction "
              f"{doc['friction']}: {len(doc['runs'])} runs; RMS error ratio to {base} "
              "(below 1: better)"]
     for c in doc["controllers"]:
@@ -123,8 +126,7 @@ def run(args: argparse.Namespace) -> int:
         with staged_folder(folder, "--report", "report",
                            note=command or "fcomp compensate") as tmp:
             report(res, command).write(tmp / "report.html")
-        if args.json != "-":
-            print(f"wrote {folder / 'report.html'}")
+        common.wrote(folder / "report.html")
     emit_result(result_text(doc), args.json, out, summary(doc))
     return 0
 

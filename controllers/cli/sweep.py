@@ -92,7 +92,11 @@ def _plan(args: argparse.Namespace) -> Any:
 
 
 def summary(doc: dict[str, Any]) -> str:
-    lines = [f"{doc['mode']} on {doc['plant']}, task {doc['task']}: {len(doc['runs'])} runs"]
+    """The conclusion (:func:`controllers.conclusions.of_sweep`), then the errors per
+    controller (Monte Carlo) or per grid point, as printed."""
+    from controllers.conclusions import of_sweep
+
+    lines = [*of_sweep(doc).lines(), "",f"{doc['mode']} on {doc['plant']}, task {doc['task']}: {len(doc['runs'])} runs"]
     if doc["mode"] == "monte-carlo":
         for c, d in doc["distributions"].items():
             r = d["rms_error"]
@@ -208,7 +212,6 @@ def run(args: argparse.Namespace) -> int:
     if folder is not None:
         with staged_folder(folder, "--report", "report", note=command or "fcomp sweep") as tmp:
             report(doc, command).write(tmp / "report.html")
-        if args.json != "-":
-            print(f"wrote {folder / 'report.html'}")
+        common.wrote(folder / "report.html")
     emit_result(result_text(doc), args.json, out, summary(doc))
     return 0

@@ -26,6 +26,9 @@ MAX_VALUE = 1e15
 #: Warnings of the running command (``{"code", "parameter", "message"}``), printed as
 #: ``fcomp: warning: ...`` after a successful run and written into its outputs.
 WARNINGS: list[dict[str, Any]] = []
+#: Files and reports written before the summary is printed: announced after it
+#: (:func:`wrote`, :func:`emit_result`), so that the conclusion comes first.
+WRITTEN: list[Path] = []
 #: The running command's arguments (after ``fcomp``), for reports.
 ARGV: list[str] = []
 #: Python warnings caught while the command runs (set by :func:`fcomp.cli.main.main`).
@@ -506,6 +509,11 @@ def _finite(value: Any) -> Any:
     return value
 
 
+def wrote(path: Path) -> None:
+    """Announce ``path`` (a report written before the result) after the summary."""
+    WRITTEN.append(path)
+
+
 def emit_result(text: str, json_arg: str | None, out: Path | None, summary: str) -> None:
     """Write a command's result: the JSON ``text`` alone to standard output for
     ``--json -``; otherwise the human ``summary``, then ``text`` to ``out``
@@ -516,6 +524,9 @@ def emit_result(text: str, json_arg: str | None, out: Path | None, summary: str)
         sys.stdout.write(text)
         return
     print(summary)
+    for path in WRITTEN:
+        print(f"wrote {path}")
+    WRITTEN.clear()
     if out is not None:
         write_text(out, text)
         print(f"wrote {out}")

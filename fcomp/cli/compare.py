@@ -78,8 +78,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def summary(doc: dict[str, Any]) -> str:
-    """The printed summary of a comparison's JSON."""
-    lines = [f"model {doc['description']} ({'fitted on the training samples' if doc['fitted'] else 'as given'}): "
+    """The printed summary of a comparison's JSON: the conclusion
+    (:func:`fcomp.conclusions.of_comparison`) first, then the errors per regime."""
+    from fcomp.conclusions import of_comparison
+
+    lines = [*of_comparison(doc).lines(), "", f"model {doc['description']} ({'fitted on the training samples' if doc['fitted'] else 'as given'}): "
              f"RMS {doc['rms']:.4g} N over the {doc['judged']} samples "
              f"(scored: a prediction band the motion leaves costs; plain y - F "
              f"{doc['rms_plain']:.4g} N; noise floor {doc['noise_floor']:.3g} N)"]
@@ -183,8 +186,7 @@ def run(args: argparse.Namespace) -> int:
     if report is not None:
         with staged_folder(report, "--report", "report", note=command or "fcomp compare") as tmp:
             comp.write_report(tmp, command=command)
-        if args.json != "-":
-            print(f"wrote {report / 'report.html'}")
+        common.wrote(report / "report.html")
     emit_result(text, args.json, out, summary(doc))
     return 0
 

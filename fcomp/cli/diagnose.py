@@ -81,8 +81,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def summary(doc: dict) -> str:
-    """The printed summary of a diagnosis JSON."""
-    lines = [f"baseline {doc['baseline']}: held-out RMS {doc['rms_baseline']:.4g} N "
+    """The printed summary of a diagnosis JSON: the conclusion
+    (:func:`fcomp.conclusions.of_diagnosis`) first, then the steps, the baseline check and
+    the verdict's reasons, one per line (the warnings go to stderr, grouped)."""
+    from fcomp.conclusions import of_diagnosis
+
+    lines = [*of_diagnosis(doc).lines(), "", f"baseline {doc['baseline']}: held-out RMS {doc['rms_baseline']:.4g} N "
              f"(noise floor {doc['noise_floor']:.3g} N, {doc['noise_method']}; {doc['split']})"]
     for i, s in enumerate(doc["steps"], 1):
         tag = "accepted" if s["accepted"] else "rejected"
@@ -118,9 +122,8 @@ def summary(doc: dict) -> str:
     elif doc["baseline_check"]["why"] != "not asked for":
         lines.append(f"baseline check not run: {doc['baseline_check']['why']} "
                      "(--baseline-check runs it)")
-    lines.append(f"verdict: {doc['verdict']} -- {doc['reason']}")
-    for w in doc.get("warnings", []):
-        lines.append(f"warning ({w['code']}): {w['message']}")
+    lines.append(f"verdict: {doc['verdict']}, because:")
+    lines += [f"  - {part}" for part in doc["reason"].split("; ")]
     return "\n".join(lines)
 
 
@@ -164,15 +167,17 @@ def run(args: argparse.Namespace) -> int:
                      check_baseline=(True if args.baseline_check else
                                      False if args.no_baseline_check else "auto"))
     diag.fit(data)
-    doc = common.with_warnings({**diag.to_dict(),
+    found = diag.to_dict()
+    for w in found.get("warnings", []):  # printed on stderr after the summary, grouped
+        common.warn(w["code"], w["message"], w["parameter"])
+    doc = common.with_warnings({**found,
                                 "model_file": diag.model_file(common.model_source(args.data))})
     text = result_text(doc)
     command = "fcomp " + shlex.join(common.ARGV) if common.ARGV else None
     if report is not None:
         with staged_folder(report, "--report", "report", note=command or "fcomp diagnose") as tmp:
             write_report(diag, tmp, command=command)
-        if args.json != "-":
-            print(f"wrote {report / 'report.html'}")
+        common.wrote(report / "report.html")
     emit_result(text, args.json, out, summary(doc))
     common.save_model_file(doc["model_file"], saved, args.json)
     return 0

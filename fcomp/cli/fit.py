@@ -113,10 +113,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
-def _table(f: FrictionFit) -> str:
-    """The printed result: estimates, the parameters held (not determined by the record)
-    and the RMS error (the plausibility warnings follow as ``fcomp: warning:`` lines)."""
-    lines = [f"model {f.to_dict()['model']}  ({f.method_} fit, target {f.target_}, "
+def _table(f: FrictionFit, doc: dict[str, Any]) -> str:
+    """The printed result: the conclusion (:func:`fcomp.conclusions.of_fit`), then the
+    estimates, the parameters held (not determined by the record) and the RMS error (the
+    plausibility warnings follow on stderr as ``fcomp: warning:`` lines)."""
+    from fcomp.conclusions import of_fit
+
+    lines = [*of_fit(doc).lines(), "", f"model {f.to_dict()['model']}  ({f.method_} fit, target {f.target_}, "
              f"{f.n_samples_} samples)"]
     pct = round(100 * f.confidence)
     head = f"{'parameter':12s} {'value':>12s} {'stderr':>11s}   {pct}% interval{'':14s} unit"
@@ -187,7 +190,7 @@ def run(args: argparse.Namespace) -> int:
     doc = with_warnings({**fit.to_dict(), "model_file": fit.model_file(model_source(args.data))})
     if report is not None:
         _write_report(fit, data, report, args)
-    emit_result(result_text(doc), args.json, out, _table(fit))
+    emit_result(result_text(doc), args.json, out, _table(fit, doc))
     save_model_file(doc["model_file"], saved, args.json)
     return 0
 
@@ -253,5 +256,4 @@ def _write_report(fit: FrictionFit, data: Any, report: Path, args: argparse.Name
         why = ""
     with staged_folder(report, "--report", "report", note=command) as tmp:
         write_fit_report(fit, comp, tmp, command=command, note=why)
-    if args.json != "-":
-        print(f"wrote {report / 'report.html'}")
+    common.wrote(report / "report.html")

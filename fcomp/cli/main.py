@@ -8,8 +8,9 @@ What every command shares, enforced here:
 * a problem with the input is one line ``fcomp: error: ...`` on stderr and
   exit status 2, never a traceback; an error raised from inside the user's
   ``--effects`` module names that file and line (:mod:`fcomp.usercode`);
-* warnings (``fcomp: warning: ...``, one line each) are printed after a
-  successful run; Python and numpy warnings raised on the way are collected
+* warnings (``fcomp: warning: ...``) are printed after a successful run, on
+  stderr, grouped: one line each, or one counted line for several of one kind
+  (:func:`fcomp.conclusions.grouped_warnings`); Python and numpy warnings raised on the way are collected
   and printed the same way, never as raw multi-line warnings; a failed run
   prints only its error line;
 * Ctrl-C and SIGTERM interrupt cleanly: outputs are staged, so an
@@ -114,6 +115,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     common.ARGV = list(sys.argv[1:] if argv is None else argv)
     common.WARNINGS.clear()
+    common.WRITTEN.clear()
     with warnings.catch_warnings(record=True) as caught, _signals_interrupt():
         common.PYTHON_WARNINGS = caught
         try:
@@ -124,8 +126,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             for w in caught:
                 common.warn(*common.python_warning(w))
     if code == 0:
-        for item in common.WARNINGS:
-            sys.stderr.write(f"fcomp: warning: {plain(item['message'])}\n")
+        from fcomp.conclusions import grouped_warnings
+
+        for line in grouped_warnings(common.WARNINGS):
+            sys.stderr.write(f"fcomp: warning: {plain(line)}\n")
     return code
 
 

@@ -9,7 +9,7 @@ all draw the same conclusion::
 
     c = of_diagnosis(diag.to_dict())
     print("\\n".join(c.lines()))      # Conclusion / How sure / Next
-    html = c.html()                   # the report's opening paragraph
+    report.conclusion(c)              # the report's opening (fcomp.report.Report)
 
 Flags come from the result's warnings (codes of
 :mod:`fcomp.identification.plausibility`) and from comparisons that hold
@@ -20,7 +20,6 @@ does not determine, an answer that depends on the baseline.
 
 from __future__ import annotations
 
-import html as _html
 import re
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
@@ -73,20 +72,8 @@ class Conclusion:
             out += ["Next:", *_items(self.next_steps)]
         return out
 
-    def html(self) -> str:
-        """The report form: a ``<div class="conclusion">`` with the same three parts."""
-        e = _html.escape
-        reasons = "".join(f"<li>{e(r)}</li>" for r in self.reasons)
-        steps = "".join(f"<li>{e(s)}</li>" for s in self.next_steps[:SHOWN])
-        return (f'<div class="conclusion confidence-{e(self.confidence)}">'
-                f"<p><strong>Conclusion:</strong> {e(self.finding)}</p>"
-                f"<p><strong>How sure:</strong> {e(self.confidence)}</p>"
-                + (f"<ul>{reasons}</ul>" if reasons else "")
-                + (f"<p><strong>Next:</strong></p><ul>{steps}</ul>" if steps else "")
-                + "</div>")
 
-
-#: Most reasons and next steps a console conclusion lists (the report lists every reason).
+#: Most reasons and next steps a console conclusion lists (a report lists them all).
 SHOWN = 4
 
 

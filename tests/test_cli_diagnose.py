@@ -50,6 +50,9 @@ def test_contract_json_and_report(pressure_csv: Path, tmp_path: Path, capsys) ->
     assert html.count('<img src="data:image/png;base64,') >= 7
     assert not re.search(r'(src|href)="https?://', html)  # self-contained
     assert "Chamber pressure energises lip seals" in html  # the physics of the added effect
+    opening = html.index('conclusion"><p><strong>Conclusion:</strong> lugre misses '
+                         "pressure-dependence")
+    assert opening < html.index("<h2")  # the report opens with it
     captured = capsys.readouterr()
     printed = captured.out
     assert "verdict: explained" in printed and "pressure-dependence" in printed

@@ -12,6 +12,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from controllers import CONTROLLERS
+from controllers.conclusions import of_sweep
 from controllers.harness import LoopConfig, control_model
 from controllers.robustness import Grid, Sweep, distributions, draw_distribution, run_jobs
 from controllers.tasks import TASKS
@@ -94,8 +95,6 @@ def _plan(args: argparse.Namespace) -> Any:
 def summary(doc: dict[str, Any]) -> str:
     """The conclusion (:func:`controllers.conclusions.of_sweep`), then the errors per
     controller (Monte Carlo) or per grid point, as printed."""
-    from controllers.conclusions import of_sweep
-
     lines = [*of_sweep(doc).lines(), "",f"{doc['mode']} on {doc['plant']}, task {doc['task']}: {len(doc['runs'])} runs"]
     if doc["mode"] == "monte-carlo":
         for c, d in doc["distributions"].items():
@@ -147,6 +146,7 @@ def report(doc: dict[str, Any], command: str | None) -> Any:
                  subtitle=f"{len(doc['runs'])} closed-loop runs of "
                  f"{', '.join(doc['controllers'])}", command=command,
                  config={k: doc[k] for k in ("mode", "plant", "task", "fast")})
+    rep.conclusion(of_sweep(doc))
     failed = sum(r["status"] != "ok" for r in doc["runs"])
     if failed:
         rep.note(f"{failed} run(s) failed (counted, not dropped): see the table.", kind="warn")

@@ -14,6 +14,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, cast
 
+from fcomp.conclusions import of_comparison, of_diagnosis, of_fit
 from fcomp.diagnosis.figures import (
     check_fitted,
     comparison_figures,
@@ -97,6 +98,7 @@ def build_comparison_report(comp: Comparison, *, command: str | None = None) -> 
                     "; the model's own values"),
                  command=command, config={"model": d["description"], "fitted": comp.fitted,
                                           "split": comp.split})
+    rep.conclusion(of_comparison(d))
     if d["warnings"]:
         rep.section("What a careful engineer would question", level=3)
         rep.table(["warning", "parameter", "what it means"],
@@ -147,6 +149,7 @@ def build_fit_report(fit: Any, comp: Comparison | None, *, command: str | None =
                  subtitle=f"{fit.method_} fit, target {fit.target_}, RMS {fit.rms_:.4g} N over "
                  f"{fit.n_samples_} samples", command=command,
                  config={"model": d["model"], "method": d["method"]})
+    rep.conclusion(of_fit(d))
     rep.section("Estimates")
     pct = round(100 * fit.confidence)
     rep.table(["parameter", "value", "stderr", f"{pct} % interval", "unit"], fit.rows(),
@@ -196,6 +199,7 @@ def build_report(diag: Diagnosis, *, command: str | None = None) -> Report:
                  command=command,
                  config={"baseline": d["baseline"], "split": diag.split_.description,
                          "effects": [c.effect for c in diag.candidates_] or d["added"]})
+    rep.conclusion(of_diagnosis(d))
     rep.section("Summary")
     if d["added"]:
         rep.paragraph(f"Added, in order: {', '.join('`' + e + '`' for e in d['added'])}. "

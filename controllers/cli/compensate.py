@@ -79,8 +79,7 @@ def run(args: argparse.Namespace) -> int:
     out = json_target(args.json)
     folder = report_dir(args.report)
     scheduler = check_scheduler(args.scheduler)
-    if args.workers is not None and args.workers < 1:
-        raise FcompError(f"--workers must be a positive integer, got {args.workers}")
+    common.check_jobs(args.jobs)
     if args.samples is not None and args.samples < 0:
         raise FcompError(f"--samples must be 0 or more, got {args.samples}")
     if not 0 <= args.spread < 1:
@@ -91,11 +90,11 @@ def run(args: argparse.Namespace) -> int:
         CONTROLLERS.get(c)
     if args.task is not None:
         TASKS.get(args.task)
-    models = common.name_list(args.models, "--models") or []
+    models = common.name_list(args.controller_friction, "--controller-friction") or []
     inputs = InputSet()
     for option, spec in (("--plant-params", args.plant_params), ("--friction", args.friction),
                          ("--reference", args.reference), ("--effects", args.effects),
-                         *(("--models", m) for m in models)):
+                         *(("--controller-friction", m) for m in models)):
         if spec is not None and (option in ("--reference", "--effects")
                                  or spec.lower().endswith((".toml", ".json"))):
             inputs.file(spec, option)
@@ -112,7 +111,7 @@ def run(args: argparse.Namespace) -> int:
         res = compensate(plant, args.friction, models, controllers=controllers,
                          task=args.task, reference=args.reference, fast=args.fast,
                          samples=args.samples, spread=args.spread, seed=args.seed,
-                         workers=args.workers,
+                         workers=args.jobs,
                          scheduler=scheduler, keep_signals=folder is not None,
                          progress=lambda done, total: bar.update(done - bar.n),
                          effects=args.effects)

@@ -82,14 +82,14 @@ def _plan(args: argparse.Namespace) -> Any:
     if args.grid or frictions:
         return Grid(plant=plant, task=args.task, controllers=controllers,
                     factors=_factors(args.grid), controller_frictions=frictions,
-                    seed=args.seed, fast=not args.full, base=base)
+                    seed=args.seed, fast=args.fast, base=base)
     try:
         lo, hi = (common.finite_float(v) for v in args.noise.split(","))
     except (ValueError, argparse.ArgumentTypeError):
         raise FcompError(f"--noise {args.noise!r}: expected LO,HI (two numbers)") from None
     return Sweep(plant=plant, task=args.task, controllers=controllers,
                  samples=args.samples, spread=args.spread, noise=(lo, hi), seed=args.seed,
-                 fast=not args.full, base=base)
+                 fast=args.fast, base=base)
 
 
 def summary(doc: dict[str, Any]) -> str:
@@ -195,15 +195,14 @@ def run(args: argparse.Namespace) -> int:
     scheduler = check_scheduler(args.scheduler)
     if args.seed < 0:
         raise FcompError(f"--seed must be a non-negative integer, got {args.seed}")
-    if args.workers is not None and args.workers < 1:
-        raise FcompError(f"--workers must be a positive integer, got {args.workers}")
+    common.check_jobs(args.jobs)
     inputs = common.plant_inputs(args)
     common.check_outputs(inputs, [("--json", out)], [("--report", folder, "report")])
     plan = _plan(args)
     jobs = plan.jobs()
     bar = progress_bar("sweep", len(jobs), enabled=not args.no_progress)
     try:
-        runs = run_jobs(jobs, workers=args.workers, scheduler=scheduler,
+        runs = run_jobs(jobs, workers=args.jobs, scheduler=scheduler,
                         progress=lambda done, total: bar.update(done - bar.n))
     finally:
         bar.close()

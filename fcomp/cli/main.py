@@ -41,7 +41,12 @@ COMMANDS = ("simulate", "fit", "compare", "diagnose", "sweep", "compensate", "st
 
 
 class _Parser(argparse.ArgumentParser):
-    """argparse with one-line errors and exit status 2."""
+    """argparse with one-line errors and exit status 2, its help in plain text
+    (:class:`fcomp.cli.common.HelpFormatter`, whatever formatter a command asks for)."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        kwargs["formatter_class"] = common.HelpFormatter
+        super().__init__(*args, **kwargs)
 
     def error(self, message: str) -> None:  # type: ignore[override]
         sys.stderr.write(f"{self.prog}: error: {plain(message)} (see --help)\n")
@@ -113,6 +118,7 @@ def _signals_interrupt() -> Iterator[None]:
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    common.say_deprecated(args)
     common.ARGV = list(sys.argv[1:] if argv is None else argv)
     common.WARNINGS.clear()
     common.WRITTEN.clear()

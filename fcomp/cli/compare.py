@@ -68,7 +68,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="train/held-out split (for --fit and the feature strengths)")
     p.add_argument("--cutoff", type=finite_float, default=None, metavar="HZ",
                    help="cutoff of the zero-phase filter deriving v, a from x (default: from "
-                   "the sample rate and the position noise)")
+                   "the sample rate and the position noise, and a fit's 10 Hz for the RMS on "
+                   "the whole record; a --params FIT.json fitted with another --cutoff: that)")
     p.add_argument("--json", metavar="OUT", default=None,
                    help="write the result as JSON to OUT ('-' for standard output)")
     p.add_argument("--report", metavar="DIR", default=None,
@@ -79,8 +80,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 def summary(doc: dict[str, Any]) -> str:
     """The printed summary of a comparison's JSON."""
+    where = ("" if doc["fitted"] else "on the whole record, as fcomp fit measures it; "
+             f"scored {doc['rms_scored']:.4g} N ")
     lines = [f"model {doc['description']} ({'fitted on the training samples' if doc['fitted'] else 'as given'}): "
-             f"RMS {doc['rms']:.4g} N over the {doc['judged']} samples "
+             f"RMS {doc['rms']:.4g} N {where}over the {doc['judged']} samples "
              f"(scored: a prediction band the motion leaves costs; plain y - F "
              f"{doc['rms_plain']:.4g} N; noise floor {doc['noise_floor']:.3g} N)"]
     for name, r in doc["regimes"].items():
@@ -97,6 +100,7 @@ def summary(doc: dict[str, Any]) -> str:
 def _model(args: argparse.Namespace) -> tuple[Any, float | None]:
     """The model compared and the mass a fit JSON gives (None otherwise)."""
     from fcomp.diagnosis.compare import model_from_fit
+    from fcomp.identification.target import CUTOFF_HZ
     from fcomp.modelfile import is_model_file, read_model
     from fcomp.textdata import check_path, read_text
 
@@ -123,6 +127,10 @@ def _model(args: argparse.Namespace) -> tuple[Any, float | None]:
             raise FcompError(f"--params {spec}: is a fit of {doc['model']}, not of "
                              f"{args.model}; give --model {doc['model']}")
         args.params = None
+        cutoff = doc.get("cutoff_hz") if isinstance(doc, dict) else None
+        if args.cutoff is None and isinstance(cutoff, int | float) and cutoff > 0 \
+                and cutoff != CUTOFF_HZ:  # the fit's own cut-off: the fit's RMS
+            args.cutoff = float(cutoff)
         base = common.build_model(args.model, None, argparse.Namespace(
             effects=args.effects, add_effect=[], set=[]))
         model, mass = model_from_fit(doc, base, source=f"--params {spec}")

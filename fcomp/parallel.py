@@ -269,7 +269,7 @@ def shippable(pool: Executor | None, *objs: Any) -> bool:
     warnings.warn(FcompWarning(
         "serial", f"{', '.join(names)} is defined in the caller's __main__ (the script or "
         "the notebook), which worker processes do not run: these jobs run here, one after "
-        "another; define it in a module (or an effects file, "
+        "another; define it in a module you import (or an effects file, "
         f"{term('effects_module')} FILE.py) to run them in parallel"), stacklevel=3)
     return False
 

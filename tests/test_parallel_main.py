@@ -102,8 +102,7 @@ def test_run_tasks_in_an_unguarded_spawn_script(tmp_path: Path) -> None:
         import multiprocessing
         import operator
         import warnings
-        from fcomp.errors import FcompWarning
-from fcomp.parallel import run_tasks
+        from fcomp.parallel import run_tasks
         multiprocessing.set_start_method("spawn")
         print("TOP-LEVEL")
 

@@ -422,7 +422,8 @@ class FrictionFit:
     def predict(self, data: Measurement) -> np.ndarray:
         """Predicted force ``F_model + mass*(a + g*s_o) + offset`` (N) along ``data``'s motion
         (:func:`predicted`)."""
-        return predicted(self.model_, self._data(data), self.substeps)
+        d = self._data(data)  # first: a fit not fitted yet says so
+        return predicted(self.model_, d, self.substeps)
 
     def plot(self, data: Measurement | None = None) -> Any:
         """The fit drawn: measured (or reconstructed) force and the fitted model over time and

@@ -195,8 +195,9 @@ def simulate(plant: str, friction: str | FrictionModel,
     """Simulate ``plant`` with the friction model ``friction`` (``fcomp simulate``).
 
     ``friction`` is a model, a model name, or a model file (``.json``,
-    :func:`fcomp.modelfile.load_model`: its measurement terms dropped with a
-    warning). ``input`` is a SPEC (``sine:amplitude=A,frequency=F``, ``step:amplitude=A``,
+    :func:`fcomp.modelfile.load_model`); the measurement terms of a fitted model or a
+    model file (the record's mass, offset, lag) are dropped with a warning: the plant
+    has its own moving mass. ``input`` is a SPEC (``sine:amplitude=A,frequency=F``, ``step:amplitude=A``,
     ``csv:PATH``) or a function of time; ``params`` a parameter set (default: the
     plant's, which also gives a model named by ``friction`` its values);
     ``engine`` the integrator options (``method``, ``rtol``, ``atol``,
@@ -208,11 +209,30 @@ def simulate(plant: str, friction: str | FrictionModel,
         model = load_model(friction)
     else:
         model = make_model(friction, params=pset) if isinstance(friction, str) else friction
+    model = _seal(model)
     u = parse_input(input) if isinstance(input, str) else input
     run = cls(model, pset).simulate(u, duration, rate, x0=dict(x0) if x0 else None, **engine)
     if isinstance(input, str):
         run.meta.setdefault("simulation", {})["input"] = input
     return run
+
+
+def _seal(model: FrictionModel) -> FrictionModel:
+    """``model`` as plant friction: a fitted model's measurement terms (the record's mass,
+    offset, lag) dropped with one warning -- the plant has its own moving mass."""
+    terms = model.measurement
+    if not terms:
+        return model
+    import warnings
+
+    from fcomp.errors import FcompWarning
+
+    warnings.warn(FcompWarning("measurement-terms", (
+        f"{model.describe()}: measurement terms {', '.join(terms)} dropped: they describe "
+        "the record the model was fitted to, not the seal, and are not part of the plant "
+        "friction" + ("; the plant's moving mass is its own (rig.mass of its parameters)"
+                      if "mass" in terms else ""))), stacklevel=3)
+    return model.with_measurement(None)
 
 
 #: The plant-domain names this module offers, defined by the plants (:mod:`plants.comparison`)

@@ -99,19 +99,49 @@ class ModelFile:
 
     def measured_model(self) -> FrictionModel:
         """The model as fitted to its record: the friction with the measurement effects
-        (a fit's ``offset`` as a ``force-offset`` effect); ``mass`` and ``lag`` are values
-        of the record, not of the model (:attr:`mass`)."""
-        effects = list(self.measurement_effects)
-        offset = self.measurement_params.get("offset")
-        if offset and all(e.name != "force-offset" for e in effects):
-            effects.append(EFFECTS.get("force-offset")({"offset": offset}))
-        return self.model.with_effects(*effects) if effects else self.model
+        (a fit's ``offset`` as a ``force-offset`` effect), carrying ``mass`` and ``lag``
+        -- values of the record, not of the friction (:attr:`mass`) -- as its
+        :attr:`~fcomp.models.base.FrictionModel.measurement` (:func:`split_measurement`)."""
+        model = self.model.with_effects(*self.measurement_effects) \
+            if self.measurement_effects else self.model
+        return split_measurement(model.with_measurement(self.measurement_params))[0] \
+            .with_measurement({k: v for k, v in self.measurement_params.items()
+                               if k != "offset"})
 
     def dropped_note(self, use: str = "plant friction") -> str:
-        """One line saying which measurement terms are left out, and why."""
+        """One line saying which measurement terms are left out, and why (a plant's or a
+        compensator's moving mass is its own, not the record's fitted one)."""
+        mass = ("; the plant's moving mass is its own (rig.mass of its parameters)"
+                if "mass" in self.measurement_params and "plant" in use else "")
         return (f"{self.label}: measurement terms {', '.join(self.measurement_terms)} dropped: "
                 f"they describe the measurement, not the seal, and are not part of the "
-                f"{use}")
+                f"{use}{mass}")
+
+
+def split_measurement(model: FrictionModel) -> tuple[FrictionModel, dict[str, float]]:
+    """A model as it is compared with a record, and the terms of that record.
+
+    The model's measurement terms (:attr:`~fcomp.models.base.FrictionModel.measurement`,
+    a fit's ``mass``, ``offset``, ``lag``) are taken off: a constant ``offset`` becomes
+    the ``force-offset`` effect that holds it (unless the model has one), ``mass`` (kg)
+    and ``lag`` (s), which the comparison puts into the record's force balance, are
+    returned.
+
+    Returns
+    -------
+    model : FrictionModel
+        The friction (with the offset's effect), without measurement terms.
+    record_terms : dict of str to float
+        ``mass`` and ``lag``, those the model carried.
+    """
+    terms = model.measurement
+    if not terms:
+        return model, {}
+    out = model.with_measurement(None)
+    offset = terms.pop("offset", None)
+    if offset and all(e.name != "force-offset" for e in out.effects):
+        out = out.with_effects(EFFECTS.get("force-offset")({"offset": offset}))
+    return out, terms
 
 
 def seal_friction(source: str | Path, use: str, effects_module: str | Path | None = None
@@ -382,4 +412,4 @@ def _with_values(model: FrictionModel, params: Mapping[str, float], consumed: se
 
 
 __all__ = ["FORMAT", "VERSION", "ModelFile", "is_model_file", "load_model", "model_document",
-           "read_model", "save_model"]
+           "read_model", "save_model", "split_measurement"]

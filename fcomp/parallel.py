@@ -10,6 +10,13 @@ through here:
   in this process;
 * the user's own code (``--effects`` files) is executed in every worker first,
   so jobs carrying a user's effect unpickle there;
+* the caller's ``__main__`` -- a script, ``python -``, a notebook's kernel -- is
+  **never run again** in a worker (:func:`pool_context`): fcomp's jobs are its own
+  functions, which a worker imports by module name, so a plain script without an
+  ``if __name__ == "__main__":`` guard just works. Something defined *in* the
+  caller's ``__main__`` (an effect class written in a notebook cell) cannot reach
+  such a worker: those jobs run here, one after another, with one warning
+  (:func:`shippable`);
 * **an existing Dask distributed cluster** (``scheduler="tcp://host:8786"``,
   the command line's ``--scheduler ADDRESS``): the jobs go to its workers
   (started with ``dask scheduler`` / ``dask worker``, or by a cluster manager),
@@ -27,14 +34,21 @@ jobs) is called as they arrive. The commands' progress bars (:func:`progress_bar
 
 from __future__ import annotations
 
+import multiprocessing
+import multiprocessing.context
 import os
+import pickle
 import signal
+import sys
+import threading
+import types
+import warnings
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import Executor, ProcessPoolExecutor, as_completed
-from contextlib import AbstractContextManager, contextmanager
+from contextlib import AbstractContextManager, contextmanager, suppress
 from typing import Any, TypeVar
 
-from fcomp.errors import FcompError, term
+from fcomp.errors import FcompError, FcompWarning, term
 from fcomp.progress import ProgressCallback
 from fcomp.usercode import load_sources, user_sources
 
@@ -129,13 +143,135 @@ def executor(scheduler: str | None = None, workers: int | None = None
 def process_pool(workers: int, *, spawn: bool = False) -> ProcessPoolExecutor:
     """A local process pool whose workers first execute the user's own code (``--effects``
     files, :func:`fcomp.usercode.load_sources`); ``spawn`` starts them fresh (the default
-    on macOS and Windows) rather than forked. Its workers leave Ctrl-C and SIGTERM to the
-    parent (:func:`stopping`)."""
-    import multiprocessing
-
-    ctx = multiprocessing.get_context("spawn") if spawn else None
-    return ProcessPoolExecutor(max_workers=workers, mp_context=ctx,
+    on macOS and Windows) rather than forked. Its workers never run the caller's
+    ``__main__`` (:func:`pool_context`) and leave Ctrl-C and SIGTERM to the parent
+    (:func:`stopping`)."""
+    return ProcessPoolExecutor(max_workers=workers, mp_context=pool_context(spawn),
                                initializer=_worker_start, initargs=(user_sources(),))
+
+
+#: Held while a worker process starts with the caller's ``__main__`` hidden.
+_HIDING = threading.Lock()
+
+
+class _MainHidden:
+    """A process that starts without the caller's ``__main__``.
+
+    A fresh (``spawn``, ``forkserver``) process is told by
+    :func:`multiprocessing.spawn.get_preparation_data` to run the parent's main
+    module again -- by its file (``python script.py``) or its module name
+    (``python -m``) -- so that functions defined there unpickle. fcomp's jobs
+    never need it, and running it is wrong: a script without an ``if __name__ ==
+    "__main__":`` guard runs again in every worker, starts pools there and the
+    pool breaks (``BrokenProcessPool``). While the process starts, ``__main__``
+    is a bare module (no ``__spec__``, no ``__file__``), so the worker is told
+    nothing about it. ``fork`` is not used instead: forking a process that runs
+    threads (a progress relay, BLAS, the user's own) is unsafe.
+    """
+
+    def start(self) -> None:
+        with _HIDING:
+            main = sys.modules.get("__main__")
+            sys.modules["__main__"] = types.ModuleType("__main__")
+            try:
+                super().start()  # type: ignore[misc]
+            finally:
+                if main is None:
+                    sys.modules.pop("__main__", None)
+                else:
+                    sys.modules["__main__"] = main
+
+
+class _SpawnProcess(_MainHidden, multiprocessing.context.SpawnProcess):
+    pass
+
+
+class _SpawnContext(multiprocessing.context.SpawnContext):
+    Process = _SpawnProcess
+
+
+_CONTEXTS: dict[str, multiprocessing.context.BaseContext] = {"spawn": _SpawnContext()}
+if hasattr(multiprocessing.context, "ForkServerContext"):  # not on Windows
+    class _ForkServerProcess(_MainHidden, multiprocessing.context.ForkServerProcess):
+        pass
+
+    class _ForkServerContext(multiprocessing.context.ForkServerContext):
+        Process = _ForkServerProcess
+
+    _CONTEXTS["forkserver"] = _ForkServerContext()
+
+
+def pool_context(spawn: bool = False) -> multiprocessing.context.BaseContext:
+    """The :mod:`multiprocessing` context of fcomp's local pools: ``spawn`` (or, by default,
+    this platform's start method) with workers that never run the caller's ``__main__``
+    (:class:`_MainHidden`); ``fork`` copies the parent and runs nothing again."""
+    method = "spawn" if spawn else multiprocessing.get_start_method()
+    return _CONTEXTS.get(method) or multiprocessing.get_context(method)
+
+
+def fresh_workers(pool: Executor | None) -> bool:
+    """Whether ``pool`` is a local pool whose workers start fresh (``spawn``,
+    ``forkserver``): they have none of the caller's ``__main__``."""
+    if not isinstance(pool, ProcessPoolExecutor):
+        return False
+    ctx = getattr(pool, "_mp_context", None)
+    return ctx is not None and ctx.get_start_method() != "fork"
+
+
+class _Sink:
+    def write(self, data: bytes) -> int:
+        return len(data)
+
+
+def main_objects(*objs: Any) -> list[str]:
+    """The names of what pickling ``objs`` would take from the caller's ``__main__``
+    (classes, functions, instances of its classes), in the order met."""
+    found: list[str] = []
+
+    class Finder(pickle.Pickler):
+        def reducer_override(self, obj: Any) -> Any:
+            kind = obj if isinstance(obj, type | types.FunctionType) else type(obj)
+            if getattr(kind, "__module__", None) == "__main__":
+                name = getattr(kind, "__qualname__", repr(kind))
+                if not any(name == f or name.startswith(f + ".") for f in found):
+                    found.append(name)  # a class's nested ones (its Params) go unnamed
+            return NotImplemented
+
+    # what cannot be pickled at all: the pool's own pickling says what is wrong
+    with suppress(pickle.PicklingError, TypeError, AttributeError, ValueError):
+        Finder(_Sink(), protocol=pickle.HIGHEST_PROTOCOL).dump(objs)
+    return found
+
+
+#: The ``__main__`` names :func:`shippable` has warned about in this process (once each).
+_WARNED: set[tuple[str, ...]] = set()
+
+
+def shippable(pool: Executor | None, *objs: Any) -> bool:
+    """Whether jobs carrying ``objs`` can go to ``pool``'s workers.
+
+    Not when ``pool`` starts fresh workers (:func:`fresh_workers`) and ``objs`` use
+    something defined in the caller's ``__main__`` (an effect class written in a
+    notebook cell or in the script itself): the workers do not run ``__main__``
+    (:class:`_MainHidden`), so they could not unpickle it. Such jobs run here, one
+    after another, with one :class:`~fcomp.errors.FcompWarning` (``serial``, once per
+    process for the same names) saying how to run them in parallel. (Shipping them by value, ``cloudpickle``, would not
+    bring their results back: a worker's copy of the class is not the caller's.)
+    """
+    if not fresh_workers(pool):
+        return True
+    names = main_objects(*objs)
+    if not names:
+        return True
+    if tuple(names) in _WARNED:
+        return False
+    _WARNED.add(tuple(names))
+    warnings.warn(FcompWarning(
+        "serial", f"{', '.join(names)} is defined in the caller's __main__ (the script or "
+        "the notebook), which worker processes do not run: these jobs run here, one after "
+        "another; define it in a module you import (or an effects file, "
+        f"{term('effects_module')} FILE.py) to run them in parallel"), stacklevel=3)
+    return False
 
 
 def _worker_start(sources: tuple[tuple[str, str, str], ...]) -> None:
@@ -186,6 +322,8 @@ def run_tasks(fn: Callable[[T], R], items: Sequence[T], *, workers: int | None =
         return results
     with executor(scheduler, min(workers or os.cpu_count() or 1, total)) as pool:
         assert pool is not None
+        if not shippable(pool, fn, items):
+            return run_tasks(fn, items, workers=1, progress=progress)
         futures = {pool.submit(fn, item): i for i, item in enumerate(items)}
         for done, fut in enumerate(as_completed(futures), start=1):
             results[futures[fut]] = fut.result()
@@ -194,5 +332,5 @@ def run_tasks(fn: Callable[[T], R], items: Sequence[T], *, workers: int | None =
     return results
 
 
-__all__ = ["check_scheduler", "dask_client", "executor", "process_pool", "run_tasks", "stop",
-           "stopping"]
+__all__ = ["check_scheduler", "dask_client", "executor", "fresh_workers", "main_objects",
+           "pool_context", "process_pool", "run_tasks", "shippable", "stop", "stopping"]

@@ -44,6 +44,7 @@ OPTIONS: dict[str, str] = {
     "out": "--out", "input": "--input", "mapping": "--map", "position_scale": "--position-scale",
     "effects_module": "--effects", "units": "--units", "drop": "--drop",
     "decimal": "--decimal", "delimiter": "--delimiter", "scheduler": "--scheduler",
+    "mass": "--mass",
 }
 
 

@@ -34,7 +34,9 @@ fit) and runs in the command's own process.
 from __future__ import annotations
 
 import argparse
+import json
 import shlex
+from pathlib import Path
 from typing import Any
 
 from fcomp.cli import common
@@ -69,7 +71,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="train/held-out split (for --fit and the feature strengths)")
     p.add_argument("--cutoff", type=finite_float, default=None, metavar="HZ",
                    help="cutoff of the zero-phase filter deriving v, a from x (default: from "
-                   "the sample rate and the position noise)")
+                   "the sample rate and the position noise, and a fit's 10 Hz for the RMS on "
+                   "the whole record; a --params FIT.json fitted with another --cutoff: that)")
     p.add_argument("--json", metavar="OUT", default=None,
                    help="write the result as JSON to OUT ('-' for standard output)")
     p.add_argument("--report", metavar="DIR", default=None,
@@ -85,8 +88,10 @@ def summary(doc: dict[str, Any]) -> str:
     (:func:`fcomp.conclusions.of_comparison`) first, then the errors per regime."""
     from fcomp.conclusions import of_comparison
 
+    where = ("" if doc["fitted"] else "on the whole record, as fcomp fit measures it; "
+             f"scored {doc['rms_scored']:.4g} N ")
     lines = [*of_comparison(doc).lines(), "", f"model {doc['description']} ({'fitted on the training samples' if doc['fitted'] else 'as given'}): "
-             f"RMS {doc['rms']:.4g} N over the {doc['judged']} samples "
+             f"RMS {doc['rms']:.4g} N {where}over the {doc['judged']} samples "
              f"(scored: a prediction band the motion leaves costs; plain y - F "
              f"{doc['rms_plain']:.4g} N; noise floor {doc['noise_floor']:.3g} N)"]
     for name, r in doc["regimes"].items():
@@ -98,6 +103,24 @@ def summary(doc: dict[str, Any]) -> str:
         errs = ", ".join(f"{k} {v:.3g} {'m' if k == 'x' else 'Pa'}" for k, v in pc["rms"].items())
         lines.append(f"plant {pc['plant']} on {label}: RMS {errs}")
     return "\n".join(lines)
+
+
+def _fit_cutoff(params: str | None) -> float | None:
+    """The cut-off (Hz) a fit's JSON given as ``--params`` was fitted with, if not the
+    default: compared with it, the model scores the fit's RMS."""
+    from fcomp.identification.target import CUTOFF_HZ
+
+    if params is None or not params.lower().endswith(".json"):
+        return None
+    try:
+        doc = json.loads(Path(params).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None  # read and reported by the model's loader
+    cutoff = doc.get("cutoff_hz") if isinstance(doc, dict) else None
+    if isinstance(cutoff, int | float) and not isinstance(cutoff, bool) and cutoff > 0 \
+            and cutoff != CUTOFF_HZ:
+        return float(cutoff)
+    return None
 
 
 def run(args: argparse.Namespace) -> int:
@@ -134,6 +157,7 @@ def run(args: argparse.Namespace) -> int:
     common.check_outputs(inputs, [("--json", out)], [("--report", report, "report")])
     given = bool(args.params or args.set or args.fit or args.friction.lower().endswith(".json"))
     model, mass = common.model_with_params(args, use="model compared", measured=True)
+    cutoff = args.cutoff if args.cutoff is not None else _fit_cutoff(args.params)
     data = [Measurement.read(p) for p in args.data]
     for d in data:
         common.warn_sidecar(d)
@@ -144,7 +168,7 @@ def run(args: argparse.Namespace) -> int:
     with common.Activity(f"compare {args.friction}", enabled=not args.no_progress):
         comp = compare(data, model, fit=args.fit,
                        mass=args.mass if args.mass is not None else mass, split=args.split,
-                       cutoff_hz=args.cutoff, plant=args.plant, plant_params=plant_params,
+                       cutoff_hz=cutoff, plant=args.plant, plant_params=plant_params,
                        jobs=args.jobs, scheduler=scheduler)
     doc = common.with_warnings(comp.to_dict())
     text = result_text(doc)

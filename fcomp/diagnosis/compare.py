@@ -21,6 +21,7 @@ Plant domain
 
 from __future__ import annotations
 
+import contextlib
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -37,9 +38,13 @@ from fcomp.diagnosis.refit import RIG_EXTRAS, FitResult, Refit
 from fcomp.diagnosis.regimes import Segmentation, segment
 from fcomp.diagnosis.residuals import Segment, regime_errors, worst_segments
 from fcomp.diagnosis.split import Split, make_split
-from fcomp.errors import FcompError
+from fcomp.diagnosis.writers import HELD_OUT
+from fcomp.errors import FcompError, term
+from fcomp.identification.estimator import MEASURED, model_rms
 from fcomp.identification.plausibility import FitWarning
+from fcomp.identification.target import CUTOFF_HZ
 from fcomp.measurement import Measurement
+from fcomp.modelfile import split_measurement
 from fcomp.models import FrictionModel, make_model
 
 if TYPE_CHECKING:
@@ -57,13 +62,21 @@ class Comparison:
     model
         The model compared (with the values it was compared with).
     rms
+        The RMS error (N). Of a model compared as given: the one RMS of a model on a
+        record (:func:`fcomp.identification.estimator.model_rms`), which ``fcomp fit``
+        prints for the model it fitted (``rms_measured`` says so in words). Of a
+        fitted comparison: :attr:`rms_scored`, over the held-out samples.
+    rms_scored
         RMS error over the judged samples: the scored residual
         (:func:`~fcomp.diagnosis.scoring.scored_residual`, the logarithmic score of
         the model's prediction band with the noise floor, in N), which equals the
         plain error where the motion fixes the prediction and charges a band the
-        model cannot place. The same measure decides in :mod:`.loop`.
+        model cannot place. The same measure decides in :mod:`.loop`, and is the one
+        of :attr:`regimes`.
     rms_plain
-        RMS of the plain residual ``y - F_model`` over the same samples.
+        RMS of the plain residual ``y - F_model`` over the judged samples.
+    rms_measured
+        What :attr:`rms` is, in words.
     regimes
         Per regime and ``"all"``: ``{"rms", "n"}`` over the judged samples.
     worst
@@ -111,6 +124,8 @@ class Comparison:
     plant: list[Any] = field(default_factory=list)
     values: dict[str, float] = field(default_factory=dict)
     rms_plain: float = math.nan
+    rms_scored: float = math.nan
+    rms_measured: str = ""
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON of ``fcomp compare``: ``{"model", "rms", "regimes", "residual_features",
@@ -126,6 +141,8 @@ class Comparison:
             "fitted": self.fitted,
             "judged": self.judged_label,
             "rms": num(self.rms),
+            "rms_measured": self.rms_measured,
+            "rms_scored": num(self.rms_scored),
             "rms_plain": num(self.rms_plain),
             "noise_floor": num(self.noise_floor),
             "regimes": {k: {"rms": num(v["rms"]), "n": v["n"]}  # type: ignore[arg-type]
@@ -168,8 +185,9 @@ class Comparison:
         return write_comparison_report(self, directory, command=command)
 
     def __repr__(self) -> str:
-        return (f"<Comparison {self.model.describe()}: RMS {self.rms:.4g} N over "
-                f"{int(self.judged.sum())} {self.judged_label} samples of "
+        return (f"<Comparison {self.model.describe()}: RMS {self.rms:.4g} N (scored "
+                f"{self.rms_scored:.4g} N over {int(self.judged.sum())} {self.judged_label} "
+                "samples) of "
                 f"{', '.join(self.data.labels[:3])}{' ...' if len(self.data.labels) > 3 else ''}"
                 f"{'; fitted' if self.fitted else ''}>")
 
@@ -185,7 +203,8 @@ def model_from_fit(doc: Mapping[str, Any], model: FrictionModel | None = None,
 
     ``doc`` gives ``model``, ``effects``, ``params`` and the parameters held
     (``fixed``); ``mass`` becomes the returned mass and ``offset`` the effect that
-    holds it (:func:`fcomp.effects.effect_holding`); direction-dependent values
+    holds it (:func:`fcomp.effects.effect_holding`); ``mass`` and ``lag`` are carried
+    by the model as its measurement terms (:attr:`FrictionModel.measurement`); direction-dependent values
     (``Fc_pos``, ...) make the model directional. ``model`` (default: the model ``doc`` names) is the model
     the values are put into. Raises :class:`FcompError` naming ``source`` for a
     document that is not a fit or values the model does not have.
@@ -211,7 +230,7 @@ def model_from_fit(doc: Mapping[str, Any], model: FrictionModel | None = None,
             raise FcompError(f"{source}: params.{k} = {v!r} is not a number") from None
     mass = values.pop("mass", None)
     offset = values.pop("offset", None)
-    values.pop("lag", None)  # a diagnosis's lag of the record's force channel, not the model's
+    lag = values.pop("lag", None)  # the lag of the record's force channel, not the model's
     if any(k not in mdl.flat_params() for k in values):
         directional = directional_model(mdl)
         if all(k in directional.flat_params() for k in values):
@@ -223,22 +242,24 @@ def model_from_fit(doc: Mapping[str, Any], model: FrictionModel | None = None,
     mdl = mdl.with_params(**values) if values else mdl
     if offset:
         mdl = mdl.with_effects(offset_effect({"offset": offset}))
-    return mdl, mass
+    terms = {k: v for k, v in (("mass", mass), ("lag", lag)) if v is not None}
+    return (mdl.with_measurement(terms) if terms else mdl), mass
 
 
 def fitted_model(fit: Any) -> tuple[FrictionModel, float | None]:
     """The model of a fitted :class:`~fcomp.identification.FrictionFit` as :func:`compare`
     takes it: its fitted values, a fitted ``offset`` as the effect that holds it
-    (:func:`fcomp.effects.effect_holding`), and the fitted (or given) mass."""
-    from fcomp.effects import effect_holding
+    (:func:`fcomp.modelfile.split_measurement`), and the fitted (or given) mass."""
 
-    values = {**fit.held_, **fit.params_}
-    model = fit.model_
-    if values.get("offset"):
-        model = model.with_effects(effect_holding("offset")({"offset": values["offset"]}))
-    mass = values.get("mass", fit.mass)
+    model, terms = split_measurement(fit.model_)
+    mass = terms.get("mass", fit.mass)
     return model, (None if mass is None else float(mass))
 
+
+#: What :attr:`Comparison.rms` of a model compared as given is where the record cannot be
+#: run along (:func:`fcomp.identification.estimator.model_rms` fails).
+SCORED = ("the scored RMS error over the usable samples (the model cannot run along this "
+          "record's motion as a fit does: steady-state points)")
 
 #: Longest record a given model is compared on in full (longer ones are block-averaged
 #: for the prediction's alternatives only; every score is on the full record).
@@ -269,7 +290,10 @@ def compare(model: str | FrictionModel, data: Measurement | Sequence[Measurement
         The moving mass (kg) for records that give a driving force and no
         ``rig.mass`` (a fit's ``params.mass``); fitted with ``fit``.
     split, cutoff_hz
-        As for :class:`~fcomp.diagnosis.loop.Diagnosis`.
+        As for :class:`~fcomp.diagnosis.loop.Diagnosis`; ``cutoff_hz`` is also the
+        cut-off of :attr:`Comparison.rms` of a model compared as given (default: a
+        fit's, :data:`fcomp.identification.target.CUTOFF_HZ`, so that it is the RMS
+        ``fcomp fit`` prints).
 
     The plant domain is added by ``fcomp.compare(..., plant=NAME)``
     (:func:`fcomp.api.compare`), since the plants live above this package.
@@ -277,6 +301,7 @@ def compare(model: str | FrictionModel, data: Measurement | Sequence[Measurement
     mdl = make_model(model) if isinstance(model, str) else model
     if not isinstance(mdl, FrictionModel):
         raise FcompError(f"model must be a model name or a FrictionModel, got {model!r}")
+    mdl, record_terms = split_measurement(mdl)  # a fitted model's mass, offset, lag
     warnings: list[FitWarning] = []
     if fit:
         diag = Diagnosis(mdl, search=False, split=split, cutoff_hz=cutoff_hz, n_jobs=1,
@@ -292,11 +317,16 @@ def compare(model: str | FrictionModel, data: Measurement | Sequence[Measurement
         floor = noise_floor(d, seg).value
         values = {}
         if d.fits_mass:
+            mass = record_terms.get("mass") if mass is None else mass
             if mass is None:
                 raise FcompError(f"{', '.join(d.labels[:3])}: the record gives a driving force "
                                  "and no rig.mass, so the friction force depends on the moving "
-                                 "mass: give it (mass, a fit's params.mass) or fit the model")
+                                 f"mass: give {term('mass')} KG, a fit that estimated it "
+                                 f"({term('params')} FIT.json, or in Python the fit's "
+                                 "model_), or rig.mass in the record's sidecar")
             values["mass"] = float(mass)
+        if "lag" in record_terms and d.fits_lag:
+            values["lag"] = record_terms["lag"]
         refit = Refit(d, sp, seg.d_pre, max_samples=COMPARE_SAMPLES, noise=floor)
         with np.errstate(over="ignore", invalid="ignore"):  # judged just below
             res = refit.result(mdl, values, 0)
@@ -309,7 +339,16 @@ def compare(model: str | FrictionModel, data: Measurement | Sequence[Measurement
                          f"forces beyond {MAX_FORCE:.0e} N or not finite on this record"
                          + (f" (values {', '.join(f'{k} = {v:.3g}' for k, v in huge.items())})"
                             if huge else "") + ": check the parameter values")
-    rms = float(np.sqrt(np.mean(r[judged] ** 2))) if judged.any() else math.nan
+    scored = float(np.sqrt(np.mean(r[judged] ** 2))) if judged.any() else math.nan
+    rms, how = scored, HELD_OUT
+    if not fit:
+        rms, how = scored, SCORED
+        if not isinstance(data, DiagnosisData):  # the one RMS of a model on a record
+            with contextlib.suppress(FcompError):  # steady points a run cannot take
+                carried = {"mass": values["mass"]} if "mass" in values else {}
+                rms = model_rms(mdl.with_measurement(carried), data,
+                                cutoff_hz=cutoff_hz if cutoff_hz is not None else CUTOFF_HZ)
+                how = MEASURED
     width = max(10, int(round(0.25 / d.scales.dt)))
     bounds = [e.start for e in d.experiments[1:]]
     features = residual_structure(located, d, seg, sp.train, sp.test)
@@ -317,4 +356,5 @@ def compare(model: str | FrictionModel, data: Measurement | Sequence[Measurement
                       worst_segments(plain, judged, width, 3, bounds), d.y, res.F_hat,
                       sp.description, d, seg, sp, res, judged, label, features, fit, floor,
                       warnings, [], values,
-                      float(np.sqrt(np.mean(plain[judged] ** 2))) if judged.any() else math.nan)
+                      float(np.sqrt(np.mean(plain[judged] ** 2))) if judged.any() else math.nan,
+                      scored, how)

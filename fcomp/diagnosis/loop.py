@@ -114,8 +114,10 @@ class DiagnosisConfig:
 
     @property
     def model(self) -> FrictionModel:
-        """The baseline model (built from its name on each call)."""
-        return make_model(self.baseline) if isinstance(self.baseline, str) else self.baseline
+        """The baseline model (built from its name on each call); a fitted model's
+        measurement terms are left out: the diagnosis estimates the record's own."""
+        return (make_model(self.baseline) if isinstance(self.baseline, str)
+                else self.baseline.with_measurement(None))
 
     @property
     def names(self) -> list[str]:

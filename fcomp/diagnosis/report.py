@@ -43,7 +43,9 @@ def short_reason(reason: str, limit: int = 110) -> str:
 def _comparison_rows(obj: Comparison) -> tuple[str, list[list[Any]]]:
     """A title and the key numbers of a comparison (for notebooks)."""
     rows = [["model", obj.model.describe(), ""],
-            [f"RMS error ({obj.judged_label} samples)", f"{obj.rms:.4g}", "N"],
+            ["RMS error" + (" (held-out samples)" if obj.fitted else " (whole record)"),
+             f"{obj.rms:.4g}", "N"],
+            [f"scored RMS error ({obj.judged_label} samples)", f"{obj.rms_scored:.4g}", "N"],
             ["noise floor", f"{obj.noise_floor:.3g}", "N"]]
     rows += [[f"regime {k}", "-" if v["rms"] is None else f"{v['rms']:.4g}",
               f"N (n={v['n']})"] for k, v in obj.regimes.items()]
@@ -92,8 +94,9 @@ def build_comparison_report(comp: Comparison, *, command: str | None = None) -> 
     labels = comp.data.labels
     rep = Report(f"Comparison: {comp.model.describe()} on {', '.join(labels[:3])}"
                  + (" ..." if len(labels) > 3 else ""),
-                 subtitle=f"RMS {comp.rms:.4g} N over the {comp.judged_label} samples "
-                 f"(noise floor {comp.noise_floor:.3g} N)"
+                 subtitle=f"RMS {comp.rms:.4g} N" + ("" if comp.fitted else " on the whole "
+                 f"record; scored {comp.rms_scored:.4g} N") + f" over the {comp.judged_label} "
+                 f"samples (noise floor {comp.noise_floor:.3g} N)"
                  + ("; fitted on the training samples" if comp.fitted else
                     "; the model's own values"),
                  command=command, config={"model": d["description"], "fitted": comp.fitted,
@@ -146,8 +149,9 @@ def build_fit_report(fit: Any, comp: Comparison | None, *, command: str | None =
     drawn, and -- where the record takes it -- the comparison's sections for the fitted model."""
     d = fit.to_dict()
     rep = Report(f"Fit: {fit.model_.describe()} on {fit.data_.label}",
-                 subtitle=f"{fit.method_} fit, target {fit.target_}, RMS {fit.rms_:.4g} N over "
-                 f"{fit.n_samples_} samples", command=command,
+                 subtitle=f"{fit.method_} fit on {fit.n_samples_} samples, target "
+                 f"{fit.target_}, RMS {fit.rms_:.4g} N on the whole record",
+                 command=command,
                  config={"model": d["model"], "method": d["method"]})
     rep.conclusion(of_fit(d))
     rep.section("Estimates")
@@ -165,8 +169,10 @@ def build_fit_report(fit: Any, comp: Comparison | None, *, command: str | None =
         rep.note(f"No comparison by regime: {note}", kind="warn")
         return rep
     rep.paragraph(f"The fitted model beside the record, as `fcomp compare` shows it: RMS "
-                  f"{comp.rms:.4g} N over the {comp.judged_label} samples (noise floor "
-                  f"{comp.noise_floor:.3g} N).")
+                  f"{comp.rms:.4g} N on the whole record (the fit's RMS); scored "
+                  f"{comp.rms_scored:.4g} N over the {comp.judged_label} samples, the measure "
+                  f"of the regimes below (a prediction band the motion leaves costs; noise "
+                  f"floor {comp.noise_floor:.3g} N).")
     return comparison_sections(rep, comp)
 
 
@@ -247,7 +253,8 @@ def build_report(diag: Diagnosis, *, command: str | None = None) -> Report:
         ["velocity driving the friction states", f"{sig['velocity']} -- {sig['reason']}", ""],
         ["samples left out (motion the position misses)",
          str(sig.get("unresolved_samples", 0)), ""],
-        ["held-out RMS, baseline (scored: a prediction band costs)", d["rms_baseline"], "N"],
+        ["held-out RMS, baseline (refitted on the training part; scored: a prediction band "
+         "costs)", d["rms_baseline"], "N"],
         ["held-out RMS, final (scored)", d["rms_final"], "N"],
         ["held-out RMS of y - F, baseline / final",
          f"{d['rms_plain']['baseline']:.4g} / {d['rms_plain']['final']:.4g}", "N"],
@@ -259,7 +266,9 @@ def build_report(diag: Diagnosis, *, command: str | None = None) -> Report:
           if sig.get("force_lag_s") is not None else []),
         ["rest speed / presliding length", f"{diag.segmentation_.v_rest:.3g} m/s / "
          f"{diag.segmentation_.d_pre:.3g} m", ""],
-    ], caption="The diagnosis at a glance (errors on held-out samples).", digits=4)
+    ], caption="The diagnosis at a glance (errors on held-out samples: each model refitted "
+       "on the training part, so not the RMS of a given model on the whole record that fit and "
+       "compare print).", digits=4)
 
     figs = figures(diag)
     rep.section("1. Compare: errors per regime")

@@ -21,7 +21,7 @@ from contextlib import contextmanager
 import fcomp.diagnosis.catalogue as catalogue
 from fcomp.diagnosis.refit import FitResult, Refit
 from fcomp.errors import FcompError
-from fcomp.parallel import executor, process_pool, stop, stopping
+from fcomp.parallel import executor, process_pool, shippable, stop, stopping
 from fcomp.progress import Tick
 
 #: Evaluation budget of a refit without exact sensitivities (finite differences).
@@ -100,12 +100,17 @@ def refit_all(refit: Refit, proposals: Sequence[catalogue.Proposal], current: Fi
     """Refit every proposal against ``current``: on ``pool`` where there are several.
 
     Returns the results (a string says why a refit failed) and the pool to use from
-    now on (``None`` when a local pool lost its workers: its jobs were finished here).
+    now on (``None`` when a local pool lost its workers: its jobs were finished here;
+    or when a model uses something of the caller's ``__main__`` its fresh workers do
+    not have, :func:`fcomp.parallel.shippable`: every refit runs here).
     ``seconds`` records each refit's duration by effect and form (the order of the
     next step's jobs, :func:`longest_first`). A box a worker's fit had to widen is
     adopted by ``refit`` here.
     """
     results: list[FitResult | str] = [""] * len(proposals)
+    if pool is not None and not shippable(pool, [p.model for p in proposals], current.model):
+        stop(pool)  # a model of the caller's __main__: this diagnosis refits here from now on
+        pool = None
     if pool is not None and len(proposals) >= 2:
         live: Executor = pool
         pending = {live.submit(timed_refit_candidate, refit, proposals[i], current): i

@@ -63,6 +63,13 @@ def signals(result: DiagnosisResult) -> dict[str, Any]:
             "records": recs}
 
 
+#: What the RMS errors of a diagnosis (``rms_baseline``, ``rms_final``, ``rms_before``,
+#: ``rms_after``, ``rms_heldout``) are, in words (the JSON's ``rms_measured``).
+HELD_OUT = ("held-out RMS (N): each model refitted on the training part of the records and "
+            "scored on the held-out part; not the RMS of a given model on the whole record "
+            "that fcomp fit and fcomp compare print")
+
+
 def model_file(result: DiagnosisResult, source: Mapping[str, Any] | None = None
                ) -> dict[str, Any]:
     """The final model as a model file's document (:mod:`fcomp.modelfile`): the friction
@@ -89,6 +96,7 @@ def to_dict(result: DiagnosisResult) -> dict[str, Any]:
     return {
         "baseline": result.baseline_name,
         "rms_baseline": result.baseline_fit.rms_test,
+        "rms_measured": HELD_OUT,
         "added": list(result.added),
         "steps": [{"effect": s.effect, "rms_before": s.rms_before, "rms_after":
                    _num(s.rms_after), "accepted": bool(s.accepted), "forced": s.forced,

@@ -62,14 +62,73 @@ from fcomp.identification.engine import (
 )
 from fcomp.identification.plausibility import FitWarning, RigContext, check_fit, correlations
 from fcomp.identification.strategies import HYSTERESIS_REFINE_NFEV, FitStrategy, strategy_for
-from fcomp.identification.target import FitData, fit_data
+from fcomp.identification.target import CUTOFF_HZ, FitData, fit_data
 from fcomp.measurement import Measurement
+from fcomp.modelfile import split_measurement
 from fcomp.models import FrictionModel, make_model
 from fcomp.parameters import Directional
+from fcomp.trajectory import friction_along_motion
 
 __all__ = ["ALWAYS_FIXED", "EXTRA_SPECS", "HOLD_RELATIVE_ERROR", "HYSTERESIS_REFINE_NFEV",
-           "METHODS", "SEGMENT_NAMES", "FrictionFit", "default_free", "directional_model",
-           "equality_constraints"]
+           "MEASURED", "METHODS", "SEGMENT_NAMES", "FrictionFit", "default_free",
+           "directional_model", "equality_constraints", "model_rms", "predicted"]
+
+
+#: What :func:`model_rms` measures, in words.
+MEASURED = ("the model's RMS error on the whole record (measured force minus the model run "
+            "along the measured motion, with the record's fitted mass, offset; as fcomp fit "
+            "and fcomp compare print it)")
+
+
+def model_rms(model: FrictionModel, data: Measurement | Sequence[Measurement], *,
+              cutoff_hz: float = CUTOFF_HZ, substeps: int = 1) -> float:
+    """The one RMS error (N) of a model on a record, as ``fcomp fit`` and ``fcomp compare``
+    print it.
+
+    The model runs along the record's measured motion (:func:`~.target.fit_data`: ``v``
+    and ``a`` from their columns, else from ``x`` by the zero-phase filter at
+    ``cutoff_hz``, a driving force through the same filter) and its force, with the
+    model's measurement terms put back (:attr:`~fcomp.models.base.FrictionModel.measurement`:
+    a fitted ``offset``, and ``mass`` times the acceleration where the record gives a
+    driving force and no ``rig.mass``), is compared with the measured (or
+    reconstructed) force at every sample; several records are pooled.
+
+    Raises
+    ------
+    FcompError
+        For a record with a driving force and no ``rig.mass`` when the model carries
+        no mass, or a record a fit could not read.
+    """
+    records = [data] if isinstance(data, Measurement) else list(data)
+    squares, n = 0.0, 0
+    for meas in records:
+        d = fit_data(meas, cutoff_hz=cutoff_hz)
+        squares += float(np.sum((d.y - predicted(model, d, substeps)) ** 2))
+        n += d.n
+    return math.sqrt(squares / n) if n else math.nan
+
+
+def predicted(model: FrictionModel, d: FitData, substeps: int = 1) -> np.ndarray:
+    """The force (N) ``model`` predicts for the target of ``d``: its friction run along the
+    motion, with its measurement terms (:attr:`~fcomp.models.base.FrictionModel.measurement`)
+    put back: the ``offset``, and ``mass`` times the inertia column where ``d`` has one
+    (a driving force, no known mass).
+
+    Raises
+    ------
+    FcompError
+        Where ``d`` needs a mass and the model carries none.
+    """
+    friction, record = split_measurement(model)
+    s = d.sig
+    F = friction_along_motion(friction, s["t"], s["v"], a=s["a"], x=s["x"], p1=s["p1"],
+                              p2=s["p2"], substeps=substeps).F
+    if d.inertia is None:
+        return F
+    if "mass" not in record:
+        raise FcompError(f"{d.label}: the record gives a driving force and no rig.mass: the "
+                         "model carries no fitted mass to compare with")
+    return F + record["mass"] * d.inertia
 
 
 def directional_model(model: FrictionModel) -> FrictionModel:
@@ -154,11 +213,22 @@ class FrictionFit:
     units_ : dict
         SI unit of each estimate.
     rms_ : float
-        RMS of the force residual (N) over the fitted samples.
+        The fitted model's RMS error (N) on the record: the one RMS of a model on a
+        record (:func:`model_rms`) that ``fcomp compare`` prints too, so
+        ``fcomp.compare(fit.model_, record).rms == fit.rms_``. For a trajectory fit it
+        is the residual the fit minimised.
+    rms_fit_ : float
+        RMS of the least-squares residual (N) the fit minimised, over the samples it
+        fitted (the steady-state points of a ``"steady-state"`` fit, the moving samples
+        of a ``"samples"`` one).
+    rms_measured_ : str
+        How ``rms_`` was measured (in words).
     converged_ : bool
     message_ : str
     model_ : FrictionModel
-        The model with the fitted values.
+        The model with the fitted values, carrying the terms of the record the fit
+        estimated beside the friction (``model_.measurement``: ``mass``, ``offset``,
+        ``lag``), so that ``fcomp.compare(fit.model_, record)`` compares it as fitted.
     fixed_ : dict
         Model parameters held fixed, with their values.
     not_identifiable_ : list
@@ -196,7 +266,7 @@ class FrictionFit:
         method: str = "auto",
         v_min: float | None = None,
         min_duration: float = 0.05,
-        cutoff_hz: float = 10.0,
+        cutoff_hz: float = CUTOFF_HZ,
         substeps: int = 1,
         max_nfev: int = 200,
         confidence: float = 0.95,
@@ -247,6 +317,12 @@ class FrictionFit:
         self._failure = ""
         self.data_ = data
         self._fit(data)
+        try:
+            self.rms_, self.rms_measured_ = self.score(data), MEASURED
+        except (FcompError, ValueError) as exc:  # a record the model cannot run along
+            self.rms_ = self.rms_fit_
+            self.rms_measured_ = (f"the least-squares residual of the fit ({MEASURED} "
+                                  f"fails: {str(exc).splitlines()[0]})")
         self.context_ = RigContext.from_meta(data.meta, mass=self.mass)
         self.warnings_ = self.plausibility()
         if not self.converged_ and self.strict:
@@ -305,10 +381,10 @@ class FrictionFit:
 
     def _adopt(self, out: FitOutcome, d: FitData) -> None:
         """Set the result attributes from the strategy's outcome."""
-        self.model_ = out.model
+        self.model_ = out.model.with_measurement(self._measurement_terms(out.extras))
         self.params_, self.stderr_, self.ci_ = out.params, out.stderr, out.ci
         self.units_, self.cov_, self.param_names_ = out.units, out.cov, out.param_names
-        self.rms_, self.converged_, self.message_ = out.rms, out.converged, out.message
+        self.rms_fit_, self.converged_, self.message_ = out.rms, out.converged, out.message
         self.fixed_, self.not_identifiable_ = out.fixed, out.not_identifiable
         self.at_bound_, self.method_ = out.at_bound, out.method
         self.n_samples_, self.n_eff_, self.tau_int_ = out.n_samples, out.n_eff, out.tau_int
@@ -317,6 +393,17 @@ class FrictionFit:
         self._extras = out.extras
         self._target_kind = (d.source, d.inertia is not None)
         self._failure = out.failure
+
+    def _measurement_terms(self, extras: Mapping[str, float]) -> dict[str, float]:
+        """The terms of the record the fitted model carries (``model_.measurement``): the
+        fitted (or held) ``mass``, ``offset``, ``lag``, and a given ``mass``."""
+        from fcomp.models.document import MEASUREMENT_PARAMS
+
+        terms = {k: float(v) for k, v in extras.items()
+                 if k in MEASUREMENT_PARAMS and math.isfinite(float(v))}
+        if self.mass is not None and "mass" not in terms:
+            terms["mass"] = float(self.mass)
+        return terms
 
     # -------------------------------------------------------------- predict
     def _check_fitted(self) -> None:
@@ -333,16 +420,10 @@ class FrictionFit:
                         cutoff_hz=self.cutoff_hz)
 
     def predict(self, data: Measurement) -> np.ndarray:
-        """Predicted force ``F_model + mass*(a + g*s_o) + offset`` (N) along ``data``'s motion."""
-        d = self._data(data)
-        s = d.sig
-        from fcomp.trajectory import friction_along_motion
-
-        F = friction_along_motion(self.model_, s["t"], s["v"], a=s["a"], x=s["x"], p1=s["p1"],
-                                  p2=s["p2"], substeps=self.substeps).F
-        if "mass" in self._extras and d.inertia is not None:
-            F = F + self._extras["mass"] * d.inertia
-        return F + self._extras.get("offset", 0.0)
+        """Predicted force ``F_model + mass*(a + g*s_o) + offset`` (N) along ``data``'s motion
+        (:func:`predicted`)."""
+        d = self._data(data)  # first: a fit not fitted yet says so
+        return predicted(self.model_, d, self.substeps)
 
     def plot(self, data: Measurement | None = None) -> Any:
         """The fit drawn: measured (or reconstructed) force and the fitted model over time and
@@ -387,8 +468,8 @@ class FrictionFit:
         name = self.model if isinstance(self.model, str) else self.model.describe()
         if not hasattr(self, "params_"):
             return f"<FrictionFit {name}: not fitted>"
-        return (f"<FrictionFit {self.model_.describe()}: {len(self.params_)} estimates, RMS "
-                f"{self.rms_:.4g} N over {self.n_samples_} samples, {len(self.warnings_)} "
+        return (f"<FrictionFit {self.model_.describe()}: {len(self.params_)} estimates from "
+                f"{self.n_samples_} samples, RMS {self.rms_:.4g} N, {len(self.warnings_)} "
                 f"warning(s)>")
 
     def _repr_html_(self) -> str:
@@ -407,8 +488,11 @@ class FrictionFit:
         return notebook_html(f"Fit: {self.model_.describe()} ({self.method_})", rows, fig)
 
     def score(self, data: Measurement) -> float:
-        """RMS force error (N) of the fitted model on ``data`` (e.g. a validation record)."""
-        return float(np.sqrt(np.mean((self.target(data) - self.predict(data)) ** 2)))
+        """The fitted model's RMS error (N) on ``data`` (e.g. a validation record): the one
+        RMS of a model on a record (:func:`model_rms`, with this fit's cut-off), which is
+        :attr:`rms_` for the record fitted."""
+        self._check_fitted()
+        return model_rms(self.model_, data, cutoff_hz=self.cutoff_hz, substeps=self.substeps)
 
     def model_file(self, source: Mapping[str, Any] | None = None) -> dict[str, Any]:
         """The fitted model as a model file's document (:mod:`fcomp.modelfile`): the
@@ -437,6 +521,9 @@ class FrictionFit:
             "params": dict(self.params_),
             "stderr": dict(self.stderr_),
             "rms": self.rms_,
+            "rms_measured": self.rms_measured_,
+            "rms_fit": self.rms_fit_,
+            "cutoff_hz": self.cutoff_hz,
             "ci": {k: list(v) for k, v in self.ci_.items()},
             "confidence": self.confidence,
             "units": dict(self.units_),

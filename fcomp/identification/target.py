@@ -36,6 +36,10 @@ from fcomp.measurement import ORIENTATIONS, G, Measurement
 from fcomp.models.base import side_of
 from fcomp.trajectory import prepare_signals
 
+#: Default cut-off (Hz) of the zero-phase filter deriving ``v``, ``a`` from ``x`` (and of the
+#: driving force's parallel filtering) in a fit and in :func:`.estimator.model_rms`.
+CUTOFF_HZ = 10.0
+
 
 @dataclass(frozen=True)
 class FitData:
@@ -146,7 +150,7 @@ def block_mean(arr: np.ndarray, q: int) -> np.ndarray:
     return np.concatenate([head, [arr[m * q:].mean()]]) if arr.size % q else head
 
 
-def motion(meas: Measurement, cutoff_hz: float = 10.0
+def motion(meas: Measurement, cutoff_hz: float = CUTOFF_HZ
            ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, bool]:
     """``(v, a, x, filtered)`` of a measurement: columns where present, else derived.
 
@@ -176,7 +180,7 @@ def fit_data(
     *,
     estimate_mass: bool | None = None,
     mass: float | None = None,
-    cutoff_hz: float = 10.0,
+    cutoff_hz: float = CUTOFF_HZ,
     force_cutoff_hz: float | None = None,
 ) -> FitData:
     """The :class:`FitData` of a measurement (see the module docstring for the cases).

@@ -342,6 +342,8 @@ class FrictionModel(PlainValue, ABC):
         model: FrictionModel = self
         for e in effects:
             model = as_effect(e).attach(model)
+        if self.measurement and not model.measurement:  # a structural term builds anew
+            model = model.with_measurement(self.measurement)
         return model
 
     def with_params(self, **flat: float) -> FrictionModel:
@@ -367,6 +369,47 @@ class FrictionModel(PlainValue, ABC):
         new.__dict__.update(self.__dict__)
         new.params = params
         new.effects = effects
+        return new
+
+    # ------------------------------------------------------ measurement
+    @property
+    def measurement(self) -> dict[str, float]:
+        """The terms of the *measurement* a fit found beside the friction (a copy):
+        ``mass`` (kg, the moving mass of a driving force), ``offset`` (N, a constant
+        force offset), ``lag`` (s, the lag of the force channel) -- those estimated;
+        empty for a model not fitted.
+
+        They are the model file's ``measurement_terms.params``
+        (:data:`fcomp.models.document.MEASUREMENT_PARAMS`): a comparison with a
+        record puts them back (:func:`fcomp.modelfile.split_measurement`), so a fitted
+        model is compared as it was fitted; the friction itself -- what a plant or a
+        compensator uses -- never reads them. A plant has its own moving mass.
+        """
+        return dict(self.__dict__.get("_measurement") or {})
+
+    def with_measurement(self, terms: Mapping[str, float] | None = None) -> FrictionModel:
+        """A copy carrying the measurement terms ``terms`` (:attr:`measurement`), replacing
+        any it had; ``None`` or empty: none (the seal's friction alone).
+
+        Raises
+        ------
+        ValueError
+            For a name that is not a measurement term or a value that is not finite.
+        """
+        from fcomp.models.document import MEASUREMENT_PARAMS
+
+        clean: dict[str, float] = {}
+        for k, v in (terms or {}).items():
+            if k not in MEASUREMENT_PARAMS:
+                raise ValueError(f"{k!r} is not a measurement term (known: "
+                                 f"{', '.join(MEASUREMENT_PARAMS)})")
+            if not math.isfinite(float(v)):
+                raise ValueError(f"measurement term {k} = {v} is not a finite number")
+            clean[k] = float(v)
+        new = self._rebuild(self.params, self.effects)
+        new.__dict__.pop("_measurement", None)
+        if clean:
+            new.__dict__["_measurement"] = clean
         return new
 
     def flat_params(self) -> dict[str, float]:
@@ -560,7 +603,12 @@ class FrictionModel(PlainValue, ABC):
 
     # ----------------------------------------------------------------- misc
     def __repr__(self) -> str:
-        return f"<{type(self).__name__} {self.describe()}>"
+        from fcomp.models.document import MEASUREMENT_PARAMS
+
+        terms = self.measurement
+        extra = ("; measurement " + ", ".join(f"{k} {v:.4g} {MEASUREMENT_PARAMS[k]}"
+                                              for k, v in terms.items()) if terms else "")
+        return f"<{type(self).__name__} {self.describe()}{extra}>"
 
     def passivity(self) -> dict[str, Any]:
         """Passivity (dissipativity) of the map ``v -> F``.

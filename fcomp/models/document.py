@@ -115,7 +115,8 @@ def model_document(model: FrictionModel, *, stderr: Mapping[str, float] | None =
         is written as ``null``).
     measurement : mapping of str to float, optional
         Measurement values of a fit or diagnosis (``mass``, ``offset``, ``lag``;
-        others are ignored).
+        others are ignored), beside (and over) those the model carries
+        (:attr:`~fcomp.models.base.FrictionModel.measurement`).
     source : mapping, optional
         Where the model comes from (``command``, ``data``, ...), JSON values.
 
@@ -146,7 +147,8 @@ def model_document(model: FrictionModel, *, stderr: Mapping[str, float] | None =
     params = {k: number(v, f"params.{k}") for k, v in model.flat_params().items()
               if k not in dropped}
     flat = model.flat_params()  # an effect's own parameter (force-offset's offset) is not an extra
-    extras = {k: number(v, f"measurement_terms.{k}") for k, v in (measurement or {}).items()
+    terms = {**model.measurement, **dict(measurement or {})}
+    extras = {k: number(v, f"measurement_terms.{k}") for k, v in terms.items()
               if k in MEASUREMENT_PARAMS and k not in flat and v is not None
               and not math.isnan(float(v))}
     doc: dict[str, Any] = {"format": FORMAT, "version": VERSION,

@@ -2,7 +2,7 @@
 
 * A fitted model carries the terms of its record the fit estimated beside the friction
   (``model_.measurement``: ``mass``, ``offset``, ``lag``, the model file's
-  ``measurement_terms.params``), so ``fcomp.compare(fit.model_, record)`` works on a
+  ``measurement_terms.params``), so ``fcomp.compare(record, fit.model_)`` works on a
   record with a driving force and no ``rig.mass`` (it raised "... no rig.mass").
 * ``fit``'s RMS is the comparison's (:func:`fcomp.diagnosis.compare.model_rms`):
   ``fcomp fit`` and ``fcomp compare --params FIT.json`` print the same number (they
@@ -70,7 +70,7 @@ def test_the_readme_block_works_on_the_real_oring_record(oring_fit) -> None:
     rec, fit = oring_fit
     assert set(fit.model_.measurement) == {"mass"}
     assert fit.model_.measurement["mass"] == pytest.approx(fit.params_["mass"])
-    comp = fcomp.compare(fit.model_, rec)  # raised "... gives a driving force and no rig.mass"
+    comp = fcomp.compare(rec, fit.model_)  # raised "... gives a driving force and no rig.mass"
     assert comp.rms == fit.rms_  # one RMS of a model on a record
     assert comp.values["mass"] == pytest.approx(fit.params_["mass"])
 
@@ -129,13 +129,13 @@ def test_simulate_drops_a_fitted_models_measurement_terms_with_a_warning(oring_f
 
 
 def test_the_missing_mass_message_says_what_to_do(oring: Path, capsys) -> None:
-    assert main(["compare", str(oring), "--model", "lugre", "--set", "Fc=1"]) == 2
+    assert main(["compare", str(oring), "--friction", "lugre", "--set", "Fc=1"]) == 2
     err = capsys.readouterr().err
     assert err.startswith("fcomp: error: ") and err.count("\n") == 1
     for what in ("--mass KG", "--params FIT.json", "rig.mass"):
         assert what in err
     with pytest.raises(FcompError, match="give mass KG"):
-        fcomp.compare(make_model("lugre"), fcomp.read(oring))
+        fcomp.compare(fcomp.read(oring), make_model("lugre"))
 
 
 # ------------------------------------------------------------------ b. one RMS
@@ -144,20 +144,20 @@ def test_fit_and_compare_print_the_same_rms_on_a_synthetic_record(
         tmp_path: Path, capsys, offset: bool) -> None:
     rec = _driving_force_record(tmp_path / "rec.csv")
     fit_json, model_json = tmp_path / "fit.json", tmp_path / "model.json"
-    assert main(["fit", str(rec), "--model", "coulomb-viscous", "--json", str(fit_json),
+    assert main(["fit", str(rec), "--friction", "coulomb-viscous", "--json", str(fit_json),
                  "--save-model", str(model_json), *(["--offset"] if offset else [])]) == 0
     fitted = json.loads(fit_json.read_text())
     assert fitted["params"]["mass"] == pytest.approx(2.0, rel=0.05)
     assert "fcomp compare" in fitted["rms_measured"] and fitted["rms_fit"] > 0
     capsys.readouterr()
-    for how in (["--model", "coulomb-viscous", "--params", str(fit_json)],
-                ["--model", str(model_json)]):
+    for how in (["--friction", "coulomb-viscous", "--params", str(fit_json)],
+                ["--friction", str(model_json)]):
         assert main(["compare", str(rec), *how, "--json", "-"]) == 0
         doc = json.loads(capsys.readouterr().out)
         assert doc["rms"] == fitted["rms"]
         assert doc["params"]["mass"] == pytest.approx(fitted["params"]["mass"])
     fit = fcomp.fit(rec, "coulomb-viscous", offset=offset)
-    assert fcomp.compare(fit.model_, rec).rms == fit.rms_ == fitted["rms"]
+    assert fcomp.compare(rec, fit.model_).rms == fit.rms_ == fitted["rms"]
 
 
 @pytest.mark.parametrize("cutoff", [[], ["--cutoff", "20"]])
@@ -166,12 +166,12 @@ def test_fit_and_compare_print_the_same_rms_on_the_oring_record(oring: Path, tmp
     """The issue's case: 0.749 N from fit, 0.840 N from compare --params fit.json; a fit
     with its own cut-off gives it to the comparison through its JSON."""
     out = tmp_path / "fit.json"
-    assert main(["fit", str(oring), "--model", "lugre", "--json", str(out), *cutoff]) == 0
+    assert main(["fit", str(oring), "--friction", "lugre", "--json", str(out), *cutoff]) == 0
     printed = capsys.readouterr().out
     fitted = json.loads(out.read_text())
     assert f"rms force error {fitted['rms']:.4g} N" in printed
     assert fitted["cutoff_hz"] == (20.0 if cutoff else 10.0)
-    assert main(["compare", str(oring), "--model", "lugre", "--params", str(out), "--json",
+    assert main(["compare", str(oring), "--friction", "lugre", "--params", str(out), "--json",
                  str(tmp_path / "cmp.json")]) == 0
     assert f"RMS {fitted['rms']:.4g} N on the whole record" in capsys.readouterr().out
     assert json.loads((tmp_path / "cmp.json").read_text())["rms"] == fitted["rms"]
@@ -179,16 +179,16 @@ def test_fit_and_compare_print_the_same_rms_on_the_oring_record(oring: Path, tmp
 
 def test_held_out_rms_says_what_it_is(tmp_path: Path) -> None:
     rec = fcomp.read(_driving_force_record(tmp_path / "rec.csv"))
-    given = fcomp.compare(make_model("coulomb-viscous").with_measurement({"mass": 2.0}), rec)
+    given = fcomp.compare(rec, make_model("coulomb-viscous").with_measurement({"mass": 2.0}))
     assert given.to_dict()["rms_measured"].startswith("the model's RMS error on the whole record")
-    fitted = fcomp.compare("coulomb-viscous", rec, fit=True).to_dict()
+    fitted = fcomp.compare(rec, "coulomb-viscous", fit=True).to_dict()
     assert fitted["rms_measured"].startswith("held-out RMS")
     assert "refitted on the training part" in fitted["rms_measured"]
 
 
 def test_a_diagnosis_json_says_its_rms_is_held_out(tmp_path: Path) -> None:
     rec = fcomp.read(_driving_force_record(tmp_path / "rec.csv"))
-    doc = fcomp.diagnose(rec, "coulomb-viscous", effects=["stribeck"], max_steps=1, n_jobs=1,
+    doc = fcomp.diagnose(rec, "coulomb-viscous", candidates=["stribeck"], max_steps=1, n_jobs=1,
                          check_baseline=False).to_dict()
     assert doc["rms_measured"].startswith("held-out RMS")
     assert "refitted on the training part" in doc["rms_measured"]

@@ -29,7 +29,7 @@ rec = fcomp.simulate("motion", "lugre", "sine:amplitude=0.01,frequency=0.5", dur
 with warnings.catch_warnings(record=True) as caught:
     warnings.simplefilter("always")
     d = fcomp.diagnose(rec, "coulomb-viscous", n_jobs=2, max_steps=1, check_baseline=False,
-                       effects=EFFECTS)
+                       candidates=EFFECTS)
 print("RESULT", d.verdict_, d.rms_baseline_ > 0)
 print("SERIAL", sum(getattr(w.message, "code", "") == "serial" for w in caught))
 """

@@ -33,6 +33,13 @@ LEVELS = ("low", "medium", "high")
 #: estimate is off.
 BELOW_FLOOR = 0.8
 
+def below_floor(rms: float | None, floor: float | None) -> bool:
+    """Whether ``rms`` is well below the noise floor ``floor`` (:data:`BELOW_FLOOR`; a
+    floor under 1 uN is a noise-free record, where nothing is below it)."""
+    return (rms is not None and floor is not None and floor > 1e-6
+            and rms < BELOW_FLOOR * floor)
+
+
 #: Codes whose parameters the record does not determine (the number is not to be trusted).
 UNDETERMINED = ("at-bound", "not-identified", "interval-crosses-zero")
 
@@ -189,7 +196,7 @@ def of_comparison(doc: Mapping[str, Any]) -> Conclusion:
     if "default-params" in codes:
         reasons.append("the model's default values, not fitted to these records")
         level = "low"
-    if ratio is not None and ratio < BELOW_FLOOR:
+    if below_floor(rms, floor):
         reasons.append(f"RMS below the noise floor {_num(floor)} (the floor estimate is off, "
                        "or the model was fitted to these very samples)")
         level = _lowest(level, "medium")
@@ -236,7 +243,7 @@ def of_diagnosis(doc: Mapping[str, Any]) -> Conclusion:
         level = "low"
         steps.insert(0, "compare both models on a second record (fcomp compare REC2 "
                      "--friction MODEL.json) before trusting either")
-    if rf is not None and floor and rf < BELOW_FLOOR * floor:
+    if below_floor(rf, floor):
         reasons.append(f"held-out RMS {_num(rf)} below the noise floor {_num(floor)}: "
                        "over-fitting, or the floor estimate is off")
         level = _lowest(level, "medium")

@@ -170,3 +170,8 @@ def test_reprs_summarise_and_never_dump_arrays() -> None:
     page = rec.measurement._repr_html_()
     assert "<table>" in page and "data:image/png;base64," in page
     assert "<td style='text-align:left'>F</td><td style='text-align:right'>N</td>" in page
+
+
+def test_a_noise_free_record_has_nothing_below_its_floor() -> None:
+    c = of_diagnosis({**CLEAN, "rms_final": 0.0, "noise_floor": 4e-9})
+    assert c.confidence == "high"

@@ -181,3 +181,21 @@ def test_distribution_ticks_plain_over_a_narrow_range() -> None:
     labels = [t.get_text() for t in ax.get_yticklabels()
               if t.get_text() and lo <= t.get_position()[1] <= hi]
     assert len(labels) >= 2 and all(re.fullmatch(r"\d+(\.\d+)?", s) for s in labels), labels
+
+
+def test_plant_domain_in_mm_and_bar(tmp_path: Path) -> None:
+    import fcomp
+
+    model = fcomp.make_model("lugre")
+    run = fcomp.simulate("pneumatic", model, "sine:amplitude=0.3,frequency=0.5", duration=2.0,
+                         rate=500.0)
+    comp = fcomp.compare(model, run, plant="pneumatic")
+    fig = comp.plot("plant")
+    assert [ax.get_ylabel() for ax in fig.axes] == ["x (mm)", "p1 (bar)", "p2 (bar)"]
+    x_line = fig.axes[0].lines[0].get_ydata()
+    assert np.nanmax(np.abs(x_line)) == pytest.approx(1e3 * np.abs(comp.plant[0].measured["x"]).max())
+    comp.write_report(tmp_path)
+    page = (tmp_path / "report.html").read_text()
+    plant_rows = re.findall(r"<td>(x|p1|p2)</td><td class=\"num\">[^<]*</td><td>([^<]*)</td>",
+                            page)
+    assert dict(plant_rows) == {"x": "mm", "p1": "bar", "p2": "bar"}

@@ -14,6 +14,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, cast
 
+from fcomp import figstyle as fs
 from fcomp.diagnosis.figures import (
     check_fitted,
     comparison_figures,
@@ -46,7 +47,7 @@ def _comparison_rows(obj: Comparison) -> tuple[str, list[list[Any]]]:
             ["noise floor", f"{obj.noise_floor:.3g}", "N"]]
     rows += [[f"regime {k}", "-" if v["rms"] is None else f"{v['rms']:.4g}",
               f"N (n={v['n']})"] for k, v in obj.regimes.items()]
-    rows += [[f"plant {c.plant}, {k}", f"{v:.3g}", "m" if k == "x" else "Pa"]
+    rows += [[f"plant {c.plant}, {k}", f"{fs.scaled(k, v):.3g}", fs.scale_of(k).unit]
              for c in obj.plant for k, v in c.rms.items()]
     top = obj.residual_features[:3]
     rows.append(["residual follows", ", ".join(f"{f.feature} {f.strength:.2f}"
@@ -152,9 +153,9 @@ def comparison_sections(rep: Report, comp: Comparison) -> Report:
         rep.section("3. Plant domain")
         rep.figure(figs["plant"], "The plant simulated with each record's command from its "
                    "measured initial state (dashed) beside the measured signals.")
-        rep.table(["record", "plant", "signal", "RMS"],
-                  [[c.label, c.plant, k, f"{v:.4g} {'m' if k == 'x' else 'Pa'}"]
-                   for c in comp.plant for k, v in c.rms.items()])
+        rep.table(["record", "plant", "signal", "RMS", "unit"],
+                  [[c.label, c.plant, k, fs.scaled(k, v), fs.scale_of(k).unit]
+                   for c in comp.plant for k, v in c.rms.items()], digits=None)
     return rep
 
 

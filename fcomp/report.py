@@ -73,7 +73,8 @@ th, td { border-bottom: 1px solid var(--line); padding: .3rem .65rem; text-align
   vertical-align: top; }
 th { background: var(--soft); font-weight: 600; }
 td.num { text-align: right; font-variant-numeric: tabular-nums; white-space: nowrap; }
-@media (min-width: 48rem) { td { overflow-wrap: anywhere; } td.num { overflow-wrap: normal; } }
+@media (min-width: 48rem) { th, td { padding: .3rem .45rem; }
+  td { overflow-wrap: anywhere; } td.num { overflow-wrap: normal; } }
 tr.match td.status { color: var(--ok); }
 tr.differs td.status { color: var(--bad); }
 tr.na td.status { color: var(--muted); }

@@ -591,6 +591,9 @@ def report(result: CompensateResult, command: str | None = None) -> Any:
                  config={"plant": result.plant["label"], "true friction": result.friction,
                          **{f"model {k}": v for k, v in result.models.items()},
                          "tasks": ", ".join(result.tasks), "fast": result.fast})
+    from controllers.conclusions import of_compensation
+
+    rep.conclusion(of_compensation(result.as_dict()))
     for w in result.warnings:
         rep.note(w["message"], kind="warn")
     rep.section("Ratios to the baseline")

@@ -317,6 +317,24 @@ class Report:
         self._blocks.append(f'<div class="note {kind}"><p>{_inline(text)}</p></div>')
         return self
 
+    def conclusion(self, found: Any) -> Report:
+        """The report's opening: what was found, how sure, what next.
+
+        ``found`` is a :class:`fcomp.conclusions.Conclusion` (or any object with its
+        ``finding``, ``confidence``, ``reasons`` and ``next_steps``); shown as a note whose
+        colour is its confidence (high: ok, medium: warn, low: bad), every reason listed.
+        """
+        kind = {"high": "ok", "medium": "warn"}.get(found.confidence, "bad")
+        reasons = "".join(f"<li>{_inline(r)}</li>" for r in found.reasons)
+        steps = "".join(f"<li>{_inline(s)}</li>" for s in found.next_steps)
+        self._blocks.append(
+            f'<div class="note {kind} conclusion"><p><strong>Conclusion:</strong> '
+            f"{_inline(found.finding)}</p><p><strong>How sure:</strong> "
+            f"{_inline(found.confidence)}" + (", because" if reasons else "") + "</p>"
+            + (f"<ul>{reasons}</ul>" if reasons else "")
+            + (f"<p><strong>Next:</strong></p><ul>{steps}</ul>" if steps else "") + "</div>")
+        return self
+
     def code(self, text: str) -> Report:
         """A preformatted block (commands, configuration)."""
         self._blocks.append(f"<pre><code>{html.escape(text)}</code></pre>")

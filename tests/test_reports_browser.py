@@ -85,18 +85,19 @@ def command_reports(tmp_path_factory: pytest.TempPathFactory) -> Path:
     lugre.with_effects("direction-asymmetry").with_params(r_neg=1.5).save(out / "true.json")
     lugre.save(out / "base.json")
     runs = {
-        "fit": ["fit", str(rec), "--model", "lugre", "--json", str(out / "fit.json")],
-        "compare": ["compare", str(rec), "--model", "lugre", "--params", str(out / "fit.json")],
-        "diagnose": ["diagnose", str(rec), "--baseline", "lugre", "--jobs", "1",
+        "fit": ["fit", str(rec), "--friction", "lugre", "--json", str(out / "fit.json")],
+        "compare": ["compare", str(rec), "--friction", "lugre", "--params",
+                    str(out / "fit.json")],
+        "diagnose": ["diagnose", str(rec), "--friction", "lugre", "--jobs", "1",
                      "--candidates", "pressure-dependence,force-offset,stribeck"],
-        "sweep": ["sweep", "--controllers", "pid,pid-ff", "--samples", "2", "--workers", "1"],
+        "sweep": ["sweep", "--controllers", "pid,pid-ff", "--samples", "2", "--jobs", "1"],
         "compensate": ["compensate", "--plant-params", str(ROOT / "docs/examples/axis50.toml"),
-                       "--friction", str(out / "true.json"), "--models",
+                       "--friction", str(out / "true.json"), "--controller-friction",
                        f"{out / 'base.json'},{out / 'true.json'}", "--controllers", "pid-ff",
-                       "--task", "steps", "--fast", "--samples", "1", "--workers", "1"],
+                       "--task", "steps", "--fast", "--samples", "1", "--jobs", "1"],
     }
     for name in COMMANDS:
-        code = main([*runs[name], "--report", str(out / name)])
+        code = main([*runs[name], "--report", str(out / name), "--no-progress"])
         assert code == 0, f"fcomp {name} exited {code}"
     return out
 

@@ -100,7 +100,8 @@ def summary(doc: dict[str, Any]) -> str:
     top = ", ".join(f"{f['feature']} {f['strength']:.2f}" for f in doc["residual_features"][:3])
     lines.append(f"residual follows: {top} (strength)")
     for label, pc in doc["plant"].items():
-        errs = ", ".join(f"{k} {v:.3g} {'m' if k == 'x' else 'Pa'}" for k, v in pc["rms"].items())
+        errs = ", ".join(f"{k} {v * 1e3:.3g} mm" if k == "x" else f"{k} {v * 1e-5:.3g} bar"
+                         for k, v in pc["rms"].items())
         lines.append(f"plant {pc['plant']} on {label}: RMS {errs}")
     return "\n".join(lines)
 
@@ -121,6 +122,30 @@ def _fit_cutoff(params: str | None) -> float | None:
             and cutoff != CUTOFF_HZ:
         return float(cutoff)
     return None
+
+
+def _values_from(args: argparse.Namespace) -> str:
+    """Where the compared model's values come from, in words (the report's subtitle); called
+    once ``--params`` has been read (a JSON file with a ``format`` is a model file)."""
+    import json
+
+    from fcomp.modelfile import is_model_file
+
+    spec, friction = args.params, args.friction
+    if is_model_file(friction):
+        where = f"the model file `{friction}`"
+    elif spec is not None and is_model_file(spec):
+        try:
+            with open(spec, encoding="utf-8") as fh:
+                kind = "model file" if "format" in json.load(fh) else "fit file"
+        except (OSError, ValueError, TypeError):
+            kind = "file"
+        where = f"the {kind} `{spec}`"
+    elif spec is not None:
+        where = f"the parameter set `{spec}`"
+    else:
+        where = "the model's default values"
+    return where + (" with --set " + ", ".join(f"`{a}`" for a in args.set) if args.set else "")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -158,6 +183,7 @@ def run(args: argparse.Namespace) -> int:
     given = bool(args.params or args.set or args.fit or args.friction.lower().endswith(".json"))
     model, mass = common.model_with_params(args, use="model compared", measured=True)
     cutoff = args.cutoff if args.cutoff is not None else _fit_cutoff(args.params)
+    values_from = _values_from(args)
     data = [Measurement.read(p) for p in args.data]
     for d in data:
         common.warn_sidecar(d)
@@ -175,7 +201,7 @@ def run(args: argparse.Namespace) -> int:
     command = "fcomp " + shlex.join(common.ARGV) if common.ARGV else None
     if report is not None:
         with staged_folder(report, "--report", "report", note=command or "fcomp compare") as tmp:
-            comp.write_report(tmp, command=command)
+            comp.write_report(tmp, command=command, values_from=values_from)
         common.wrote(report / "report.html")
     emit_result(text, args.json, out, summary(doc))
     return 0

@@ -74,3 +74,31 @@ def test_report_has_tables_figures_and_timing(summary: dict, site: Path) -> None
             "fig-robustness.png"} <= set(figs)
     t = summary["mpc_timing"]
     assert {"hydraulic/mpc", "pneumatic/mpc", "hydraulic/ekf"} <= set(t)
+
+
+def test_each_configuration_is_tuned_once_with_the_same_runs(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """The study's runs carry their configuration's tuning, derived once per configuration
+    (:func:`controllers.robustness.with_tunings`; every worker used to derive it again, most
+    of a fast run's time); the closed loop is the same as with the tuning derived where it
+    runs."""
+    from controllers import robustness
+    from controllers.harness import LoopConfig
+    from controllers.robustness import GivenTuning, Job, run_job, with_tunings
+
+    calls: list[LoopConfig] = []
+    derive = robustness.derived_tuning
+    monkeypatch.setattr(robustness, "derived_tuning",
+                        lambda cfg: calls.append(cfg) or derive(cfg))
+    a = LoopConfig(plant="hydraulic", fast=True)
+    b = LoopConfig(plant="hydraulic", fast=True, noise=2.0)
+    jobs = [Job("pid", "steps", a), Job("pid-ff", "steps", a), Job("pid", "steps", b)]
+    tuned = with_tunings(jobs, workers=1)
+    assert calls == [a, b]
+    assert [j.controller for j in tuned] == ["pid", "pid-ff", "pid"]
+    assert all(isinstance(j.config.tuning, GivenTuning) for j in tuned)
+    assert tuned[0].config.tuning.tuning is tuned[1].config.tuning.tuning  # type: ignore[union-attr]
+    for plain, given in zip(jobs, tuned, strict=True):
+        m0, m1 = run_job(plain)["metrics"], run_job(given)["metrics"]
+        for k in ("rms_error", "max_error", "steady_state_error"):
+            assert m0[k] == m1[k], k

@@ -102,3 +102,26 @@ def test_each_configuration_is_tuned_once_with_the_same_runs(
         m0, m1 = run_job(plain)["metrics"], run_job(given)["metrics"]
         for k in ("rms_error", "max_error", "steady_state_error"):
             assert m0[k] == m1[k], k
+
+
+def test_the_feedback_tuning_is_shared_by_friction_draws() -> None:
+    """Rules 1-3 of the tuning (the PID part, seconds to derive) do not depend on the
+    controller's friction levels: their cache key leaves them out, so the Monte Carlo draws
+    (the controllers' friction times random factors) derive it once per plant -- and the
+    tuning is the one derived afresh."""
+    import controllers.plant_model as pm
+    import controllers.tuning as tu
+    from controllers.harness import LoopConfig, control_model
+
+    a = LoopConfig(plant="hydraulic", fast=True)
+    b = LoopConfig(plant="hydraulic", fast=True, mismatch={"Fc": 1.7, "sigma0": 0.6})
+    assert control_model(a).plant_key() == control_model(b).plant_key()
+    fresh = []
+    for cfg in (a, b):
+        tu._PID_PARTS.clear()
+        pm._TUNINGS.clear()
+        fresh.append(control_model(cfg).tuning)
+    tu._PID_PARTS.clear()
+    pm._TUNINGS.clear()
+    assert [control_model(cfg).tuning for cfg in (a, b)] == fresh
+    assert len(tu._PID_PARTS) == 1

@@ -9,9 +9,9 @@ naming the failed studies.
 The studies are independent: they run side by side on a local process pool
 (:meth:`studies.base.StudyConfig.local_workers` processes, 2 by default), the
 longest first (:attr:`studies.base.Study.cost`), each with its own parallel
-jobs inside; one worker runs them here in turn. Progress: a bar of finished
-studies on stderr and, on a terminal, each running study's own bar beneath it
-(:class:`fcomp.progress.ProgressRelay`).
+jobs inside; one worker runs them here in turn. Progress, on a terminal only: a
+bar of finished studies naming those running now, and each running study's own bar
+beneath it (:class:`fcomp.progress.ProgressRelay`, :func:`fcomp.progress.running`).
 """
 
 from __future__ import annotations

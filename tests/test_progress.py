@@ -228,3 +228,30 @@ def test_study_all_writes_no_progress_into_a_pipe() -> None:
     _, code, err = build_site()
     assert code == 0
     assert "\r" not in err and "study/s" not in err and "run/s" not in err, err[-2000:]
+
+
+@pytest.mark.parametrize(("name", "module"), [("presliding", "studies.presliding_runs"),
+                                              ("friction-models", "studies.friction_models")])
+def test_no_progress_reaches_the_bar_of_every_study(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch, name: str, module: str) -> None:
+    """``fcomp study NAME --no-progress`` (``StudyConfig.progress`` false): the study's own
+    bar is off too, on a terminal as well (two studies drew theirs regardless)."""
+    import importlib
+
+    from studies import STUDIES
+    from studies.base import StudyConfig
+
+    class SeenError(Exception):
+        pass
+
+    asked: list[tuple[str, bool]] = []
+
+    def bar(label: str, total: int | None, *, enabled: bool = True, unit: str = "run") -> None:
+        asked.append((label, enabled))
+        raise SeenError  # enough: the run itself is not the point
+
+    monkeypatch.setattr(importlib.import_module(module), "progress_bar", bar)
+    with pytest.raises(SeenError):
+        STUDIES.get(name).main(StudyConfig(out=tmp_path / "out", fast=True, progress=False))
+    assert asked == [(name, False)]
+    assert not (tmp_path / "out").exists()

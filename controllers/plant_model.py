@@ -242,7 +242,9 @@ class ControlModel:
         """What the tuning's feedback part depends on (rules 1-3 of
         :mod:`controllers.tuning`): the plant, its settings and the loop damping -- not the
         friction model's levels."""
-        return (self.plant_name, tuple(sorted(self.params.items())), self.settings,
+        levels = self.friction.flat_params()  # the controller's friction: not in rules 1-3
+        return (self.plant_name, tuple(sorted((k, v) for k, v in self.params.items()
+                                              if k not in levels)), self.settings,
                 self._damping)
 
     def _tuning_key(self) -> tuple[Any, ...]:

@@ -46,8 +46,10 @@ from typing import Any
 
 import numpy as np
 
-from controllers.harness import LoopConfig, friction_label, run_closed_loop
+from controllers.harness import LoopConfig, control_model, friction_label, run_closed_loop
+from controllers.plant_model import ControlModel
 from controllers.tasks import Task
+from controllers.tuning import Tuning
 from fcomp.errors import FcompError
 from fcomp.figstyle import plain_log_ticks
 from fcomp.models import FrictionModel
@@ -110,6 +112,54 @@ def run_jobs(jobs: Sequence[Job], *, workers: int | None = None, scheduler: str 
     """
     return run_tasks(run_job, list(jobs), workers=workers, scheduler=scheduler,
                      progress=progress)
+
+
+@dataclass(frozen=True)
+class GivenTuning:
+    """A tuning derived beforehand (:func:`with_tunings`), in the form
+    :attr:`controllers.harness.LoopConfig.tuning` takes: the model's own derived tuning,
+    carried by the job instead of derived again where the job runs."""
+
+    tuning: Tuning
+
+    def __call__(self, model: ControlModel) -> Tuning:
+        return self.tuning
+
+
+def derived_tuning(config: LoopConfig) -> Tuning | None:
+    """The derived tuning of a configuration's controller model (``None`` if it cannot be
+    derived: the run itself then fails and says why)."""
+    try:
+        return control_model(config).tuning
+    except (FcompError, ValueError, ArithmeticError):
+        return None
+
+
+def with_tunings(jobs: Sequence[Job], *, workers: int | None = None,
+                 scheduler: str | None = None) -> list[Job]:
+    """``jobs``, each carrying the derived tuning of its configuration (:class:`GivenTuning`).
+
+    Deriving a tuning takes seconds (:mod:`controllers.tuning`), and every controller on a
+    configuration needs the same one: derived where each job runs, a pool's workers would
+    each derive it again (a fast ``compensators`` study spent most of its time there). Here
+    each distinct configuration's is derived once, in parallel (``workers``, ``scheduler``:
+    as :func:`run_jobs`); the runs and their results are the same. Jobs with a tuning of
+    their own keep it.
+    """
+    configs: list[LoopConfig] = []
+    index: list[int | None] = []
+    for job in jobs:
+        if job.config.tuning is not None:
+            index.append(None)
+            continue
+        k = next((i for i, c in enumerate(configs) if c == job.config), len(configs))
+        if k == len(configs):
+            configs.append(job.config)
+        index.append(k)
+    tunings = run_tasks(derived_tuning, configs, workers=workers, scheduler=scheduler)
+    return [job if k is None or tunings[k] is None
+            else replace(job, config=replace(job.config, tuning=GivenTuning(tunings[k])))
+            for job, k in zip(jobs, index, strict=True)]
 
 
 @dataclass(frozen=True)

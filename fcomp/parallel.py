@@ -298,13 +298,45 @@ def stopping(pool: ProcessPoolExecutor) -> Iterator[ProcessPoolExecutor]:
 
 
 def stop(pool: Executor) -> None:
-    """Cancel ``pool``'s pending jobs and end its local workers now (a Dask client's jobs are
-    cancelled; its workers are the cluster's)."""
+    """Cancel ``pool``'s pending jobs and end its local workers now, with every process they
+    started (a study's worker runs a pool of its own: left alive, those processes would go
+    on computing, and hold the pipes whose closing tells this process that its workers
+    ended -- ``fcomp study all`` then hung at exit); a Dask client's jobs are cancelled, its
+    workers are the cluster's."""
     procs = list((getattr(pool, "_processes", None) or {}).values())
     pool.shutdown(wait=False, cancel_futures=True)
-    for proc in procs:
-        if proc.is_alive():
-            proc.terminate()
+    pids = [p.pid for p in procs if p.is_alive() and p.pid is not None]
+    for pid in [*_descendants(pids), *pids]:  # the innermost first: no new orphan meanwhile
+        with suppress(ProcessLookupError, PermissionError):  # ended meanwhile, or not ours
+            os.kill(pid, signal.SIGTERM)
+
+
+def _descendants(pids: Sequence[int]) -> list[int]:
+    """The processes started by ``pids`` and by theirs, innermost first (from ``/proc``;
+    none where there is no ``/proc``)."""
+    parents: dict[int, list[int]] = {}
+    try:
+        entries = os.listdir("/proc")
+    except OSError:
+        return []
+    for entry in entries:
+        if not entry.isdigit():
+            continue
+        try:
+            with open(f"/proc/{entry}/stat", "rb") as f:
+                stat = f.read()
+        except OSError:  # ended meanwhile
+            continue
+        fields = stat[stat.rfind(b")") + 2:].split()  # after "pid (name) "
+        if len(fields) > 1 and fields[1].isdigit():
+            parents.setdefault(int(fields[1]), []).append(int(entry))
+    found: list[int] = []
+    todo = list(pids)
+    while todo:
+        kids = parents.get(todo.pop(), [])
+        found += kids
+        todo += kids
+    return found[::-1]
 
 
 def run_tasks(fn: Callable[[T], R], items: Sequence[T], *, workers: int | None = None,

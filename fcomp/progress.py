@@ -101,6 +101,23 @@ def relay_progress(queue: Any) -> None:
     _RELAY = queue
 
 
+@contextmanager
+def running(name: str) -> Iterator[None]:
+    """Name, on the head bar of the parent's :class:`ProgressRelay`, the work this process
+    does inside the block (``study all``: the studies running now); nothing without a
+    relay (:func:`relay_progress`)."""
+    queue = _RELAY
+    if queue is None:
+        yield
+        return
+    key = f"{os.getpid()}:{name}"
+    queue.put(("running", key, name))
+    try:
+        yield
+    finally:
+        queue.put(("ran", key))
+
+
 class RelayedBar:
     """A progress bar of a worker process, drawn by the parent (:class:`ProgressRelay`): the
     part of tqdm's interface the package uses (module docstring)."""
@@ -129,12 +146,14 @@ class ProgressRelay:
     :attr:`queue` goes to the workers (a :mod:`multiprocessing` manager's queue, which
     can be passed to a pool's jobs), whose :func:`progress_bar` calls then
     arrive here after :func:`relay_progress`; a thread draws one tqdm bar per worker bar,
-    each on its own line. ``enabled=False`` (or stderr not a terminal): nothing is drawn and
-    :attr:`queue` is ``None``.
+    each on its own line, below ``head`` (the parent's own bar, whose postfix names the work
+    running now, :func:`running`). ``enabled=False`` (or stderr not a terminal): nothing is
+    drawn and :attr:`queue` is ``None``.
     """
 
-    def __init__(self, *, enabled: bool = True) -> None:
-        self.enabled = enabled and sys.stderr.isatty()
+    def __init__(self, *, enabled: bool = True, head: Any = None) -> None:
+        self.enabled = enabled and on_terminal()
+        self.head = head
         self.queue: Any = None
 
     def __enter__(self) -> ProgressRelay:
@@ -160,9 +179,18 @@ class ProgressRelay:
 
         bars: dict[str, Any] = {}
         lines: list[str | None] = []  # the screen line of each open bar
+        names: dict[str, str] = {}  # the work running now (:func:`running`), in start order
         while (msg := self.queue.get()) is not None:
             kind, key = msg[0], msg[1]
-            if kind == "open":
+            if kind in ("running", "ran"):
+                if kind == "running":
+                    names[key] = msg[2]
+                else:
+                    names.pop(key, None)
+                if self.head is not None:
+                    self.head.set_postfix_str(f"running {', '.join(names.values())}"
+                                              if names else "")
+            elif kind == "open":
                 line = lines.index(None) if None in lines else len(lines)
                 lines[line:line + 1] = [key]
                 bars[key] = tqdm(total=msg[3], desc=msg[2], unit=msg[4], file=sys.stderr,
@@ -178,19 +206,27 @@ class ProgressRelay:
             bar.close()
 
 
-def progress_bar(label: str, total: int | None, *, enabled: bool = True, unit: str = "run",
-                 tty_only: bool = True) -> Any:
+def progress_bar(label: str, total: int | None, *, enabled: bool = True, unit: str = "run"
+                 ) -> Any:
     """A tqdm progress bar on stderr of ``total`` ``unit``\\ s (``None``: not known in
-    advance, a counter), left off the screen at the end; shown only when ``enabled`` (and,
-    with ``tty_only``, stderr is a terminal), else a bar that draws nothing. In a worker
-    whose bars are relayed (:func:`relay_progress`) the parent process draws it."""
+    advance, a counter), left off the screen at the end; shown only when ``enabled`` and
+    stderr is a terminal (:func:`on_terminal`), else a bar that draws nothing: no bar ever
+    goes into a file or a pipe. In a worker whose bars are relayed (:func:`relay_progress`)
+    the parent process draws it (on its terminal only, :class:`ProgressRelay`)."""
     from tqdm import tqdm
 
     if enabled and _RELAY is not None:
         return RelayedBar(_RELAY, label, total, unit)
-    show = enabled and (sys.stderr.isatty() or not tty_only)
     return tqdm(total=total, desc=label, unit=unit, file=sys.stderr, leave=False,
-                disable=not show, dynamic_ncols=True)
+                disable=not (enabled and on_terminal()), dynamic_ncols=True)
+
+
+def on_terminal() -> bool:
+    """Whether stderr is a terminal: the only place progress is drawn."""
+    try:
+        return sys.stderr.isatty()
+    except (AttributeError, ValueError):  # replaced by an object without it, or closed
+        return False
 
 
 #: One unit of work done, named (``tick("refit of dwell-time")``): work without a total.
@@ -202,11 +238,10 @@ def quiet(what: str) -> None:
 
 
 @contextmanager
-def counter(label: str, *, enabled: bool = True, unit: str = "run",
-            tty_only: bool = True) -> Iterator[Tick]:
+def counter(label: str, *, enabled: bool = True, unit: str = "run") -> Iterator[Tick]:
     """A :data:`Tick` advancing a :func:`progress_bar` without a total by one, with what was
     done beside it; the bar is closed on leaving."""
-    bar = progress_bar(label, None, enabled=enabled, unit=unit, tty_only=tty_only)
+    bar = progress_bar(label, None, enabled=enabled, unit=unit)
 
     def tick(what: str) -> None:
         bar.set_postfix_str(what, refresh=False)
@@ -218,5 +253,5 @@ def counter(label: str, *, enabled: bool = True, unit: str = "run",
         bar.close()
 
 
-__all__ = ["ProgressCallback", "Tick", "counter", "quiet", "ProgressRelay", "RelayedBar", "progress_bar", "receiver",
-           "relay_progress", "report", "reporting", "ticker"]
+__all__ = ["ProgressCallback", "Tick", "counter", "quiet", "ProgressRelay", "RelayedBar", "on_terminal",
+           "progress_bar", "receiver", "relay_progress", "report", "reporting", "running", "ticker"]

@@ -9,9 +9,9 @@ naming the failed studies.
 The studies are independent: they run side by side on a local process pool
 (:meth:`studies.base.StudyConfig.local_workers` processes, 2 by default), the
 longest first (:attr:`studies.base.Study.cost`), each with its own parallel
-jobs inside; one worker runs them here in turn. Progress: a bar of finished
-studies on stderr and, on a terminal, each running study's own bar beneath it
-(:class:`fcomp.progress.ProgressRelay`).
+jobs inside; one worker runs them here in turn. Progress, on a terminal only: a
+bar of finished studies naming those running now, and each running study's own bar
+beneath it (:class:`fcomp.progress.ProgressRelay`, :func:`fcomp.progress.running`).
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from fcomp.parallel import run_tasks
-from fcomp.progress import ProgressRelay, progress_bar, relay_progress, ticker
+from fcomp.progress import ProgressRelay, progress_bar, relay_progress, running, ticker
 from fcomp.report import Link
 from studies.base import Study, StudyConfig, StudyError, StudyOutput
 
@@ -61,7 +61,8 @@ def run_study(job: StudyJob) -> dict[str, Any]:
     relay_progress(job.progress)
     start, cpu = time.perf_counter(), _cpu()
     try:
-        results = job.study.main(job.config)
+        with running(job.name):
+            results = job.study.main(job.config)
         run: dict[str, Any] = {"status": "ok", "headline": job.study.headline(results),
                                "error": None}
     except Exception as exc:  # record and go on: one failing study must not hide others
@@ -95,9 +96,9 @@ class AllStudies(Study):
         order = sorted(names, key=lambda n: -STUDIES.get(n).cost)
         workers = min(config.local_workers(), max(len(names), 1))
         start = time.perf_counter()
-        bar = progress_bar("studies", len(names), unit="study", enabled=config.progress,
-                           tty_only=False)
-        with ProgressRelay(enabled=config.progress and workers > 1) as relay:
+        bar = progress_bar("studies", len(names), unit="study", enabled=config.progress)
+        # on a terminal the studies' own bars are drawn below, and the running ones named
+        with ProgressRelay(enabled=config.progress, head=bar) as relay:
             jobs = [StudyJob(n, STUDIES.get(n), StudyConfig(
                 out=config.out / n, workdir=out.directory / n, fast=config.fast,
                 scheduler=config.scheduler, workers=config.workers, progress=config.progress,

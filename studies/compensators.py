@@ -69,6 +69,7 @@ from controllers.robustness import (
     draw_distribution,
     run_jobs,
     run_sequential,
+    with_tunings,
 )
 from controllers.tasks import TASKS
 from fcomp.errors import FcompError
@@ -251,8 +252,11 @@ class CompensatorsStudy(Study):
         tick = ticker(bar)
 
         def run(batch: list[Job]) -> list[dict[str, Any]]:
+            # each configuration's tuning derived once, not by every worker that runs it
+            tuned = with_tunings(batch, workers=config.local_workers(),
+                                 scheduler=_scheduler(config))
             order = sorted(range(len(batch)), key=lambda i: -_cost(batch[i]))
-            done = run_jobs([batch[i] for i in order], workers=config.local_workers(),
+            done = run_jobs([tuned[i] for i in order], workers=config.local_workers(),
                             scheduler=_scheduler(config), progress=tick)
             res: list[dict[str, Any]] = [{}] * len(batch)
             for i, r in zip(order, done, strict=True):

@@ -223,8 +223,9 @@ class Runs:
     sweep: list[dict[str, Any]]
 
 
-def run_study(fast: bool) -> tuple[dict[str, Any], Runs]:
-    """All simulations and measures; returns the results (summary) and the runs."""
+def run_study(fast: bool, progress: bool = True) -> tuple[dict[str, Any], Runs]:
+    """All simulations and measures; returns the results (summary) and the runs (``progress``:
+    a bar on a terminal)."""
     amp, freq = paper_input()
     plants = {k: hydraulic_plant(k) for k in MODEL_KEYS}
     s0_grid = FAST_SIGMA0 if fast else SWEEP_SIGMA0
@@ -232,7 +233,8 @@ def run_study(fast: bool) -> tuple[dict[str, Any], Runs]:
     grid_cases = [(amp, freq)] if fast else [(a, f) for f in GRID_FREQUENCIES
                                              for a in GRID_AMPLITUDES]
     bar = progress_bar("friction-models",
-                       len(MODEL_KEYS) * (len(grid_cases) + 1) + len(s0_grid) * len(s1_grid) * 2)
+                       len(MODEL_KEYS) * (len(grid_cases) + 1) + len(s0_grid) * len(s1_grid) * 2,
+                       enabled=progress)
     paper: dict[str, Measurement] = {}
     models: dict[str, dict[str, float]] = {}
     for k in MODEL_KEYS:
@@ -653,7 +655,7 @@ class FrictionModelsStudy(Study):
                 f"holds at {n} of {len(results['sweep'])} sweep points")
 
     def build(self, out: StudyOutput, config: StudyConfig) -> dict[str, Any]:
-        results, runs = run_study(config.fast)
+        results, runs = run_study(config.fast, progress=config.progress)
         results["findings"] = findings(results)
         write_report(out, results, runs, config.fast)
         return results

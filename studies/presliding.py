@@ -106,7 +106,7 @@ class PreslidingStudy(Study):
                 f"NMLGM friction-work error {100 * n['loop_area_error']:+.0f} %")
 
     def build(self, out: StudyOutput, config: StudyConfig) -> dict[str, Any]:
-        cases = run_cases(config.fast)
+        cases = run_cases(config.fast, progress=config.progress)
         res = analyse(cases, config.fast)
         res["findings"] = findings(res)
         write_report(out, cases, res, config.fast)

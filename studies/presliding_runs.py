@@ -215,8 +215,8 @@ class Case:
     new: RigRun
 
 
-def run_cases(fast: bool) -> list[Case]:
-    """Every pressure programme on the rig (both models)."""
+def run_cases(fast: bool, progress: bool = True) -> list[Case]:
+    """Every pressure programme on the rig (both models); ``progress``: a bar on a terminal."""
     dt = 2 * DT if fast else DT
     plan: list[tuple[int, str, Programme]] = []
     for cyl in ((1,) if fast else CYLINDERS):
@@ -231,7 +231,7 @@ def run_cases(fast: bool) -> list[Case]:
         if not fast:
             for p in FIG12B_P2:
                 plan.append((cyl, "fig12b", programme("fig12", FIG12B_P1, p).scaled(k)))
-    bar = progress_bar("presliding", len(plan))
+    bar = progress_bar("presliding", len(plan), enabled=progress)
     cases = []
     cyls = sorted({p[0] for p in plan})
     rigs = {c: (rig_plant(c), rig_plant(c, new_model(c))) for c in cyls}

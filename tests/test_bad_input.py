@@ -24,6 +24,7 @@ there are.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import os
@@ -1088,6 +1089,96 @@ def test_ctrl_c_during_parallel_work_is_one_line(tmp_path: Path) -> None:
     print(f"stopped {time.monotonic() - sent:.1f} s after Ctrl-C")
     assert proc.returncode == 130, err.decode()
     assert err.decode().strip() == "fcomp: interrupted" and out == b""
+    assert snapshot(tmp_path) == before
+
+
+def _models_for_compensate(folder: Path) -> None:
+    """``true.json`` (LuGre with a retracting side 1.5 times as strong) and ``base.json``."""
+    from fcomp.models import make_model
+
+    lugre = make_model("lugre", params="seed002-type1")
+    lugre.with_effects("direction-asymmetry").with_params(r_neg=1.5).save(folder / "true.json")
+    lugre.save(folder / "base.json")
+
+
+#: Long commands, each stopped during its parallel work: (label, arguments, seconds to wait).
+#: ``study all`` runs a pool of studies whose workers run pools of their own.
+LONG_COMMANDS = [
+    ("study-all", ["study", "all", "--fast", "--out", "site"], 10.0),
+    ("study-compensators", ["study", "compensators", "--fast", "--out", "comp"], 5.0),
+    ("sweep", ["sweep", "--samples", "20", "--json", "sweep.json", "--report", "sweep"], 4.0),
+    ("compensate", ["compensate", "--plant-params", str(ROOT / "docs" / "examples" /
+                                                         "axis50.toml"),
+                    "--friction", "true.json", "--models", "base.json,true.json",
+                    "--samples", "10", "--json", "comp.json", "--report", "comp"], 4.0),
+]
+
+
+def _group_gone(pgid: int, seconds: float) -> bool:
+    """Whether every process of the group ``pgid`` has ended within ``seconds`` (ended
+    ones that nobody reaps count as ended)."""
+    end = time.monotonic() + seconds
+    while time.monotonic() < end:
+        alive = []
+        for entry in os.listdir("/proc"):
+            if not entry.isdigit():
+                continue
+            try:
+                stat = (Path("/proc") / entry / "stat").read_bytes()
+            except OSError:
+                continue
+            fields = stat[stat.rfind(b")") + 2:].split()
+            if int(fields[3]) == pgid and fields[0] != b"Z":
+                alive.append(int(entry))
+        if not alive:
+            return True
+        time.sleep(0.1)
+    for pid in alive:  # not leave them running after the test
+        with contextlib.suppress(OSError):
+            os.kill(pid, signal.SIGKILL)
+    return False
+
+
+@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs /proc (Linux)")
+@pytest.mark.parametrize(("sig", "code", "line"), [(signal.SIGINT, 130, "fcomp: interrupted"),
+                                                   (signal.SIGTERM, 143, "fcomp: terminated")])
+@pytest.mark.parametrize(("label", "args", "wait"), LONG_COMMANDS,
+                         ids=[c[0] for c in LONG_COMMANDS])
+@pytest.mark.slow
+def test_a_signal_stops_a_long_command_at_once(tmp_path: Path, label: str, args: list[str],
+                                               wait: float, sig: int, code: int,
+                                               line: str) -> None:
+    """Ctrl-C (SIGINT to the process group, as a terminal sends it) or SIGTERM (to the main
+    process) during a command's parallel work: it ends within seconds (the rule: 2 s; the
+    bound here leaves room for a loaded machine and still catches what was seen: ``study
+    all`` never ended after Ctrl-C -- its studies' own workers, left running, held its pipes
+    -- and wrote into the removed staging folder), with its one line and exit status,
+    nothing on stdout, nothing written and no process of it left."""
+    _models_for_compensate(tmp_path)
+    before = snapshot(tmp_path)
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "fcomp.cli.main", *args], cwd=tmp_path, env=_env(),
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+        start_new_session=True,  # a group of its own, as a terminal's foreground job
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    time.sleep(wait)  # the workers started and working
+    assert proc.poll() is None, f"{label} ended before the signal"
+    sent = time.monotonic()
+    if sig == signal.SIGINT:
+        os.killpg(proc.pid, sig)
+    else:
+        proc.send_signal(sig)
+    try:
+        out, err = proc.communicate(timeout=60)
+    finally:
+        gone = _group_gone(proc.pid, 5.0)
+    took = time.monotonic() - sent
+    print(f"{label}: stopped {took:.2f} s after {signal.Signals(sig).name}")
+    assert took < 5.0, f"{label} took {took:.1f} s to stop"
+    assert proc.returncode == code, err.decode()
+    assert err.decode() == line + "\n" and out == b""
+    assert gone, f"{label} left processes running"
+    time.sleep(0.5)  # a straggler would write now
     assert snapshot(tmp_path) == before
 
 

@@ -74,3 +74,54 @@ def test_report_has_tables_figures_and_timing(summary: dict, site: Path) -> None
             "fig-robustness.png"} <= set(figs)
     t = summary["mpc_timing"]
     assert {"hydraulic/mpc", "pneumatic/mpc", "hydraulic/ekf"} <= set(t)
+
+
+def test_each_configuration_is_tuned_once_with_the_same_runs(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """The study's runs carry their configuration's tuning, derived once per configuration
+    (:func:`controllers.robustness.with_tunings`; every worker used to derive it again, most
+    of a fast run's time); the closed loop is the same as with the tuning derived where it
+    runs."""
+    from controllers import robustness
+    from controllers.harness import LoopConfig
+    from controllers.robustness import GivenTuning, Job, run_job, with_tunings
+
+    calls: list[LoopConfig] = []
+    derive = robustness.derived_tuning
+    monkeypatch.setattr(robustness, "derived_tuning",
+                        lambda cfg: calls.append(cfg) or derive(cfg))
+    a = LoopConfig(plant="hydraulic", fast=True)
+    b = LoopConfig(plant="hydraulic", fast=True, noise=2.0)
+    jobs = [Job("pid", "steps", a), Job("pid-ff", "steps", a), Job("pid", "steps", b)]
+    tuned = with_tunings(jobs, workers=1)
+    assert calls == [a, b]
+    assert [j.controller for j in tuned] == ["pid", "pid-ff", "pid"]
+    assert all(isinstance(j.config.tuning, GivenTuning) for j in tuned)
+    assert tuned[0].config.tuning.tuning is tuned[1].config.tuning.tuning  # type: ignore[union-attr]
+    for plain, given in zip(jobs, tuned, strict=True):
+        m0, m1 = run_job(plain)["metrics"], run_job(given)["metrics"]
+        for k in ("rms_error", "max_error", "steady_state_error"):
+            assert m0[k] == m1[k], k
+
+
+def test_the_feedback_tuning_is_shared_by_friction_draws() -> None:
+    """Rules 1-3 of the tuning (the PID part, seconds to derive) do not depend on the
+    controller's friction levels: their cache key leaves them out, so the Monte Carlo draws
+    (the controllers' friction times random factors) derive it once per plant -- and the
+    tuning is the one derived afresh."""
+    import controllers.plant_model as pm
+    import controllers.tuning as tu
+    from controllers.harness import LoopConfig, control_model
+
+    a = LoopConfig(plant="hydraulic", fast=True)
+    b = LoopConfig(plant="hydraulic", fast=True, mismatch={"Fc": 1.7, "sigma0": 0.6})
+    assert control_model(a).plant_key() == control_model(b).plant_key()
+    fresh = []
+    for cfg in (a, b):
+        tu._PID_PARTS.clear()
+        pm._TUNINGS.clear()
+        fresh.append(control_model(cfg).tuning)
+    tu._PID_PARTS.clear()
+    pm._TUNINGS.clear()
+    assert [control_model(cfg).tuning for cfg in (a, b)] == fresh
+    assert len(tu._PID_PARTS) == 1

@@ -57,3 +57,14 @@ def test_full_diagnosis_reports_written(site: Path) -> None:
     text = (folder / "report.html").read_text(encoding="utf-8")
     for sub in subs:
         assert f'href="{sub.parent.name}/report.html"' in text
+
+
+def test_fast_mode_says_the_baseline_check_was_not_run(summary: dict, site: Path) -> None:
+    """The fast mode leaves out the baseline check (half of each diagnosis's time); its
+    JSON and each diagnosis report say so rather than "not asked for"."""
+    assert summary["settings"]["options"]["check_baseline"] is False
+    for case in summary["generated"] + summary["real"]:
+        assert case["diagnosis"]["baseline_check"] == {"ran": False,
+                                                       "why": mp.FAST_NO_CHECK}
+    for sub in (site / "missing-physics").glob("diagnosis-*/report.html"):
+        assert f"Baseline check not run: {mp.FAST_NO_CHECK}" in sub.read_text(encoding="utf-8")

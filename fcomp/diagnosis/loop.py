@@ -181,12 +181,13 @@ def check_support(model: FrictionModel, data: DiagnosisData, seg: Segmentation) 
 
 
 def baseline_check(config: DiagnosisConfig, result: DiagnosisResult, pool: Executor | None,
-                   progress: bool) -> DiagnosisResult:
+                   tick: Tick) -> DiagnosisResult:
     """``result`` with the baseline check ``config.check_baseline`` asks for.
 
     ``True`` always, ``False`` never, ``"auto"`` when the first answer is doubtful
     (:attr:`.result.DiagnosisResult.doubts`): the same configuration from a baseline
-    of the other kind (:func:`.result.other_baseline`), on the same workers.
+    of the other kind (:func:`.result.other_baseline`), on the same workers, its fits
+    counted by ``tick`` as the first answer's were (one bar for the whole diagnosis).
     """
     doubts = result.doubts
     if config.check_baseline is False:
@@ -200,11 +201,10 @@ def baseline_check(config: DiagnosisConfig, result: DiagnosisResult, pool: Execu
     other = None  # none applies, or it does not fit these data
     if other_name is not None:
         second = dataclasses.replace(config, baseline=other_name, add=(), check_baseline=False)
-        with counter("diagnose", enabled=progress, unit="fit", tty_only=False) as tick:
-            tick(f"baseline check: {other_name}")
-            with contextlib.suppress(FcompError):
-                other = dataclasses.replace(diagnose(second, result.ground.data, pool, tick)[0],
-                                            check={"ran": False, "why": "not asked for"})
+        tick(f"baseline check: {other_name}")
+        with contextlib.suppress(FcompError):
+            other = dataclasses.replace(diagnose(second, result.ground.data, pool, tick)[0],
+                                        check={"ran": False, "why": "not asked for"})
     return dataclasses.replace(result, other=other, check={
         "ran": other is not None,
         "why": why if other is not None else "no baseline of the other kind fits these data"})
@@ -371,12 +371,11 @@ class Diagnosis(FittedAttributes):
         """Run the diagnosis on ``data`` (one or several measurements); returns ``self``."""
         config = self.config
         self.__dict__.pop("result_", None)
-        with worker_pool(config.n_jobs, config.scheduler,
-                         len(config.names) if config.search else 0) as pool:
-            with counter("diagnose", enabled=self.progress, unit="fit",
-                         tty_only=False) as tick:
-                result, search = diagnose(config, data, pool, tick)
-            result = baseline_check(config, result, pool, self.progress)
+        with (worker_pool(config.n_jobs, config.scheduler,
+                          len(config.names) if config.search else 0) as pool,
+              counter("diagnose", enabled=self.progress, unit="fit") as tick):
+            result, search = diagnose(config, data, pool, tick)
+            result = baseline_check(config, result, pool, tick)
         search.pool, search.tick = None, quiet
         self._search = search
         self.result_ = result

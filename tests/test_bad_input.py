@@ -1109,7 +1109,7 @@ LONG_COMMANDS = [
     ("sweep", ["sweep", "--samples", "20", "--json", "sweep.json", "--report", "sweep"], 4.0),
     ("compensate", ["compensate", "--plant-params", str(ROOT / "docs" / "examples" /
                                                          "axis50.toml"),
-                    "--friction", "true.json", "--models", "base.json,true.json",
+                    "--friction", "true.json", "--controller-friction", "base.json,true.json",
                     "--samples", "10", "--json", "comp.json", "--report", "comp"], 4.0),
 ]
 

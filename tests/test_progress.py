@@ -158,7 +158,7 @@ def _small_record(folder: Path) -> Path:
     return path
 
 
-DIAGNOSE = ["diagnose", "small.csv", "--baseline", "coulomb-viscous", "--baseline-check",
+DIAGNOSE = ["diagnose", "small.csv", "--friction", "coulomb-viscous", "--baseline-check",
             "--max-steps", "1", "--jobs", "1", "--candidates", "pressure-dependence",
             "--json", "d.json"]
 

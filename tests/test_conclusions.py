@@ -175,3 +175,10 @@ def test_reprs_summarise_and_never_dump_arrays() -> None:
 def test_a_noise_free_record_has_nothing_below_its_floor() -> None:
     c = of_diagnosis({**CLEAN, "rms_final": 0.0, "noise_floor": 4e-9})
     assert c.confidence == "high"
+
+
+def test_the_verdicts_reasons_are_split_at_top_level_only() -> None:
+    from fcomp.cli.diagnose import _clauses
+
+    assert _clauses("structure: x (strength 0.30 >= 0.15; it carries 0.28 N); at a bound") == [
+        "structure: x (strength 0.30 >= 0.15; it carries 0.28 N)", "at a bound"]

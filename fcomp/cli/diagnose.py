@@ -76,6 +76,17 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
+def _clauses(text: str) -> list[str]:
+    """``text`` split at its top-level ``"; "`` (not inside parentheses)."""
+    out, depth, start = [], 0, 0
+    for i, ch in enumerate(text):
+        depth += (ch == "(") - (ch == ")")
+        if depth == 0 and text.startswith("; ", i):
+            out.append(text[start:i])
+            start = i + 2
+    return [*out, text[start:]]
+
+
 def summary(doc: dict) -> str:
     """The printed summary of a diagnosis JSON: the conclusion
     (:func:`fcomp.conclusions.of_diagnosis`) first, then the steps, the baseline check and
@@ -119,7 +130,7 @@ def summary(doc: dict) -> str:
         lines.append(f"baseline check not run: {doc['baseline_check']['why']} "
                      "(--baseline-check runs it)")
     lines.append(f"verdict: {doc['verdict']}, because:")
-    lines += [f"  - {part}" for part in doc["reason"].split("; ")]
+    lines += [f"  - {part}" for part in _clauses(doc["reason"])]
     return "\n".join(lines)
 
 

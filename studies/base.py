@@ -26,8 +26,8 @@ import math
 import os
 import shutil
 from abc import ABC, abstractmethod
-from collections.abc import Mapping
-from dataclasses import dataclass, replace
+from collections.abc import Mapping, Sequence
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any, ClassVar
 
@@ -38,7 +38,8 @@ from fcomp.outputs import staged_folder, write_files, write_text
 from fcomp.report import Report, render_png
 from fcomp.version import __version__
 
-__all__ = ["Study", "StudyConfig", "StudyError", "StudyOutput", "to_jsonable"]
+__all__ = ["Finding", "Study", "StudyConfig", "StudyError", "StudyOutput", "StudyReport",
+           "to_jsonable"]
 
 
 #: :class:`StudyConfig` fields that only some studies take (:attr:`Study.options`), with
@@ -58,6 +59,89 @@ def _option_label(value: Any) -> str:
 
 class StudyError(RuntimeError):
     """One or more studies raised an error (their output says which and why)."""
+
+
+#: The colours of a finding (the report's note kinds): the claim holds, holds in part or
+#: carries a number not to trust, fails.
+LEVELS = ("ok", "warn", "bad")
+
+
+@dataclass(frozen=True)
+class Finding:
+    """What a study found, in an engineer's words: the top of its report, its entry on the index.
+
+    Attributes
+    ----------
+    status
+        The finding in a few words: ``"reproduced"``, ``"partly reproduced"``, ``"not
+        reproduced"`` (a paper's claim), ``"confirmed"``, ... (the study's own claim).
+    level
+        Its colour, one of :data:`LEVELS`: ``"ok"`` the claim holds, ``"warn"`` it holds in
+        part, ``"bad"`` it fails.
+    found
+        What was found: one or two sentences, with units.
+    sure
+        How sure: what the result rests on, what is assumed.
+    next
+        What to do next.
+    flags
+        Numbers not to trust, one sentence each (what, and why not).
+    """
+
+    status: str
+    level: str
+    found: str
+    sure: str = ""
+    next: str = ""
+    flags: Sequence[str] = field(default_factory=tuple)
+
+    def __post_init__(self) -> None:
+        if self.level not in LEVELS:
+            raise FcompError(f"finding level must be one of {', '.join(LEVELS)}, "
+                             f"got {self.level!r}")
+        if not self.status.strip() or not self.found.strip():
+            raise FcompError("a finding needs a status and what was found")
+        object.__setattr__(self, "flags", tuple(self.flags))
+
+    @property
+    def shown_level(self) -> str:
+        """The colour shown: a claim that holds but carries a flag is amber, not green."""
+        return "warn" if self.level == "ok" and self.flags else self.level
+
+    def as_dict(self) -> dict[str, Any]:
+        """The finding as ``summary.json`` holds it (``meta.finding``)."""
+        return {**asdict(self), "flags": list(self.flags), "shown_level": self.shown_level}
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> Finding:
+        """The finding of :meth:`as_dict` (``shown_level`` is derived, not read)."""
+        return cls(status=str(data["status"]), level=str(data["level"]),
+                   found=str(data["found"]), sure=str(data.get("sure", "")),
+                   next=str(data.get("next", "")), flags=tuple(data.get("flags", ())))
+
+
+class StudyReport(Report):
+    """A study's report: a :class:`fcomp.report.Report` that opens with the study's conclusion."""
+
+    def conclusion(self, finding: Finding) -> StudyReport:
+        """Put ``finding`` first, before every section added so far: what was found (in the
+        finding's colour), each flag, how sure, what to do next."""
+        blocks, toc = len(self._blocks), len(self._toc)
+        self.section("Conclusion")
+        status = finding.status[:1].upper() + finding.status[1:]
+        self.note(f"{status}. {finding.found}", kind=finding.shown_level)
+        for flag in finding.flags:
+            self.note(f"Check: {flag}", kind="warn")
+        self.bullets([f"How sure: {finding.sure}"] * bool(finding.sure)
+                     + [f"Next: {finding.next}"] * bool(finding.next))
+        self._blocks[:] = self._blocks[blocks:] + self._blocks[:blocks]
+        self._toc[:] = self._toc[toc:] + self._toc[:toc]
+        return self
+
+    def raw(self, markup: str) -> StudyReport:
+        """A block of markup made here (already escaped): the index's study cards."""
+        self._blocks.append(markup)
+        return self
 
 
 @dataclass(frozen=True)
@@ -193,12 +277,12 @@ class StudyOutput:
     directory
         Where the files go.
     report
-        The :class:`fcomp.report.Report` being built.
+        The :class:`StudyReport` being built.
     figures
         Paths of the figure files written so far.
     """
 
-    def __init__(self, directory: Path, report: Report) -> None:
+    def __init__(self, directory: Path, report: StudyReport) -> None:
         self.directory = directory
         self.report = report
         self.figures: list[Path] = []
@@ -244,6 +328,9 @@ class Study(ABC):
     cost: ClassVar[float] = 1.0
     #: The optional :class:`StudyConfig` fields (:data:`STUDY_OPTIONS`) this study takes.
     options: ClassVar[tuple[str, ...]] = ()
+    #: The paper the study reproduces (authors, year, title; the index names the study by
+    #: it), or ``None`` for a study of the package's own claims.
+    paper: ClassVar[str | None] = None
 
     def check(self, config: StudyConfig) -> list[str]:
         """Check the configuration's inputs before anything is written (:meth:`main` calls
@@ -262,6 +349,16 @@ class Study(ABC):
     def headline(self, results: dict[str, Any]) -> str:
         """One line of result for the index of ``fcomp study all`` (default: the summary)."""
         return self.summary
+
+    def finding(self, results: dict[str, Any]) -> Finding:
+        """What the run found (:class:`Finding`): the conclusion the report opens with and
+        the study's entry on the index. The default judges nothing: the headline."""
+        return Finding("ran", "ok", self.headline(results))
+
+    def key_figure(self, results: dict[str, Any]) -> str | None:
+        """The name of the report's most telling figure (``fig-NAME.png``): the index shows
+        it. ``None``: no figure."""
+        return None
 
     @abstractmethod
     def build(self, out: StudyOutput, config: StudyConfig) -> dict[str, Any]:
@@ -290,13 +387,19 @@ class Study(ABC):
         except OSError as exc:
             raise FcompError(f"{cfg.out_label} {cfg.out}: cannot create it ({exc.strerror})") \
                 from None
-        report = Report(self.title, subtitle=self.subtitle(cfg), command=cfg.command,
+        report = StudyReport(self.title, subtitle=self.subtitle(cfg), command=cfg.command,
                         config={"study": self.name, **cfg.as_dict()},
                         table_label=self.table_label, figure_label=self.figure_label)
         out = StudyOutput(directory, report)
         results = self.build(out, replace(cfg, workdir=directory))
         if "meta" in results:
             raise RuntimeError(f"study {self.name}: 'meta' is reserved in summary.json")
+        finding = self.finding(results)
+        report.conclusion(finding)
+        key = self.key_figure(results)
+        key_file = f"fig-{key}.png" if key else None
+        if key_file is not None and directory / key_file not in out.figures:
+            raise RuntimeError(f"study {self.name}: key figure {key_file} was not written")
         summary = to_jsonable({
             **results,
             "meta": {
@@ -306,6 +409,9 @@ class Study(ABC):
                 "fast": cfg.fast,
                 "command": cfg.command,
                 "figures": [p.name for p in out.figures],
+                "finding": finding.as_dict(),
+                "key_figure": key_file,
+                "paper": self.paper,
                 "reports": list(self.report_files),
             },
         })

@@ -11,11 +11,11 @@ from typing import Any
 
 from matplotlib.figure import Figure
 
+from fcomp.figstyle import legend_above
 
-def legend_above(ax: Any, ncol: int = 3, **kw: Any) -> None:
-    """A legend above the axes, never over the data."""
-    ax.legend(fontsize=7, loc="lower left", bbox_to_anchor=(0.0, 1.01), ncol=ncol,
-              frameon=False, borderaxespad=0.0, **kw)
+__all__ = ["fig_plant", "legend_above"]
+
+
 
 
 def fig_plant(comps: Any) -> Figure:

@@ -24,7 +24,6 @@ from __future__ import annotations
 
 import base64
 import html
-import io
 import json
 import math
 import platform
@@ -374,7 +373,7 @@ class Report:
                 for k, v in values.items()]
         return self.table(["parameter", "value"], rows, caption=caption)
 
-    def figure(self, fig: Any, caption: str, *, alt: str | None = None, dpi: int = 110,
+    def figure(self, fig: Any, caption: str, *, alt: str | None = None, dpi: int | None = None,
                fmt: str = "png") -> Report:
         """Embed a figure with a numbered caption.
 
@@ -385,6 +384,9 @@ class Report:
             text, or the path of a ``.png``/``.svg`` file.
         caption
             What the figure shows and how to read it.
+        dpi
+            Dots per inch of a matplotlib figure's PNG (default
+            :data:`fcomp.figstyle.DPI`: shown at its natural size in the column).
         fmt
             ``"png"`` (base64) or ``"svg"`` (inline) for a matplotlib figure.
         """
@@ -457,29 +459,19 @@ class Report:
         return atomic_write_text(path, self.to_html())
 
 
-def _render(fig: Any, fmt: str, dpi: int) -> bytes:
-    """Render a matplotlib figure to PNG or SVG bytes and close it."""
+def _render(fig: Any, fmt: str, dpi: int | None) -> bytes:
+    """Render a matplotlib figure to PNG or SVG bytes in the report style and close it
+    (:func:`fcomp.figstyle.save`: a PNG records its smallest font and its dpi)."""
+    from fcomp.figstyle import DPI, save
+
     if not hasattr(fig, "savefig"):
         raise FcompError(f"cannot embed a {type(fig).__name__} as a figure")
-    buf = io.BytesIO()
-    kwargs: dict[str, Any] = {"format": fmt, "bbox_inches": "tight"}
-    if fmt == "png":
-        kwargs["dpi"] = dpi
-        kwargs["metadata"] = {"Software": None}
-    else:
-        kwargs["metadata"] = {"Date": None}
-    fig.savefig(buf, **kwargs)
-    try:
-        import matplotlib.pyplot as plt
-
-        plt.close(fig)
-    except ImportError:  # pragma: no cover - matplotlib is a dependency
-        pass
-    return buf.getvalue()
+    return save(fig, fmt=fmt, dpi=dpi or DPI)
 
 
-def render_png(fig: Any, *, dpi: int = 110) -> bytes:
-    """PNG bytes of a matplotlib figure (the figure is closed)."""
+def render_png(fig: Any, *, dpi: int | None = None) -> bytes:
+    """PNG bytes of a matplotlib figure in the report style (the figure is closed; ``dpi``
+    defaults to :data:`fcomp.figstyle.DPI`)."""
     return _render(fig, "png", dpi)
 
 

@@ -288,20 +288,30 @@ class StudyOutput:
         self.figures: list[Path] = []
 
     @staticmethod
-    def subplots(*args: Any, **kwargs: Any) -> tuple[Any, Any]:
-        """``matplotlib.pyplot.subplots`` on the Agg backend (no display needed)."""
-        import matplotlib
+    def subplots(nrows: int = 1, ncols: int = 1, *, figsize: tuple[float, float] | None = None,
+                 **kwargs: Any) -> tuple[Any, Any]:
+        """A figure in the report style and its axes, like ``matplotlib.pyplot.subplots``
+        (:func:`fcomp.figstyle.new_figure`: fonts readable at 1400 px, constrained layout).
+        A ``figsize`` wider than the column (:data:`fcomp.figstyle.WIDTH`) is scaled down
+        to it, aspect kept: a wider figure would be shown smaller, its text below 9 pt."""
+        from fcomp import figstyle
 
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
+        width, height = figsize or (figstyle.WIDTH, 3.2)
+        if width > figstyle.WIDTH:
+            width, height = figstyle.WIDTH, height * figstyle.WIDTH / width
+        return figstyle.new_figure(height=height, width=width, nrows=nrows, ncols=ncols,
+                                   **kwargs)
 
-        return plt.subplots(*args, **kwargs)
-
-    def figure(self, fig: Any, name: str, caption: str, *, dpi: int = 110) -> Path:
+    def figure(self, fig: Any, name: str, caption: str, *, dpi: int | None = None) -> Path:
         """Write ``fig`` (a matplotlib figure, or PNG bytes rendered elsewhere) to
-        ``DIR/fig-NAME.png`` and embed the same image in the report."""
+        ``DIR/fig-NAME.png`` and embed the same image in the report. A matplotlib figure's
+        texts below :data:`fcomp.figstyle.FONT_MIN` are raised to it first."""
+        from fcomp import figstyle
+
         if not name.replace("-", "").replace("_", "").isalnum():
             raise FcompError(f"figure name {name!r}: use letters, digits, '-' and '_'")
+        if not isinstance(fig, bytes):
+            figstyle.apply_floor(fig)
         png = fig if isinstance(fig, bytes) else render_png(fig, dpi=dpi)
         path = self.directory / f"fig-{name}.png"
         write_files({path: png})

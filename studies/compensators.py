@@ -72,6 +72,7 @@ from controllers.robustness import (
 )
 from controllers.tasks import TASKS
 from fcomp.errors import FcompError
+from fcomp.figstyle import legend_above
 from fcomp.models.base import FrictionModel
 from fcomp.progress import progress_bar, ticker
 from studies.base import Finding, Study, StudyConfig, StudyOutput
@@ -616,7 +617,6 @@ class CompensatorsStudy(Study):
             plain_log_ticks(ax)
             ax.set_title(p, fontsize=9)
             ax.set_ylabel("RMS error [um]")
-        fig.tight_layout()
         how = ("box: quartiles, whiskers: 10-90 %" if shown == "box" else
                "every draw as a point: too few draws for quantiles")
         out.figure(fig, "robustness", f"RMS tracking error over the Monte Carlo draws, per "
@@ -683,12 +683,14 @@ def _pair(a: float, b: float, digits: int) -> str:
 
 
 def plain_log_ticks(ax: Any) -> None:
-    """A log y axis labelled with plain numbers at 1, 2, 5 x 10^k (not ``6x10^1``)."""
-    from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
+    """A log y axis labelled with plain numbers (:func:`fcomp.figstyle.plain_log_ticks`) at
+    1, 2 and 5 x 10^k: the errors span one or two decades, one label per decade is too few."""
+    from matplotlib.ticker import LogLocator
 
+    from fcomp import figstyle
+
+    figstyle.plain_log_ticks(ax)
     ax.yaxis.set_major_locator(LogLocator(base=10.0, subs=(1.0, 2.0, 5.0)))
-    ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _pos: f"{v:g}"))
-    ax.yaxis.set_minor_formatter(NullFormatter())
 
 
 def settings_rows(plants: list[StudyPlant]) -> list[list[Any]]:
@@ -752,9 +754,8 @@ def _panel(ax: Any, title: str, ylabel: str) -> None:
 
 
 def _finish(out: StudyOutput, fig: Any, axes: Any, ncol: int, name: str, caption: str) -> None:
-    axes[0].legend(fontsize=7, ncol=ncol)
+    legend_above(axes[0], ncol=ncol)
     axes[-1].set_xlabel("t [s]")
-    fig.tight_layout()
     out.figure(fig, name, caption)
 
 

@@ -57,6 +57,7 @@ from typing import Any
 import numpy as np
 
 from fcomp.errors import FcompError
+from fcomp.figstyle import legend_above
 from fcomp.measurement import Measurement
 from fcomp.models import FrictionModel, make_model
 from fcomp.paramsets import get as get_paramset
@@ -442,15 +443,14 @@ def _fig_time(out: StudyOutput, runs: Runs, freq: float) -> None:
     for j, k in enumerate(MODEL_KEYS):
         c = _thin(runs.paper[k].columns)
         t = c["t"]
-        axes[0, j].plot(t, c["v"], color=COLORS[k], lw=0.8)
+        axes[0, j].plot(t, c["v"] * 1e3, color=COLORS[k], lw=0.8)
         axes[1, j].plot(t, c["F"], color=COLORS[k], lw=0.8)
-        axes[2, j].plot(t, c["p1"] / 1e6, color="#444", lw=0.8, label="P1")
-        axes[2, j].plot(t, c["p2"] / 1e6, color="#999", lw=0.8, label="P2")
-        _decorate(axes[0, j], LABELS[k], "", "v [m/s]" if j == 0 else "")
+        axes[2, j].plot(t, c["p1"] / 1e5, color="#444", lw=0.8, label="P1")
+        axes[2, j].plot(t, c["p2"] / 1e5, color="#999", lw=0.8, label="P2")
+        _decorate(axes[0, j], LABELS[k], "", "v [mm/s]" if j == 0 else "")
         _decorate(axes[1, j], "", "", "F [N]" if j == 0 else "")
-        _decorate(axes[2, j], "", "t [s]", "p [MPa gauge]" if j == 0 else "")
-        axes[2, j].legend(fontsize=8, loc="lower right")
-    fig.tight_layout()
+        _decorate(axes[2, j], "", "t [s]", "p [bar gauge]" if j == 0 else "")
+    legend_above(axes[2, 0])
     out.figure(fig, "time-series",
                "Seed 002 Fig. 5 conditions simulated (valve current 4.5 mA at 1 Hz, 118 kg, "
                "from rest): piston velocity, friction force and chamber pressures (gauge) for "
@@ -461,10 +461,9 @@ def _fig_force_velocity(out: StudyOutput, runs: Runs, freq: float) -> None:
     fig, ax = out.subplots(1, 1, figsize=(7.0, 4.6))
     for k in MODEL_KEYS:
         c = _thin(runs.paper[k].columns, runs.paper[k].columns["t"] >= 1.0 / freq)
-        ax.plot(c["v"], c["F"], color=COLORS[k], lw=0.8, label=LABELS[k])
-    _decorate(ax, "Friction force against velocity (cycles 2-3)", "v [m/s]", "F [N]")
-    ax.legend(fontsize=9)
-    fig.tight_layout()
+        ax.plot(c["v"] * 1e3, c["F"], color=COLORS[k], lw=0.8, label=LABELS[k])
+    _decorate(ax, "Friction force against velocity (cycles 2-3)", "v [mm/s]", "F [N]")
+    legend_above(ax)
     out.figure(fig, "force-velocity",
                "Friction force against piston velocity at the paper's input, after the first "
                "cycle. The loops near v = 0 are the reversals; the spikes are the ringing.")
@@ -489,8 +488,7 @@ def _fig_spectrum(out: StudyOutput, runs: Runs, res: dict[str, Any], freq: float
                label=f"oil column {ph['oil_column_hz']:.1f} Hz")
     ax.set_xlim(0, SPECTRUM_MAX_HZ)
     _decorate(ax, "Velocity spectrum (Welch)", "f [Hz]", "PSD [(m/s)$^2$/Hz]")
-    ax.legend(fontsize=8)
-    fig.tight_layout()
+    legend_above(ax)
     out.figure(fig, "spectrum",
                "Power spectral density of the velocity at the paper's input: the content above "
                "the cutoff is the high-frequency measure; its peak sits at the oil-column mode.")
@@ -535,7 +533,6 @@ def _fig_sweep(out: StudyOutput, res: dict[str, Any]) -> None:
     ax.set_title("smallest LuGre/NMLGM high-frequency ratio (v, F, p)", fontsize=10)
     bar = fig.colorbar(im, ax=ax, ticks=[0.5, 0.5 * (1.0 + CLAIM_RATIO), 0.5 * (CLAIM_RATIO + top)])
     bar.ax.set_yticklabels(["< 1: fails", f"1-{CLAIM_RATIO:g}: fails", f">= {CLAIM_RATIO:g}: holds"])
-    fig.tight_layout()
     out.figure(fig, "sweep",
                "Sweep of LuGre's bristle stiffness and damping (NMLGM at the assumed values): "
                "the smallest of the three high-frequency ratios LuGre/NMLGM. Green: the claim "
@@ -557,13 +554,12 @@ def _fig_claim_case(out: StudyOutput, res: dict[str, Any], freq: float) -> None:
         c = _thin(run.columns)
         lab = (f"LuGre sigma0={s['sigma0']:.0e}, sigma1={s['sigma1']:.0e}" if k == "lugre"
                else "NMLGM (assumed)")
-        axes[0].plot(c["t"], c["v"], color=COLORS[k], lw=0.8, label=lab)
+        axes[0].plot(c["t"], c["v"] * 1e3, color=COLORS[k], lw=0.8, label=lab)
         axes[1].plot(c["t"], c["F"], color=COLORS[k], lw=0.8)
-    _decorate(axes[0], "A sweep point where the claim holds", "", "v [m/s]")
+    _decorate(axes[0], "A sweep point where the claim holds", "", "v [mm/s]")
     _decorate(axes[1], "", "t [s]", "F [N]")
-    axes[0].legend(fontsize=8)
+    legend_above(axes[0])
     axes[0].set_xlim(1.0 / freq, 2.2 / freq)
-    fig.tight_layout()
     out.figure(fig, "claim-case",
                "Velocity and friction force over one cycle at the smallest LuGre sigma1 of the "
                "sweep for which the claim holds, beside the NMLGM with the assumed parameters.")
@@ -584,8 +580,7 @@ def _fig_grid(out: StudyOutput, res: dict[str, Any]) -> None:
                     label=LABELS[k], ms=4)
         _decorate(ax, f"{f:g} Hz", "amplitude [mA]", "HF velocity RMS [mm/s]" if f == freqs[0]
                   else "")
-    axes[0].legend(fontsize=8)
-    fig.tight_layout()
+    legend_above(axes[0])
     out.figure(fig, "grid",
                "High-frequency velocity content over the valve-current amplitude, at each input "
                "frequency, for the three models.")

@@ -46,12 +46,8 @@ from fcomp.progress import progress_bar, ticker
 from fcomp.report import Link
 from studies.base import Finding, Study, StudyConfig, StudyOutput
 
-#: A time step this many times the median is a gap (figures break their lines there).
-GAP_FACTOR = 1.5
 #: A final held-out RMS below this fraction of the estimated noise floor is flagged.
 BELOW_FLOOR = 0.9
-#: Font size (pt) of the study's own figures: at least 9 pt on a 1400 px page.
-FONT = 10.0
 #: Colours of the models in the stretch figure (baseline, then the final model).
 STRETCH_COLORS = ("#c0392b", "#2356a8", "#27864a")
 
@@ -254,6 +250,7 @@ def run_case(job: CaseJob) -> tuple[dict[str, Any], dict[str, bytes]]:
     """
     from fcomp.diagnosis.figures import fig_before_after, fig_error_fall
     from fcomp.diagnosis.report import write_report as write_diagnosis
+    from fcomp.figstyle import apply_floor
     from fcomp.report import render_png
 
     if isinstance(job.case, GeneratedCase):
@@ -261,23 +258,22 @@ def run_case(job: CaseJob) -> tuple[dict[str, Any], dict[str, bytes]]:
     else:
         res, diag = run_real(job.case, job.options)
     write_diagnosis(diag, job.folder, command=job.command)
-    return res, {"error-fall": render_png(fig_error_fall(diag)),
+    fall = fig_error_fall(diag)
+    apply_floor(fall)
+    return res, {"error-fall": render_png(fall),
                  "before-after": render_png(fig_stretch(diag, fig_before_after(diag)))}
 
 
-def with_gaps(t: np.ndarray, *ys: np.ndarray, starts: Sequence[int] = (),
-              factor: float = GAP_FACTOR) -> tuple[np.ndarray, ...]:
-    """``t`` and ``ys`` with a NaN sample at every gap (a time step above ``factor`` times
-    the median, or an experiment boundary at an index of ``starts``): a plotted line breaks
-    there instead of drawing a straight line across samples that do not exist."""
-    t = np.asarray(t, dtype=float)
-    if t.size < 2:
-        return (t, *(np.asarray(y, dtype=float) for y in ys))
-    dt = np.diff(t)
-    cut = set(np.flatnonzero(dt > factor * float(np.median(dt))) + 1) | {
-        int(i) for i in starts if 0 < i < t.size}
-    at = np.array(sorted(cut), dtype=int)
-    return tuple(np.insert(np.asarray(a, dtype=float), at, np.nan) for a in (t, *ys))
+def with_gaps(t: np.ndarray, *ys: np.ndarray, starts: Sequence[int] = ()
+              ) -> tuple[np.ndarray, ...]:
+    """``t`` and ``ys`` with a NaN sample at every gap (:func:`fcomp.figstyle.break_gaps`: a
+    jump in time) and at every experiment boundary (an index of ``starts``): a plotted line
+    breaks there instead of drawing a straight line across samples that do not exist."""
+    from fcomp.figstyle import break_gaps
+
+    at = sorted({int(i) for i in starts if 0 < i < len(t)})
+    cols = [np.insert(np.asarray(a, dtype=float), at, np.nan) for a in (t, *ys)]
+    return break_gaps(cols[0], *cols[1:])
 
 
 def fig_stretch(diag: Any, chosen: Any) -> Any:
@@ -285,8 +281,7 @@ def fig_stretch(diag: Any, chosen: Any) -> Any:
     effects matter most; its time range is reused): measured force, baseline and final
     model, with the velocity and the position that explain them beneath; lines break at
     gaps and experiment boundaries."""
-    from matplotlib.figure import Figure
-
+    from fcomp import figstyle
     from fcomp.diagnosis.figures import view
 
     lines = chosen.axes[0].lines if chosen.axes else []
@@ -296,12 +291,12 @@ def fig_stretch(diag: Any, chosen: Any) -> Any:
     a, b = ((int(np.searchsorted(t, span[0])), int(np.searchsorted(t, span[-1], "right")))
             if len(span) else (0, t.size))
     starts = [e.start - a for e in vw.data.experiments if a < e.start < b]
-    sig = {"v": vw.data.signal("v")[a:b] * 1e3}
+    sig = {"v": figstyle.scaled("v", vw.data.signal("v")[a:b])}
     if vw.data.available.get("x"):  # a measured position
-        sig["x"] = vw.data.signal("x")[a:b] * 1e3
-    fig = Figure(figsize=(9.0, 2.4 + 1.6 * len(sig)))
-    axes = fig.subplots(1 + len(sig), 1, sharex=True,
-                        gridspec_kw={"height_ratios": [2.0] + [1.0] * len(sig)})
+        sig["x"] = figstyle.scaled("x", vw.data.signal("x")[a:b])
+    fig, axes = figstyle.new_figure(height=2.4 + 1.6 * len(sig), nrows=1 + len(sig),
+                                    sharex=True,
+                                    gridspec_kw={"height_ratios": [2.0] + [1.0] * len(sig)})
     tt, y, *models = with_gaps(t[a:b], vw.data.y[a:b], *(sr.fit.F_hat[a:b] for sr in vw.series),
                                starts=starts)
     axes[0].plot(tt, y, color="#222222", lw=1.1, label="measured")
@@ -309,22 +304,17 @@ def fig_stretch(diag: Any, chosen: Any) -> Any:
         axes[0].plot(tt, F, lw=1.3, ls="--" if k == len(models) - 1 and k else "-",
                      color=STRETCH_COLORS[k % len(STRETCH_COLORS)],
                      label=sr.label.split(":")[0])
-    axes[0].set_ylabel("force [N]", fontsize=FONT)
-    axes[0].legend(fontsize=FONT, loc="upper left", bbox_to_anchor=(1.01, 1.0),
-                   borderaxespad=0.0)
-    labels = {"v": "velocity [mm/s]", "x": "position [mm]"}
+    axes[0].set_ylabel("force (N)")
+    figstyle.legend_above(axes[0], ncol=len(vw.series) + 1)
+    labels = {"v": figstyle.label("velocity", "v"), "x": figstyle.label("position", "x")}
     for ax, (key, values) in zip(axes[1:], sig.items(), strict=True):
         ax.plot(*with_gaps(t[a:b], values, starts=starts), color="#4a6fa5", lw=1.1)
-        ax.set_ylabel(labels[key], fontsize=FONT)
+        ax.set_ylabel(labels[key])
         if key == "v":
             ax.axhline(0.0, color="#999999", lw=0.8)
-    axes[-1].set_xlabel("time [s]", fontsize=FONT)
-    axes[0].set_title(f"{vw.judged_label} stretch where the added effects matter most",
-                      fontsize=FONT)
+    axes[-1].set_xlabel("time (s)")
     for ax in axes:
-        ax.tick_params(labelsize=FONT)
         ax.grid(alpha=0.3)
-    fig.tight_layout()
     return fig
 
 

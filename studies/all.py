@@ -3,8 +3,8 @@
 The index names each study by the paper it reproduces and states what it
 found (:class:`studies.base.Finding`: "reproduced", "partly reproduced", "not
 reproduced", ..., in words and in colour, with the numbers to check), links
-its ``report.html`` and ``summary.json``, shows its key figure (a thumbnail
-linking to the report) and its run time (wall clock and CPU time of its
+its ``report.html`` and ``summary.json``, shows its key figure (linking to the
+report, at the column's width as in the report) and its run time (wall clock and CPU time of its
 processes); :func:`write_index` builds it from the runs' records. A study that raises is recorded as failed (with the error line) and
 the others still run; the run then ends with :class:`studies.base.StudyError`
 naming the failed studies.
@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import base64
 import html
-import io
 import resource
 import time
 from collections.abc import Mapping
@@ -30,11 +29,8 @@ from typing import Any
 
 from fcomp.parallel import run_tasks
 from fcomp.progress import ProgressRelay, progress_bar, relay_progress, ticker
-from fcomp.report import Link
+from fcomp.report import Link, _inline
 from studies.base import Finding, Study, StudyConfig, StudyError, StudyOutput, StudyReport
-
-#: Width (px) of the key figures on the index.
-THUMB_WIDTH = 640
 
 
 @dataclass(frozen=True)
@@ -66,32 +62,21 @@ def _cpu() -> float:
     return own.ru_utime + own.ru_stime + kids.ru_utime + kids.ru_stime
 
 
-def thumbnail(png: bytes, width: int = THUMB_WIDTH) -> bytes:
-    """``png`` scaled down to ``width`` pixels (PNG bytes; an image narrower stays as it is)."""
-    from PIL import Image
-
-    buf = io.BytesIO()
-    with Image.open(io.BytesIO(png)) as img:
-        small = img if img.width <= width else img.resize(
-            (width, max(1, round(img.height * width / img.width))), Image.Resampling.LANCZOS)
-        small.save(buf, format="PNG", optimize=True)
-    return buf.getvalue()
-
-
 def run_study(job: StudyJob) -> dict[str, Any]:
-    """Run one study; its status, headline and finding or error, its key figure as a
-    thumbnail, wall-clock and CPU seconds."""
+    """Run one study; its status, headline and finding or error, its key figure (PNG,
+    base64) and that figure's caption, wall-clock and CPU seconds."""
     relay_progress(job.progress)
     start, cpu = time.perf_counter(), _cpu()
-    thumb = None
+    key = caption = None
     try:
         results = job.study.main(job.config)
         meta = results["meta"]
         run: dict[str, Any] = {"status": "ok", "headline": job.study.headline(results),
                                "finding": meta["finding"], "error": None}
         if meta.get("key_figure"):
-            thumb = thumbnail((job.config.workdir or job.config.out).joinpath(
-                meta["key_figure"]).read_bytes())
+            key = (job.config.workdir or job.config.out).joinpath(
+                meta["key_figure"]).read_bytes()
+            caption = meta.get("key_caption")
     except Exception as exc:  # record and go on: one failing study must not hide others
         line = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
         run = {"status": "failed", "headline": job.study.summary, "finding": None,
@@ -105,13 +90,15 @@ def run_study(job: StudyJob) -> dict[str, Any]:
         "summary": f"{job.name}/summary.json",
         "title": job.study.title,
         "paper": job.study.paper,
-        "thumbnail": None if thumb is None else base64.b64encode(thumb).decode("ascii"),
+        "key_figure": None if key is None else base64.b64encode(key).decode("ascii"),
+        "key_caption": caption,
     })
     return run
 
 
 def _esc(text: str) -> str:
-    return html.escape(str(text), quote=False)
+    """``text`` for the page: escaped, with ```code``` spans (as the report's own text)."""
+    return _inline(str(text))
 
 
 def finding_words(run: Mapping[str, Any]) -> tuple[str, str]:
@@ -145,12 +132,13 @@ def study_card(name: str, run: Mapping[str, Any]) -> str:
                  + (f'<a href="{html.escape(run["summary"])}">summary.json</a>; '
                     if run["status"] == "ok" else "")
                  + f"{run['seconds']:.0f} s.</p>")
-    if run.get("thumbnail"):
-        parts.append(f'<p><a href="{report}"><img src="data:image/png;base64,'
-                     f'{run["thumbnail"]}" alt="{html.escape(name)}: the key figure of the '
-                     'report" style="max-width:100%;height:auto;display:block;border:1px '
-                     'solid var(--line);border-radius:4px"></a></p>')
     parts.append("</div>")
+    if run.get("key_figure"):  # at the column's width, as in the report: its text readable
+        caption = run.get("key_caption") or ""
+        parts.append(f'<figure><a href="{report}"><img src="data:image/png;base64,'
+                     f'{run["key_figure"]}" alt="{html.escape(name)}: the key figure of its '
+                     f'report"></a><figcaption><strong>Key figure.</strong> {_esc(caption)} '
+                     f'(<a href="{report}">the report</a>)</figcaption></figure>')
     return "".join(parts)
 
 
@@ -216,8 +204,8 @@ class AllStudies(Study):
             rep.note(f"Failed: {', '.join(failed)}.", kind="bad")
         assert isinstance(rep, StudyReport)
         write_index(rep, runs)
-        for r in runs.values():  # the thumbnails live in the page, not in summary.json
-            r.pop("thumbnail", None)
+        for r in runs.values():  # the key figures live in the page, not in summary.json
+            r.pop("key_figure", None)
         return {"studies": runs, "failed": failed, "workers": workers,
                 "seconds": round(wall, 3)}
 
@@ -229,10 +217,11 @@ class AllStudies(Study):
             counts[level] = counts.get(level, 0) + 1
         said = {"ok": "hold", "warn": "hold in part or carry a number to check",
                 "bad": "fail or did not run"}
-        found = "; ".join(f"{counts[k]} {said[k]}" for k in ("ok", "warn", "bad") if k in counts)
+        found = "; ".join(f"{said[k]}: {counts[k]}" for k in ("ok", "warn", "bad") if k in counts)
         level = "bad" if results["failed"] else "ok"
         return Finding(f"{len(runs) - len(results['failed'])} of {len(runs)} studies ran", level,
-                       f"Of the studies' claims: {found or 'none'} (each study below).")
+                       f"The studies' claims that {found or 'none'} (each study below, in "
+                       "its colour).")
 
     def main(self, config: Any) -> dict[str, Any]:
         summary = super().main(config)

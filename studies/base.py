@@ -286,6 +286,7 @@ class StudyOutput:
         self.directory = directory
         self.report = report
         self.figures: list[Path] = []
+        self.captions: dict[str, str] = {}
 
     @staticmethod
     def subplots(nrows: int = 1, ncols: int = 1, *, figsize: tuple[float, float] | None = None,
@@ -316,6 +317,7 @@ class StudyOutput:
         path = self.directory / f"fig-{name}.png"
         write_files({path: png})
         self.figures.append(path)
+        self.captions[path.name] = caption
         self.report.figure(png, caption, alt=f"{name}: {caption}")
         return path
 
@@ -421,6 +423,7 @@ class Study(ABC):
                 "figures": [p.name for p in out.figures],
                 "finding": finding.as_dict(),
                 "key_figure": key_file,
+                "key_caption": out.captions.get(key_file) if key_file else None,
                 "paper": self.paper,
                 "reports": list(self.report_files),
             },

@@ -640,16 +640,16 @@ class CompensatorsStudy(Study):
             ok = v["cpu_max"] <= period
             rows.append([k, v["median_of_medians"] * 1e6, _pair(v["p99"], v["max"], 2),
                          _pair(v["cpu_p99"], v["cpu_max"], 2), v["descheduled"],
-                         period * 1e3, "yes" if ok else "NO", v["fallbacks"]])
+                         f"{'yes' if ok else 'NO'} ({period * 1e3:g} ms)", v["fallbacks"]])
             if not ok:
                 late.append(f"`{k}` {v['cpu_max'] * 1e3:.3g} ms > {period * 1e3:g} ms")
         rep.table(["controller", "median [us]", "p99 / max [ms]", "CPU p99 / max [ms]",
-                   "descheduled", "period [ms]", "real-time", "fallbacks"], rows,
+                   "descheduled", "real-time (period)", "fallbacks"], rows,
                   caption="Controller step time in the closed-loop runs above (whole step: "
                   "EKF + law/QP; this machine; wall clock unless CPU) against the sampling "
                   "period of the loop; real-time: the largest CPU time of a step within the "
                   "period.",
-                  digits=[None, 0, None, None, 0, 2, None, 0])
+                  digits=[None, 0, None, None, 0, None, 0])
         if late:
             rep.note("Worst step's CPU time longer than the sampling period -- not real-time on "
                      "this machine: " + "; ".join(late) + ".", kind="bad")

@@ -28,11 +28,12 @@ def _friction_models_summary(claim: bool) -> dict:
 
 
 def _run(finding: Finding | None, *, status: str = "ok", paper: str | None = "A & B (2020)",
-         thumbnail: str | None = None) -> dict:
+         key_figure: str | None = None) -> dict:
     return {"status": status, "finding": None if finding is None else finding.as_dict(),
             "error": None if status == "ok" else "RuntimeError: broke", "seconds": 3.2,
             "cpu_seconds": 1.1, "report": "x/report.html", "summary": "x/summary.json",
-            "title": "A study", "paper": paper, "thumbnail": thumbnail}
+            "title": "A study", "paper": paper, "key_figure": key_figure,
+            "key_caption": "What it shows, `code`."}
 
 
 def _diagnosis(final: float, floor: float, verdict: str = "explained") -> dict:
@@ -67,9 +68,10 @@ def test_index_says_reproduced_in_green_and_a_flag_turns_it_amber() -> None:
 def test_index_names_the_paper_links_the_report_and_shows_the_key_figure() -> None:
     f = Finding("partly reproduced", "warn", "Half of it.")
     card = study_card("x", _run(f, paper="Tran, Dao & Yanada (2014), \"Effect\"",
-                                thumbnail="iVBORw0KGgo="))
+                                key_figure="iVBORw0KGgo="))
     assert "Reproduces Tran, Dao &amp; Yanada (2014)" in card
-    assert '<a href="x/report.html"><img src="data:image/png;base64,iVBORw0KGgo="' in card
+    assert '<figure><a href="x/report.html"><img src="data:image/png;base64,iVBORw0KGgo="' in card
+    assert "<figcaption><strong>Key figure.</strong> What it shows, <code>code</code>." in card
     own = study_card("x", _run(f, paper=None))
     assert "A claim of fcomp's own." in own and "<img" not in own
 
@@ -143,16 +145,12 @@ def test_study_all_index_shows_the_finding_the_paper_and_the_key_figure(
     assert '<div class="note bad"><p><strong>Not reproduced.</strong>' in index
     assert "Reproduces Someone (1999)" in index
     assert '<a href="claimed-test/report.html"><img src="data:image/png;base64,' in index
-    assert "thumbnail" not in s["studies"]["claimed-test"]  # the page holds it, not the JSON
-    from PIL import Image
-
-    png = re.search(r'base64,([^"]+)"', index[index.index("claimed-test/report.html\"><img"):])
-    assert png is not None
+    assert "key_figure" not in s["studies"]["claimed-test"]  # the page holds it, not the JSON
+    png = (tmp_path / "claimed-test" / "fig-key.png").read_bytes()
     import base64
-    import io
 
-    with Image.open(io.BytesIO(base64.b64decode(png.group(1)))) as img:
-        assert img.width <= 640
+    assert base64.b64encode(png).decode() in index  # the figure itself, its font record kept
+    assert "<strong>Key figure.</strong> the key figure" in index
 
 
 # ------------------------------------------------------------ presliding

@@ -491,65 +491,79 @@ def robustness(results: Sequence[Mapping[str, Any]], controllers: Sequence[str],
 def figure_tracking(result: CompensateResult, task: str) -> Any:
     """Tracking error ``r - x`` (um) over time on ``task``, one panel per controller, every
     model's run overlaid (the nominal runs; needs ``keep_signals``)."""
-    from matplotlib.figure import Figure
+    from fcomp import figstyle as fs
 
     shown = [c for c in result.controllers
              if any((c, m, task) in result.signals for m in result.models)]
-    fig = Figure(figsize=(8.0, 1.6 + 1.5 * max(len(shown), 1)))
-    axes = fig.subplots(max(len(shown), 1), 1, sharex=True, squeeze=False)[:, 0]
+    fig, axes2 = fs.new_figure(height=1.4 + 1.6 * max(len(shown), 1), nrows=max(len(shown), 1),
+                               squeeze=False, sharex=True)
+    axes = axes2[:, 0]
     for ax, c in zip(axes, shown, strict=False):
         for i, m in enumerate(result.models):
             sig = result.signals.get((c, m, task))
             if sig is None:
                 continue
-            ax.plot(sig["t"], (sig["r"] - sig["x"]) * 1e6, lw=1.0, color=f"C{i}",
-                    label=f"{m} ({result.models[m]})")
-        ax.set_ylabel(f"{c}\nerror (um)", fontsize=8)
+            fs.plot_gapped(ax, sig["t"], (sig["r"] - sig["x"]) * 1e6, lw=1.0, color=f"C{i}",
+                           label=f"{m} ({result.models[m]})")
+        ax.set_ylabel(f"{c}\nerror (\u00b5m)")
         ax.axhline(0.0, color="0.6", lw=0.5)
         ax.grid(alpha=0.3)
-    axes[0].legend(fontsize=7, loc="lower left", bbox_to_anchor=(0.0, 1.02), ncol=3,
-                   frameon=False, borderaxespad=0.0)
+    fs.legend_above(axes[0], ncol=2)
     axes[-1].set_xlabel("time (s)")
-    fig.tight_layout()
     return fig
 
 
 def figure_ratios(result: CompensateResult, error: str = "rms_error") -> Any:
     """Bar chart of the ratios of ``error`` (log scale): per controller, one bar per task
-    and compared model; below the line at 1 the model beats the baseline."""
-    from matplotlib.figure import Figure
+    and compared model, drawn from 1 (the baseline) down in green where the model beats the
+    baseline, up in red where it does worse; tasks and models told apart by hatching."""
+    from matplotlib.patches import Patch
 
-    fig = Figure(figsize=(8.0, 3.6))
-    ax = fig.add_subplot()
+    from fcomp import figstyle as fs
+
+    fig, ax = fs.new_figure(height=3.6, width=fs.HALF_WIDTH + 1.6)
     others = [m for m in result.models if m != result.baseline]
     groups = [(t, m) for t in result.tasks for m in others]
     width = 0.8 / max(len(groups), 1)
     x = np.arange(len(result.controllers))
+    hatches = ["", "//", "..", "xx", "\\\\", "++", "oo"]
+    shown: list[float] = []
+    handles = []
     for j, (t, m) in enumerate(groups):
         vals = [((result.ratios.get(c, {}).get(t, {}).get(m) or {}).get(error)) for c in
                 result.controllers]
-        ax.bar(x - 0.4 + (j + 0.5) * width, [np.nan if v is None else v for v in vals],
-               width, label=f"{m} on {t}" if len(others) > 1 else t, color=f"C{j}")
+        ratio = np.array([np.nan if v is None else float(v) for v in vals])
+        ok = np.isfinite(ratio) & (ratio > 0)
+        colours = [fs.COLORS["good"] if r < 1.0 else fs.COLORS["bad"] for r in ratio[ok]]
+        hatch = hatches[j % len(hatches)]
+        ax.bar((x - 0.4 + (j + 0.5) * width)[ok], ratio[ok] - 1.0, width, bottom=1.0,
+               color=colours, hatch=hatch, edgecolor="white", linewidth=0.5)
+        shown += list(ratio[ok])
+        handles.append(Patch(facecolor="0.75", hatch=hatch, edgecolor="white",
+                             label=f"{m} on {t}" if len(others) > 1 else t))
+    handles += [Patch(color=fs.COLORS["good"], label="better than the baseline"),
+                Patch(color=fs.COLORS["bad"], label="worse")]
     ax.axhline(1.0, color="0.2", lw=1.0)
     ax.set_yscale("log")
-    ax.set_xticks(x, list(result.controllers), fontsize=8)
+    reach = max([1.25, *(max(r, 1.0 / r) for r in shown)]) * 1.15
+    ax.set_ylim(1.0 / reach, reach)
+    fs.plain_log_ticks(ax)
+    ax.set_xticks(x, list(result.controllers))
+    ax.set_xlim(-0.6, len(result.controllers) - 0.4)
     ax.set_ylabel(f"{error.replace('_', ' ')} / baseline's")
     ax.grid(alpha=0.3, axis="y")
-    ax.legend(fontsize=7, loc="lower left", bbox_to_anchor=(0.0, 1.01), ncol=4,
+    ax.legend(handles=handles, loc="lower left", bbox_to_anchor=(0.0, 1.01), ncol=3,
               frameon=False, borderaxespad=0.0)
-    fig.tight_layout()
     return fig
 
 
 def figure_robustness(result: CompensateResult) -> Any:
     """The robustness draws: per controller, each compared model's RMS-error ratio to the
     baseline on the same draw (:func:`controllers.robustness.draw_distribution`)."""
-    from matplotlib.figure import Figure
-
     from controllers.robustness import draw_distribution
+    from fcomp import figstyle as fs
 
-    fig = Figure(figsize=(8.0, 3.4))
-    ax = fig.add_subplot()
+    fig, ax = fs.new_figure(height=3.4, width=fs.HALF_WIDTH + 1.6)
     per = result.robustness["controllers"]
     others = [m for m in result.models if m != result.baseline]
     dist = {f"{c}: {m}" if len(others) > 1 else c: {"ratio": {"values":
@@ -557,8 +571,11 @@ def figure_robustness(result: CompensateResult) -> Any:
             for m in others}
     draw_distribution(ax, dist, list(dist), metric="ratio")
     ax.axhline(1.0, color="0.2", lw=1.0)
+    lo, hi = ax.get_ylim()
+    reach = max(1.25, hi, 1.0 / lo)
+    ax.set_ylim(1.0 / reach, reach)
+    fs.plain_log_ticks(ax)
     ax.set_ylabel("RMS error / baseline's (same draw)")
-    fig.tight_layout()
     return fig
 
 
@@ -608,8 +625,8 @@ def report(result: CompensateResult, command: str | None = None) -> Any:
     else:
         rep.paragraph("No robustness draws (samples 0).")
     rep.section("Runs")
-    rep.table(["controller", "model", "task", "status", "RMS (um)", "max (um)",
-               "reversal (um)", "hunting (um)"],
+    rep.table(["controller", "model", "task", "status", "RMS (µm)", "max (µm)",
+               "reversal (µm)", "hunting (µm)"],
               [[r["controller"], r["model"], r["task"], r["status"],
                 *[None if r[e] is None else r[e] * 1e6 for e in RATIO_ERRORS]]
                for r in result.runs], digits=[None, None, None, None, 3, 3, 3, 3])

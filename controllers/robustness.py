@@ -49,6 +49,7 @@ import numpy as np
 from controllers.harness import LoopConfig, friction_label, run_closed_loop
 from controllers.tasks import Task
 from fcomp.errors import FcompError
+from fcomp.figstyle import plain_log_ticks
 from fcomp.models import FrictionModel
 from fcomp.parallel import run_tasks
 
@@ -434,10 +435,12 @@ def draw_distribution(ax: Any, dist: Mapping[str, Any], order: Sequence[str],
                     color="#2356a8")
             if v.size:
                 ax.plot([x - 0.25, x + 0.25], [np.median(v)] * 2, "-", color="0.2", lw=1.2)
-    ax.set_xticks(pos, names, rotation=30, fontsize=8)
+    ax.set_xticks(pos, names, rotation=30 if len(names) > 4 else 0,
+                  ha="right" if len(names) > 4 else "center")
     ax.set_xlim(0.4, len(names) + 0.6)
     ax.set_yscale("log")
     ax.grid(alpha=0.3)
+    plain_log_ticks(ax)
     return "box" if box else "points"
 
 

@@ -35,11 +35,7 @@ def demo_motion(rate: float = 2000.0) -> tuple[np.ndarray, np.ndarray]:
 
 def run_demo(out_dir: str | Path, params: str = "seed000-cylinder1") -> list[Path]:
     """Simulate every registered model along :func:`demo_motion`; write CSVs and ``demo.png``."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    from fcomp import figstyle as fs
     from fcomp.models import MODELS, make_model
     from fcomp.trajectory import friction_along_motion
 
@@ -49,7 +45,8 @@ def run_demo(out_dir: str | Path, params: str = "seed000-cylinder1") -> list[Pat
     out.mkdir(parents=True, exist_ok=True)
     t, v = demo_motion()
     names = MODELS.names()
-    fig, axes = plt.subplots(len(names), 3, figsize=(13, 2.6 * len(names)), squeeze=False)
+    fig, axes = fs.new_figure(height=2.3 * len(names) + 0.4, nrows=len(names), ncols=3,
+                              squeeze=False)
     written: list[Path] = []
     small = t >= 6.5
     for row, name in enumerate(names):
@@ -64,20 +61,18 @@ def run_demo(out_dir: str | Path, params: str = "seed000-cylinder1") -> list[Pat
         written.append(csv)
         ax_t, ax_v, ax_x = axes[row]
         ax_t.plot(t, run.F, lw=0.8)
-        ax_t.set_ylabel(f"{name}\nF [N]")
-        ax_v.plot(run.v[~small], run.F[~small], lw=0.6)
+        ax_t.set_ylabel(f"{name}\nF (N)")
+        ax_v.plot(fs.scaled("v", run.v[~small]), run.F[~small], lw=0.6)
         ax_x.plot((run.x[small] - run.x[small][0]) * 1e3, run.F[small], lw=0.8)
         for ax in (ax_t, ax_v, ax_x):
             ax.grid(alpha=0.3)
     axes[0, 0].set_title("force vs time")
     axes[0, 1].set_title("force vs velocity (slides)")
     axes[0, 2].set_title("force vs displacement (small cycles)")
-    axes[-1, 0].set_xlabel("t [s]")
-    axes[-1, 1].set_xlabel("v [m/s]")
-    axes[-1, 2].set_xlabel("x - x0 [mm]")
-    fig.tight_layout()
+    axes[-1, 0].set_xlabel("t (s)")
+    axes[-1, 1].set_xlabel(fs.label("v", "v"))
+    axes[-1, 2].set_xlabel("x - x0 (mm)")
     png = out / "demo.png"
-    fig.savefig(png, dpi=90)
-    plt.close(fig)
+    fs.save(fig, png)
     written.append(png)
     return written

@@ -58,12 +58,12 @@ from typing import Any
 import numpy as np
 from matplotlib import rc_context
 from matplotlib.figure import Figure
-from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
+from matplotlib.ticker import FuncFormatter, LogLocator, MaxNLocator, NullFormatter
 
 __all__ = [
     "COLORS", "COLUMN_PX", "DPI", "FONT", "FONT_MIN", "HALF_WIDTH", "RC", "SCALES", "WIDTH",
     "Scale", "apply_floor", "binned_means", "break_gaps", "check_readable", "displayed_pt",
-    "good_bad_cmap", "label", "legend_above", "natural_px", "new_figure", "plain_log_ticks",
+    "good_bad_cmap", "label", "legend_above", "legend_top", "natural_px", "new_figure", "plain_log_ticks",
     "plot_gapped", "read_record", "save", "scale_of", "scaled", "style", "text_inside",
 ]
 
@@ -201,6 +201,19 @@ def legend_above(ax: Any, ncol: int = 3, **kw: Any) -> Any:
                      frameon=False, borderaxespad=0.0, **kw)
 
 
+def legend_top(fig: Figure, ax: Any = None, ncol: int = 3, **kw: Any) -> Any:
+    """One legend for a figure of several axes, above all of them (never over data or
+    titles; the constrained layout makes room): the labelled artists of ``ax`` (default:
+    the first axes that has any)."""
+    for a in [ax] if ax is not None else fig.axes:
+        handles, labels = a.get_legend_handles_labels()
+        if handles:
+            kw.setdefault("fontsize", FONT_MIN)
+            return fig.legend(handles, labels, loc="outside upper left", ncol=ncol,
+                              frameon=False, **kw)
+    return None
+
+
 def text_inside(ax: Any, x: float, text: str, *, frac: float = 0.04, **kw: Any) -> Any:
     """A note placed inside the axes at data ``x``, ``frac`` of the height above the bottom
     (a category's "too few samples" mark: inside the axes, never over the tick labels)."""
@@ -212,17 +225,26 @@ def text_inside(ax: Any, x: float, text: str, *, frac: float = 0.04, **kw: Any) 
 
 
 def plain_log_ticks(ax: Any, axis: str = "y") -> None:
-    """Log-axis ticks as plain numbers (1, 10, 100, 0.01, not ``10^2`` or ``6x10^1``); minor
-    ticks unlabelled."""
+    """Log-axis ticks as plain numbers (1, 10, 100, 0.01; never ``10^2`` or ``6x10^1``),
+    minor ticks unlabelled. Call it after the data are drawn: over less than a decade the
+    ticks are evenly spaced plain numbers (46, 48, 50), over less than three decades
+    1-2-5 steps (0.5, 1, 2, 5), else powers of ten."""
 
     def fmt(v: float, _pos: int) -> str:
         if v <= 0 or not math.isfinite(v):
             return ""
-        return f"{v:.0f}" if v >= 1 else f"{v:.10g}"
+        return np.format_float_positional(float(f"{v:.6g}"), trim="-")
 
     for name in ("x", "y") if axis == "both" else (axis,):
         ax_ = ax.xaxis if name == "x" else ax.yaxis
-        ax_.set_major_locator(LogLocator(base=10.0))
+        lo, hi = sorted(ax.get_xlim() if name == "x" else ax.get_ylim())
+        span = hi / lo if lo > 0 and math.isfinite(hi / lo) else math.inf
+        if span < 10.0:
+            ax_.set_major_locator(MaxNLocator(nbins=5, steps=[1, 2, 2.5, 5, 10]))
+        elif span < 1000.0:
+            ax_.set_major_locator(LogLocator(base=10.0, subs=(1.0, 2.0, 5.0)))
+        else:
+            ax_.set_major_locator(LogLocator(base=10.0))
         ax_.set_major_formatter(FuncFormatter(fmt))
         ax_.set_minor_formatter(NullFormatter())
 

@@ -63,6 +63,7 @@ pre { background: var(--soft); padding: .7rem .9rem; border-radius: 6px; overflo
 pre code { background: none; padding: 0; }
 nav.toc { background: var(--soft); border-radius: 6px; padding: .6rem 1rem; margin: 1rem 0; }
 nav.toc ol { margin: .2rem 0; padding-left: 1.3rem; }
+nav.toc ul { margin: .2rem 0; padding-left: 0; list-style: none; }
 a { color: var(--acc); }
 .table-wrap { overflow-x: auto; margin: .8rem 0; -webkit-overflow-scrolling: touch; }
 table { border-collapse: collapse; font-size: .93rem; min-width: 50%; }
@@ -70,8 +71,9 @@ caption { caption-side: top; text-align: left; color: var(--muted); padding: 0 0
   font-size: .92rem; }
 th, td { border-bottom: 1px solid var(--line); padding: .3rem .65rem; text-align: left;
   vertical-align: top; }
-th { background: var(--soft); font-weight: 600; white-space: nowrap; }
+th { background: var(--soft); font-weight: 600; }
 td.num { text-align: right; font-variant-numeric: tabular-nums; white-space: nowrap; }
+@media (min-width: 48rem) { td { overflow-wrap: anywhere; } td.num { overflow-wrap: normal; } }
 tr.match td.status { color: var(--ok); }
 tr.differs td.status { color: var(--bad); }
 tr.na td.status { color: var(--muted); }
@@ -94,6 +96,8 @@ dl.meta dd { margin: 0; overflow-wrap: anywhere; }
 """
 
 _NOTE_KINDS = ("info", "ok", "warn", "bad")
+#: A heading that carries its own number ("2. ", "3.1 ", "A. ").
+_NUMBERED = re.compile(r"^\s*(\d+\.(\d+\.?)*|[A-Z]\.)\s")
 
 
 def format_value(value: Any, digits: int | None = None) -> str:
@@ -205,8 +209,23 @@ def _cell(value: Any, digits: int | None = None) -> tuple[str, bool]:
         except ImportError:  # pragma: no cover - numpy is a dependency
             numeric = False
     if numeric:
-        return html.escape(format_value(value, digits)), True
+        return html.escape(_tiny(value, digits) or format_value(value, digits)), True
     return _inline("" if value is None else str(value)), False
+
+
+def _tiny(value: Any, digits: int | None) -> str | None:
+    """``"< 0.001"`` for a non-zero number that ``digits`` decimals would show as zero
+    (never a bare ``0.000`` for something that is not zero); ``None`` otherwise."""
+    if digits is None or digits < 1:
+        return None
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        return None
+    step = 10.0 ** -digits
+    if v == 0.0 or not math.isfinite(v) or abs(v) >= step / 2:
+        return None
+    return f"< {step:.{digits}f}" if v > 0 else f"> -{step:.{digits}f}"
 
 
 def _slug(text: str, taken: set[str]) -> str:
@@ -366,12 +385,18 @@ class Report:
         )
 
     def parameters(self, values: Mapping[str, Any], *, heading: str = "Parameters",
-                   caption: str | None = None) -> Report:
-        """A parameters section: name / value table (nested mappings shown as JSON)."""
+                   caption: str | None = None, units: Mapping[str, str] | None = None
+                   ) -> Report:
+        """A parameters section: name / value table (nested mappings shown as JSON); with
+        ``units`` (name -> unit, ``"-"`` for a pure number) a unit column."""
         self.section(heading)
         rows = [[k, json.dumps(v) if isinstance(v, Mapping | list | tuple) else v]
                 for k, v in values.items()]
-        return self.table(["parameter", "value"], rows, caption=caption)
+        if units is None:
+            return self.table(["parameter", "value"], rows, caption=caption)
+        return self.table(["parameter", "value", "unit"],
+                          [[*r, units.get(str(r[0]), "") or "-"] for r in rows],
+                          caption=caption)
 
     def figure(self, fig: Any, caption: str, *, alt: str | None = None, dpi: int | None = None,
                fmt: str = "png") -> Report:
@@ -434,8 +459,12 @@ class Report:
         if sum(1 for lvl, _, _ in self._toc if lvl == 2) >= 3:
             items = "".join(f'<li><a href="#{slug}">{_inline(h)}</a></li>'
                             for lvl, slug, h in self._toc if lvl == 2)
+            # headings that carry their own numbers ("2. Where the model fails") are listed
+            # as written, not numbered again ("2. 2. Where ...")
+            numbered = any(_NUMBERED.match(h) for lvl, _, h in self._toc if lvl == 2)
+            tag = "ul" if numbered else "ol"
             parts.append(f'<nav class="toc" aria-label="Contents"><strong>Contents</strong>'
-                         f"<ol>{items}</ol></nav>")
+                         f"<{tag}>{items}</{tag}></nav>")
         parts.extend(self._blocks)
         meta = [("fcomp version", __version__),
                 ("Python", platform.python_version()),

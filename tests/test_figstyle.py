@@ -108,6 +108,17 @@ def test_log_ticks_are_plain_numbers() -> None:
              if t.get_text() and lo <= t.get_position()[1] <= hi]
     assert shown == ["1", "10", "100", "1000"]
     assert not [t for t in ax.yaxis.get_minorticklabels() if t.get_text()]
+    for data, want in (([46, 51], {"46", "48", "50"}),
+                       ([0.6, 3.0], {"1", "2"})):
+        fig, ax = fs.new_figure(height=2.5)
+        ax.plot([0, 1], data)
+        ax.set_yscale("log")
+        fs.plain_log_ticks(ax)
+        fig.draw_without_rendering()
+        lo, hi = ax.get_ylim()
+        got = {t.get_text() for t in ax.get_yticklabels()
+               if t.get_text() and lo <= t.get_position()[1] <= hi}
+        assert want <= got and not any("10^" in g or "times" in g or "e" in g for g in got), got
 
 
 def test_legend_above_and_notes_inside_the_axes() -> None:
@@ -124,6 +135,16 @@ def test_legend_above_and_notes_inside_the_axes() -> None:
     nb = note.get_window_extent(r)
     assert box.x0 <= nb.x0 and nb.x1 <= box.x1 and box.y0 <= nb.y0 and nb.y1 <= box.y1
     assert fs.legend_above(fs.new_figure()[1]) is None  # nothing labelled: no empty legend
+    fig, (a1, a2) = fs.new_figure(height=3.0, ncols=2)
+    a1.plot([0, 1], label="one")
+    a1.set_title("a title")
+    a2.set_title("another")
+    leg = fs.legend_top(fig)
+    r = FigureCanvasAgg(fig).get_renderer()
+    fig.draw(r)
+    lb = leg.get_window_extent(r)
+    for a in (a1, a2):
+        assert lb.y0 >= a.title.get_window_extent(r).y1 - 1  # above the titles
 
 
 def test_good_is_green() -> None:

@@ -9,12 +9,12 @@ import shlex
 from typing import Any
 
 import numpy as np
-from matplotlib.figure import Figure
 
 from controllers import CONTROLLERS
 from controllers.harness import LoopConfig, control_model
 from controllers.robustness import Grid, Sweep, distributions, draw_distribution, run_jobs
 from controllers.tasks import TASKS
+from fcomp import figstyle as fs
 from fcomp.cli import common
 from fcomp.cli.common import emit_result, json_target, report_dir, result_text
 from fcomp.errors import FcompError
@@ -146,15 +146,13 @@ def report(doc: dict[str, Any], command: str | None) -> Any:
     failed = sum(r["status"] != "ok" for r in doc["runs"])
     if failed:
         rep.note(f"{failed} run(s) failed (counted, not dropped): see the table.", kind="warn")
-    fig = Figure(figsize=(8.0, 3.8))
-    ax = fig.add_subplot()
+    fig, ax = fs.new_figure(height=3.8, width=fs.HALF_WIDTH + 1.6)
     if doc["mode"] == "monte-carlo":
         shown = draw_distribution(ax, doc["distributions"], doc["controllers"], scale=1e6)
-        ax.set_ylabel("RMS tracking error (um)")
-        fig.tight_layout()
+        ax.set_ylabel("RMS tracking error (\u00b5m)")
         rep.figure(fig, f"RMS tracking error over the {doc['samples']} draws, per controller "
                    f"(log scale; {'box: quartiles, whiskers 10-90 %' if shown == 'box' else 'every draw a point, line: median'}).")
-        rep.table(["controller", "RMS median (um)", "p10 (um)", "p90 (um)", "runs", "failed"],
+        rep.table(["controller", "RMS median (µm)", "p10 (µm)", "p90 (µm)", "runs", "failed"],
                   [[c, d["rms_error"]["median"] * 1e6, d["rms_error"]["p10"] * 1e6,
                     d["rms_error"]["p90"] * 1e6, d["runs"], d["failed"]]
                    for c, d in doc["distributions"].items()], digits=[None, 3, 3, 3, 0, 0])
@@ -163,20 +161,19 @@ def report(doc: dict[str, Any], command: str | None) -> Any:
         for c in doc["controllers"]:
             ys = [pt["rms_error"].get(c) for pt in doc["points"]]
             ax.plot(xs, [np.nan if y is None else y * 1e6 for y in ys], "o-", label=c)
-        ax.set_xticks(xs, [pt["label"] for pt in doc["points"]], rotation=30, ha="right",
-                      fontsize=7)
+        ax.set_xticks(xs, [pt["label"] for pt in doc["points"]], rotation=30, ha="right")
+        ax.set_xlim(-0.5, len(xs) - 0.5)
         ax.set_yscale("log")
-        ax.set_ylabel("RMS tracking error (um)")
+        fs.plain_log_ticks(ax)
+        ax.set_ylabel("RMS tracking error (\u00b5m)")
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=7, loc="lower left", bbox_to_anchor=(0.0, 1.01), ncol=5,
-                  frameon=False, borderaxespad=0.0)
-        fig.tight_layout()
+        fs.legend_above(ax, ncol=5)
         rep.figure(fig, "RMS tracking error at every grid point, per controller (log scale).")
         rep.table(["point", *doc["controllers"]],
                   [[pt["label"], *[None if pt["rms_error"].get(c) is None
                                    else pt["rms_error"][c] * 1e6 for c in doc["controllers"]]]
                    for pt in doc["points"]],
-                  caption="RMS tracking error (um) at every grid point.",
+                  caption="RMS tracking error (µm) at every grid point.",
                   digits=[None, *[3] * len(doc["controllers"])])
     rep.table(["controller", "point/draw", "status"],
               [[r["controller"], r["sample"], r["status"]] for r in doc["runs"]

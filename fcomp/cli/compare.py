@@ -133,6 +133,20 @@ def _model(args: argparse.Namespace) -> tuple[Any, float | None]:
     return common.build_model(args.model, spec, args), mass
 
 
+def _values_from(args: argparse.Namespace) -> str:
+    """Where the compared model's values come from, in words (the report's subtitle)."""
+    spec, model = args.params, args.model
+    if model.lower().endswith(".json"):
+        where = f"the model file `{model}`"
+    elif spec is not None and spec.lower().endswith(".json"):
+        where = f"the fit file `{spec}`"
+    elif spec is not None:
+        where = f"the parameter set `{spec}`"
+    else:
+        where = "the model's default values"
+    return where + (" with --set " + ", ".join(f"`{a}`" for a in args.set) if args.set else "")
+
+
 def run(args: argparse.Namespace) -> int:
     from fcomp.api import compare
     from fcomp.measurement import Measurement
@@ -166,6 +180,7 @@ def run(args: argparse.Namespace) -> int:
         inputs.file(args.effects, "--effects")
     common.check_outputs(inputs, [("--json", out)], [("--report", report, "report")])
     given = bool(args.params or args.set or args.fit or args.model.lower().endswith(".json"))
+    values_from = _values_from(args)
     model, mass = _model(args)
     data = [Measurement.read(p) for p in args.data]
     for d in data:
@@ -182,7 +197,7 @@ def run(args: argparse.Namespace) -> int:
     command = "fcomp " + shlex.join(common.ARGV) if common.ARGV else None
     if report is not None:
         with staged_folder(report, "--report", "report", note=command or "fcomp compare") as tmp:
-            comp.write_report(tmp, command=command)
+            comp.write_report(tmp, command=command, values_from=values_from)
         if args.json != "-":
             print(f"wrote {report / 'report.html'}")
     emit_result(text, args.json, out, summary(doc))

@@ -161,11 +161,14 @@ class Comparison:
         figs = comparison_figures(self, only=name)
         return figs if name is None else figs[name]
 
-    def write_report(self, directory: str | Path, *, command: str | None = None) -> Path:
-        """Write ``DIRECTORY/report.html`` (self-contained) and return its path."""
+    def write_report(self, directory: str | Path, *, command: str | None = None,
+                     values_from: str | None = None) -> Path:
+        """Write ``DIRECTORY/report.html`` (self-contained) and return its path; ``values_from``
+        says where the model's values come from (``"the fit file fit.json"``)."""
         from fcomp.diagnosis.report import write_comparison_report
 
-        return write_comparison_report(self, directory, command=command)
+        return write_comparison_report(self, directory, command=command,
+                                       values_from=values_from)
 
     def __repr__(self) -> str:
         return (f"<Comparison {self.model.describe()}: RMS {self.rms:.4g} N over "

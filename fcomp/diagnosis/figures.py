@@ -31,23 +31,22 @@ import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.ticker import MaxNLocator
 
+from fcomp import figstyle as fs
 from fcomp.diagnosis.data import DiagnosisData
 from fcomp.diagnosis.features import feature_values
 from fcomp.diagnosis.refit import FitResult
 from fcomp.diagnosis.regimes import REGIMES, Segmentation
 from fcomp.diagnosis.residuals import worst_segments
 from fcomp.errors import FcompError
-from fcomp.figures import fig_plant, legend_above
+from fcomp.figures import fig_plant
 
 if TYPE_CHECKING:  # the results draw themselves through this module, which sits below them
     from fcomp.diagnosis.compare import Comparison
     from fcomp.diagnosis.loop import Diagnosis
 
-_UNITS = {"t": "s", "v": "m/s", "a": "m/s^2", "x": "m", "p1+p2": "bar",
-          "time_since_reversal": "s", "displacement_since_reversal": "m", "dwell_time": "s"}
-#: Features drawn in other units than SI: name -> factor (``p1+p2`` in bar, not raw Pa).
-_SHOWN_SCALE = {"p1+p2": 1e-5}
-_COLORS = {"measured": "0.25", "baseline": "#c0392b", "final": "#2356a8"}
+#: Features are drawn in the units an engineer reads (:data:`fcomp.figstyle.SCALES`: x and
+#: displacements in mm, v in mm/s, pressures in bar); the data stay SI.
+_COLORS = {k: fs.COLORS[k] for k in ("measured", "baseline", "final")}
 #: Fewest judged samples a regime needs for its bar (fewer: marked, not drawn).
 MIN_REGIME_SAMPLES = 20
 
@@ -118,8 +117,7 @@ def fig_regimes(obj: Diagnosis | Comparison | View) -> Figure:
     bar (its RMS would rest on a handful of samples): it is marked "too few".
     """
     vw = view(obj)
-    fig = Figure(figsize=(7.0, 3.6))
-    ax = fig.add_subplot()
+    fig, ax = fs.new_figure(height=3.6, width=fs.HALF_WIDTH + 1.6)
     names = [*REGIMES, "all"]
     xs = np.arange(len(names))
     width = 0.8 / len(vw.series)
@@ -137,28 +135,16 @@ def fig_regimes(obj: Diagnosis | Comparison | View) -> Figure:
     if vw.noise_floor is not None:
         ax.axhline(vw.noise_floor, color="0.4", ls="--", lw=1, label="noise floor")
         top = max(top, vw.noise_floor)
-    top = 1.1 * top if top > 0 else 1.0
+    top = 1.15 * top if top > 0 else 1.0
     for x, n in zip(xs, names, strict=True):
         if (counts[n]["n"] or 0) < MIN_REGIME_SAMPLES:
-            ax.text(float(x), 0.05 * top, "too few\nsamples", ha="center", va="bottom", fontsize=7,
-                    color="0.4")
-    ax.set_xticks(xs, [f"{n}\n(n={counts[n]['n']})" for n in names], fontsize=8)
+            fs.text_inside(ax, float(x), "too few\nsamples", frac=0.04)
+    ax.set_xticks(xs, [f"{n}\n(n={counts[n]['n']})" for n in names])
+    ax.set_xlim(-0.6, len(names) - 0.4)  # every category (and its bars) inside the axes
     ax.set_ylabel(f"{vw.judged_label} RMS error (N)")
     ax.set_ylim(0, top)
-    legend_above(ax, ncol=2)
-    fig.tight_layout()
+    fs.legend_above(ax, ncol=2)
     return fig
-
-
-def _binned(f: np.ndarray, r: np.ndarray) -> tuple[list[float], list[float]]:
-    """Means of ``r`` over bins of equal count along ``f``."""
-    order = np.argsort(f)
-    fb, rb = f[order], r[order]
-    nb = max(5, min(40, fb.size // 50))
-    edges = np.linspace(0, fb.size, nb + 1).astype(int)
-    pairs = [(fb[a:b].mean(), rb[a:b].mean())
-             for a, b in zip(edges[:-1], edges[1:], strict=True) if b > a]
-    return [a for a, _ in pairs], [b for _, b in pairs]
 
 
 def fig_residuals(obj: Diagnosis | Comparison | View) -> Figure:
@@ -168,64 +154,65 @@ def fig_residuals(obj: Diagnosis | Comparison | View) -> Figure:
     feats = feature_values(vw.data, vw.segmentation)
     te = vw.judged
     n = len(feats)
-    cols = 4
+    cols = 3
     rows = math.ceil(n / cols)
-    fig = Figure(figsize=(12.0, 2.9 * rows))
+    fig, axes = fs.new_figure(height=2.6 * rows, nrows=rows, ncols=cols, squeeze=False,
+                              sharey=True)
+    flat = list(axes.ravel())
     for i, (name, f) in enumerate(feats.items()):
-        ax = fig.add_subplot(rows, cols, i + 1)
-        shown = f[te] * _SHOWN_SCALE.get(name, 1.0)
+        ax = flat[i]
+        shown = fs.scaled(name, f[te])
         for s in vw.series:
             r = s.fit.plain_residual[te]
             ax.plot(shown, r, ".", ms=1.5, alpha=0.35, color=_COLORS[s.colour])
-            cx, cy = _binned(shown, r)
-            ax.plot(cx, cy, "-", color=_COLORS[s.colour], lw=1.5, label=s.label.split(":")[0])
+            cx, cy = fs.binned_means(shown, r)
+            ax.plot(cx, cy, "-", color=_COLORS[s.colour], lw=1.5,
+                    label=f"{s.label.split(':')[0]} (binned mean)")
         ax.axhline(0.0, color="0.5", lw=0.6)
-        ax.set_xlabel(f"{name} ({_UNITS.get(name, '-')})", fontsize=8)
-        ax.set_title(f"{name}: strength {vw.strength.get(name, 0.0):.2f}", fontsize=8)
-        ax.tick_params(labelsize=7)
-        ax.xaxis.set_major_locator(MaxNLocator(nbins=4))
-        ax.ticklabel_format(axis="x", style="sci", scilimits=(-3, 3), useMathText=True)
-        ax.xaxis.get_offset_text().set_fontsize(7)
+        ax.set_xlabel(fs.label(name.replace("_", " "), name))
+        ax.set_title(f"strength {vw.strength.get(name, 0.0):.2f}")
+        ax.xaxis.set_major_locator(MaxNLocator(nbins=5))
         if i % cols == 0:
-            ax.set_ylabel("residual y - F (N)", fontsize=8)
-        if i == 0:
-            ax.legend(fontsize=7)
-    fig.tight_layout()
+            ax.set_ylabel("residual y - F (N)")
+    for ax in flat[n:]:
+        ax.set_visible(False)
+    fs.legend_top(fig, flat[0], ncol=len(vw.series))
     return fig
 
 
 def fig_loops(obj: Diagnosis | Comparison | View) -> Figure:
     """Measured and modelled force-velocity and force-displacement loops (judged samples)."""
     vw = view(obj)
-    fig = Figure(figsize=(11.0, 4.0))
+    fig, (ax1, ax2) = fs.new_figure(height=3.8, ncols=2, sharey=True)
     te = vw.judged
     v, x, y = vw.data.signal("v"), vw.data.signal("x"), vw.data.y
-    ax1 = fig.add_subplot(1, 2, 1)
-    ax2 = fig.add_subplot(1, 2, 2)
-    for ax, q, lab in ((ax1, v, "velocity v (m/s)"), (ax2, x, "position x (m)")):
-        ax.plot(q[te], y[te], ".", ms=1.5, color=_COLORS["measured"], label="measured")
+    for ax, q, name, lab in ((ax1, v, "v", "velocity v"), (ax2, x, "x", "position x")):
+        ax.plot(fs.scaled(name, q[te]), y[te], ".", ms=1.5, color=_COLORS["measured"],
+                label="measured")
         for s in vw.series:
-            ax.plot(q[te], s.fit.F_hat[te], ".", ms=1.0, color=_COLORS[s.colour],
-                    label=s.label.split(":")[0])
-        ax.set_xlabel(lab)
-        ax.set_ylabel("friction force (N)")
-    ax1.legend(fontsize=7, markerscale=6)
+            ax.plot(fs.scaled(name, q[te]), s.fit.F_hat[te], ".", ms=1.0,
+                    color=_COLORS[s.colour], label=s.label.split(":")[0])
+        ax.set_xlabel(fs.label(lab, name))
+        ax.xaxis.set_major_locator(MaxNLocator(nbins=6))
+    ax1.set_ylabel("friction force (N)")
+    fs.legend_top(fig, ax1, ncol=len(vw.series) + 1, markerscale=6)
     if vw.data.steady_state:
-        ax1.set_title("steady-state points", fontsize=9)
-    fig.tight_layout()
+        ax2.set_title("steady-state points")
     return fig
 
 
 def _window_plot(ax: Any, vw: View, a: int, b: int, title: str) -> None:
     t = vw.data.signal("t")
-    ax.plot(t[a:b], vw.data.y[a:b], color=_COLORS["measured"], lw=1.0, label="measured")
+    fs.plot_gapped(ax, t[a:b], vw.data.y[a:b], color=_COLORS["measured"], lw=1.0,
+                   label="measured")
     for k, s in enumerate(vw.series):
-        ax.plot(t[a:b], s.fit.F_hat[a:b], color=_COLORS[s.colour], lw=1.0,
-                ls="--" if k and k == len(vw.series) - 1 else "-", label=s.label.split(":")[0])
-    ax.set_title(title, fontsize=8)
-    ax.set_xlabel("t (s)", fontsize=8)
-    ax.set_ylabel("F (N)", fontsize=8)
-    ax.tick_params(labelsize=7)
+        fs.plot_gapped(ax, t[a:b], s.fit.F_hat[a:b], color=_COLORS[s.colour], lw=1.0,
+                       ls="--" if k and k == len(vw.series) - 1 else "-",
+                       label=s.label.split(":")[0])
+    ax.set_title(title)
+    ax.set_xlabel("t (s)")
+    ax.set_ylabel("F (N)")
+    ax.xaxis.set_major_locator(MaxNLocator(nbins=4))
 
 
 def worst_windows(obj: Diagnosis | Comparison | View, count: int = 3
@@ -243,36 +230,32 @@ def fig_worst(obj: Diagnosis | Comparison | View) -> Figure:
     """The worst judged windows of the first model drawn, with the others."""
     vw = view(obj)
     wins = worst_windows(vw)
-    fig = Figure(figsize=(11.0, 3.2))
+    fig, axes = fs.new_figure(height=3.4, ncols=max(len(wins), 1), squeeze=False)
     who = vw.first.label.split(":")[0]
     for i, (a, b, rms) in enumerate(wins):
-        ax = fig.add_subplot(1, max(len(wins), 1), i + 1)
+        ax = axes[0, i]
         pad = (b - a) // 2
         a0, b0 = max(a - pad, 0), min(b + pad, vw.data.n)
         counts = np.bincount(vw.segmentation.regime[a:b], minlength=len(REGIMES))
-        _window_plot(ax, vw, a0, b0, f"{who} RMS {rms:.3g} N, mostly "
+        _window_plot(ax, vw, a0, b0, f"{who} {rms:.3g} N RMS,\nmostly "
                      f"{REGIMES[int(np.argmax(counts))]}")
-        if i == 0:
-            ax.legend(fontsize=7)
-    fig.tight_layout()
+    fs.legend_top(fig, axes[0, 0], ncol=len(vw.series) + 1)
     return fig
 
 
 def fig_candidates(diag: Diagnosis) -> Figure:
     """First-step candidates: held-out RMS after adding each (qualifying ones dark)."""
     cands = [c for c in diag.candidates_ if math.isfinite(c.rms_heldout)]
-    fig = Figure(figsize=(7.0, 0.35 * max(len(cands), 3) + 1.2))
-    ax = fig.add_subplot()
+    fig, ax = fs.new_figure(height=0.35 * max(len(cands), 3) + 1.5, width=fs.HALF_WIDTH + 1.6)
     ys = np.arange(len(cands))
     ax.barh(ys, [c.rms_heldout for c in cands],
-            color=["#1f7a3d" if c.qualifies else "0.7" for c in cands])
+            color=[fs.COLORS["good"] if c.qualifies else fs.COLORS["neutral"] for c in cands])
     ax.axvline(diag.rms_baseline_, color=_COLORS["baseline"], lw=1.2, label="baseline")
     ax.axvline(diag.noise_floor_.value, color="0.3", ls="--", lw=1, label="noise floor")
-    ax.set_yticks(ys, [c.effect for c in cands], fontsize=8)
+    ax.set_yticks(ys, [c.effect for c in cands])
     ax.invert_yaxis()
     ax.set_xlabel("held-out RMS error after adding the effect (N)")
-    ax.legend(fontsize=7)
-    fig.tight_layout()
+    fs.legend_above(ax, ncol=2)
     return fig
 
 
@@ -287,18 +270,17 @@ def fig_error_fall(diag: Diagnosis) -> Figure:
     if diag.removed_:
         labels.append("- " + ", ".join(diag.removed_))
         vals.append(diag.rms_final_)
-    fig = Figure(figsize=(7.0, 3.4))
-    ax = fig.add_subplot()
+    fig, ax = fs.new_figure(height=3.4, width=fs.HALF_WIDTH + 1.6)
     ax.plot(range(len(vals)), vals, "o-", color=_COLORS["final"])
     for i, val in enumerate(vals):
         ax.annotate(f"{val:.3g} N", (i, val), textcoords="offset points", xytext=(0, 6),
-                    ha="center", fontsize=8)
+                    ha="center", fontsize=fs.FONT_MIN)
     ax.axhline(diag.noise_floor_.value, color="0.4", ls="--", lw=1, label="noise floor")
-    ax.set_xticks(range(len(vals)), labels, fontsize=8)
+    ax.set_xticks(range(len(vals)), [lab.replace(", ", ",\n") for lab in labels])
+    ax.set_xlim(-0.5, len(vals) - 0.5)
     ax.set_ylabel("held-out RMS error (N)")
     ax.set_ylim(0, max(vals) * 1.2)
-    ax.legend(fontsize=7)
-    fig.tight_layout()
+    fs.legend_above(ax)
     return fig
 
 
@@ -308,8 +290,7 @@ def fig_before_after(obj: Diagnosis | View) -> Figure:
     vw = view(obj)
     te = vw.judged
     idx = np.flatnonzero(te)
-    fig = Figure(figsize=(11.0, 3.2))
-    ax = fig.add_subplot()
+    fig, ax = fs.new_figure(height=3.2)
     if idx.size:
         width = max(20, int(round(2.0 / vw.data.scales.dt)))
         r = vw.first.fit.residual ** 2 - vw.last.fit.residual ** 2
@@ -322,8 +303,7 @@ def fig_before_after(obj: Diagnosis | View) -> Figure:
                      f"{vw.judged_label} stretch where the added effects matter most"
                      if len(vw.series) > 1 else f"{vw.judged_label} stretch where the model "
                      "fails most")
-        ax.legend(fontsize=7)
-    fig.tight_layout()
+        fs.legend_above(ax, ncol=len(vw.series) + 1)
     return fig
 
 

@@ -14,6 +14,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, cast
 
+from fcomp import figstyle as fs
 from fcomp.diagnosis.figures import (
     check_fitted,
     comparison_figures,
@@ -46,7 +47,7 @@ def _comparison_rows(obj: Comparison) -> tuple[str, list[list[Any]]]:
             ["noise floor", f"{obj.noise_floor:.3g}", "N"]]
     rows += [[f"regime {k}", "-" if v["rms"] is None else f"{v['rms']:.4g}",
               f"N (n={v['n']})"] for k, v in obj.regimes.items()]
-    rows += [[f"plant {c.plant}, {k}", f"{v:.3g}", "m" if k == "x" else "Pa"]
+    rows += [[f"plant {c.plant}, {k}", f"{fs.scaled(k, v):.3g}", fs.scale_of(k).unit]
              for c in obj.plant for k, v in c.rms.items()]
     top = obj.residual_features[:3]
     rows.append(["residual follows", ", ".join(f"{f.feature} {f.strength:.2f}"
@@ -84,25 +85,45 @@ def diagnosis_html(diag: Diagnosis) -> str:
     return notebook_html(title, rows, fig_error_fall(diag))
 
 
-def build_comparison_report(comp: Comparison, *, command: str | None = None) -> Report:
+def parameter_units(model: Any) -> dict[str, str]:
+    """Unit of every parameter of ``model`` and of the identification extras (``mass`` kg,
+    ``offset`` N, ``lag`` s); ``"-"`` for a pure number."""
+    from fcomp.identification.records import EXTRA_SPECS
+
+    specs = {**EXTRA_SPECS, **model.param_specs()}
+    return {k: (getattr(s, "unit", "") or "-") for k, s in specs.items()}
+
+
+def build_comparison_report(comp: Comparison, *, command: str | None = None,
+                            values_from: str | None = None) -> Report:
     """The :class:`~fcomp.report.Report` of a comparison: the diagnosis report's first two
-    sections (errors per regime, where the model fails) for one model, and the plant domain."""
+    sections (errors per regime, where the model fails) for one model, and the plant domain.
+
+    ``values_from`` says where the model's values come from (``"the fit file fit.json"``, ``"the
+    parameter set seed001"``, ``"the model's default values"``); without it a comparison that
+    was not fitted says "the values given"."""
     d = comp.to_dict()
     labels = comp.data.labels
+    source = ("fitted on the training samples" if comp.fitted else
+              f"values from {values_from}" if values_from else "the values given")
     rep = Report(f"Comparison: {comp.model.describe()} on {', '.join(labels[:3])}"
                  + (" ..." if len(labels) > 3 else ""),
-                 subtitle=f"RMS {comp.rms:.4g} N over the {comp.judged_label} samples "
-                 f"(noise floor {comp.noise_floor:.3g} N)"
-                 + ("; fitted on the training samples" if comp.fitted else
-                    "; the model's own values"),
+                 subtitle=f"RMS {comp.rms:.3g} N over the {comp.judged_label} samples "
+                 f"(noise floor {comp.noise_floor:.3g} N); {source}",
                  command=command, config={"model": d["description"], "fitted": comp.fitted,
-                                          "split": comp.split})
+                                          "split": comp.split,
+                                          **({"values from": values_from} if values_from
+                                             else {})})
+    # The conclusion (what was found, how sure, what to do next) opens the page here, as
+    # the first block under the title (issue 27, item 3).
     if d["warnings"]:
         rep.section("What a careful engineer would question", level=3)
         rep.table(["warning", "parameter", "what it means"],
                   [[w["code"], w["parameter"] or "", w["message"]] for w in d["warnings"]])
     comparison_sections(rep, comp)
-    rep.parameters({k: v for k, v in d["params"].items()}, heading="Parameters (SI units)")
+    rep.parameters({k: v for k, v in d["params"].items()}, heading="Parameters",
+                   units=parameter_units(comp.model),
+                   caption="The values compared" + (f" ({source})." if source else "."))
     return rep
 
 
@@ -115,7 +136,7 @@ def comparison_sections(rep: Report, comp: Comparison) -> Report:
                "(pre-sliding, reversal, sliding, dwell/break-away); a regime with too few "
                "samples has no bar.")
     rep.table(["regime", "RMS (N)", "samples"],
-              [[k, v["rms"], v["n"]] for k, v in comp.regimes.items()], digits=[None, 4, 0])
+              [[k, v["rms"], v["n"]] for k, v in comp.regimes.items()], digits=[None, None, 0])
     rep.section("2. Where the model fails")
     rep.figure(figs["residuals"], "Residual (measured minus model) against every feature; "
                "lines: binned means. Each title gives how strongly the residual follows the "
@@ -132,9 +153,9 @@ def comparison_sections(rep: Report, comp: Comparison) -> Report:
         rep.section("3. Plant domain")
         rep.figure(figs["plant"], "The plant simulated with each record's command from its "
                    "measured initial state (dashed) beside the measured signals.")
-        rep.table(["record", "plant", "signal", "RMS"],
-                  [[c.label, c.plant, k, f"{v:.4g} {'m' if k == 'x' else 'Pa'}"]
-                   for c in comp.plant for k, v in c.rms.items()])
+        rep.table(["record", "plant", "signal", "RMS", "unit"],
+                  [[c.label, c.plant, k, fs.scaled(k, v), fs.scale_of(k).unit]
+                   for c in comp.plant for k, v in c.rms.items()], digits=None)
     return rep
 
 
@@ -147,6 +168,8 @@ def build_fit_report(fit: Any, comp: Comparison | None, *, command: str | None =
                  subtitle=f"{fit.method_} fit, target {fit.target_}, RMS {fit.rms_:.4g} N over "
                  f"{fit.n_samples_} samples", command=command,
                  config={"model": d["model"], "method": d["method"]})
+    # The conclusion (what was found, how sure, what to do next) opens the page here, as
+    # the first block under the title (issue 27, item 3).
     rep.section("Estimates")
     pct = round(100 * fit.confidence)
     rep.table(["parameter", "value", "stderr", f"{pct} % interval", "unit"], fit.rows(),
@@ -174,9 +197,11 @@ def write_fit_report(fit: Any, comp: Comparison | None, directory: str | Path, *
 
 
 def write_comparison_report(comp: Comparison, directory: str | Path, *,
-                            command: str | None = None) -> Path:
-    """Write ``DIRECTORY/report.html`` of a comparison (self-contained); return its path."""
-    return _write(build_comparison_report(comp, command=command), directory)
+                            command: str | None = None, values_from: str | None = None) -> Path:
+    """Write ``DIRECTORY/report.html`` of a comparison (self-contained); return its path
+    (``values_from``: :func:`build_comparison_report`)."""
+    return _write(build_comparison_report(comp, command=command, values_from=values_from),
+                  directory)
 
 
 def _physics(effect: str) -> str:
@@ -196,6 +221,8 @@ def build_report(diag: Diagnosis, *, command: str | None = None) -> Report:
                  command=command,
                  config={"baseline": d["baseline"], "split": diag.split_.description,
                          "effects": [c.effect for c in diag.candidates_] or d["added"]})
+    # The conclusion (what was found, how sure, what to do next) opens the page here, as
+    # the first block under the title (issue 27, item 3).
     rep.section("Summary")
     if d["added"]:
         rep.paragraph(f"Added, in order: {', '.join('`' + e + '`' for e in d['added'])}. "
@@ -265,7 +292,7 @@ def build_report(diag: Diagnosis, *, command: str | None = None) -> Report:
     rows = [[r, diag.regimes_["baseline"][r]["rms"], diag.regimes_["final"][r]["rms"],
              diag.regimes_["final"][r]["n"]] for r in [*REGIMES, "all"]]
     rep.table(["regime", "baseline RMS (N)", "final RMS (N)", "held-out samples"], rows,
-              digits=[None, 4, 4, 0])
+              digits=[None, None, None, 0])
     cov = diag.split_.coverage
     if cov:
         rows = [[kind_, name, n["train"], n["heldout"]]
@@ -329,8 +356,8 @@ def build_report(diag: Diagnosis, *, command: str | None = None) -> Report:
     rep.section("Residual structure left")
     rep.table(["feature", "strength"], [[f["feature"], f["strength"]]
                                         for f in d["residual_features"]], digits=[None, 3])
-    rep.parameters({k: v for k, v in d["params"].items()},
-                   heading="Final parameters (SI units)")
+    rep.parameters({k: v for k, v in d["params"].items()}, heading="Final parameters",
+                   units=parameter_units(diag.fit_.model))
     return rep
 
 

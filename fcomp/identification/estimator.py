@@ -347,26 +347,24 @@ class FrictionFit:
     def plot(self, data: Measurement | None = None) -> Any:
         """The fit drawn: measured (or reconstructed) force and the fitted model over time and
         against the velocity, for ``data`` (default: the record fitted)."""
-        from matplotlib.figure import Figure
+        from fcomp import figstyle as fs
 
         data = self.data_ if data is None else data
         d = self._data(data)
         y, F = d.y, self.predict(data)
         t, v = d.sig["t"], d.sig["v"]
-        fig = Figure(figsize=(11.0, 3.4))
-        ax1, ax2 = fig.add_subplot(1, 2, 1), fig.add_subplot(1, 2, 2)
-        for ax, q, label in ((ax1, t, "t (s)"), (ax2, v, "velocity v (m/s)")):
-            style = "-" if ax is ax1 else "."
-            ax.plot(q, y, style, color="0.25", lw=0.8, ms=1.5, label=f"measured ({self.target_})")
-            ax.plot(q, F, style, color="#2356a8", lw=0.8, ms=1.0,
-                    label=f"fitted {self.model_.describe()}")
-            ax.set_xlabel(label, fontsize=8)
-            ax.set_ylabel("force (N)", fontsize=8)
-            ax.tick_params(labelsize=7)
-        ax1.legend(fontsize=7, loc="lower left", bbox_to_anchor=(0.0, 1.01), ncol=2,
-                   frameon=False, borderaxespad=0.0)
-        ax2.set_title(f"RMS error {self.score(data):.4g} N", fontsize=8)
-        fig.tight_layout()
+        fig, (ax1, ax2) = fs.new_figure(height=3.6, ncols=2, sharey=True)
+        fs.plot_gapped(ax1, t, y, color=fs.COLORS["measured"], lw=0.8,
+                       label=f"measured ({self.target_})")
+        fs.plot_gapped(ax1, t, F, color=fs.COLORS["final"], lw=0.8,
+                       label=f"fitted {self.model_.describe()}")
+        ax2.plot(fs.scaled("v", v), y, ".", color=fs.COLORS["measured"], ms=1.5)
+        ax2.plot(fs.scaled("v", v), F, ".", color=fs.COLORS["final"], ms=1.0)
+        ax1.set_xlabel("t (s)")
+        ax2.set_xlabel(fs.label("velocity v", "v"))
+        ax1.set_ylabel("force (N)")
+        fs.legend_top(fig, ax1, ncol=2)
+        ax2.set_title(f"RMS error {self.score(data):.3g} N")
         return fig
 
     def rows(self) -> list[list[str]]:

@@ -48,6 +48,7 @@ PROBE = r"""
     const r = img.getBoundingClientRect();
     return {alt: img.alt, complete: img.complete, naturalWidth: img.naturalWidth,
             naturalHeight: img.naturalHeight, width: r.width, height: r.height,
+            shownWidth: img.clientWidth,
             left: r.left, right: r.right};
   });
   const svgs = Array.from(document.querySelectorAll('figure svg')).map(s => {
@@ -66,8 +67,11 @@ PROBE = r"""
   }
   const scrollers = Array.from(document.querySelectorAll('.table-wrap')).map(w => {
     const r = w.getBoundingClientRect();
+    const cap = w.querySelector('caption');
     return {left: r.left, right: r.right, scrollable: w.scrollWidth > w.clientWidth,
-            overflowX: getComputedStyle(w).overflowX};
+            scrollWidth: w.scrollWidth, clientWidth: w.clientWidth,
+            overflowX: getComputedStyle(w).overflowX,
+            caption: ((cap && cap.textContent) || '').trim().slice(0, 60)};
   });
   const links = Array.from(document.querySelectorAll('a[href]')).map(a => a.getAttribute('href'));
   return {title: document.title, readyState: document.readyState, viewport: vw,
@@ -287,3 +291,89 @@ def study_summary(name: str) -> dict[str, Any]:
         raise AssertionError(f"study {name} wrote no summary.json (fcomp study all exited "
                              f"{code}):\n{tail}")
     return json.loads(path.read_text(encoding="utf-8"))
+
+
+# ------------------------------------------------------- figures and tables
+#: Smallest figure text a reader should get at 100 % zoom, CSS pt.
+MIN_FIGURE_PT = 9.0
+
+
+def png_text(png: bytes) -> dict[str, str]:
+    """The tEXt entries of a PNG, read here from the bytes (standard library only)."""
+    import struct
+
+    if png[:8] != b"\x89PNG\r\n\x1a\n":
+        return {}
+    out, pos = {}, 8
+    while pos + 8 <= len(png):
+        (length,) = struct.unpack(">I", png[pos:pos + 4])
+        kind, body = png[pos + 4:pos + 8], png[pos + 8:pos + 8 + length]
+        if kind == b"tEXt":
+            key, _, value = body.partition(b"\0")
+            out[key.decode("latin-1")] = value.decode("latin-1")
+        elif kind == b"IEND":
+            break
+        pos += 12 + length
+    return out
+
+
+def image_sources(page: Path) -> list[bytes | None]:
+    """The bytes of every ``<img>`` of ``page`` in document order (``document.images``
+    order): data URIs decoded, relative files read; ``None`` for what cannot be read."""
+    import base64
+    from html.parser import HTMLParser
+
+    srcs: list[str] = []
+
+    class Images(HTMLParser):
+        def handle_starttag(self, tag: str, attrs: list[tuple[str, str | None]]) -> None:
+            if tag == "img":
+                srcs.append(dict(attrs).get("src") or "")
+
+    Images().feed(page.read_text(encoding="utf-8"))
+    out: list[bytes | None] = []
+    for src in srcs:
+        if src.startswith("data:"):
+            head, _, data = src.partition(",")
+            out.append(base64.b64decode(data) if head.endswith(";base64") else None)
+        else:
+            path = page.parent / src
+            out.append(path.read_bytes() if src and path.is_file() else None)
+    return out
+
+
+def figure_text_problems(page: Path, report: dict[str, Any],
+                         min_pt: float = MIN_FIGURE_PT) -> list[str]:
+    """Figures of a rendered page whose smallest text is shown below ``min_pt`` CSS pt.
+
+    Each PNG records the smallest font it drew (``fcomp:min_font_pt``, pt) and its
+    ``fcomp:dpi``; shown at ``shownWidth`` CSS px (the content box, without the border) of
+    ``naturalWidth`` px, a text of ``s`` pt is ``s * dpi / 72 * shownWidth / naturalWidth``
+    CSS px, i.e. 0.75 times as many CSS pt.
+    A PNG without the record fails.
+    """
+    out = []
+    pngs = image_sources(page)
+    if len(pngs) != len(report["images"]):
+        return [f"{len(pngs)} <img> in the file, {len(report['images'])} in the page"]
+    for i, (img, png) in enumerate(zip(report["images"], pngs, strict=True)):
+        name = f"image {i + 1} {img['alt'][:50]!r}"
+        rec = png_text(png or b"")
+        if "fcomp:min_font_pt" not in rec or "fcomp:dpi" not in rec:
+            out.append(f"{name}: no font record (fcomp:min_font_pt, fcomp:dpi) in the PNG")
+            continue
+        if not img["naturalWidth"]:
+            continue  # reported as not loaded by page_problems
+        px = (float(rec["fcomp:min_font_pt"]) * float(rec["fcomp:dpi"]) / 72.0
+              * img["shownWidth"] / img["naturalWidth"])
+        if px * 0.75 < min_pt - 1e-6:
+            out.append(f"{name}: smallest text {px * 0.75:.1f} pt (drawn at "
+                       f"{rec['fcomp:min_font_pt']} pt, {rec['fcomp:dpi']} dpi, shown at "
+                       f"{img['shownWidth']} of {img['naturalWidth']} px)")
+    return out
+
+
+def table_problems(report: dict[str, Any]) -> list[str]:
+    """Tables wider than their column (the ``.table-wrap`` scrolls)."""
+    return [f"table {w['caption']!r} is {w['scrollWidth']} px wide in a {w['clientWidth']} px "
+            "column" for w in report["scrollers"] if w["scrollWidth"] > w["clientWidth"]]

@@ -72,10 +72,9 @@ from controllers.robustness import (
 )
 from controllers.tasks import TASKS
 from fcomp.errors import FcompError
-from fcomp.figstyle import legend_above
 from fcomp.models.base import FrictionModel
 from fcomp.progress import progress_bar, ticker
-from studies.base import Finding, Study, StudyConfig, StudyOutput
+from studies.base import Finding, Study, StudyConfig, StudyOutput, legend_above
 
 #: The built-in plants the study runs on (without a plant file).
 PLANTS = ("hydraulic", "pneumatic")

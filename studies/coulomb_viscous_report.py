@@ -14,9 +14,8 @@ from typing import Any
 
 import numpy as np
 
-from fcomp.figstyle import legend_above
 from fcomp.report import Comparison, Report
-from studies.base import StudyOutput
+from studies.base import StudyOutput, legend_above
 from studies.coulomb_viscous_analysis import (
     ALPHA,
     B_CONSISTENCY_TOL,
@@ -475,7 +474,7 @@ def _decorate(ax: Any, title: str, xlabel: str, *, legend: bool = False) -> None
     ax.set_xlabel(xlabel)
     ax.grid(alpha=0.3)
     if legend:
-        legend_above(ax)
+        legend_above(ax, ncol=1)
 
 
 def _fig_table8(out: StudyOutput, res: dict[str, Any]) -> None:
@@ -522,7 +521,7 @@ def _fig_position(out: StudyOutput, data: Seed001Data, res: dict[str, Any]) -> N
         _decorate(ax, f"{d} (C1), ANOVA p = {format_p(pos[d]['anova_p'])}",
                   "position step (1 = first break-away from rest at the stroke end)")
     axes[0].set_ylabel("break-away force Fc [N]")
-    legend_above(axes[0])
+    legend_above(axes[0], ncol=1)
     out.figure(fig, "fc-position",
                "Break-away force of C1 at the 12 positions along the stroke (Tables 2-3; each "
                "dot one experiment, step 1 in red). Green: the mean and its 95 % interval. "
@@ -591,7 +590,7 @@ def _fig_force_speed(out: StudyOutput, data: Seed001Data, res: dict[str, Any]) -
     ax.set_ylabel("friction force F [N] (opposing extension > 0)")
     ax.set_ylim(-40, 40)
     ax.grid(alpha=0.3)
-    legend_above(ax)
+    legend_above(ax, ncol=2)
     out.figure(fig, "force-speed",
                "C1 friction force against velocity. Green: the Coulomb-viscous model with the "
                "two-step means of Table 8 (fcomp model `coulomb-viscous`). Dots: the "

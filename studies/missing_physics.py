@@ -44,7 +44,7 @@ from fcomp.measurement import Measurement
 from fcomp.parallel import run_tasks
 from fcomp.progress import progress_bar, ticker
 from fcomp.report import Link
-from studies.base import Finding, Study, StudyConfig, StudyOutput
+from studies.base import Finding, Study, StudyConfig, StudyOutput, legend_above
 
 #: A final held-out RMS below this fraction of the estimated noise floor is flagged.
 BELOW_FLOOR = 0.9
@@ -305,7 +305,7 @@ def fig_stretch(diag: Any, chosen: Any) -> Any:
                      color=STRETCH_COLORS[k % len(STRETCH_COLORS)],
                      label=sr.label.split(":")[0])
     axes[0].set_ylabel("force (N)")
-    figstyle.legend_above(axes[0], ncol=len(vw.series) + 1)
+    legend_above(axes[0], ncol=len(vw.series) + 1)
     labels = {"v": figstyle.label("velocity", "v"), "x": figstyle.label("position", "x")}
     for ax, (key, values) in zip(axes[1:], sig.items(), strict=True):
         ax.plot(*with_gaps(t[a:b], values, starts=starts), color="#4a6fa5", lw=1.1)

@@ -36,9 +36,8 @@ def _against_paper(e: dict[str, Any], paper: dict[str, Any]) -> str:
     for q in FIG4_QUANTITIES:
         ratios = [r for key in MODELS if (r := mismatch(e[key][q], paper.get(q))) is not None]
         if ratios:
-            flags.append(f"{FIG4_QUANTITIES[q]} {min(ratios):.0f}-{max(ratios):.0f}x off: check"
-                         if len(ratios) > 1 else
-                         f"{FIG4_QUANTITIES[q]} {ratios[0]:.0f}x off: check")
+            lo, hi = f"{min(ratios):.0f}", f"{max(ratios):.0f}"
+            flags.append(f"{FIG4_QUANTITIES[q]} {lo if lo == hi else f'{lo}-{hi}'}x off: check")
     return "; ".join(flags) or f"within {PAPER_FACTOR:g}x"
 
 

@@ -4,8 +4,9 @@ The index names each study by the paper it reproduces and states what it
 found (:class:`studies.base.Finding`: "reproduced", "partly reproduced", "not
 reproduced", ..., in words and in colour, with the numbers to check), links
 its ``report.html`` and ``summary.json``, shows its key figure (linking to the
-report, at the column's width as in the report) and its run time (wall clock and CPU time of its
-processes); :func:`write_index` builds it from the runs' records. A study that raises is recorded as failed (with the error line) and
+report, at the column's width as in the report) and its run time (wall clock
+and CPU time of its processes); :func:`write_index` builds it from the runs'
+records. A study that raises is recorded as failed (with the error line) and
 the others still run; the run then ends with :class:`studies.base.StudyError`
 naming the failed studies.
 
@@ -113,7 +114,7 @@ def finding_words(run: Mapping[str, Any]) -> tuple[str, str]:
 
 def study_card(name: str, run: Mapping[str, Any]) -> str:
     """The index's card of one study: the finding in its colour and words, the paper, the
-    flags, the links and the key figure (a thumbnail linking to the report)."""
+    flags, the links and the key figure (linking to the report)."""
     words, level = finding_words(run)
     report = html.escape(run["report"])
     parts = [f'<div class="note {level}">']
@@ -202,7 +203,6 @@ class AllStudies(Study):
                       "or a number needs checking; red: the claim fails.")
         if failed:
             rep.note(f"Failed: {', '.join(failed)}.", kind="bad")
-        assert isinstance(rep, StudyReport)
         write_index(rep, runs)
         for r in runs.values():  # the key figures live in the page, not in summary.json
             r.pop("key_figure", None)

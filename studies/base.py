@@ -8,6 +8,14 @@ does the rest, always the same way::
     DIR/fig-*.png       every figure of the report, also as a file
     DIR/report.html     the self-contained report (fcomp.report)
 
+Every report opens with the study's conclusion (:meth:`Study.finding`, a
+:class:`Finding`: what was found, how sure, what next, the numbers to check),
+whatever order the study wrote its sections in; ``summary.json`` keeps it
+under ``meta.finding``, with the report's key figure (:meth:`Study.key_figure`)
+and the paper the study reproduces (:attr:`Study.paper`), for the index of
+``study all``. Figures are made in the shared style (:meth:`StudyOutput.subplots`,
+:mod:`fcomp.figstyle`).
+
 Each study module exposes ``STUDY`` (its instance) and ``main(config) ->
 results``; it is selected by name through ``studies.STUDIES``. The whole
 folder is built in a temporary sibling folder and swapped into place only

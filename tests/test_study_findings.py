@@ -285,3 +285,21 @@ def test_sweep_map_is_green_where_the_claim_holds(tmp_path: Path) -> None:
     assert tuple(rgba[2][:3]) == pytest.approx(green) and tuple(rgba[0][:3]) == pytest.approx(red)
     words = [t.get_text() for t in ax.texts]
     assert words == ["0.80\nfails", "1.30\nfails", "2.60\nholds"]
+
+
+def test_study_figures_are_column_wide_at_most_and_their_text_9pt_or_more(tmp_path: Path) -> None:
+    from fcomp import figstyle
+    from studies.base import StudyOutput, legend_above
+
+    out = StudyOutput(tmp_path, StudyReport("t"))
+    fig, axes = out.subplots(1, 2, figsize=(12.0, 4.0), sharey=True)
+    assert tuple(fig.get_size_inches()) == pytest.approx((figstyle.WIDTH, 4.0 * 9.5 / 12.0))
+    axes[0].plot([0, 1], [0, 1], label="a line")
+    axes[0].set_title("a title")
+    axes[0].text(0.5, 0.5, "small", fontsize=6)
+    legend = legend_above(axes[0], ncol=1)
+    assert axes[0].get_title() == "" and legend.get_title().get_text() == "a title"
+    path = out.figure(fig, "wide", "a wide figure")
+    rec = figstyle.read_record(path.read_bytes())
+    assert float(rec[figstyle.KEY_MIN_FONT]) >= figstyle.FONT_MIN
+    assert figstyle.check_readable(path.read_bytes()) is None

@@ -553,7 +553,7 @@ def figure_ratios(result: CompensateResult, error: str = "rms_error") -> Any:
     ax.set_ylabel(f"{error.replace('_', ' ')} / baseline's")
     ax.grid(alpha=0.3, axis="y")
     ax.legend(handles=handles, loc="lower left", bbox_to_anchor=(0.0, 1.01), ncol=3,
-              frameon=False, borderaxespad=0.0)
+              frameon=False, borderaxespad=0.0, fontsize=fs.FONT_MIN)
     return fig
 
 
@@ -591,6 +591,9 @@ def report(result: CompensateResult, command: str | None = None) -> Any:
                  config={"plant": result.plant["label"], "true friction": result.friction,
                          **{f"model {k}": v for k, v in result.models.items()},
                          "tasks": ", ".join(result.tasks), "fast": result.fast})
+    from controllers.conclusions import of_compensation
+
+    rep.conclusion(of_compensation(result.as_dict()))
     for w in result.warnings:
         rep.note(w["message"], kind="warn")
     rep.section("Ratios to the baseline")

@@ -194,12 +194,12 @@ def zillen() -> dict:
 #: named by their path in the repository).
 SESSION = [
     "fcomp import zillen fcomp/data/datasets/zillen/O-ring_3bar.csv -o oring3.csv",
-    "fcomp fit oring3.csv --model lugre",
-    "fcomp fit oring3.csv --model coulomb-viscous",
+    "fcomp fit oring3.csv --friction lugre",
+    "fcomp fit oring3.csv --friction coulomb-viscous",
     "fcomp import emps fcomp/data/datasets/emps/DATA_EMPS.mat -o emps.csv",
-    "fcomp fit emps.csv --model nmlgm",
-    "fcomp fit emps.csv --model nmlgm --offset",
-    "fcomp diagnose emps.csv --baseline coulomb-viscous --no-progress",
+    "fcomp fit emps.csv --friction nmlgm",
+    "fcomp fit emps.csv --friction nmlgm --offset",
+    "fcomp diagnose emps.csv --friction coulomb-viscous --no-progress",
 ]
 
 
@@ -303,7 +303,7 @@ inverse model `M*a + Fc*sign(v) + B*v + offset = F_ext`:
 
 ```bash
 fcomp import emps DATA_EMPS.mat -o emps.csv
-fcomp fit emps.csv --model coulomb-viscous --offset --json emps.json
+fcomp fit emps.csv --friction coulomb-viscous --offset --json emps.json
 ```
 
 (`v`, `a` from `qm` by the zero-phase 10 Hz Butterworth of
@@ -362,7 +362,7 @@ determine it, it ends at its bound 0 and `fit` warns `mass-implausible`, see
 
 ```bash
 fcomp import zillen O-ring_5bar.csv -o oring5.csv
-fcomp fit oring5.csv --model coulomb --offset --json oring5.json
+fcomp fit oring5.csv --friction coulomb --offset --json oring5.json
 ```
 
 {zillen_tables}

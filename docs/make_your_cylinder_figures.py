@@ -8,8 +8,8 @@ pneumatic one (``docs/examples/axis40.toml``), in a temporary folder:
 1. a friction-rig record of the rig scale of that kind (``fcomp.synthetic.generate``)
    with a hidden direction asymmetry the LuGre baseline lacks (retracting friction
    1.5 times the extending one);
-2. ``fcomp fit REC.csv --model lugre --save-model base.json`` and the *full*
-   ``fcomp diagnose REC.csv --baseline lugre --save-model diag.json`` (no candidate
+2. ``fcomp fit REC.csv --friction lugre --save-model base.json`` and the *full*
+   ``fcomp diagnose REC.csv --friction lugre --save-model diag.json`` (no candidate
    list, no step limit);
 3. the generator's truth as a model file (``fcomp.make_model`` + effect, ``model.save``);
 4. ``fcomp compensate`` on the axis (all five controllers, fast tasks, 4 draws);
@@ -77,9 +77,9 @@ def chain(name: str, plant: Path, scale: str, dF_neg: float) -> dict:
     rec = generate({"direction-asymmetry": {"dF_neg": dF_neg}}, scale=scale,
                    style="pressures", duration=DURATION, seed=SEED, name=f"{name}-rig")
     rec.measurement.write("rig.csv")
-    run(["fit", "rig.csv", "--model", "lugre", "--save-model", "base.json"])
+    run(["fit", "rig.csv", "--friction", "lugre", "--save-model", "base.json"])
     t0 = time.perf_counter()
-    run(["diagnose", "rig.csv", "--baseline", "lugre", "--save-model", "diag.json",
+    run(["diagnose", "rig.csv", "--friction", "lugre", "--save-model", "diag.json",
          "--json", "diagnosis.json", "--no-progress"])
     diagnose_time = time.perf_counter() - t0
     true_model(scale, dF_neg).save("true.json")

@@ -7,13 +7,16 @@
     rec = fcomp.simulate("motion", "lugre", "sine:amplitude=0.01,frequency=0.5",
                          duration=4.0, params="canudas1995")
     f = fcomp.fit(rec, "lugre")                     # FrictionFit: params_, stderr_, rms_
-    c = fcomp.compare(f.model_, rec)                 # Comparison: rms, regimes, plot()
+    c = fcomp.compare(rec, f.model_)                 # Comparison: rms, regimes, plot()
     d = fcomp.diagnose(rec, "coulomb-viscous")       # Diagnosis: added_, verdict_
 
 Each function is what its command does (``fcomp simulate``, ``fcomp fit``,
 ``fcomp compare``, ``fcomp diagnose``), minus the files: it takes and
 returns objects (:class:`~fcomp.measurement.Measurement`, models, results).
-A measurement argument may also be the path of a measurement file.
+A measurement argument may also be the path of a measurement file. The order
+is the same everywhere: the data first, then the friction model
+(``fit(data, friction)``, ``compare(data, friction)``, ``diagnose(data,
+friction)``), as the command line's ``--friction`` names it.
 """
 
 from __future__ import annotations
@@ -27,11 +30,12 @@ import numpy as np
 
 from fcomp.diagnosis import Comparison, Diagnosis
 from fcomp.diagnosis import compare as compare_force
+from fcomp.errors import deprecated
 from fcomp.identification import FrictionFit
 from fcomp.inputs import parse_input
 from fcomp.measurement import Measurement
-from fcomp.modelfile import is_model_file, load_model
-from fcomp.models import FrictionModel, make_model
+from fcomp.modelfile import is_model_file, load_model, read_model
+from fcomp.models import MODELS, FrictionModel, make_model
 from fcomp.paramsets import ParameterSet
 from fcomp.registry import PLANT_TOOLS, PLANTS
 
@@ -51,14 +55,55 @@ def _measurements(data: Data | Sequence[Data]) -> Measurement | list[Measurement
     return [d if isinstance(d, Measurement) else Measurement.read(d) for d in data]
 
 
-def fit(data: Data, model: str | FrictionModel, **options: Any) -> FrictionFit:
-    """Identify ``model`` from the measurement ``data`` (``fcomp fit``).
+Friction = str | Path | FrictionModel
+
+
+def _renamed(fn: str, old: str, new: str, value: Any, options: dict[str, Any]) -> Any:
+    """The value of argument ``new`` of ``fn``, taken from its deprecated keyword ``old``
+    in ``options`` (with a DeprecationWarning) when given so; both given: TypeError."""
+    if old not in options:
+        if value is None:
+            raise TypeError(f"{fn}() missing required argument: {new!r}")
+        return value
+    if value is not None:
+        raise TypeError(f"{fn}() got both {new}= and its deprecated spelling {old}=; give "
+                        f"{new}=")
+    deprecated(f"{fn}({old}=...)", f"{fn}({new}=...)", stacklevel=4)
+    return options.pop(old)
+
+
+def _is_friction(x: Any) -> bool:
+    """Whether ``x`` names a friction model: a model, a registered name, a model file."""
+    if isinstance(x, FrictionModel):
+        return True
+    if isinstance(x, str | Path):
+        return is_model_file(x) or (isinstance(x, str) and x in MODELS.names())
+    return False
+
+
+def _friction(friction: Friction, mass: float | None) -> tuple[FrictionModel, float | None]:
+    """The model (and the mass) of a friction argument: a model file is read as fitted to
+    its record (measurement terms kept; its mass unless ``mass`` is given)."""
+    if isinstance(friction, FrictionModel):
+        return friction, mass
+    if is_model_file(friction):
+        mf = read_model(friction)
+        return mf.measured_model(), mf.mass if mass is None else mass
+    return make_model(str(friction)), mass
+
+
+def fit(data: Data, friction: str | FrictionModel | None = None, **options: Any
+        ) -> FrictionFit:
+    """Identify the friction model ``friction`` from the measurement ``data`` (``fcomp
+    fit``).
 
     ``options`` are those of :class:`~fcomp.identification.FrictionFit`
     (``offset``, ``mass``, ``fixed``, ``free``, ``directional``, ...). Returns the
     fitted estimator: ``params_``, ``stderr_``, ``ci_``, ``rms_``, ``warnings_``,
-    ``model_`` (the model with the fitted values), ``to_dict()``.
+    ``model_`` (the model with the fitted values), ``to_dict()``. The keyword ``model=``
+    is the deprecated spelling of ``friction=``.
     """
+    friction = _renamed("fit", "model", "friction", friction, options)
     meas = _measurements(data)
     if isinstance(meas, list):
         if len(meas) != 1:
@@ -67,37 +112,80 @@ def fit(data: Data, model: str | FrictionModel, **options: Any) -> FrictionFit:
             raise ValueError("fit takes one measurement; fcomp.identification.fit_records fits "
                              "one parameter vector to several records")
         meas = meas[0]
-    return FrictionFit(model, **options).fit(meas)
+    return FrictionFit(friction, **options).fit(meas)
 
 
-def compare(model: str | FrictionModel, data: Data | Sequence[Data], *, fit: bool = False,
+def compare(data: Data | Sequence[Data] | Friction | None = None,
+            friction: Friction | Data | Sequence[Data] | None = None, *, fit: bool = False,
             mass: float | None = None, split: str = "auto", cutoff_hz: float | None = None,
-            plant: str | None = None, plant_params: str | ParameterSet | None = None
-            ) -> Comparison:
-    """One given model beside records (``fcomp compare``).
+            plant: str | None = None, plant_params: str | ParameterSet | None = None,
+            jobs: int | None = None, scheduler: str | None = None,
+            **deprecated_names: Any) -> Comparison:
+    """One given friction model beside records (``fcomp compare``).
 
-    The force domain is :func:`fcomp.diagnosis.compare` (``fit``, ``mass``,
-    ``split``, ``cutoff_hz`` as there); with ``plant`` the plant of that name is
-    also simulated with each record's command ``u`` and compared in ``x``,
-    ``p1``, ``p2`` (:func:`plants.comparison.compare_plant`, with the parameter
-    set ``plant_params``: a name, or a plant file's
-    :meth:`~plants.planfile.PlantFile.parameter_set`), the results in ``Comparison.plant``.
+    Parameters
+    ----------
+    data
+        One or several measurements (or their paths).
+    friction
+        The model: a :class:`~fcomp.models.FrictionModel` with its values, a model name
+        (its default values) or a model file (its values, offset and mass as fitted
+        to its record).
+    fit, mass, split, cutoff_hz
+        The force domain, as :func:`fcomp.diagnosis.compare` takes them.
+    plant, plant_params
+        Also simulate the plant of that name with each record's command ``u`` and
+        compare ``x``, ``p1``, ``p2`` (:func:`plants.comparison.compare_plant`, with
+        the parameter set ``plant_params``: a name, or a plant file's
+        :meth:`~plants.planfile.PlantFile.parameter_set`), the results in
+        ``Comparison.plant``.
+    jobs, scheduler
+        Where the plant-domain replays, one per record, run: ``jobs`` local processes
+        (default: the CPU count) or the Dask distributed scheduler at ``scheduler``
+        (:func:`fcomp.parallel.run_tasks`); the results are those of a serial run. The
+        force domain is one computation over all records together (a joint split and,
+        with ``fit``, one fit), so it runs in this process.
+
+    The order ``compare(model, data)`` and the keyword ``model=`` are deprecated
+    spellings (a :class:`DeprecationWarning`; they still work for one release).
     """
-    meas = _measurements(data)
+    friction = _renamed("compare", "model", "friction", friction, deprecated_names) \
+        if "model" in deprecated_names else friction
+    if deprecated_names:
+        raise TypeError(f"compare() got an unexpected keyword argument "
+                        f"{next(iter(deprecated_names))!r}")
+    if data is None or friction is None:
+        raise TypeError("compare() needs data and friction: compare(data, friction)")
+    if _is_friction(data) and not _is_friction(friction):
+        deprecated("compare(model, data)", "compare(data, friction)")
+        data, friction = friction, data
+    model, mass = _friction(friction, mass)  # type: ignore[arg-type]
+    meas = _measurements(data)  # type: ignore[arg-type]
     records = [meas] if isinstance(meas, Measurement) else meas
     comp = compare_force(model, meas, fit=fit, mass=mass, split=split, cutoff_hz=cutoff_hz)
     if plant is None:
         return comp
-    compare_plant = PLANT_TOOLS.get("compare_plant")
-    return replace(comp, plant=[compare_plant(m, plant, comp.result.model, params=plant_params)
-                                for m in records])
+    from fcomp.parallel import run_tasks
+
+    replays = [(m, plant, comp.result.model, plant_params) for m in records]
+    return replace(comp, plant=run_tasks(_replay, replays, workers=jobs, scheduler=scheduler))
 
 
-def diagnose(data: Data | Sequence[Data], baseline: str | FrictionModel,
+def _replay(job: tuple[Measurement, str, FrictionModel, str | ParameterSet | None]) -> Any:
+    """One record's plant-domain replay (:func:`compare`): a picklable job for a local
+    process or a Dask worker."""
+    meas, plant, model, params = job
+    return PLANT_TOOLS.get("compare_plant")(meas, plant, model, params=params)
+
+
+def diagnose(data: Data | Sequence[Data], friction: str | FrictionModel | None = None,
              **options: Any) -> Diagnosis:
-    """Find the missing physics (``fcomp diagnose``): :class:`~fcomp.diagnosis.Diagnosis`
-    with ``options`` (``effects``, ``add``, ``split``, ``max_steps``, ...), fitted."""
-    return Diagnosis(baseline, **options).fit(_measurements(data))
+    """Find the missing physics (``fcomp diagnose``) from the baseline friction model
+    ``friction``: :class:`~fcomp.diagnosis.Diagnosis` with ``options`` (``candidates``,
+    ``add``, ``split``, ``max_steps``, ...), fitted. The keyword ``baseline=`` is the
+    deprecated spelling of ``friction=``."""
+    friction = _renamed("diagnose", "baseline", "friction", friction, options)
+    return Diagnosis(friction, **options).fit(_measurements(data))
 
 
 def simulate(plant: str, friction: str | FrictionModel,

@@ -82,3 +82,19 @@ class FcompWarning(UserWarning):
         super().__init__(render_terms(message))
         self.code = code
         self.template = message
+
+
+def deprecation_message(old: str, new: str) -> str:
+    """The one line naming a deprecated spelling ``old`` and the one to use instead,
+    ``new``: the command line prints it after ``fcomp: warning:``, the Python API raises it
+    as a :class:`DeprecationWarning` (:func:`deprecated`)."""
+    return (f"{old} is deprecated, use {new} (the old spelling will be removed in the next "
+            "release)")
+
+
+def deprecated(old: str, new: str, stacklevel: int = 3) -> None:
+    """Warn (:class:`DeprecationWarning`, at the caller's caller by default) that ``old``
+    is deprecated in favour of ``new`` (:func:`deprecation_message`)."""
+    import warnings
+
+    warnings.warn(deprecation_message(old, new), DeprecationWarning, stacklevel=stacklevel)

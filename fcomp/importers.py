@@ -44,7 +44,7 @@ import numpy as np
 
 from fcomp.errors import FcompError, term
 from fcomp.matfile import from_variables, load_mat, parse_mapping
-from fcomp.measurement import Measurement, checked, read_sidecar
+from fcomp.measurement import Measurement, check_sidecar, checked, read_sidecar
 from fcomp.registry import Registry
 from fcomp.textdata import check_path, data_rows, parse_rows, read_text
 from fcomp.version import __version__
@@ -303,15 +303,22 @@ def import_mat(src: Path, *, mapping: str | Mapping[str, str],
     the output sidecar, with the ``[source]`` provenance added.
     """
     _require_file(src)
-    meta: dict[str, Any] = {}
-    if sidecar is not None:
-        sp = check_path(sidecar, "sidecar file")
-        meta = read_sidecar(sp)
+    meta = _sidecar(sidecar)
     cmap = parse_mapping(mapping) if isinstance(mapping, str) else dict(mapping)
     meta.setdefault("name", src.stem)
     meta["source"] = provenance(src, "mat", mapping=cmap,
                                 **({"sidecar": Path(sidecar).name} if sidecar else {}))
     return from_variables(load_mat(src), cmap, meta, source=src)
+
+
+def _sidecar(sidecar: str | Path | None) -> dict[str, Any]:
+    """The content of an importer's ``sidecar`` file (``{}`` without one), checked: a bad
+    value is named with that file, not with the data file."""
+    if sidecar is None:
+        return {}
+    meta = read_sidecar(check_path(sidecar, "sidecar file"))
+    check_sidecar(meta, str(sidecar))
+    return meta
 
 
 def _csv_table(src: Path, delimiter: str | None, decimal: str) -> dict[str, np.ndarray]:
@@ -374,7 +381,7 @@ def import_csv(src: Path, *, mapping: str | Mapping[str, str],
         if d != "*" and d not in cols:
             raise FcompError(f"{src}: drop: no column {d!r} in the file (columns: "
                              f"{', '.join(cols)})")
-    meta: dict[str, Any] = read_sidecar(check_path(sidecar, "sidecar file")) if sidecar else {}
+    meta = _sidecar(sidecar)
     meta.setdefault("name", src.stem)
     meta["source"] = provenance(src, "csv", mapping=cmap, units=umap,
                                 **({"sidecar": Path(sidecar).name} if sidecar else {}))

@@ -17,6 +17,7 @@ MATLAB v4, v6 and v7 files are read with :func:`scipy.io.loadmat`; v7.3 files
 
 from __future__ import annotations
 
+import math
 import re
 from collections.abc import Mapping
 from pathlib import Path
@@ -119,9 +120,14 @@ def _lookup(variables: Mapping[str, Any], name: str, path: Path, quoted: bool = 
 def _factor(variables: Mapping[str, Any], token: str, path: Path, column: str,
             noun: str = "variable") -> np.ndarray:
     try:
-        return np.asarray(float(token))
+        number = float(token)
     except ValueError:
         pass
+    else:
+        if not math.isfinite(number):
+            raise FcompError(f"{path}: column {column!r}: the number {token} in the mapping is "
+                             "not a finite number (beyond about 1.8e308, or nan/inf)")
+        return np.asarray(number)
     quoted = len(token) >= 2 and token[0] == token[-1] and token[0] in "'\""
     if quoted:
         token = token[1:-1]

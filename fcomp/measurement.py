@@ -137,6 +137,32 @@ class Measurement:
         return (f"<Measurement {self.label!r}: {len(self)} samples{span}, columns "
                 f"{', '.join(self.columns)}>")
 
+    def _repr_html_(self) -> str:
+        """Jupyter's view: every column with its unit and range, the sidecar's rig, and the
+        position and force against time."""
+        from matplotlib.figure import Figure
+
+        from fcomp.report import notebook_html
+
+        units = self.units()
+        rows: list[list[str]] = [["column", "unit", "min", "max"]]
+        rows += [[k, units.get(k, ""), f"{float(np.min(v)):.4g}", f"{float(np.max(v)):.4g}"]
+                 for k, v in self.columns.items() if v.size]
+        rig = self.meta.get("rig") if isinstance(self.meta.get("rig"), Mapping) else {}
+        rows += [[f"rig.{k}", "", str(v), ""] for k, v in (rig or {}).items()]
+        shown = [(k, f, u) for k, f, u in (("x", 1e3, "mm"), ("F", 1.0, "N"),
+                                           ("F_ext", 1.0, "N")) if k in self.columns]
+        fig = None
+        if shown and len(self) > 1:
+            fig = Figure(figsize=(7.0, 1.8 * len(shown)))
+            for i, (k, f, u) in enumerate(shown):
+                ax = fig.add_subplot(len(shown), 1, i + 1)
+                ax.plot(self["t"], self[k] * f, lw=0.8)
+                ax.set_ylabel(f"{k} ({u})")
+            fig.axes[-1].set_xlabel("t (s)")
+            fig.tight_layout()
+        return notebook_html(f"Measurement {self.label}: {len(self)} samples", rows, fig)
+
     # ----------------------------------------------------------------- pandas
     def units(self) -> dict[str, str]:
         """The unit of every column: SI for the columns of the format (``u``: the sidecar's
@@ -307,51 +333,9 @@ class Measurement:
         check_values(self.columns, self.label)
         if n < 2:
             raise FcompError(f"{self.label}: needs at least two samples")
-        kind = self.meta.get("kind")
-        if kind is not None and kind not in KINDS:
-            raise FcompError(f"{self.label}: sidecar kind = {_plain(kind)} is not one of "
-                             f"{', '.join(KINDS)}")
-        p_atm = self.meta.get("p_atm", 101325.0)
-        if (not isinstance(p_atm, int | float) or isinstance(p_atm, bool)
-                or not P_ATM_RANGE[0] <= p_atm <= P_ATM_RANGE[1]):
-            raise FcompError(f"{self.label}: sidecar p_atm = {_plain(p_atm)} is not an "
-                             f"atmospheric pressure in Pa ({P_ATM_RANGE[0]:g} to "
-                             f"{P_ATM_RANGE[1]:g}; 1 bar = 1e5 Pa)")
-        pr = self.meta.get("pressure", "gauge")
-        if pr not in ("gauge", "absolute"):
-            raise FcompError(f"{self.label}: sidecar 'pressure' must be 'gauge' or 'absolute', "
-                             f"got {_plain(pr)}")
+        check_sidecar(self.meta, self.label)
         rig = self.meta.get("rig", {})
-        if not isinstance(rig, Mapping):
-            raise FcompError(f"{self.label}: sidecar [rig] must be a table")
-        for key in ("bore", "rod", "stroke", "mass"):
-            if key in rig:
-                val = rig[key]
-                if (not isinstance(val, int | float) or isinstance(val, bool) or not val >= 0
-                        or not math.isfinite(val)):
-                    raise FcompError(
-                        f"{self.label}: sidecar rig.{key} must be a non-negative number in SI "
-                        f"units, got {_plain(val)}"
-                    )
-        if "mass" in rig and rig["mass"] > MAX_MASS:
-            raise FcompError(f"{self.label}: sidecar rig.mass = {_plain(rig['mass'])} kg is "
-                             f"implausible (more than {MAX_MASS:g} kg); the mass is in kg (SI)")
-        for key, limit in MAX_LENGTH.items():
-            if key in rig and rig[key] > limit:
-                raise FcompError(
-                    f"{self.label}: sidecar rig.{key} = {_plain(rig[key])} m is implausible; "
-                    "lengths are in metres (SI), not millimetres"
-                )
-        if "bore" in rig and "rod" in rig and rig["rod"] >= rig["bore"]:
-            raise FcompError(f"{self.label}: sidecar rig.rod ({_plain(rig['rod'])}) must be "
-                             f"smaller than rig.bore ({_plain(rig['bore'])})")
-        orient = rig.get("orientation", "horizontal")
-        if orient not in ORIENTATIONS:
-            raise FcompError(
-                f"{self.label}: sidecar rig.orientation must be one of {', '.join(ORIENTATIONS)}, "
-                f"got {_plain(orient)}"
-            )
-        self._check_units(pr, rig)
+        self._check_units(self.meta.get("pressure", "gauge"), rig)
 
     def _check_units(self, pressure: str, rig: Mapping[str, Any]) -> None:
         """Coarse SI plausibility checks of the columns (see the module docstring)."""
@@ -468,6 +452,66 @@ def measurement_paths(path: str | Path) -> tuple[Path, Path]:
     return p, p.with_suffix(".toml")
 
 
+
+def check_sidecar(meta: Mapping[str, Any], label: str) -> None:
+    """Check a sidecar's entries against the data-format rules (``label`` names the file in
+    the message: the measurement, or the sidecar file an importer was given).
+
+    Raises
+    ------
+    FcompError
+        One line naming the key and what is wrong with its value.
+    """
+    name = meta.get("name")
+    if name is not None and not isinstance(name, str):
+        raise FcompError(f"{label}: sidecar name = {_plain(name)} must be text (quote it: "
+                         f"name = \"{_plain(name)}\")")
+    kind = meta.get("kind")
+    if kind is not None and kind not in KINDS:
+        raise FcompError(f"{label}: sidecar kind = {_plain(kind)} is not one of "
+                         f"{', '.join(KINDS)}")
+    p_atm = meta.get("p_atm", 101325.0)
+    if (not isinstance(p_atm, int | float) or isinstance(p_atm, bool)
+            or not P_ATM_RANGE[0] <= p_atm <= P_ATM_RANGE[1]):
+        raise FcompError(f"{label}: sidecar p_atm = {_plain(p_atm)} is not an "
+                         f"atmospheric pressure in Pa ({P_ATM_RANGE[0]:g} to "
+                         f"{P_ATM_RANGE[1]:g}; 1 bar = 1e5 Pa)")
+    pr = meta.get("pressure", "gauge")
+    if pr not in ("gauge", "absolute"):
+        raise FcompError(f"{label}: sidecar 'pressure' must be 'gauge' or 'absolute', "
+                         f"got {_plain(pr)}")
+    rig = meta.get("rig", {})
+    if not isinstance(rig, Mapping):
+        raise FcompError(f"{label}: sidecar [rig] must be a table")
+    for key in ("bore", "rod", "stroke", "mass"):
+        if key in rig:
+            val = rig[key]
+            if (not isinstance(val, int | float) or isinstance(val, bool) or not val >= 0
+                    or not math.isfinite(val)):
+                raise FcompError(
+                    f"{label}: sidecar rig.{key} must be a non-negative number in SI "
+                    f"units, got {_plain(val)}"
+                )
+    if "mass" in rig and rig["mass"] > MAX_MASS:
+        raise FcompError(f"{label}: sidecar rig.mass = {_plain(rig['mass'])} kg is "
+                         f"implausible (more than {MAX_MASS:g} kg); the mass is in kg (SI)")
+    for key, limit in MAX_LENGTH.items():
+        if key in rig and rig[key] > limit:
+            raise FcompError(
+                f"{label}: sidecar rig.{key} = {_plain(rig[key])} m is implausible; "
+                "lengths are in metres (SI), not millimetres"
+            )
+    if "bore" in rig and "rod" in rig and rig["rod"] >= rig["bore"]:
+        raise FcompError(f"{label}: sidecar rig.rod ({_plain(rig['rod'])} m) must be "
+                         f"smaller than rig.bore ({_plain(rig['bore'])} m)")
+    orient = rig.get("orientation", "horizontal")
+    if orient not in ORIENTATIONS:
+        raise FcompError(
+            f"{label}: sidecar rig.orientation must be one of {', '.join(ORIENTATIONS)}, "
+            f"got {_plain(orient)}"
+        )
+
+
 def read_sidecar(toml: Path) -> dict[str, Any]:
     """A sidecar (or any TOML file the user gives) as a dict; one line on any problem."""
     text = read_text(toml, str(toml), what="TOML")
@@ -479,11 +523,22 @@ def read_sidecar(toml: Path) -> dict[str, Any]:
 
 def sidecar_warnings(meas: Measurement) -> list[tuple[str, str]]:
     """``(key, one line)`` per suspicious sidecar entry: ``[rig]`` keys the format does not
-    know (a typo such as ``mas`` leaves the mass unknown)."""
+    know (a typo such as ``mas`` leaves the mass unknown), and top-level keys that belong
+    elsewhere: a ``[rig]`` key written above the ``[rig]`` header (``mass = 2`` at the
+    top is not the moving mass) or a column's name (``experiment`` is a column)."""
     rig = meas.meta.get("rig", {})
     unknown = [k for k in rig if k not in RIG_KEYS] if isinstance(rig, Mapping) else []
-    return [(f"rig.{k}", f"{meas.label}: sidecar key rig.{k} is not one the format knows "
-             f"({', '.join(RIG_KEYS)}); it is kept but not used") for k in unknown]
+    out = [(f"rig.{k}", f"{meas.label}: sidecar key rig.{k} is not one the format knows "
+            f"({', '.join(RIG_KEYS)}); it is kept but not used") for k in unknown]
+    for k in meas.meta:
+        if k in RIG_KEYS:
+            out.append((k, f"{meas.label}: sidecar key {k} is at the top level, where the "
+                        f"format does not read it: put it under [rig] (rig.{k}); it is kept "
+                        "but not used"))
+        elif k in COLUMN_UNITS or k == "experiment":
+            out.append((k, f"{meas.label}: sidecar key {k} names a column: {k} belongs in the "
+                        "CSV, one value per row (data-format.md); it is kept but not used"))
+    return out
 
 
 def check_values(columns: Mapping[str, np.ndarray], label: str,

@@ -4,7 +4,7 @@
 M.json`` write one (and put the same document into their JSON as
 ``"model_file"``); ``model.save(path)`` writes one from Python. Every option
 that names a friction model also takes such a file (``simulate --friction
-M.json``, ``compare --model M.json``, the study and sweep friction options),
+M.json``, ``compare --friction M.json``, the study and sweep friction options),
 and so does :func:`load_model`::
 
     import fcomp

@@ -202,6 +202,7 @@ def write_files(files: Mapping[Path, str | bytes]) -> None:
     created: list[Path] = []
     tmps: dict[Path, Path] = {}
     done = False
+    path = next(iter(files), Path())
     try:
         for path in files:
             created += _make_parents(path.parent)
@@ -219,9 +220,9 @@ def write_files(files: Mapping[Path, str | bytes]) -> None:
             for path, tmp in tmps.items():
                 os.replace(tmp, path)
             done = True
-    except OSError as exc:
-        where = exc.filename or next(iter(files), "")
-        raise FcompError(f"{where}: cannot write ({exc.strerror or exc})") from None
+    except OSError as exc:  # named by the file asked for, never by its temporary name
+        raise FcompError(f"{path}: cannot write ({exc.strerror or exc}); nothing was "
+                         "written") from None
     finally:
         if not done:
             for tmp in tmps.values():

@@ -73,7 +73,8 @@ th, td { border-bottom: 1px solid var(--line); padding: .3rem .65rem; text-align
   vertical-align: top; }
 th { background: var(--soft); font-weight: 600; }
 td.num { text-align: right; font-variant-numeric: tabular-nums; white-space: nowrap; }
-@media (min-width: 48rem) { td { overflow-wrap: anywhere; } td.num { overflow-wrap: normal; } }
+@media (min-width: 48rem) { th, td { padding: .3rem .45rem; }
+  td { overflow-wrap: anywhere; } td.num { overflow-wrap: normal; } }
 tr.match td.status { color: var(--ok); }
 tr.differs td.status { color: var(--bad); }
 tr.na td.status { color: var(--muted); }
@@ -314,6 +315,24 @@ class Report:
         if kind not in _NOTE_KINDS:
             raise FcompError(f"note kind must be one of {', '.join(_NOTE_KINDS)}, got {kind!r}")
         self._blocks.append(f'<div class="note {kind}"><p>{_inline(text)}</p></div>')
+        return self
+
+    def conclusion(self, found: Any) -> Report:
+        """The report's opening: what was found, how sure, what next.
+
+        ``found`` is a :class:`fcomp.conclusions.Conclusion` (or any object with its
+        ``finding``, ``confidence``, ``reasons`` and ``next_steps``); shown as a note whose
+        colour is its confidence (high: ok, medium: warn, low: bad), every reason listed.
+        """
+        kind = {"high": "ok", "medium": "warn"}.get(found.confidence, "bad")
+        reasons = "".join(f"<li>{_inline(r)}</li>" for r in found.reasons)
+        steps = "".join(f"<li>{_inline(s)}</li>" for s in found.next_steps)
+        self._blocks.append(
+            f'<div class="note {kind} conclusion"><p><strong>Conclusion:</strong> '
+            f"{_inline(found.finding)}</p><p><strong>How sure:</strong> "
+            f"{_inline(found.confidence)}" + (", because" if reasons else "") + "</p>"
+            + (f"<ul>{reasons}</ul>" if reasons else "")
+            + (f"<p><strong>Next:</strong></p><ul>{steps}</ul>" if steps else "") + "</div>")
         return self
 
     def code(self, text: str) -> Report:

@@ -62,6 +62,12 @@ class FrictionRun:
     state_names: tuple[str, ...]
     F: np.ndarray
 
+    def __repr__(self) -> str:  # a summary, never the arrays
+        span = f", t {self.t[0]:.4g}..{self.t[-1]:.4g} s" if self.t.size else ""
+        peak = f", |F| up to {np.max(np.abs(self.F)):.4g} N" if self.F.size else ""
+        states = ", ".join(self.state_names) or "none"
+        return f"<FrictionRun {self.t.size} samples{span}, states {states}{peak}>"
+
 
 def _as_array(name: str, value: Any, n: int) -> np.ndarray:
     arr = np.broadcast_to(np.asarray(value, dtype=float), (n,)).copy()

@@ -11,13 +11,16 @@ remembered, so that an error raised later from inside it (an effect's
 
 from __future__ import annotations
 
+import contextlib
 import importlib.util
 import os
 import re
 import sys
 import traceback
+from collections.abc import Iterator
 from pathlib import Path
 from types import ModuleType, TracebackType
+from typing import NoReturn
 
 from fcomp.errors import FcompError
 
@@ -44,7 +47,8 @@ def run_module(path: Path, module_name: str, what: str) -> ModuleType:
     try:
         SOURCES[module_name] = (str(path), Path(path).read_text(encoding="utf-8",
                                                                  errors="replace"))
-        spec.loader.exec_module(module)
+        with _no_hard_exit():
+            spec.loader.exec_module(module)
     except BaseException as exc:  # SystemExit too: a plugin must not end the command
         # not loaded, whatever stopped it: never executed again in a later worker process
         sys.modules.pop(spec.name, None)
@@ -82,10 +86,32 @@ def load_sources(items: tuple[tuple[str, str, str], ...]) -> None:
         module = types.ModuleType(name)
         module.__file__ = path
         sys.modules[name] = module
-        exec(compile(source, os.path.realpath(path), "exec"), module.__dict__)
+        with _no_hard_exit():
+            exec(compile(source, os.path.realpath(path), "exec"), module.__dict__)
+
+
+class _HardExit(SystemExit):
+    """``os._exit(code)`` called by a user file while it was executed."""
+
+
+@contextlib.contextmanager
+def _no_hard_exit() -> Iterator[None]:
+    """While a user file runs, ``os._exit`` raises :class:`_HardExit` instead of ending the
+    process on the spot (with nothing written and nothing said)."""
+    def refuse(status: int) -> NoReturn:
+        raise _HardExit(status)
+
+    real = os._exit
+    os._exit = refuse
+    try:
+        yield
+    finally:
+        os._exit = real
 
 
 def _describe(exc: BaseException) -> str:
+    if isinstance(exc, _HardExit):
+        return f"it called os._exit({exc.code!r}); a plugin must not end the command"
     if isinstance(exc, SystemExit):
         return f"it called sys.exit({exc.code!r}); a plugin must not end the command"
     text = str(exc).strip().splitlines()[0] if str(exc).strip() else ""

@@ -34,8 +34,7 @@ def run(args: argparse.Namespace) -> int:
     if args.plant_params is not None and not args.plant_params.lower().endswith(".toml"):
         raise FcompError(f"--plant-params {args.plant_params}: a plant file ends in .toml")
     scheduler = check_scheduler(args.scheduler)
-    if args.workers is not None and args.workers < 1:
-        raise FcompError(f"--workers must be a positive integer, got {args.workers}")
+    common.check_jobs(args.jobs)
     if args.out is not None and not args.out.strip():
         raise FcompError("--out: no folder name given (an empty argument)")
     out = Path(args.out) if args.out else Path(f"study-{args.name}")
@@ -46,7 +45,7 @@ def run(args: argparse.Namespace) -> int:
         if given[key] is not None:
             words += [option, given[key]]
     config = StudyConfig(out=out, fast=args.fast, command=shlex.join(words), out_label="--out",
-                         scheduler=scheduler, workers=args.workers,
+                         scheduler=scheduler, workers=args.jobs,
                          progress=not args.no_progress, plant_file=args.plant_params,
                          friction=args.friction, effects=args.effects)
     for warning in study.check(config):  # bad inputs: one line, before anything is written

@@ -38,7 +38,7 @@ Outputs:
   installed (``pip install 'fcomp[bench]'``; ``benchmarks/bench_mpc.py``).
 
 The runs go to a local process pool (2 workers by default; ``fcomp study
---workers N``, or ``FCOMP_WORKERS``) or to a Dask cluster (``fcomp study
+--jobs N``, or ``FCOMP_WORKERS``) or to a Dask cluster (``fcomp study
 --scheduler ADDRESS``, or ``FCOMP_DASK_SCHEDULER``), with a progress bar on a
 terminal; the longest runs are handed out first, so that no worker is left
 alone with a long run at the end. The Monte Carlo sweep draws in batches

@@ -28,7 +28,7 @@ def pressure_csv(tmp_path_factory) -> Path:
 
 def test_contract_json_and_report(pressure_csv: Path, tmp_path: Path, capsys) -> None:
     out, rep = tmp_path / "d.json", tmp_path / "rep"
-    code = main(["diagnose", str(pressure_csv), "--baseline", "lugre", "--json", str(out),
+    code = main(["diagnose", str(pressure_csv), "--friction", "lugre", "--json", str(out),
                  "--report", str(rep), "--no-progress"])
     assert code == 0
     doc = json.loads(out.read_text())
@@ -50,12 +50,22 @@ def test_contract_json_and_report(pressure_csv: Path, tmp_path: Path, capsys) ->
     assert html.count('<img src="data:image/png;base64,') >= 7
     assert not re.search(r'(src|href)="https?://', html)  # self-contained
     assert "Chamber pressure energises lip seals" in html  # the physics of the added effect
-    printed = capsys.readouterr().out
+    opening = html.index('conclusion"><p><strong>Conclusion:</strong> lugre misses '
+                         "pressure-dependence")
+    assert opening < html.index("<h2")  # the report opens with it
+    captured = capsys.readouterr()
+    printed = captured.out
     assert "verdict: explained" in printed and "pressure-dependence" in printed
+    # the conclusion first; warnings only on stderr, in the one form
+    assert printed.startswith("Conclusion: lugre misses pressure-dependence; with them the "
+                              "held-out RMS falls")
+    assert printed.splitlines()[1].startswith("How sure: ")
+    assert "warning" not in printed
+    assert all(ln.startswith("fcomp: warning: ") for ln in captured.err.splitlines())
 
 
 def test_json_to_stdout(pressure_csv: Path, capsys) -> None:
-    code = main(["diagnose", str(pressure_csv), "--baseline", "lugre", "--json", "-",
+    code = main(["diagnose", str(pressure_csv), "--friction", "lugre", "--json", "-",
                  "--candidates", "pressure-dependence,force-offset", "--no-progress"])
     assert code == 0
     doc = json.loads(capsys.readouterr().out)
@@ -70,7 +80,7 @@ def test_several_files_are_several_experiments(tmp_path: Path, capsys) -> None:
         p = tmp_path / f"run{i}.csv"
         Measurement({k: v for k, v in m.columns.items() if k != "experiment"}, m.meta).write(p)
         paths.append(str(p))
-    code = main(["diagnose", *paths, "--baseline", "lugre", "--json", "-", "--no-progress",
+    code = main(["diagnose", *paths, "--friction", "lugre", "--json", "-", "--no-progress",
                  "--candidates", "force-offset,direction-asymmetry"])
     assert code == 0
     doc = json.loads(capsys.readouterr().out)
@@ -103,8 +113,8 @@ def test_add_a_users_own_effect(tmp_path: Path, capsys) -> None:
     mod.write_text(USER_EFFECT)
     data = tmp_path / "off.csv"
     generate(["force-offset"], duration=12.0, seed=1).measurement.write(data)
-    code = main(["diagnose", str(data), "--baseline", "lugre", "--effects", str(mod),
-                 "--add", "load-cell-bias", "--no-search", "--json", "-", "--no-progress"])
+    code = main(["diagnose", str(data), "--friction", "lugre", "--effects", str(mod),
+                 "--add-effect", "load-cell-bias", "--no-search", "--json", "-", "--no-progress"])
     assert code == 0
     doc = json.loads(capsys.readouterr().out)
     assert doc["added"] == ["load-cell-bias"]
@@ -127,19 +137,19 @@ def _one_line_error(capsys, argv: list[str], match: str) -> None:
 
 def test_bad_input_one_line_exit_2(pressure_csv: Path, tmp_path: Path, capsys) -> None:
     base = ["diagnose", str(pressure_csv), "--no-progress"]
-    _one_line_error(capsys, ["diagnose", str(tmp_path / "nope.csv"), "--baseline", "lugre"],
+    _one_line_error(capsys, ["diagnose", str(tmp_path / "nope.csv"), "--friction", "lugre"],
                     "not found")
-    _one_line_error(capsys, [*base, "--baseline", "lugrex"], "unknown friction model 'lugrex'")
-    _one_line_error(capsys, [*base, "--baseline", "lugre", "--add", "magic"],
+    _one_line_error(capsys, [*base, "--friction", "lugrex"], "unknown friction model 'lugrex'")
+    _one_line_error(capsys, [*base, "--friction", "lugre", "--add-effect", "magic"],
                     "unknown effect 'magic'")
-    _one_line_error(capsys, [*base, "--baseline", "lugre", "--json",
-                             str(tmp_path / "missing" / "o.json")], "does not exist")
     (tmp_path / "afile").write_text("x")
-    _one_line_error(capsys, [*base, "--baseline", "lugre", "--report", str(tmp_path / "afile")],
+    _one_line_error(capsys, [*base, "--friction", "lugre", "--json",
+                             str(tmp_path / "afile" / "o.json")], "is a file")
+    _one_line_error(capsys, [*base, "--friction", "lugre", "--report", str(tmp_path / "afile")],
                     "not a directory")
-    _one_line_error(capsys, [*base, "--baseline", "lugre", "--effects",
+    _one_line_error(capsys, [*base, "--friction", "lugre", "--effects",
                              str(tmp_path / "none.py")], "not found")
-    _one_line_error(capsys, ["diagnose", "--baseline", "lugre"], "required")
+    _one_line_error(capsys, ["diagnose", "--friction", "lugre"], "required")
 
 
 def test_unsupported_baselines_say_why(tmp_path: Path, capsys) -> None:
@@ -148,14 +158,14 @@ def test_unsupported_baselines_say_why(tmp_path: Path, capsys) -> None:
     Measurement({"t": t, "x": np.full(t.size, 0.1), "F": np.random.default_rng(0).normal(
         5.0, 0.3, t.size)}, {"name": "still"}).write(still)
     out = tmp_path / "o.json"
-    _one_line_error(capsys, ["diagnose", str(still), "--baseline", "lugre", "--json", str(out),
+    _one_line_error(capsys, ["diagnose", str(still), "--friction", "lugre", "--json", str(out),
                              "--no-progress"], "hardly moves")
     assert not out.exists()  # no half-written output
     v = np.array([0.01, 0.05, 0.1, -0.01, -0.05, -0.1] * 4)
     table = tmp_path / "table.csv"
     Measurement({"t": np.arange(v.size, dtype=float), "v": v, "F": 20 * np.sign(v) + 50 * v},
                 {"name": "table", "diagnosis": {"samples": "steady-state"}}).write(table)
-    _one_line_error(capsys, ["diagnose", str(table), "--baseline", "lugre", "--no-progress"],
+    _one_line_error(capsys, ["diagnose", str(table), "--friction", "lugre", "--no-progress"],
                     "dynamic model .* steady-state points")
 
 
@@ -163,4 +173,4 @@ def test_console_script_help() -> None:
     proc = subprocess.run([sys.executable, "-m", "fcomp.cli.main", "diagnose", "--help"],
                           capture_output=True, text=True, check=False)
     assert proc.returncode == 0
-    assert "--baseline" in proc.stdout and "--report" in proc.stdout
+    assert "--friction" in proc.stdout and "--report" in proc.stdout

@@ -1,4 +1,4 @@
-"""``fcomp fit DATA.csv --model NAME [--offset] [--json OUT]``: the public contract.
+"""``fcomp fit DATA.csv --friction NAME [--offset] [--json OUT]``: the public contract.
 
 JSON ``{"model", "params", "stderr", "rms"}`` (plus more keys); the mass is estimated
 when the sidecar has no ``rig.mass`` and the data hold ``F_ext``; ``--offset`` adds
@@ -67,7 +67,7 @@ def test_help_exits_zero(capsys: pytest.CaptureFixture[str]) -> None:
 
 def test_json_contract(lugre_csv: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     out = tmp_path / "fit.json"
-    code, text, err = run(["fit", str(lugre_csv), "--model", "lugre", "--json", str(out)],
+    code, text, err = run(["fit", str(lugre_csv), "--friction", "lugre", "--json", str(out)],
                           capsys)
     assert code == 0, err
     doc = json.loads(out.read_text())
@@ -86,7 +86,7 @@ def test_json_contract(lugre_csv: Path, tmp_path: Path, capsys: pytest.CaptureFi
 
 
 def test_json_to_stdout(lugre_csv: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    code, text, _ = run(["fit", str(lugre_csv), "--model", "coulomb-viscous", "--json", "-"],
+    code, text, _ = run(["fit", str(lugre_csv), "--friction", "coulomb-viscous", "--json", "-"],
                         capsys)
     assert code == 0
     doc = json.loads(text)  # nothing but the JSON on standard output
@@ -96,7 +96,7 @@ def test_json_to_stdout(lugre_csv: Path, capsys: pytest.CaptureFixture[str]) -> 
 def test_mass_estimated_and_offset(rig_csv: Path, tmp_path: Path,
                                    capsys: pytest.CaptureFixture[str]) -> None:
     out = tmp_path / "rig.json"
-    code, _, err = run(["fit", str(rig_csv), "--model", "coulomb-viscous", "--offset",
+    code, _, err = run(["fit", str(rig_csv), "--friction", "coulomb-viscous", "--offset",
                         "--json", str(out)], capsys)
     assert code == 0, err
     doc = json.loads(out.read_text())
@@ -104,19 +104,19 @@ def test_mass_estimated_and_offset(rig_csv: Path, tmp_path: Path,
     for name, value in {"mass": 2.5, "Fc": 3.0, "B": 40.0, "offset": 0.4}.items():
         assert abs(p[name] - value) < 3 * se[name], name
     # a known mass (option) is not estimated
-    code, text, _ = run(["fit", str(rig_csv), "--model", "coulomb-viscous", "--offset",
+    code, text, _ = run(["fit", str(rig_csv), "--friction", "coulomb-viscous", "--offset",
                          "--mass", "2.5", "--json", "-"], capsys)
     assert code == 0 and "mass" not in json.loads(text)["params"]
 
 
 @pytest.mark.parametrize("args, message", [
-    (["fit", "missing.csv", "--model", "lugre"], "file not found"),
-    (["fit", "DATA", "--model", "no-such-model"], "no-such-model"),
-    (["fit", "DATA", "--model", "lugre", "--fix", "sigma0"], "expected NAME=VALUE"),
-    (["fit", "DATA", "--model", "lugre", "--free", "Fc,bogus"], "bogus"),
-    (["fit", "DATA", "--model", "lugre", "--json", "/no/such/dir/out.json"], "does not exist"),
-    (["fit", "DATA", "--model", "lugre", "--max-nfev", "0"], "--max-nfev"),
-    (["fit", "DATA", "--model", "lugre", "--method", "samples"], "is dynamic"),
+    (["fit", "missing.csv", "--friction", "lugre"], "file not found"),
+    (["fit", "DATA", "--friction", "no-such-model"], "no-such-model"),
+    (["fit", "DATA", "--friction", "lugre", "--fix", "sigma0"], "expected NAME=VALUE"),
+    (["fit", "DATA", "--friction", "lugre", "--free", "Fc,bogus"], "bogus"),
+    (["fit", "DATA", "--friction", "lugre", "--json", "/dev/null/out.json"], "is a file"),
+    (["fit", "DATA", "--friction", "lugre", "--max-nfev", "0"], "--max-nfev"),
+    (["fit", "DATA", "--friction", "lugre", "--method", "samples"], "is dynamic"),
 ])
 def test_bad_input_one_line_exit_2(args: list[str], message: str, lugre_csv: Path,
                                    capsys: pytest.CaptureFixture[str]) -> None:
@@ -130,14 +130,14 @@ def test_data_without_force(tmp_path: Path, capsys: pytest.CaptureFixture[str]) 
     t, v, _ = _motion(200)
     path = tmp_path / "bare.csv"
     Measurement({"t": t, "v": v}, {"name": "bare"}).write(path)
-    code, _, err = run(["fit", str(path), "--model", "coulomb"], capsys)
+    code, _, err = run(["fit", str(path), "--friction", "coulomb"], capsys)
     assert code == 2 and "no force to fit" in err and err.count("\n") == 1
 
 
 def test_non_convergence_exits_2_without_output(lugre_csv: Path, tmp_path: Path) -> None:
     out = tmp_path / "never.json"
     proc = subprocess.run(
-        [sys.executable, "-m", "fcomp.cli.main", "fit", str(lugre_csv), "--model", "lugre",
+        [sys.executable, "-m", "fcomp.cli.main", "fit", str(lugre_csv), "--friction", "lugre",
          "--max-nfev", "2", "--json", str(out)],
         capture_output=True, text=True)
     assert proc.returncode == 2

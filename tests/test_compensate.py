@@ -45,8 +45,8 @@ def cli_run(tmp_path_factory: pytest.TempPathFactory) -> dict:
     true, base, diag = _models(folder)
     out = folder / "out.json"
     code = main(["compensate", "--plant-params", str(AXIS), "--friction", str(true),
-                 "--models", f"{base},{diag}", "--controllers", "pid-ff", "--task", "steps",
-                 "--fast", "--samples", "1", "--workers", "1", "--json", str(out),
+                 "--controller-friction", f"{base},{diag}", "--controllers", "pid-ff", "--task", "steps",
+                 "--fast", "--samples", "1", "--jobs", "1", "--json", str(out),
                  "--report", str(folder / "report"), "--no-progress"])
     assert code == 0
     return {"doc": json.loads(out.read_text()), "folder": folder,
@@ -135,8 +135,8 @@ def test_a_reference_file_is_tracked(tmp_path: Path, capsys: pytest.CaptureFixtu
     ref.write_text("t,x_ref\n" + "".join(f"{a:.17g},{b:.17g}\n" for a, b in zip(t, x, strict=True)))
     out = tmp_path / "ref.json"
     code, _, err = _run(["compensate", "--plant-params", str(AXIS), "--friction", str(true),
-                         "--models", f"{base},{diag}", "--controllers", "pid-ff",
-                         "--reference", str(ref), "--samples", "0", "--workers", "1",
+                         "--controller-friction", f"{base},{diag}", "--controllers", "pid-ff",
+                         "--reference", str(ref), "--samples", "0", "--jobs", "1",
                          "--json", str(out), "--no-progress"], capsys)
     assert code == 0, err
     doc = json.loads(out.read_text())
@@ -168,7 +168,7 @@ def test_bad_input_is_one_line_and_writes_nothing(case: str, words: str, tmp_pat
     ref = tmp_path / "ref.csv"
     ref.write_text("t,x_ref\n0,0.1\n0.5,0.11\n1.0,0.1\n")
     args = ["compensate", "--plant-params", str(AXIS), "--friction", str(true),
-            "--models", f"{base},{diag}", "--controllers", "pid", "--task", "steps",
+            "--controller-friction", f"{base},{diag}", "--controllers", "pid", "--task", "steps",
             "--fast", "--samples", "0", "--json", str(tmp_path / "out.json"),
             "--report", str(tmp_path / "rep"), "--no-progress"]
     if case == "controller":

@@ -469,14 +469,14 @@ def test_baseline_check_runs_when_the_answer_is_doubtful() -> None:
     structure left (a Stribeck hump the Coulomb map cannot follow, no candidate offered)
     runs it; ``False`` never does."""
     rec = generate(["stribeck"], duration=12.0, seed=4).measurement
-    doubtful = Diagnosis("coulomb-viscous", effects=["force-offset"], n_jobs=1).fit(rec)
+    doubtful = Diagnosis("coulomb-viscous", candidates=["force-offset"], n_jobs=1).fit(rec)
     assert doubtful.doubts()
     assert doubtful.baseline_check_["ran"] and doubtful.other_ is not None
-    never = Diagnosis("coulomb-viscous", effects=["force-offset"], n_jobs=1,
+    never = Diagnosis("coulomb-viscous", candidates=["force-offset"], n_jobs=1,
                       check_baseline=False).fit(rec)
     assert never.baseline_check_ == {"ran": False, "why": "not asked for"}
     assert never.other_ is None and never.to_dict()["baseline_check"]["ran"] is False
-    clean = Diagnosis("lugre", effects=["force-offset"], n_jobs=1).fit(
+    clean = Diagnosis("lugre", candidates=["force-offset"], n_jobs=1).fit(
         generate([], duration=12.0, seed=4).measurement)
     if not clean.doubts():
         assert clean.baseline_check_["ran"] is False and clean.other_ is None

@@ -92,7 +92,7 @@ def _json(args: list[str], out: Path) -> dict:
 
 def test_sweep_on_the_cluster_gives_the_local_results(scheduler: str, tmp_path: Path) -> None:
     args = ["sweep", "--controllers", "pid,pid-ff", "--samples", "3"]
-    local = _json([*args, "--workers", "1"], tmp_path / "local.json")
+    local = _json([*args, "--jobs", "1"], tmp_path / "local.json")
     remote = _json([*args, "--scheduler", scheduler], tmp_path / "remote.json")
     assert remote == local
     assert len(local["runs"]) == 6 and all(r["status"] == "ok" for r in local["runs"])
@@ -101,7 +101,7 @@ def test_sweep_on_the_cluster_gives_the_local_results(scheduler: str, tmp_path: 
 def test_grid_on_the_cluster_gives_the_local_results(scheduler: str, tmp_path: Path) -> None:
     args = ["sweep", "--controllers", "pid-ff", "--grid", "Fc=0.5,1", "--controller-friction",
             "lugre,nmlgm"]
-    local = _json([*args, "--workers", "1"], tmp_path / "local.json")
+    local = _json([*args, "--jobs", "1"], tmp_path / "local.json")
     remote = _json([*args, "--scheduler", scheduler], tmp_path / "remote.json")
     assert remote == local and len(local["points"]) == 4
 
@@ -117,10 +117,10 @@ def test_compensate_on_the_cluster_gives_the_local_results(scheduler: str,
     lugre.with_effects("direction-asymmetry").with_params(r_neg=1.5).save(tmp_path / "true.json")
     (tmp_path / "ref.csv").write_text("t,x_ref\n0,0.15\n0.3,0.152\n0.8,0.152\n")
     args = ["compensate", "--plant-params", str(ROOT / "docs" / "examples" / "axis50.toml"),
-            "--friction", str(tmp_path / "true.json"), "--models",
+            "--friction", str(tmp_path / "true.json"), "--controller-friction",
             f"{tmp_path / 'base.json'},{tmp_path / 'true.json'}", "--controllers", "pid-ff",
             "--reference", str(tmp_path / "ref.csv"), "--samples", "2"]
-    local = _json([*args, "--workers", "1"], tmp_path / "local.json")
+    local = _json([*args, "--jobs", "1"], tmp_path / "local.json")
     remote = _json([*args, "--scheduler", scheduler], tmp_path / "remote.json")
     assert remote == local
     assert len(local["runs"]) == 2 and all(r["status"] == "ok" for r in local["runs"])
@@ -142,7 +142,7 @@ def records(tmp_path_factory: pytest.TempPathFactory) -> list[str]:
 
 def test_fit_over_records_on_the_cluster(scheduler: str, records: list[str],
                                          tmp_path: Path) -> None:
-    args = ["fit", *records, "--model", "coulomb-viscous", "--offset"]
+    args = ["fit", *records, "--friction", "coulomb-viscous", "--offset"]
     local = _json([*args, "--jobs", "1"], tmp_path / "local.json")
     remote = _json([*args, "--scheduler", scheduler], tmp_path / "remote.json")
     assert remote == local
@@ -150,7 +150,7 @@ def test_fit_over_records_on_the_cluster(scheduler: str, records: list[str],
 
 
 def test_diagnose_on_the_cluster(scheduler: str, records: list[str], tmp_path: Path) -> None:
-    args = ["diagnose", records[0], "--baseline", "coulomb-viscous", "--no-baseline-check",
+    args = ["diagnose", records[0], "--friction", "coulomb-viscous", "--no-baseline-check",
             "--candidates", "force-offset,viscous,dwell-time", "--max-steps", "1"]
     local = _json([*args, "--jobs", "1"], tmp_path / "local.json")
     remote = _json([*args, "--scheduler", scheduler], tmp_path / "remote.json")
@@ -174,7 +174,7 @@ def test_study_on_the_cluster(scheduler: str, tmp_path: Path,
     monkeypatch.setattr(comp.CompensatorsStudy, "_do_mpc", staticmethod(lambda fast: {
         "available": False, "note": "left out in this test"}))
     summaries = {}
-    for name, extra in (("local", ["--workers", "1"]), ("remote", ["--scheduler", scheduler])):
+    for name, extra in (("local", ["--jobs", "1"]), ("remote", ["--scheduler", scheduler])):
         out = tmp_path / name
         assert main(["study", "compensators", "--fast", "--out", str(out), "--no-progress",
                      *extra]) == 0

@@ -120,7 +120,7 @@ def test_a_user_effects_hooks_make_its_proposals(fitted) -> None:
 def test_a_user_effects_reasons_reach_the_diagnosis(record) -> None:
     name = f"test-unsuited-{uuid.uuid4().hex[:8]}"
     register_effect(_user_effect(name, reason="the test record cannot show it"))
-    d = Diagnosis("lugre", effects=[name], n_jobs=1, check_baseline=False).fit(record)
+    d = Diagnosis("lugre", candidates=[name], n_jobs=1, check_baseline=False).fit(record)
     assert d.skipped_[name] == "the test record cannot show it"
     with pytest.raises(FcompError, match="the test record cannot show it"):
         d.add_effect(name)

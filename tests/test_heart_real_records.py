@@ -39,7 +39,7 @@ def emps(tmp_path_factory: pytest.TempPathFactory) -> Path:
 def test_emps_finds_the_carriage_mass_from_any_baseline(emps: Path, baseline: str,
                                                         tmp_path: Path) -> None:
     out = tmp_path / "d.json"
-    assert main(["diagnose", str(emps), "--baseline", baseline, "--no-progress",
+    assert main(["diagnose", str(emps), "--friction", baseline, "--no-progress",
                  "--no-baseline-check", "--json", str(out)]) == 0
     doc = json.loads(out.read_text())
     mass = doc["params"]["mass"]

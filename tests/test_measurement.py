@@ -130,7 +130,7 @@ def test_drop_nan_drops_only_incomplete_rows(tmp_path: Path) -> None:
         ("[rig]\nbore = 25.0\n", r"rig.bore = 25.0 m is implausible.*not millimetres"),
         ("[rig]\nrod = 10\n", r"rig.rod = 10 m is implausible"),
         ("[rig]\nstroke = 300\n", r"rig.stroke = 300 m is implausible"),
-        ("[rig]\nbore = 0.02\nrod = 0.03\n", r"rig.rod \(0.03\) must be smaller than rig.bore"),
+        ("[rig]\nbore = 0.02\nrod = 0.03\n", r"rig.rod \(0.03 m\) must be smaller than rig.bore"),
         ("[rig]\nmass = -1\n", r"rig.mass must be a non-negative number"),
         ("[rig]\nmass = \"heavy\"\n", r"rig.mass must be a non-negative number"),
         ("[rig]\norientation = \"sideways\"\n", r"rig.orientation must be one of"),

@@ -228,7 +228,7 @@ def _record(tmp_path: Path) -> Path:
 def test_fit_writes_the_model_file_and_compare_reads_it(tmp_path: Path, capsys) -> None:
     rec = _record(tmp_path)
     saved, out = tmp_path / "fit.json", tmp_path / "out.json"
-    assert main(["fit", str(rec), "--model", "coulomb-viscous", "--save-model", str(saved),
+    assert main(["fit", str(rec), "--friction", "coulomb-viscous", "--save-model", str(saved),
                  "--json", str(out), "--no-progress"]) == 0
     doc, result = json.loads(saved.read_text()), json.loads(out.read_text())
     assert result["model_file"] == doc
@@ -239,18 +239,18 @@ def test_fit_writes_the_model_file_and_compare_reads_it(tmp_path: Path, capsys) 
     seal = read_model(saved).model  # the friction, without the fitted mass
     assert np.array_equal(_forces(seal), _forces(fit.model_))
     capsys.readouterr()
-    assert main(["compare", str(rec), "--model", str(saved), "--json", "-"]) == 0
+    assert main(["compare", str(rec), "--friction", str(saved), "--json", "-"]) == 0
     by_file = json.loads(capsys.readouterr().out)
     # the same comparison as with the fit's JSON (its values and fitted mass)
-    assert main(["compare", str(rec), "--model", "coulomb-viscous", "--params", str(out),
+    assert main(["compare", str(rec), "--friction", "coulomb-viscous", "--params", str(out),
                  "--json", "-"]) == 0
     by_fit = json.loads(capsys.readouterr().out)
     assert by_file["rms_plain"] == by_fit["rms_plain"]
     assert by_file["rms"] == by_fit["rms"]
-    assert main(["compare", str(rec), "--model", str(saved), "--params", "canudas1995"]) == 2
+    assert main(["compare", str(rec), "--friction", str(saved), "--params", "canudas1995"]) == 2
     assert "gives the values" in capsys.readouterr().err
     # a fit started from the file: the same model, the same optimum
-    assert main(["fit", str(rec), "--model", str(saved), "--json", "-", "--no-progress"]) == 0
+    assert main(["fit", str(rec), "--friction", str(saved), "--json", "-", "--no-progress"]) == 0
     again = json.loads(capsys.readouterr().out)
     assert again["model"] == "coulomb-viscous"
     assert again["params"]["B"] == pytest.approx(result["params"]["B"], rel=1e-6)
@@ -258,7 +258,7 @@ def test_fit_writes_the_model_file_and_compare_reads_it(tmp_path: Path, capsys) 
 
 def test_save_model_refuses_a_name_that_is_not_json(tmp_path: Path, capsys) -> None:
     rec = _record(tmp_path)
-    assert main(["fit", str(rec), "--model", "coulomb", "--save-model",
+    assert main(["fit", str(rec), "--friction", "coulomb", "--save-model",
                  str(tmp_path / "m.txt")]) == 2
     assert "ends in .json" in capsys.readouterr().err
 
@@ -270,7 +270,7 @@ def test_diagnose_writes_its_final_model(tmp_path: Path, capsys) -> None:
     data = tmp_path / "off.csv"
     generate(["force-offset"], duration=12.0, seed=1).measurement.write(data)
     saved = tmp_path / "diag.json"
-    assert main(["diagnose", str(data), "--baseline", "coulomb-viscous", "--add",
+    assert main(["diagnose", str(data), "--friction", "coulomb-viscous", "--add-effect",
                  "force-offset", "--no-search", "--no-baseline-check", "--no-progress",
                  "--jobs", "1", "--save-model", str(saved), "--json", "-"]) == 0
     result = json.loads(capsys.readouterr().out)
@@ -286,7 +286,7 @@ def test_diagnose_writes_its_final_model(tmp_path: Path, capsys) -> None:
         result["model_params"]["offset"], rel=1e-12)
     assert doc["params"]["B"] == result["model_params"]["B"]
     # the final model as the baseline of another diagnosis (its offset left out, said so)
-    assert main(["diagnose", str(data), "--baseline", str(saved), "--no-search",
+    assert main(["diagnose", str(data), "--friction", str(saved), "--no-search",
                  "--no-baseline-check", "--no-progress", "--jobs", "1", "--json", "-"]) == 0
     captured = capsys.readouterr()
     assert json.loads(captured.out)["baseline"] == "coulomb-viscous"
@@ -352,6 +352,6 @@ def test_sweep_reads_a_model_file_with_a_users_effect_given_its_module(
     assert len(err) == 1 and "--effects" in err[0], err
     assert not (tmp_path / "no.json").exists()
     out = tmp_path / "sweep.json"
-    assert main([*args, "--effects", str(mod), "--workers", "2", "--json", str(out)]) == 0
+    assert main([*args, "--effects", str(mod), "--jobs", "2", "--json", str(out)]) == 0
     doc = json.loads(out.read_text())
     assert doc["runs"] and all(r["status"] == "ok" for r in doc["runs"]), doc["runs"]

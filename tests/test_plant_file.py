@@ -224,7 +224,7 @@ def test_sweep_on_a_plant_file_is_the_sweep_on_the_built_in_plant(tmp_path: Path
     for extra in (["--plant", "pneumatic", "--friction", "nmlgm"],
                   ["--plant-params", str(builtin_path("pneumatic")), "--friction", str(friction)]):
         assert main(["sweep", *extra, "--controllers", "pid", "--samples", "1",
-                     "--workers", "1", "--no-progress", "--json", "-"]) == 0
+                     "--jobs", "1", "--no-progress", "--json", "-"]) == 0
         docs.append(json.loads(capsys.readouterr().out))
     assert docs[0]["plant"] == docs[1]["plant"] == "pneumatic"
     assert docs[0]["runs"][0]["metrics"] == docs[1]["runs"][0]["metrics"]
@@ -240,7 +240,7 @@ def test_compare_in_the_plant_domain_with_a_plant_file(tmp_path: Path, capsys) -
     capsys.readouterr()
     docs = []
     for extra in (["--plant", "pneumatic"], ["--plant-params", str(builtin_path("pneumatic"))]):
-        assert main(["compare", str(rec), "--model", "lugre", "--params", "seed000-servo",
+        assert main(["compare", str(rec), "--friction", "lugre", "--params", "seed000-servo",
                      *extra, "--json", "-"]) == 0
         docs.append(json.loads(capsys.readouterr().out))
     assert docs[0]["plant"] and docs[0]["plant"] == docs[1]["plant"]

@@ -44,7 +44,7 @@ def test_emps_diagnosis_reports_the_baseline_check(tmp_path: Path) -> None:
     assert main(["import", "emps", str(datasets.path("emps", "DATA_EMPS.mat")), "-o",
                  str(rec)]) == 0
     out = tmp_path / "d.json"
-    assert main(["diagnose", str(rec), "--baseline", "coulomb-viscous", "--no-progress",
+    assert main(["diagnose", str(rec), "--friction", "coulomb-viscous", "--no-progress",
                  "--baseline-check", "--json", str(out)]) == 0
     doc = json.loads(out.read_text())
     assert isinstance(doc["baseline_dependent"], bool)

@@ -58,7 +58,7 @@ def test_zillen_coulomb_viscous_flags_the_impossible_mass(oring3: Measurement) -
 
 def test_emps_advice_names_no_chambers(emps: Measurement) -> None:
     assert emps.meta["kind"] == "electromechanical-axis"
-    diag = Diagnosis("coulomb-viscous", effects=["direction-asymmetry", "force-offset"],
+    diag = Diagnosis("coulomb-viscous", candidates=["direction-asymmetry", "force-offset"],
                      max_steps=1, n_jobs=1).fit(emps)
     assert diag.data_.kind == "electromechanical-axis"
     doc = diag.to_dict()
@@ -91,7 +91,7 @@ def test_cli_prints_warnings_and_json_carries_them(tmp_path: Path,
     rec, out = tmp_path / "oring3.csv", tmp_path / "fit.json"
     assert main(["import", "zillen", str(src), "-o", str(rec)]) == 0
     capsys.readouterr()
-    assert main(["fit", str(rec), "--model", "lugre", "--json", str(out)]) == 0
+    assert main(["fit", str(rec), "--friction", "lugre", "--json", str(out)]) == 0
     printed = capsys.readouterr()
     doc = json.loads(out.read_text())
     assert {"model", "params", "stderr", "rms", "warnings"} <= set(doc)

@@ -28,7 +28,7 @@ def comparison(record: Path):
     import fcomp
     from fcomp.measurement import Measurement
 
-    return fcomp.compare("lugre", Measurement.read(record))
+    return fcomp.compare(Measurement.read(record), "lugre")
 
 
 def _drawn(fig):
@@ -123,10 +123,10 @@ def test_no_zero_shown_for_a_non_zero_number_and_units_in_parameters() -> None:
 
 def test_compare_report_says_where_the_values_came_from(record: Path, tmp_path: Path) -> None:
     fit = tmp_path / "fit.json"
-    assert main(["fit", str(record), "--model", "lugre", "--json", str(fit),
-                 "--no-progress"]) == 0
-    assert main(["compare", str(record), "--model", "lugre", "--params", str(fit),
-                 "--report", str(tmp_path / "c")]) == 0
+    assert main(["fit", str(record), "--friction", "lugre", "--json", str(fit),
+                 "--save-model", str(tmp_path / "m.json"), "--no-progress"]) == 0
+    assert main(["compare", str(record), "--friction", "lugre", "--params", str(fit),
+                 "--report", str(tmp_path / "c"), "--no-progress"]) == 0
     page = (tmp_path / "c" / "report.html").read_text()
     sub = re.search(r'<p class="subtitle">(.*?)</p>', page).group(1)
     assert "fit file" in sub and "fit.json" in sub and "own values" not in sub
@@ -137,11 +137,16 @@ def test_compare_report_says_where_the_values_came_from(record: Path, tmp_path: 
     units = dict(rows)
     assert units["Fc"] == "N" and units["sigma0"] == "N/m" and units["vs"] == "m/s"
     assert all(units.values())
-    assert main(["compare", str(record), "--model", "lugre", "--params", "seed002-type1",
-                 "--report", str(tmp_path / "s")]) == 0
+    assert main(["compare", str(record), "--friction", "lugre", "--params", "seed002-type1",
+                 "--report", str(tmp_path / "s"), "--no-progress"]) == 0
     sub = re.search(r'<p class="subtitle">(.*?)</p>',
                     (tmp_path / "s" / "report.html").read_text()).group(1)
     assert "parameter set" in sub and "seed002-type1" in sub
+    assert main(["compare", str(record), "--friction", "lugre", "--params",
+                 str(tmp_path / "m.json"), "--report", str(tmp_path / "m"), "--no-progress"]) == 0
+    sub = re.search(r'<p class="subtitle">(.*?)</p>',
+                    (tmp_path / "m" / "report.html").read_text()).group(1)
+    assert "model file" in sub and "m.json" in sub
 
 
 def test_ratio_bars_green_when_better_red_when_worse_plain_ticks() -> None:
@@ -189,7 +194,7 @@ def test_plant_domain_in_mm_and_bar(tmp_path: Path) -> None:
     model = fcomp.make_model("lugre")
     run = fcomp.simulate("pneumatic", model, "sine:amplitude=0.3,frequency=0.5", duration=2.0,
                          rate=500.0)
-    comp = fcomp.compare(model, run, plant="pneumatic")
+    comp = fcomp.compare(run, model, plant="pneumatic")
     fig = comp.plot("plant")
     assert [ax.get_ylabel() for ax in fig.axes] == ["x (mm)", "p1 (bar)", "p2 (bar)"]
     x_line = fig.axes[0].lines[0].get_ydata()

@@ -85,18 +85,19 @@ def command_reports(tmp_path_factory: pytest.TempPathFactory) -> Path:
     lugre.with_effects("direction-asymmetry").with_params(r_neg=1.5).save(out / "true.json")
     lugre.save(out / "base.json")
     runs = {
-        "fit": ["fit", str(rec), "--model", "lugre", "--json", str(out / "fit.json")],
-        "compare": ["compare", str(rec), "--model", "lugre", "--params", str(out / "fit.json")],
-        "diagnose": ["diagnose", str(rec), "--baseline", "lugre", "--jobs", "1",
+        "fit": ["fit", str(rec), "--friction", "lugre", "--json", str(out / "fit.json")],
+        "compare": ["compare", str(rec), "--friction", "lugre", "--params",
+                    str(out / "fit.json")],
+        "diagnose": ["diagnose", str(rec), "--friction", "lugre", "--jobs", "1",
                      "--candidates", "pressure-dependence,force-offset,stribeck"],
-        "sweep": ["sweep", "--controllers", "pid,pid-ff", "--samples", "2", "--workers", "1"],
+        "sweep": ["sweep", "--controllers", "pid,pid-ff", "--samples", "2", "--jobs", "1"],
         "compensate": ["compensate", "--plant-params", str(ROOT / "docs/examples/axis50.toml"),
-                       "--friction", str(out / "true.json"), "--models",
+                       "--friction", str(out / "true.json"), "--controller-friction",
                        f"{out / 'base.json'},{out / 'true.json'}", "--controllers", "pid-ff",
-                       "--task", "steps", "--fast", "--samples", "1", "--workers", "1"],
+                       "--task", "steps", "--fast", "--samples", "1", "--jobs", "1"],
     }
     for name in COMMANDS:
-        code = main([*runs[name], "--report", str(out / name)])
+        code = main([*runs[name], "--report", str(out / name), "--no-progress"])
         assert code == 0, f"fcomp {name} exited {code}"
     return out
 
@@ -243,25 +244,27 @@ def test_validator_and_probe_catch_faults(tmp_path: Path) -> None:
     assert validate_html("<!DOCTYPE html><html><body><p>a</div></body></html>")
 
 
-def _png(fontsize: float, dpi: int, record: bool = True) -> bytes:
-    """A PNG drawn here (not by fcomp), with or without the font record."""
+def _png(fontsize: float, width: float = 6.0, record: bool = True) -> bytes:
+    """A PNG drawn here at 100 dpi (not by fcomp), ``width`` inches wide, with or without the
+    font record."""
     import io
 
     from matplotlib.figure import Figure
 
-    fig = Figure(figsize=(6.0, 2.0))
+    fig = Figure(figsize=(width, 2.0))
     ax = fig.add_subplot()
     ax.plot([0, 1], [0, 1])
     ax.tick_params(labelsize=fontsize)
     buf = io.BytesIO()
-    meta = {"fcomp:min_font_pt": str(fontsize), "fcomp:dpi": str(dpi)} if record else {}
-    fig.savefig(buf, format="png", dpi=dpi, metadata=meta)
+    meta = {"fcomp:min_font_pt": str(fontsize), "fcomp:dpi": "100"} if record else {}
+    fig.savefig(buf, format="png", dpi=100, metadata=meta)
     return buf.getvalue()
 
 
 def test_table_and_figure_text_checks_catch_faults(tmp_path: Path) -> None:
-    """A table wider than the column, small figure text (drawn small, or a big PNG shown
-    scaled down) and a PNG without the record are caught; a readable page passes."""
+    """A table wider than the column, small figure text (drawn small, or a wide PNG shown
+    scaled down to the column) and a PNG without the record are caught; a readable figure
+    passes."""
     import base64
 
     def img(png: bytes, alt: str) -> str:
@@ -274,8 +277,8 @@ def test_table_and_figure_text_checks_catch_faults(tmp_path: Path) -> None:
         "<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\"><title>x</title>"
         "</head><body><main style=\"max-width:60rem\"><div class=\"table-wrap\" "
         "style=\"overflow-x:auto\"><table><caption>wide</caption><tr>" + cells +
-        "</tr></table></div>" + img(_png(7, 100), "small") + img(_png(9, 300), "scaled") +
-        img(_png(9, 100, record=False), "bare") + img(_png(9, 100), "fine") +
+        "</tr></table></div>" + img(_png(7), "small") + img(_png(9, width=20.0), "scaled") +
+        img(_png(9, record=False), "bare") + img(_png(9), "fine") +
         "</main></body></html>", encoding="utf-8")
     with Browser() as b:
         rep = b.render(bad, width=DESKTOP)

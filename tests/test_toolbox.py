@@ -35,7 +35,7 @@ def test_compare_command_gives_the_contract_json_and_the_right_error(tmp_path: P
     """The generating model compared as given leaves nothing; a wrong one leaves its own error."""
     _coulomb_viscous_record(tmp_path / "rec.csv")
     out = tmp_path / "cmp.json"
-    assert main(["compare", str(tmp_path / "rec.csv"), "--model", "coulomb-viscous",
+    assert main(["compare", str(tmp_path / "rec.csv"), "--friction", "coulomb-viscous",
                  "--set", "Fc=30", "--set", "B=80", "--json", str(out)]) == 0
     doc = json.loads(out.read_text())
     for key in ("model", "rms", "regimes", "residual_features", "warnings"):
@@ -45,7 +45,7 @@ def test_compare_command_gives_the_contract_json_and_the_right_error(tmp_path: P
     # velocity's own derivative estimate gives, about 1e-5 N at B = 80 N s/m)
     assert doc["rms"] < 1e-5 * 30.0
     # a Coulomb level 5 N too low: the error is 5 N wherever the rig slides (by hand)
-    assert main(["compare", str(tmp_path / "rec.csv"), "--model", "coulomb-viscous",
+    assert main(["compare", str(tmp_path / "rec.csv"), "--friction", "coulomb-viscous",
                  "--set", "Fc=25", "--set", "B=80", "--json", str(out)]) == 0
     doc = json.loads(out.read_text())
     assert doc["regimes"]["sliding"]["rms"] == pytest.approx(5.0, rel=0.02)
@@ -54,7 +54,7 @@ def test_compare_command_gives_the_contract_json_and_the_right_error(tmp_path: P
 def test_compare_fit_judges_held_out_samples_and_reports(tmp_path: Path) -> None:
     _coulomb_viscous_record(tmp_path / "rec.csv", noise=0.5)
     out = tmp_path / "cmp.json"
-    assert main(["compare", str(tmp_path / "rec.csv"), "--model", "coulomb-viscous", "--fit",
+    assert main(["compare", str(tmp_path / "rec.csv"), "--friction", "coulomb-viscous", "--fit",
                  "--json", str(out), "--report", str(tmp_path / "rep")]) == 0
     doc = json.loads(out.read_text())
     assert doc["fitted"] is True and doc["judged"] == "held-out"
@@ -69,7 +69,7 @@ def test_compare_never_writes_onto_its_input(tmp_path: Path, capsys: pytest.Capt
     rec = tmp_path / "rec.csv"
     _coulomb_viscous_record(rec)
     before = rec.read_bytes()
-    assert main(["compare", str(rec), "--model", "coulomb", "--json", str(rec)]) == 2
+    assert main(["compare", str(rec), "--friction", "coulomb", "--json", str(rec)]) == 2
     assert rec.read_bytes() == before
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "Traceback" not in err[0]
@@ -80,7 +80,7 @@ def test_plant_domain_through_the_public_compare(tmp_path: Path) -> None:
     model = fcomp.make_model("lugre")
     run = fcomp.simulate("pneumatic", model, "sine:amplitude=0.3,frequency=0.5", duration=3.0,
                          rate=500.0)
-    comp = fcomp.compare(model, run, plant="pneumatic")
+    comp = fcomp.compare(run, model, plant="pneumatic")
     assert len(comp.plant) == 1 and comp.plant[0].rms["x"] < 1e-9
     assert comp.to_dict()["plant"][run.label]["plant"] == "pneumatic"
     assert isinstance(comp.plant[0], fcomp.PlantComparison)
@@ -171,7 +171,7 @@ def test_add_and_remove_a_configured_effect_instance() -> None:
 def test_rich_display_and_short_reprs(tmp_path: Path) -> None:
     rec = _coulomb_viscous_record(tmp_path / "rec.csv", noise=0.2)
     f = fcomp.fit(rec, "coulomb-viscous")
-    c = fcomp.compare(f.model_, rec)
+    c = fcomp.compare(rec, f.model_)
     for obj in (f, c):
         assert "array(" not in repr(obj) and len(repr(obj)) < 400
         assert "<table" in obj._repr_html_()
@@ -200,7 +200,7 @@ def test_the_packages_carry_their_type_hints() -> None:
 def test_fit_report_draws_the_fit(tmp_path: Path) -> None:
     _coulomb_viscous_record(tmp_path / "rec.csv", noise=0.2)
     rep = tmp_path / "fitrep"
-    assert main(["fit", str(tmp_path / "rec.csv"), "--model", "coulomb-viscous",
+    assert main(["fit", str(tmp_path / "rec.csv"), "--friction", "coulomb-viscous",
                  "--report", str(rep)]) == 0
     html = (rep / "report.html").read_text()
     assert html.count("<img") >= 2 and "Fc" in html

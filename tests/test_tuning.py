@@ -174,7 +174,7 @@ def test_explicit_values_win_and_are_checked(tmp_path: Path, capsys) -> None:
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "refused" in err[0] and "pid_bandwidth" in err[0]
     assert main(["sweep", "--plant-params", str(bad), "--samples", "1", "--controllers", "pid",
-                 "--task", "steps", "--no-progress", "--workers", "1"]) == 2
+                 "--task", "steps", "--no-progress", "--jobs", "1"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "refused" in err[0]
     # the former fixed numbers, given as controller options, lack margins: refused in one line

@@ -48,10 +48,13 @@ def _plant(args: argparse.Namespace) -> Any:
 
 
 def summary(doc: dict[str, Any]) -> str:
-    """The ratios per controller and task, as printed."""
+    """The conclusion (:func:`controllers.conclusions.of_compensation`), then the ratios
+    per controller and task, as printed."""
+    from controllers.conclusions import of_compensation
+
     base = doc["baseline"]
     others = [m for m in doc["models"] if m != base]
-    lines = [f"compensate on {doc['plant']['name']} ({doc['plant']['kind']}), true friction "
+    lines = [*of_compensation(doc).lines(), "",f"compensate on {doc['plant']['name']} ({doc['plant']['kind']}), true friction "
              f"{doc['friction']}: {len(doc['runs'])} runs; RMS error ratio to {base} "
              "(below 1: better)"]
     for c in doc["controllers"]:
@@ -76,8 +79,7 @@ def run(args: argparse.Namespace) -> int:
     out = json_target(args.json)
     folder = report_dir(args.report)
     scheduler = check_scheduler(args.scheduler)
-    if args.workers is not None and args.workers < 1:
-        raise FcompError(f"--workers must be a positive integer, got {args.workers}")
+    common.check_jobs(args.jobs)
     if args.samples is not None and args.samples < 0:
         raise FcompError(f"--samples must be 0 or more, got {args.samples}")
     if not 0 <= args.spread < 1:
@@ -88,11 +90,11 @@ def run(args: argparse.Namespace) -> int:
         CONTROLLERS.get(c)
     if args.task is not None:
         TASKS.get(args.task)
-    models = common.name_list(args.models, "--models") or []
+    models = common.name_list(args.controller_friction, "--controller-friction") or []
     inputs = InputSet()
     for option, spec in (("--plant-params", args.plant_params), ("--friction", args.friction),
                          ("--reference", args.reference), ("--effects", args.effects),
-                         *(("--models", m) for m in models)):
+                         *(("--controller-friction", m) for m in models)):
         if spec is not None and (option in ("--reference", "--effects")
                                  or spec.lower().endswith((".toml", ".json"))):
             inputs.file(spec, option)
@@ -109,7 +111,7 @@ def run(args: argparse.Namespace) -> int:
         res = compensate(plant, args.friction, models, controllers=controllers,
                          task=args.task, reference=args.reference, fast=args.fast,
                          samples=args.samples, spread=args.spread, seed=args.seed,
-                         workers=args.workers,
+                         workers=args.jobs,
                          scheduler=scheduler, keep_signals=folder is not None,
                          progress=lambda done, total: bar.update(done - bar.n),
                          effects=args.effects)
@@ -123,8 +125,7 @@ def run(args: argparse.Namespace) -> int:
         with staged_folder(folder, "--report", "report",
                            note=command or "fcomp compensate") as tmp:
             report(res, command).write(tmp / "report.html")
-        if args.json != "-":
-            print(f"wrote {folder / 'report.html'}")
+        common.wrote(folder / "report.html")
     emit_result(result_text(doc), args.json, out, summary(doc))
     return 0
 

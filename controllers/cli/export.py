@@ -30,23 +30,27 @@ def control_model(args: argparse.Namespace) -> Any:
     (``--friction FILE.json``) resolve: whatever they give, the export takes a
     ``ControlModel``.
     """
+    from fcomp.modelfile import is_model_file
+
+    plant_set = None if args.params is None or is_model_file(args.params) else args.params
     if args.plant_params is not None:
         plant_file = read_plant_file(args.plant_params)
         if args.plant not in (None, plant_file.kind):
             raise FcompError(f"--plant-params {args.plant_params}: a {plant_file.kind} plant, "
                              f"not {args.plant}")
-        params = args.params if args.params is not None else PLANTS.get(
-            plant_file.kind).default_params
+        params = plant_set or PLANTS.get(plant_file.kind).default_params
         return ControlModel(plant_file, common.friction_model(
-            args.friction, params, args, use="controller friction"), args.params)
+            args.friction, args.params if plant_set is None and args.params else params, args,
+            use="controller friction"), plant_set)
     plant = args.plant or "hydraulic"
     if plant not in KINDS:
         raise FcompError(f"--plant {plant!r}: the controllers run on "
                          f"{' or '.join(sorted(KINDS))}")
-    params = args.params if args.params is not None else PLANTS.get(plant).default_params
-    friction = common.friction_model(args.friction, params, args,
-                                     use="controller friction")
-    return ControlModel(plant, friction, args.params)
+    params = plant_set or PLANTS.get(plant).default_params
+    friction = common.friction_model(args.friction,
+                                     args.params if plant_set is None and args.params else params,
+                                     args, use="controller friction")
+    return ControlModel(plant, friction, plant_set)
 
 
 def summary(doc: dict[str, Any]) -> str:
@@ -79,7 +83,8 @@ def run(args: argparse.Namespace) -> int:
     inputs = InputSet()
     if args.effects is not None:
         inputs.file(args.effects, "--effects")
-    for option, spec in (("--plant-params", args.plant_params), ("--friction", args.friction)):
+    for option, spec in (("--plant-params", args.plant_params), ("--friction", args.friction),
+                         ("--params", args.params)):
         if spec is not None and spec.lower().endswith((".toml", ".json")):
             inputs.file(spec, option)
     common.check_outputs(inputs, [("--json", out)], [("-o", folder, "export")])
@@ -89,7 +94,8 @@ def run(args: argparse.Namespace) -> int:
             options[k] = int(options[k])
     model = control_model(args)
     command = "fcomp " + shlex.join(common.ARGV) if common.ARGV else "fcomp export"
-    with staged_folder(folder, "-o", "export", note=command) as tmp:
+    with staged_folder(folder, "-o", "export", note=command) as tmp, \
+            common.Activity(f"export {args.controller}", enabled=not args.no_progress):
         res = export_controller(args.controller, model, tmp, options=options, task=args.task,
                                 duration=args.duration, timing_steps=args.timing_steps)
     for w in res.warnings:

@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 
 from controllers import CONTROLLERS
+from controllers.conclusions import of_sweep
 from controllers.harness import LoopConfig, control_model
 from controllers.robustness import Grid, Sweep, distributions, draw_distribution, run_jobs
 from controllers.tasks import TASKS
@@ -81,18 +82,20 @@ def _plan(args: argparse.Namespace) -> Any:
     if args.grid or frictions:
         return Grid(plant=plant, task=args.task, controllers=controllers,
                     factors=_factors(args.grid), controller_frictions=frictions,
-                    seed=args.seed, fast=not args.full, base=base)
+                    seed=args.seed, fast=args.fast, base=base)
     try:
         lo, hi = (common.finite_float(v) for v in args.noise.split(","))
     except (ValueError, argparse.ArgumentTypeError):
         raise FcompError(f"--noise {args.noise!r}: expected LO,HI (two numbers)") from None
     return Sweep(plant=plant, task=args.task, controllers=controllers,
                  samples=args.samples, spread=args.spread, noise=(lo, hi), seed=args.seed,
-                 fast=not args.full, base=base)
+                 fast=args.fast, base=base)
 
 
 def summary(doc: dict[str, Any]) -> str:
-    lines = [f"{doc['mode']} on {doc['plant']}, task {doc['task']}: {len(doc['runs'])} runs"]
+    """The conclusion (:func:`controllers.conclusions.of_sweep`), then the errors per
+    controller (Monte Carlo) or per grid point, as printed."""
+    lines = [*of_sweep(doc).lines(), "",f"{doc['mode']} on {doc['plant']}, task {doc['task']}: {len(doc['runs'])} runs"]
     if doc["mode"] == "monte-carlo":
         for c, d in doc["distributions"].items():
             r = d["rms_error"]
@@ -143,6 +146,7 @@ def report(doc: dict[str, Any], command: str | None) -> Any:
                  subtitle=f"{len(doc['runs'])} closed-loop runs of "
                  f"{', '.join(doc['controllers'])}", command=command,
                  config={k: doc[k] for k in ("mode", "plant", "task", "fast")})
+    rep.conclusion(of_sweep(doc))
     failed = sum(r["status"] != "ok" for r in doc["runs"])
     if failed:
         rep.note(f"{failed} run(s) failed (counted, not dropped): see the table.", kind="warn")
@@ -188,15 +192,14 @@ def run(args: argparse.Namespace) -> int:
     scheduler = check_scheduler(args.scheduler)
     if args.seed < 0:
         raise FcompError(f"--seed must be a non-negative integer, got {args.seed}")
-    if args.workers is not None and args.workers < 1:
-        raise FcompError(f"--workers must be a positive integer, got {args.workers}")
+    common.check_jobs(args.jobs)
     inputs = common.plant_inputs(args)
     common.check_outputs(inputs, [("--json", out)], [("--report", folder, "report")])
     plan = _plan(args)
     jobs = plan.jobs()
     bar = progress_bar("sweep", len(jobs), enabled=not args.no_progress)
     try:
-        runs = run_jobs(jobs, workers=args.workers, scheduler=scheduler,
+        runs = run_jobs(jobs, workers=args.jobs, scheduler=scheduler,
                         progress=lambda done, total: bar.update(done - bar.n))
     finally:
         bar.close()
@@ -205,7 +208,6 @@ def run(args: argparse.Namespace) -> int:
     if folder is not None:
         with staged_folder(folder, "--report", "report", note=command or "fcomp sweep") as tmp:
             report(doc, command).write(tmp / "report.html")
-        if args.json != "-":
-            print(f"wrote {folder / 'report.html'}")
+        common.wrote(folder / "report.html")
     emit_result(result_text(doc), args.json, out, summary(doc))
     return 0

@@ -6,16 +6,17 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import re
 import sys
 import threading
 import time
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
 from fcomp.effects import load_effects_module
-from fcomp.errors import FcompError, FcompWarning, render_terms
+from fcomp.errors import FcompError, FcompWarning, deprecation_message, render_terms
 from fcomp.models import FrictionModel, make_model
 from fcomp.outputs import InputSet, check_distinct, check_folder_target
 from fcomp.registry import COMMANDS
@@ -26,6 +27,9 @@ MAX_VALUE = 1e15
 #: Warnings of the running command (``{"code", "parameter", "message"}``), printed as
 #: ``fcomp: warning: ...`` after a successful run and written into its outputs.
 WARNINGS: list[dict[str, Any]] = []
+#: Files and reports written before the summary is printed: announced after it
+#: (:func:`wrote`, :func:`emit_result`), so that the conclusion comes first.
+WRITTEN: list[Path] = []
 #: The running command's arguments (after ``fcomp``), for reports.
 ARGV: list[str] = []
 #: Python warnings caught while the command runs (set by :func:`fcomp.cli.main.main`).
@@ -83,12 +87,199 @@ def finite_float(text: str) -> float:
     return value
 
 
-def add_model_options(p: argparse.ArgumentParser, *, flag: str = "--friction") -> None:
-    p.add_argument("--add-effect", action="append", default=[], metavar="EFFECT",
-                   help="add a catalogue (or registered) effect to the model; repeatable")
+# ---------------------------------------------------------------- one vocabulary
+#: The wording of ``--set`` on every command (docs/cli.md).
+SET_HELP = ("set a friction parameter (flat name, SI units); in fit: its start value; "
+            "repeatable")
+
+
+class _Spellings:
+    """Mixin of an argparse action whose option has deprecated spellings besides its own.
+
+    The action holds every spelling (``option_strings``; the first is the canonical one)
+    and stores into the canonical destination whichever is given. A deprecated spelling
+    is noted in ``args._deprecated`` and :func:`say_deprecated` prints it once the command
+    line is parsed: one line ``fcomp: warning: OLD is deprecated, use NEW ...`` on stderr
+    (once per run, however often it is given); the old and the new spelling given together
+    are one error (exit 2, no warning). The help lists only the canonical spelling
+    (:class:`HelpFormatter`).
+    """
+
+    deprecated: tuple[str, ...] = ()
+    dest: str
+    option_strings: Sequence[str]
+
+    def __call__(self, parser: argparse.ArgumentParser, namespace: argparse.Namespace,
+                 values: Any, option_string: str | None = None) -> None:
+        seen = namespace.__dict__.setdefault("_spellings", {}).setdefault(self.dest, set())
+        seen.add(option_string)
+        canonical = self.option_strings[0]
+        old = sorted(s for s in seen if s in self.deprecated)
+        if old and len(seen) > 1:
+            parser.error(f"{old[0]} and {canonical} are the same option ({old[0]} is the "
+                         f"deprecated spelling): give only {canonical}")
+        said = namespace.__dict__.setdefault("_deprecated", [])
+        if option_string in self.deprecated:
+            line = deprecation_message(option_string, canonical)
+            if line not in said:
+                said.append(line)
+        super().__call__(parser, namespace, values, option_string)  # type: ignore[misc]
+
+
+def say_deprecated(args: argparse.Namespace) -> None:
+    """Print the deprecated spellings the command line used, one line each, on stderr."""
+    for line in getattr(args, "_deprecated", ()):
+        sys.stderr.write(f"fcomp: warning: {line}\n")
+
+
+class _StoreSpellings(_Spellings, argparse._StoreAction):
+    pass
+
+
+class _AppendSpellings(_Spellings, argparse._AppendAction):
+    pass
+
+
+class _StoreConstSpellings(_Spellings, argparse._StoreConstAction):
+    pass
+
+
+def add_option(p: argparse.ArgumentParser | Any, flag: str, *deprecated: str,
+               **kwargs: Any) -> argparse.Action:
+    """``p.add_argument(flag, ...)`` with the ``deprecated`` old spellings of the option
+    still accepted for one release (:class:`_Spellings`): the one mechanism of every
+    renamed option of the command line (docs/cli.md, "Deprecated spellings")."""
+    if not deprecated:
+        return p.add_argument(flag, **kwargs)
+    kind = kwargs.pop("action", "store")
+    cls = {"store": _StoreSpellings, "append": _AppendSpellings,
+           "store_const": _StoreConstSpellings}[kind]
+    action = type(cls.__name__, (cls,), {"deprecated": tuple(deprecated)})
+    kwargs.setdefault("dest", flag.lstrip("-").replace("-", "_"))
+    return p.add_argument(flag, *deprecated, action=action, **kwargs)
+
+
+def add_friction_option(p: argparse.ArgumentParser, *deprecated: str, required: bool = True,
+                        default: str | None = None, help: str | None = None) -> None:
+    """``--friction NAME|MODEL.json``: the friction model, a registered name (fcomp list
+    models) or a model file (fcomp fit --save-model)."""
+    add_option(p, "--friction", *deprecated, required=required, default=default,
+               metavar="NAME|MODEL.json",
+               help=help or "the friction model: a name (fcomp list models) or a model file "
+               "(fcomp fit --save-model)")
+
+
+def add_add_effect_option(p: argparse.ArgumentParser, *deprecated: str,
+                          help: str | None = None) -> None:
+    """``--add-effect EFFECT`` (repeatable): an effect added to the friction model."""
+    add_option(p, "--add-effect", *deprecated, action="append", default=[], metavar="EFFECT",
+               help=help or "add a catalogue (or registered) effect to the model; repeatable")
+
+
+def add_parallel_options(p: argparse.ArgumentParser, *deprecated: str, what: str,
+                         default: str = "CPU count") -> None:
+    """``--jobs N`` and ``--scheduler ADDRESS``: where the independent jobs ``what`` run
+    (local processes, or a Dask distributed cluster); the results are the same."""
+    add_option(p, "--jobs", *deprecated, type=int, default=None, metavar="N",
+               help=f"local processes running {what} (default: {default})")
+    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help=f"run {what} on the Dask distributed scheduler at ADDRESS "
+                   "(tcp://host:8786) instead of local processes; the same results")
+
+
+def check_jobs(jobs: int | None) -> None:
+    """Refuse ``--jobs`` below 1."""
+    if jobs is not None and jobs < 1:
+        raise FcompError(f"--jobs must be a positive integer, got {jobs}")
+
+
+def add_length_options(p: argparse.ArgumentParser, default: str, fast: str, full: str) -> None:
+    """``--fast`` / ``--full``, a mutually exclusive pair storing ``args.fast``; ``default``
+    (``"fast"`` or ``"full"``) is the command's own default, and the help says so."""
+    g = p.add_mutually_exclusive_group()
+    mark = {"fast": " (default)" if default == "fast" else "",
+            "full": " (default)" if default == "full" else ""}
+    g.add_argument("--fast", dest="fast", action="store_const", const=True,
+                   help=f"{fast}{mark['fast']}")
+    g.add_argument("--full", dest="fast", action="store_const", const=False,
+                   help=f"{full}{mark['full']}")
+    p.set_defaults(fast=default == "fast")
+
+
+def add_progress_option(p: argparse.ArgumentParser) -> None:
+    """``--no-progress``: no progress display (shown only on a terminal anyway)."""
+    p.add_argument("--no-progress", action="store_true",
+                   help="no progress display on stderr (it is shown only on a terminal)")
+
+
+def add_set_option(p: argparse.ArgumentParser) -> None:
+    """``--set NAME=VALUE``, worded alike on every command (:data:`SET_HELP`)."""
+    p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE", help=SET_HELP)
+
+
+#: The wording of ``--params`` on every command that takes it.
+PARAMS_HELP = ("parameter values: a parameter set (fcomp list params), a fit's JSON (fcomp fit "
+               "--json) or a model file (fcomp fit --save-model)")
+
+
+def add_params_option(p: argparse.ArgumentParser, default: str) -> None:
+    """``--params SET|FIT.json|MODEL.json`` (:func:`friction_values`)."""
+    p.add_argument("--params", default=None, metavar="SET|FIT.json|MODEL.json",
+                   help=f"{PARAMS_HELP} (default: {default})")
+
+
+# ---------------------------------------------------------------- plain-text help
+_REST = [
+    (re.compile(r":(?:class|func|meth|mod|data|attr|exc|obj|ref|doc):`~?([^`<]*?)(?:\s*<[^>]*>)?`"),
+     lambda m: m.group(1).rsplit(".", 1)[-1] if "." in m.group(1) and "(" not in m.group(1)
+     else m.group(1)),
+    (re.compile(r"``(.+?)``", re.S), lambda m: m.group(1)),
+    (re.compile(r"(?<![\w`])`([^`\n]+)`_{0,2}(?![\w`])"), lambda m: m.group(1)),
+    (re.compile(r"(?<![\w*])\*\*(?=\S)([^*\n]+?)(?<=\S)\*\*(?![\w*])"), lambda m: m.group(1)),
+    (re.compile(r"(?<![\w*'\\])\*(?=[A-Za-z])([A-Za-z][^*\n]*?)(?<=[A-Za-z.])\*(?![\w*])"),
+     lambda m: m.group(1)),
+    (re.compile(r"(\S)::$", re.M), lambda m: m.group(1) + ":"),
+    (re.compile(r"^(\s*)::$", re.M), lambda m: ""),
+    (re.compile(r"\\\\"), lambda m: "\\"),
+]
+
+
+def plain_text(text: str) -> str:
+    """``text`` (a module docstring in reST) as plain text for ``--help``: roles
+    (``:class:`~a.B``` -> ``B``), literals (````x```` -> ``x``), emphasis and ``Example::``
+    written plainly."""
+    for pattern, repl in _REST:
+        text = pattern.sub(repl, text)
+    return text
+
+
+class HelpFormatter(argparse.RawDescriptionHelpFormatter):
+    """The help of every command: descriptions as written (line breaks kept), in plain
+    text (:func:`plain_text`), an option listed by its canonical spelling only (the
+    deprecated ones of :func:`add_option` stay out of the help)."""
+
+    def _format_action_invocation(self, action: argparse.Action) -> str:
+        hidden = getattr(action, "deprecated", ())
+        if not hidden:
+            return super()._format_action_invocation(action)
+        shown = argparse.Action([s for s in action.option_strings if s not in hidden],
+                                action.dest, nargs=action.nargs, metavar=action.metavar)
+        return super()._format_action_invocation(shown)
+
+    def _expand_help(self, action: argparse.Action) -> str:
+        return plain_text(super()._expand_help(action))
+
+    def _format_text(self, text: str) -> str:
+        return super()._format_text(plain_text(text))
+
+
+def add_model_options(p: argparse.ArgumentParser, *, add_deprecated: tuple[str, ...] = ()
+                      ) -> None:
+    """``--add-effect EFFECT`` (repeatable), ``--effects MODULE.py`` and ``--set
+    NAME=VALUE``: the options that change a friction model on every command."""
+    add_add_effect_option(p, *add_deprecated)
     add_effects_option(p, "registers the user's own effects")
-    p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
-                   help="override a friction parameter (flat name, SI units); repeatable")
+    add_set_option(p)
 
 
 def add_effects_option(p: argparse.ArgumentParser,
@@ -153,7 +344,7 @@ def add_save_model_option(p: argparse.ArgumentParser, what: str) -> None:
     """``--save-model MODEL.json``: write ``what`` as a model file (docs/model-file.md)."""
     p.add_argument("--save-model", metavar="MODEL.json", default=None,
                    help=f"write {what} as a model file (versioned JSON, docs/model-file.md) "
-                   "that every friction option reads (simulate --friction, compare --model, "
+                   "that every friction option reads (simulate --friction, compare --friction, "
                    "...)")
 
 
@@ -169,8 +360,7 @@ def model_target(path: str | None) -> Path | None:
         raise FcompError(f"--save-model {path}: a model file ends in .json")
     if out.is_dir():
         raise FcompError(f"--save-model {path}: is a directory")
-    if not out.parent.is_dir():
-        raise FcompError(f"--save-model {path}: folder {out.parent} does not exist")
+    _writable_folder("--save-model", path)
     return out
 
 
@@ -197,21 +387,91 @@ def model_source(data: list[str]) -> dict[str, Any]:
 def friction_model(spec: str, params: str | None, args: argparse.Namespace, *,
                    use: str = "plant friction") -> FrictionModel:
     """The friction model a friction option names: a model file (``.json``, its
-    measurement terms dropped with a warning) or a registered model (:func:`build_model`).
+    measurement terms dropped with a warning) or a registered model with the values of
+    ``params`` (a parameter set, a fit's JSON or a model file: :func:`model_with_params`).
 
-    A file takes no parameter set; ``--add-effect`` and ``--set`` apply to it as to a name.
+    A file takes no ``params``; ``--add-effect`` and ``--set`` apply to it as to a name.
     """
-    from fcomp.modelfile import is_model_file, seal_friction
+    return _friction(spec, params, args, use, measured=False)[0]
 
-    if not is_model_file(spec):
-        return build_model(spec, params, args)
-    model, dropped = seal_friction(spec, use, args.effects)
-    if dropped:
-        warn("measurement-terms", dropped, "friction")
+
+def model_with_params(args: argparse.Namespace, *, use: str = "plant friction",
+                      measured: bool = False) -> tuple[FrictionModel, float | None]:
+    """The model of ``--friction`` with the values of ``--params`` (``SET``, ``FIT.json``
+    or ``MODEL.json``), ``--add-effect`` and ``--set``; and the moving mass (kg) a fit's
+    JSON or a model file gives (``None`` otherwise).
+
+    ``measured``: the model as fitted to its records (a model file's or a fit's offset
+    kept as an effect; ``compare``); otherwise the seal's friction (measurement terms
+    dropped with a warning).
+    """
+    from fcomp.modelfile import is_model_file
+
+    if args.params is not None and is_model_file(args.friction):
+        raise FcompError(f"--params {args.params}: the model file {args.friction} gives the "
+                         "values; change one with --set NAME=VALUE")
+    return _friction(args.friction, args.params, args, use, measured=measured)
+
+
+def _friction(spec: str, params: str | None, args: argparse.Namespace, use: str, *,
+              measured: bool) -> tuple[FrictionModel, float | None]:
+    from fcomp.modelfile import is_model_file, read_model, seal_friction
+
+    mass: float | None = None
+    if is_model_file(spec):
+        if params is not None and is_model_file(params):  # a set gives a plant's values
+            raise FcompError(f"--params {params}: the model file {spec} gives the values; "
+                             "change one with --set NAME=VALUE")
+        if measured:
+            mf = read_model(spec, args.effects)
+            model, mass = mf.measured_model(), mf.mass
+        else:
+            model, dropped = seal_friction(spec, use, args.effects)
+            if dropped:
+                warn("measurement-terms", dropped, "friction")
+    elif params is not None and is_model_file(params):
+        model, mass = _values_file(spec, params, args.effects, use, measured)
+    else:
+        return build_model(spec, params, args), None
     if args.add_effect:
         model = model.with_effects(*args.add_effect)
     overrides = parse_assignments(args.set)
-    return model.with_params(**overrides) if overrides else model
+    return (model.with_params(**overrides) if overrides else model), mass
+
+
+def _values_file(name: str, path: str, effects: str | None, use: str, measured: bool
+                 ) -> tuple[FrictionModel, float | None]:
+    """The model ``name`` with the values of ``--params FILE.json``: a fit's JSON (``fcomp
+    fit --json``) or a model file (``fcomp fit --save-model``) of that model."""
+    from fcomp.diagnosis.compare import model_from_fit
+    from fcomp.modelfile import read_model
+    from fcomp.textdata import check_path, read_text
+
+    source = f"--params {path}"
+    try:
+        doc = json.loads(read_text(check_path(path, "parameter file"), path, what="JSON"))
+    except json.JSONDecodeError as exc:
+        raise FcompError(f"{source}: not valid JSON ({exc.msg}, line {exc.lineno})") from None
+    if not isinstance(doc, dict):
+        raise FcompError(f"{source}: neither a fit's JSON nor a model file (a JSON object is "
+                         "expected)")
+    if isinstance(doc.get("records"), list):
+        raise FcompError(f"{source}: the JSON of a fit of several records; give the fit of "
+                         "one record")
+    if doc.get("model") not in (None, name):
+        raise FcompError(f"{source}: gives the values of {doc['model']}, not of {name}; "
+                         f"give --friction {doc['model']}")
+    if effects is not None:
+        load_effects_module(effects)
+    if "format" in doc or (not measured and isinstance(doc.get("model_file"), dict)):
+        mf = read_model(doc, effects)
+        if measured:
+            return mf.measured_model(), mf.mass
+        if mf.measurement_terms:
+            warn("measurement-terms", mf.dropped_note(use).replace("model document", source),
+                 "params")
+        return mf.model, None
+    return model_from_fit(doc, make_model(name), source=source)
 
 
 def output_path(path: str, suffix: str = ".csv", option: str = "-o") -> Path:
@@ -237,8 +497,9 @@ def json_target(path: str | None) -> Path | None:
     Raises
     ------
     FcompError
-        If ``path`` is empty, a directory, or its folder does not exist (checked before any work, so a failure never leaves a
-        half-written result).
+        If ``path`` is empty, a directory, or under a file (checked before any work, so a
+        failure never leaves a half-written result). Missing folders are created, as for
+        every output (and removed again if the run fails).
     """
     if path is None or path == "-":
         return None
@@ -247,11 +508,18 @@ def json_target(path: str | None) -> Path | None:
     out = Path(path)
     if out.is_dir():
         raise FcompError(f"--json {path}: is a directory")
-    if not out.parent.exists():
-        raise FcompError(f"--json {path}: folder {out.parent} does not exist")
-    if not out.parent.is_dir():
-        raise FcompError(f"--json {path}: {out.parent} is not a folder")
+    _writable_folder("--json", path)
     return out
+
+
+def _writable_folder(option: str, path: str) -> None:
+    """Refuse an output file under a file; a missing folder is fine (every output creates
+    its missing folders, :func:`fcomp.outputs.write_files`)."""
+    parent = Path(path).parent
+    while not parent.exists() and parent != parent.parent:
+        parent = parent.parent
+    if not parent.is_dir():
+        raise FcompError(f"{option} {path}: {parent} is a file, not a folder")
 
 
 def report_dir(path: str | None, option: str = "--report") -> Path | None:
@@ -470,16 +738,14 @@ def provided(command: str) -> Callable[[argparse.Namespace], int]:
 
 def add_closed_loop_run_options(p: argparse.ArgumentParser) -> None:
     """The options of a command that runs many closed loops (``sweep``, ``compensate``):
-    ``--workers``, ``--scheduler``, ``--json``, ``--report``, ``--no-progress``."""
-    p.add_argument("--workers", type=int, default=None, metavar="N",
-                   help="local worker processes (default: CPU count)")
-    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
-                   help="run on the Dask distributed scheduler at ADDRESS (tcp://host:8786)")
+    ``--jobs`` (old spelling ``--workers``), ``--scheduler``, ``--json``, ``--report``,
+    ``--no-progress``."""
+    add_parallel_options(p, "--workers", what="the closed-loop runs")
     p.add_argument("--json", metavar="OUT", default=None,
                    help="write the result as JSON to OUT ('-' for standard output)")
     p.add_argument("--report", metavar="DIR", default=None,
                    help="write a self-contained HTML report to DIR/report.html")
-    p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
+    add_progress_option(p)
 
 
 def result_text(doc: dict) -> str:
@@ -499,6 +765,11 @@ def _finite(value: Any) -> Any:
     return value
 
 
+def wrote(path: Path) -> None:
+    """Announce ``path`` (a report written before the result) after the summary."""
+    WRITTEN.append(path)
+
+
 def emit_result(text: str, json_arg: str | None, out: Path | None, summary: str) -> None:
     """Write a command's result: the JSON ``text`` alone to standard output for
     ``--json -``; otherwise the human ``summary``, then ``text`` to ``out``
@@ -509,6 +780,9 @@ def emit_result(text: str, json_arg: str | None, out: Path | None, summary: str)
         sys.stdout.write(text)
         return
     print(summary)
+    for path in WRITTEN:
+        print(f"wrote {path}")
+    WRITTEN.clear()
     if out is not None:
         write_text(out, text)
         print(f"wrote {out}")

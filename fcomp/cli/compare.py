@@ -1,8 +1,8 @@
-"""``fcomp compare DATA.csv [DATA2.csv ...] --model NAME [--params FIT.json|SET] [--plant NAME]
+"""``fcomp compare DATA.csv [DATA2.csv ...] --friction NAME [--params SET|FIT.json|MODEL.json] [--plant NAME]
 [--json OUT] [--report DIR]`` -- one given model beside the records.
 
-The model (``--model``, with the values of a fit's JSON or a parameter set
-given by ``--params``, effects added by ``--add-effect`` and values changed
+The model (``--friction``, with the values of a parameter set, a fit's JSON or
+a model file given by ``--params``, effects added by ``--add-effect`` and values changed
 by ``--set``) is run along each record's measured motion and its friction
 force compared with the measured one: the RMS error per regime
 (pre-sliding, reversal, sliding, dwell/break-away), how strongly the residual
@@ -12,7 +12,7 @@ force-velocity and force-position loops and the windows where the model
 fails most. Without ``--fit`` the model is compared as given, on every usable
 sample; with ``--fit`` it is first fitted on the training samples and judged
 on the held-out ones. ``--plant NAME`` also simulates that plant with each
-record's valve command ``u`` and compares ``x``, ``p1``, ``p2``. ``--model
+record's valve command ``u`` and compares ``x``, ``p1``, ``p2``. ``--friction
 MODEL.json`` takes a model file (docs/model-file.md: ``fcomp fit
 --save-model``) with its values; its measurement terms (offset, fitted mass)
 are used, as they describe these records.
@@ -24,19 +24,23 @@ JSON (``--json OUT``, ``-`` for standard output)::
      "plant": {RECORD: {"plant", "rms": {"x", "p1", "p2"}}}, "params", "warnings"}
 
 (errors in N; plant-domain errors in m and Pa); ``--report DIR`` writes the
-figures into a self-contained ``DIR/report.html``.
+figures into a self-contained ``DIR/report.html``. ``--jobs N`` / ``--scheduler
+ADDRESS`` run the plant-domain replays (one per record) in local processes or on
+a Dask cluster, with the results of a serial run; the force domain is one
+computation over all the records together (a joint split; with ``--fit``, one
+fit) and runs in the command's own process.
 """
 
 from __future__ import annotations
 
 import argparse
-import json
 import shlex
 from typing import Any
 
 from fcomp.cli import common
 from fcomp.cli.common import emit_result, finite_float, json_target, report_dir, result_text
 from fcomp.errors import FcompError
+from fcomp.parallel import check_scheduler
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -45,12 +49,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("data", nargs="+", metavar="DATA.csv",
                    help="measurement(s) (CSV + TOML sidecar); several files = several experiments")
-    p.add_argument("--model", required=True, metavar="NAME|MODEL.json",
-                   help="friction model name (fcomp list models), or a model file (fcomp fit "
-                   "--save-model) with its values")
-    p.add_argument("--params", default=None, metavar="FIT.json|SET",
-                   help="the values compared: a fit's JSON (fcomp fit --json) or a parameter "
-                   "set (default: the model's defaults)")
+    common.add_friction_option(p, "--model", help="the friction model: a name (fcomp list "
+                               "models), or a model file (fcomp fit --save-model) with its values")
+    common.add_params_option(p, "the model's defaults")
     common.add_model_options(p)  # --add-effect, --effects, --set
     p.add_argument("--fit", action="store_true",
                    help="fit the model on the training samples first and judge it on the "
@@ -74,12 +75,17 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--report", metavar="DIR", default=None,
                    help="write a self-contained HTML report with every figure to "
                    "DIR/report.html")
+    common.add_parallel_options(p, what="the plant-domain replays (--plant), one per record")
+    common.add_progress_option(p)
     p.set_defaults(func=run)
 
 
 def summary(doc: dict[str, Any]) -> str:
-    """The printed summary of a comparison's JSON."""
-    lines = [f"model {doc['description']} ({'fitted on the training samples' if doc['fitted'] else 'as given'}): "
+    """The printed summary of a comparison's JSON: the conclusion
+    (:func:`fcomp.conclusions.of_comparison`) first, then the errors per regime."""
+    from fcomp.conclusions import of_comparison
+
+    lines = [*of_comparison(doc).lines(), "", f"model {doc['description']} ({'fitted on the training samples' if doc['fitted'] else 'as given'}): "
              f"RMS {doc['rms']:.4g} N over the {doc['judged']} samples "
              f"(scored: a prediction band the motion leaves costs; plain y - F "
              f"{doc['rms_plain']:.4g} N; noise floor {doc['noise_floor']:.3g} N)"]
@@ -94,52 +100,23 @@ def summary(doc: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
-def _model(args: argparse.Namespace) -> tuple[Any, float | None]:
-    """The model compared and the mass a fit JSON gives (None otherwise)."""
-    from fcomp.diagnosis.compare import model_from_fit
-    from fcomp.modelfile import is_model_file, read_model
-    from fcomp.textdata import check_path, read_text
-
-    mass = None
-    spec = args.params
-    if is_model_file(args.model):
-        if spec is not None:
-            raise FcompError(f"--params {spec}: the model file {args.model} gives the values; "
-                             "change one with --set NAME=VALUE")
-        mf = read_model(args.model, args.effects)
-        model = mf.measured_model()  # its offset and mass describe the records compared
-        if args.add_effect:
-            model = model.with_effects(*args.add_effect)
-        overrides = common.parse_assignments(args.set)
-        return (model.with_params(**overrides) if overrides else model), mf.mass
-    if spec is not None and spec.lower().endswith(".json"):
-        path = check_path(spec, "fit JSON file")
-        try:
-            doc = json.loads(read_text(path, spec, what="JSON"))
-        except json.JSONDecodeError as exc:
-            raise FcompError(f"--params {spec}: not valid JSON ({exc.msg}, line {exc.lineno})") \
-                from None
-        if isinstance(doc, dict) and doc.get("model") not in (None, args.model):
-            raise FcompError(f"--params {spec}: is a fit of {doc['model']}, not of "
-                             f"{args.model}; give --model {doc['model']}")
-        args.params = None
-        base = common.build_model(args.model, None, argparse.Namespace(
-            effects=args.effects, add_effect=[], set=[]))
-        model, mass = model_from_fit(doc, base, source=f"--params {spec}")
-        if args.add_effect:
-            model = model.with_effects(*args.add_effect)
-        overrides = common.parse_assignments(args.set)
-        return (model.with_params(**overrides) if overrides else model), mass
-    return common.build_model(args.model, spec, args), mass
-
-
 def _values_from(args: argparse.Namespace) -> str:
-    """Where the compared model's values come from, in words (the report's subtitle)."""
-    spec, model = args.params, args.model
-    if model.lower().endswith(".json"):
-        where = f"the model file `{model}`"
-    elif spec is not None and spec.lower().endswith(".json"):
-        where = f"the fit file `{spec}`"
+    """Where the compared model's values come from, in words (the report's subtitle); called
+    once ``--params`` has been read (a JSON file with a ``format`` is a model file)."""
+    import json
+
+    from fcomp.modelfile import is_model_file
+
+    spec, friction = args.params, args.friction
+    if is_model_file(friction):
+        where = f"the model file `{friction}`"
+    elif spec is not None and is_model_file(spec):
+        try:
+            with open(spec, encoding="utf-8") as fh:
+                kind = "model file" if "format" in json.load(fh) else "fit file"
+        except (OSError, ValueError, TypeError):
+            kind = "file"
+        where = f"the {kind} `{spec}`"
     elif spec is not None:
         where = f"the parameter set `{spec}`"
     else:
@@ -157,6 +134,8 @@ def run(args: argparse.Namespace) -> int:
     report = report_dir(args.report)
     if args.cutoff is not None and not args.cutoff > 0:
         raise FcompError(f"--cutoff must be a positive frequency in Hz, got {args.cutoff:g}")
+    common.check_jobs(args.jobs)
+    scheduler = check_scheduler(args.scheduler)
     if args.mass is not None and not args.mass >= 0:
         raise FcompError(f"--mass must be a non-negative number of kg, got {args.mass:g}")
     plant_params: Any = args.plant_params
@@ -168,20 +147,18 @@ def run(args: argparse.Namespace) -> int:
         args.plant, plant_params = pf.kind, pf.parameter_set()
     if args.plant is not None:
         PLANTS.get(args.plant)  # an unknown name now, with the list of known ones
-    extra = [args.params] if args.params and args.params.lower().endswith(".json") else []
     inputs = common.measurement_inputs(args.data)
-    for f in extra:
-        inputs.file(f, "--params")
-    if args.model.lower().endswith(".json"):
-        inputs.file(args.model, "--model")
+    for option, spec in (("--params", args.params), ("--friction", args.friction)):
+        if spec is not None and spec.lower().endswith(".json"):
+            inputs.file(spec, option)
     if args.plant_params is not None and args.plant_params.lower().endswith(".toml"):
         inputs.file(args.plant_params, "--plant-params")
     if args.effects is not None:
         inputs.file(args.effects, "--effects")
     common.check_outputs(inputs, [("--json", out)], [("--report", report, "report")])
-    given = bool(args.params or args.set or args.fit or args.model.lower().endswith(".json"))
+    given = bool(args.params or args.set or args.fit or args.friction.lower().endswith(".json"))
+    model, mass = common.model_with_params(args, use="model compared", measured=True)
     values_from = _values_from(args)
-    model, mass = _model(args)
     data = [Measurement.read(p) for p in args.data]
     for d in data:
         common.warn_sidecar(d)
@@ -189,17 +166,18 @@ def run(args: argparse.Namespace) -> int:
         common.warn("default-params", f"the model {model.describe()} is compared with its "
                     "default values: give params (a fit's JSON or a parameter set) or --fit "
                     "for a model that belongs to these records", "params")
-    comp = compare(model, data, fit=args.fit, mass=args.mass if args.mass is not None else mass,
-                   split=args.split, cutoff_hz=args.cutoff, plant=args.plant,
-                   plant_params=plant_params)
+    with common.Activity(f"compare {args.friction}", enabled=not args.no_progress):
+        comp = compare(data, model, fit=args.fit,
+                       mass=args.mass if args.mass is not None else mass, split=args.split,
+                       cutoff_hz=args.cutoff, plant=args.plant, plant_params=plant_params,
+                       jobs=args.jobs, scheduler=scheduler)
     doc = common.with_warnings(comp.to_dict())
     text = result_text(doc)
     command = "fcomp " + shlex.join(common.ARGV) if common.ARGV else None
     if report is not None:
         with staged_folder(report, "--report", "report", note=command or "fcomp compare") as tmp:
             comp.write_report(tmp, command=command, values_from=values_from)
-        if args.json != "-":
-            print(f"wrote {report / 'report.html'}")
+        common.wrote(report / "report.html")
     emit_result(text, args.json, out, summary(doc))
     return 0
 

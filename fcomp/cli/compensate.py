@@ -1,13 +1,13 @@
-"""``fcomp compensate --plant-params PLANT.toml --friction TRUE.json --models
-BASE.json,DIAG.json [--controllers C,...] [--task T | --reference REF.csv] [--fast]
-[--samples N] [--json OUT] [--report DIR] [--scheduler ADDRESS]`` -- what a better
+"""``fcomp compensate --plant-params PLANT.toml --friction TRUE.json --controller-friction
+BASE.json,DIAG.json [--controllers C,...] [--task T | --reference REF.csv] [--fast|--full]
+[--samples N] [--json OUT] [--report DIR] [--jobs N] [--scheduler ADDRESS]`` -- what a better
 friction model buys in closed loop.
 
 On the plant of a plant file (or ``--plant hydraulic|pneumatic``, a built-in
 plant) whose simulated friction is ``--friction`` (a model file, or a model
 name), every controller (``pid``, ``pid-ff``, ``lugre-observer``, ``ekf``,
 ``mpc``; ``--controllers`` a subset) is built once with each model of
-``--models`` (model files, named by their stems; the first is the baseline)
+``--controller-friction`` (model files, named by their stems; the first is the baseline)
 and run on the standard tasks (``slow-sine``, ``steps``, ``low-velocity-ramp``,
 ``seed002-sine``; ``--task`` one, ``--fast`` their short versions) or on a
 reference of your own (``--reference REF.csv``: columns ``t`` (s) and
@@ -21,7 +21,7 @@ in which every parameter of the true friction and the moving mass are off by
 a factor uniform in 1 +- 0.2 (``--spread``), every controller and model on the
 same draws.
 Measurement terms of a model file (force offset, fitted mass, channel lag)
-are dropped with a warning. The runs go to local processes (``--workers``)
+are dropped with a warning. The runs go to local processes (``--jobs``)
 or to a Dask cluster (``--scheduler ADDRESS``).
 
 JSON: ``{"plant", "friction", "models", "baseline", "controllers", "tasks",
@@ -47,11 +47,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="hydraulic or pneumatic: a built-in plant; with --plant-params, its kind")
     p.add_argument("--plant-params", default=None, metavar="PLANT.toml",
                    help="the plant as a file (docs/plants.md: fcomp plant template)")
-    p.add_argument("--friction", required=True, metavar="TRUE.json|NAME",
-                   help="the plant's simulated (true) friction: a model file or a model name")
-    p.add_argument("--models", required=True, metavar="BASE.json,DIAG.json,...",
-                   help="the controllers' friction models, the first the baseline: model "
-                   "files (named by their stems) or model names")
+    common.add_friction_option(p, help="the plant's simulated (true) friction: a model file "
+                               "or a model name")
+    common.add_option(p, "--controller-friction", "--models", required=True,
+                      metavar="M1,M2,...",
+                      help="the controllers' friction models, the first the baseline: model "
+                      "files (BASE.json,DIAG.json; named by their stems) or model names")
     p.add_argument("--controllers", default=None, metavar="C1,C2,...",
                    help="controllers to run (default: pid,pid-ff,lugre-observer,ekf,mpc)")
     p.add_argument("--task", default=None,
@@ -59,7 +60,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    "seed002-sine)")
     p.add_argument("--reference", default=None, metavar="REF.csv",
                    help="your own reference instead: a CSV with columns t (s), x_ref (m)")
-    p.add_argument("--fast", action="store_true", help="the short versions of the tasks")
+    common.add_length_options(p, "full", fast="the short versions of the tasks",
+                              full="the tasks' full versions")
     p.add_argument("--samples", type=int, default=None, metavar="N",
                    help="robustness draws (default 8, 4 with --fast; 0: none)")
     p.add_argument("--spread", type=finite_float, default=0.2,

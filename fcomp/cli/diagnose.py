@@ -1,6 +1,6 @@
-"""``fcomp diagnose DATA.csv [DATA2.csv ...] --baseline NAME [--json OUT] [--report DIR]``.
+"""``fcomp diagnose DATA.csv [DATA2.csv ...] --friction NAME [--json OUT] [--report DIR]``.
 
-Compare the baseline friction model with the measurement(s), find which
+Compare the baseline friction model (``--friction``) with the measurement(s), find which
 physical effect is missing, add it, refit, and watch the held-out error fall
 (:class:`fcomp.diagnosis.Diagnosis`). Several files are several experiments
 (e.g. runs at different pressure levels); a file with an ``experiment``
@@ -13,11 +13,11 @@ column is split by it. Prints a summary; ``--json OUT`` writes
 
 (all errors in newtons, on held-out data; ``-`` writes to standard output)
 and ``--report DIR`` a self-contained ``DIR/report.html`` with every figure.
-``--baseline MODEL.json`` starts from a model file (a model with effects,
+``--friction MODEL.json`` starts from a model file (a model with effects,
 diagnosed further). ``--save-model MODEL.json`` writes the final model as a model file
 (docs/model-file.md; the JSON's ``model_file`` is the same document), a fitted
 mass, the channel lag and measurement effects in it as measurement terms.
-``--add EFFECT`` adds an effect (catalogue or registered with ``--effects
+``--add-effect EFFECT`` adds an effect (catalogue or registered with ``--effects
 MODULE.py``) before the search, whatever the acceptance rule says.
 """
 
@@ -38,22 +38,22 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("data", nargs="+", metavar="DATA.csv",
                    help="measurement(s) (CSV + TOML sidecar); several files = several experiments")
-    p.add_argument("--baseline", required=True, metavar="NAME|MODEL.json",
-                   help="friction model name (fcomp list models), or a model file (a model "
-                   "with effects to diagnose further)")
+    common.add_friction_option(p, "--baseline", help="the baseline friction model: a name "
+                               "(fcomp list models), or a model file (a model with effects to "
+                               "diagnose further)")
     p.add_argument("--json", metavar="OUT", default=None,
                    help="write the result as JSON to OUT ('-' for standard output)")
     p.add_argument("--report", metavar="DIR", default=None,
                    help="write a self-contained HTML report to DIR/report.html")
-    p.add_argument("--add", action="append", default=[], metavar="EFFECT",
-                   help="add this effect first (and refit), whatever the rule says; repeatable")
+    common.add_add_effect_option(p, "--add", help="add this effect first (and refit), "
+                                 "whatever the rule says; repeatable")
     p.add_argument("--effects", metavar="MODULE.py", default=None,
                    help="a Python file that registers the user's own effects (they become "
                    "candidates too)")
     p.add_argument("--candidates", metavar="E1,E2,...", default=None,
                    help="effects to try (default: every registered effect)")
     p.add_argument("--no-search", action="store_true",
-                   help="only the baseline and the --add effects; no search")
+                   help="only the baseline and the --add-effect effects; no search")
     p.add_argument("--split", default="auto", choices=["auto", "experiment", "segment"],
                    help="held-out split: by experiment (4+ experiments under auto) or by "
                    "contiguous segment")
@@ -62,8 +62,6 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    "the sample rate and the position noise)")
     p.add_argument("--max-steps", type=int, default=6, metavar="N",
                    help="most effects the search adds (default 6)")
-    p.add_argument("--jobs", type=int, default=None, metavar="N",
-                   help="parallel refits (default: CPU count, at most 4)")
     check = p.add_mutually_exclusive_group()
     check.add_argument("--baseline-check", action="store_true",
                        help="always diagnose again from a baseline of the other kind (static "
@@ -72,17 +70,19 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                        "tie, or structure left)")
     check.add_argument("--no-baseline-check", action="store_true",
                        help="never run that baseline check")
-    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
-                   help="run the candidate refits on the Dask distributed scheduler at ADDRESS "
-                   "(tcp://host:8786) instead of local processes (--jobs); the same results")
+    common.add_parallel_options(p, what="the candidate refits", default="CPU count, at most 4")
     common.add_save_model_option(p, "the diagnosis's final model")
-    p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
+    common.add_progress_option(p)
     p.set_defaults(func=run)
 
 
 def summary(doc: dict) -> str:
-    """The printed summary of a diagnosis JSON."""
-    lines = [f"baseline {doc['baseline']}: held-out RMS {doc['rms_baseline']:.4g} N "
+    """The printed summary of a diagnosis JSON: the conclusion
+    (:func:`fcomp.conclusions.of_diagnosis`) first, then the steps, the baseline check and
+    the verdict's reasons, one per line (the warnings go to stderr, grouped)."""
+    from fcomp.conclusions import of_diagnosis
+
+    lines = [*of_diagnosis(doc).lines(), "", f"baseline {doc['baseline']}: held-out RMS {doc['rms_baseline']:.4g} N "
              f"(noise floor {doc['noise_floor']:.3g} N, {doc['noise_method']}; {doc['split']})"]
     for i, s in enumerate(doc["steps"], 1):
         tag = "accepted" if s["accepted"] else "rejected"
@@ -118,9 +118,8 @@ def summary(doc: dict) -> str:
     elif doc["baseline_check"]["why"] != "not asked for":
         lines.append(f"baseline check not run: {doc['baseline_check']['why']} "
                      "(--baseline-check runs it)")
-    lines.append(f"verdict: {doc['verdict']} -- {doc['reason']}")
-    for w in doc.get("warnings", []):
-        lines.append(f"warning ({w['code']}): {w['message']}")
+    lines.append(f"verdict: {doc['verdict']}, because:")
+    lines += [f"  - {part}" for part in doc["reason"].split("; ")]
     return "\n".join(lines)
 
 
@@ -136,27 +135,26 @@ def run(args: argparse.Namespace) -> int:
     report = common.report_dir(args.report)
     if args.max_steps < 0:
         raise FcompError(f"--max-steps must be a non-negative integer, got {args.max_steps}")
-    if args.jobs is not None and args.jobs < 1:
-        raise FcompError(f"--jobs must be a positive integer, got {args.jobs}")
+    common.check_jobs(args.jobs)
     if args.cutoff is not None and not args.cutoff > 0:
         raise FcompError(f"--cutoff must be a positive frequency in Hz, got {args.cutoff:g}")
     saved = common.model_target(args.save_model)
     common.guard_outputs(args.data, args.effects, [("--json", out), ("--save-model", saved)],
-                         [("--report", report, "report")], models=[("--baseline", args.baseline)])
+                         [("--report", report, "report")], models=[("--friction", args.friction)])
     if args.effects is not None:
         load_effects_module(args.effects)
-    baseline = args.baseline
+    baseline = args.friction
     if is_model_file(baseline):
         mf = read_model(baseline, args.effects)
         if mf.measurement_terms:
             common.warn("measurement-terms", mf.dropped_note("baseline (the diagnosis finds "
-                        "its own)"), "baseline")
+                        "its own)"), "friction")
         baseline = mf.model
     candidates = common.name_list(args.candidates, "--candidates")
     data = [Measurement.read(p) for p in args.data]
     for d in data:
         common.warn_sidecar(d)
-    diag = Diagnosis(baseline, effects=candidates, add=args.add,
+    diag = Diagnosis(baseline, candidates=candidates, add=args.add_effect,
                      search=not args.no_search, split=args.split, cutoff_hz=args.cutoff,
                      max_steps=args.max_steps, n_jobs=args.jobs,
                      scheduler=check_scheduler(args.scheduler),
@@ -164,15 +162,17 @@ def run(args: argparse.Namespace) -> int:
                      check_baseline=(True if args.baseline_check else
                                      False if args.no_baseline_check else "auto"))
     diag.fit(data)
-    doc = common.with_warnings({**diag.to_dict(),
+    found = diag.to_dict()
+    for w in found.get("warnings", []):  # printed on stderr after the summary, grouped
+        common.warn(w["code"], w["message"], w["parameter"])
+    doc = common.with_warnings({**found,
                                 "model_file": diag.model_file(common.model_source(args.data))})
     text = result_text(doc)
     command = "fcomp " + shlex.join(common.ARGV) if common.ARGV else None
     if report is not None:
         with staged_folder(report, "--report", "report", note=command or "fcomp diagnose") as tmp:
             write_report(diag, tmp, command=command)
-        if args.json != "-":
-            print(f"wrote {report / 'report.html'}")
+        common.wrote(report / "report.html")
     emit_result(text, args.json, out, summary(doc))
     common.save_model_file(doc["model_file"], saved, args.json)
     return 0

@@ -1,4 +1,5 @@
-"""``fcomp export CONTROLLER --plant hydraulic|pneumatic [--params SET] [--friction MODEL]
+"""``fcomp export CONTROLLER --plant hydraulic|pneumatic [--params SET|FIT.json|MODEL.json]
+[--friction NAME|MODEL.json]
 -o DIR [--json OUT]`` -- a controller's step as C code for a real-time target.
 
 The controller (``pid``, ``pid-ff``, ``lugre-observer``, ``ekf``, ``mpc``) built on the
@@ -24,6 +25,7 @@ from __future__ import annotations
 
 import argparse
 
+from fcomp.cli import common
 from fcomp.cli.common import add_model_options, finite_float, provided
 
 
@@ -37,12 +39,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    "--plant-params, its kind")
     p.add_argument("--plant-params", default=None, metavar="PLANT.toml",
                    help="the plant as a file (docs/plants.md: fcomp plant template)")
-    p.add_argument("--params", default=None,
-                   help="parameter set of the plant and the friction model (default: the "
-                   "plant's)")
-    p.add_argument("--friction", default="nmlgm",
-                   help="the controller's friction model: a name or a model file MODEL.json "
-                   "(default nmlgm)")
+    common.add_params_option(p, "the plant's parameter set; a set gives the plant's values "
+                             "too")
+    common.add_friction_option(p, required=False, default="nmlgm",
+                               help="the controller's friction model: a name or a model file "
+                               "(default nmlgm)")
     p.add_argument("-o", "--output", required=True, metavar="DIR",
                    help="folder for the C files (replaced whole; fcomp's own or new)")
     p.add_argument("--json", metavar="OUT", default=None,
@@ -56,4 +57,5 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--option", action="append", default=[], metavar="NAME=VALUE",
                    help="a controller option (observer_gain=30, bandwidth=50, ...); repeatable")
     add_model_options(p)
+    common.add_progress_option(p)
     p.set_defaults(func=provided("export"))

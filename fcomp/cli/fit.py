@@ -1,4 +1,4 @@
-"""``fcomp fit DATA.csv [DATA2.csv ...] --model NAME [--offset] [--json OUT]`` -- identify a
+"""``fcomp fit DATA.csv [DATA2.csv ...] --friction NAME [--offset] [--json OUT]`` -- identify a
 friction model.
 
 Prints a table of estimates with standard errors and confidence intervals
@@ -12,11 +12,13 @@ a bound, an interval of a positive quantity reaching zero, an implausible mass,
 parameters not determined or trading off) are printed under the table, one
 ``fcomp: warning: ...`` line each, and listed in the JSON's ``warnings``. A fit that does not converge
 says so on one line and exits with status 2 (no JSON is written).
-``--set NAME=VALUE`` gives a start value, ``--fix NAME=VALUE`` holds a parameter.
+``--params SET|FIT.json|MODEL.json`` gives the start values (a parameter set, a fit's
+JSON or a model file), ``--set NAME=VALUE`` one start value, ``--fix NAME=VALUE`` holds a
+parameter.
 Several records are fitted one by one, each on its own, in local processes
 (``--jobs N``) or on a Dask cluster (``--scheduler ADDRESS``); the JSON is then
 ``{"model", "records": [{"data", "params", "stderr", "rms", ...}, ...], "warnings"}``.
-``--model MODEL.json`` starts the fit from a model file (its model, effects and
+``--friction MODEL.json`` starts the fit from a model file (its model, effects and
 values). ``--save-model MODEL.json`` writes the fitted model as a model file
 (docs/model-file.md; the JSON's ``model_file`` is the same document), a fitted
 mass and offset in it as measurement terms.
@@ -32,13 +34,13 @@ import argparse
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from fcomp.cli import common
 from fcomp.cli.common import (
     Activity,
     add_model_options,
     add_save_model_option,
     emit_result,
     finite_float,
-    friction_model,
     guard_outputs,
     json_target,
     model_source,
@@ -66,16 +68,14 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("data", nargs="+", metavar="DATA.csv",
                    help="measurement (CSV + TOML sidecar); several files are fitted one by "
                    "one, in parallel (--jobs, --scheduler)")
-    p.add_argument("--model", required=True, metavar="NAME|MODEL.json",
-                   help="friction model name (fcomp list models), or a model file whose "
-                   "model and values start the fit")
+    common.add_friction_option(p, "--model", help="the friction model: a name (fcomp list "
+                               "models), or a model file whose model and values start the fit")
     p.add_argument("--offset", action="store_true",
                    help="fit a constant force offset too (params.offset, N)")
     p.add_argument("--json", metavar="OUT", default=None,
                    help="write the result as JSON to OUT ('-' for standard output)")
-    p.add_argument("--params", default=None, metavar="SET",
-                   help="parameter set giving the values of the fixed parameters and of those "
-                   "not read off the data (default: the model's defaults)")
+    common.add_params_option(p, "the model's defaults; the values start the fit and give "
+                             "those the data do not determine")
     add_model_options(p)  # --add-effect, --effects, --set (start values of the fit)
     p.add_argument("--fix", action="append", default=[], metavar="NAME=VALUE",
                    help="hold a parameter at VALUE (SI units) instead of fitting it; repeatable")
@@ -104,19 +104,18 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    "estimates, the fit drawn, and the fitted model compared with the record "
                    "(errors per regime, residual against every feature, loops, worst windows)")
     add_save_model_option(p, "the fitted model")
-    p.add_argument("--no-progress", action="store_true", help="no progress line on stderr")
-    p.add_argument("--jobs", type=int, default=None, metavar="N",
-                   help="several records: local processes fitting them (default: CPU count)")
-    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
-                   help="several records: fit them on the Dask distributed scheduler at "
-                   "ADDRESS (tcp://host:8786) instead of local processes")
+    common.add_progress_option(p)
+    common.add_parallel_options(p, what="the fits of several records")
     p.set_defaults(func=run)
 
 
-def _table(f: FrictionFit) -> str:
-    """The printed result: estimates, the parameters held (not determined by the record)
-    and the RMS error (the plausibility warnings follow as ``fcomp: warning:`` lines)."""
-    lines = [f"model {f.to_dict()['model']}  ({f.method_} fit, target {f.target_}, "
+def _table(f: FrictionFit, doc: dict[str, Any]) -> str:
+    """The printed result: the conclusion (:func:`fcomp.conclusions.of_fit`), then the
+    estimates, the parameters held (not determined by the record) and the RMS error (the
+    plausibility warnings follow on stderr as ``fcomp: warning:`` lines)."""
+    from fcomp.conclusions import of_fit
+
+    lines = [*of_fit(doc).lines(), "", f"model {f.to_dict()['model']}  ({f.method_} fit, target {f.target_}, "
              f"{f.n_samples_} samples)"]
     pct = round(100 * f.confidence)
     head = f"{'parameter':12s} {'value':>12s} {'stderr':>11s}   {pct}% interval{'':14s} unit"
@@ -131,7 +130,6 @@ def _table(f: FrictionFit) -> str:
 def run(args: argparse.Namespace) -> int:
     from fcomp.identification import FrictionFit
     from fcomp.measurement import Measurement
-    from fcomp.modelfile import is_model_file
 
     out = json_target(args.json)
     if args.max_nfev < 1:
@@ -147,8 +145,7 @@ def run(args: argparse.Namespace) -> int:
                          f"got {args.confidence:g}")
     report = report_dir(args.report)
     scheduler = check_scheduler(args.scheduler)
-    if args.jobs is not None and args.jobs < 1:
-        raise FcompError(f"--jobs must be a positive integer, got {args.jobs}")
+    common.check_jobs(args.jobs)
     if report is not None and len(args.data) > 1:
         raise FcompError("--report draws one fit: give one record (or fit the records one "
                          "by one)")
@@ -157,11 +154,8 @@ def run(args: argparse.Namespace) -> int:
         raise FcompError("--save-model writes one fitted model: give one record (or fit the "
                          "records one by one)")
     guard_outputs(args.data, args.effects, [("--json", out), ("--save-model", saved)],
-                  [("--report", report, "report")], models=[("--model", args.model)])
-    if args.params is not None and is_model_file(args.model):
-        raise FcompError(f"--params {args.params}: the model file {args.model} gives the "
-                         "values the fit starts from")
-    model = friction_model(args.model, args.params, args, use="model the fit starts from")
+                  [("--report", report, "report")], models=[("--friction", args.friction), ("--params", args.params or "")])
+    model, _ = common.model_with_params(args, use="model the fit starts from")
     initial = parse_assignments(args.set)
     fixed = parse_assignments(args.fix, "--fix")
     both = sorted(set(initial) & set(fixed))
@@ -180,14 +174,14 @@ def run(args: argparse.Namespace) -> int:
         return _run_many(args, model, options, out, scheduler)
     data = records[0]
     fit = FrictionFit(model, **options)
-    with Activity(f"fit {args.model}", enabled=not args.no_progress):
+    with Activity(f"fit {args.friction}", enabled=not args.no_progress):
         fit.fit(data)
     for w in fit.warnings_:  # printed under the table, recorded in the JSON
         warn(w.code, w.message, w.parameter)
     doc = with_warnings({**fit.to_dict(), "model_file": fit.model_file(model_source(args.data))})
     if report is not None:
         _write_report(fit, data, report, args)
-    emit_result(result_text(doc), args.json, out, _table(fit))
+    emit_result(result_text(doc), args.json, out, _table(fit, doc))
     save_model_file(doc["model_file"], saved, args.json)
     return 0
 
@@ -213,7 +207,7 @@ def _run_many(args: argparse.Namespace, model: Any, options: dict[str, Any],
     from fcomp.progress import progress_bar
 
     jobs = [(path, model, options) for path in args.data]
-    bar = progress_bar(f"fit {args.model}", len(jobs), enabled=not args.no_progress,
+    bar = progress_bar(f"fit {args.friction}", len(jobs), enabled=not args.no_progress,
                        unit="record")
     try:
         docs = run_tasks(fit_record, jobs, workers=args.jobs, scheduler=scheduler,
@@ -253,5 +247,4 @@ def _write_report(fit: FrictionFit, data: Any, report: Path, args: argparse.Name
         why = ""
     with staged_folder(report, "--report", "report", note=command) as tmp:
         write_fit_report(fit, comp, tmp, command=command, note=why)
-    if args.json != "-":
-        print(f"wrote {report / 'report.html'}")
+    common.wrote(report / "report.html")

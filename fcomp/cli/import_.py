@@ -1,4 +1,4 @@
-"""``fcomp import KIND SRC -o OUT.csv`` -- convert a real data file to the measurement format.
+r"""``fcomp import KIND SRC -o OUT.csv`` -- convert a real data file to the measurement format.
 
 KIND is ``emps`` (EMPS benchmark .mat), ``zillen`` (TU Delft pneumatic
 seal-friction text file), ``mataveid`` (MataveID hydraulic bench CSV), ``mat``
@@ -43,7 +43,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                        description=__doc__)
     p.add_argument("kind", metavar="KIND", help=f"the file's kind: {kinds}")
     p.add_argument("src", metavar="SRC", help="the file to convert")
-    p.add_argument("-o", "--output", required=True, metavar="OUT.csv")
+    p.add_argument("-o", "--output", required=True, metavar="OUT.csv",
+                   help="the measurement written (OUT.csv and its sidecar OUT.toml)")
     p.add_argument("--map", dest="mapping", default=None, metavar="COL=EXPR,...",
                    help="mat, csv: column mapping, e.g. t=time,x=qm,F_ext=gtau*vir "
                    "(products of variables or CSV columns and numbers; a leading - flips the "
@@ -54,10 +55,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--drop", default=None, metavar="COLUMN,...",
                    help="csv: columns of the file left out ('*': every column not mapped); "
                    "any other unmapped column is an error")
-    p.add_argument("--delimiter", default=None, choices=[",", ";", "tab"],
-                   help="csv: the field separator (default: the one the header uses)")
-    p.add_argument("--decimal", default=".", choices=[".", ","],
-                   help="csv: the decimal mark (default '.')")
+    p.add_argument("--delimiter", default=None, type=_delimiter, metavar="comma|semicolon|tab",
+                   help="csv: the field separator, comma (','), semicolon (';') or tab "
+                   "(default: the one the header uses)")
+    p.add_argument("--decimal", default=".", type=_decimal, metavar="point|comma",
+                   help="csv: the decimal mark, point ('.', the default) or comma (',')")
     p.add_argument("--sidecar", default=None, metavar="RIG.toml",
                    help="mat, csv: a TOML file with kind, pressure, [rig], [signals] "
                    "(docs/data-format.md)")
@@ -67,6 +69,27 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--position-scale", type=finite_float, default=None, metavar="M_PER_V",
                    help="mataveid: a calibration of the position signal in m/V, adds x and x_ref")
     p.set_defaults(func=run)
+
+
+#: ``--delimiter`` and ``--decimal``: the words (and the characters) each accepts.
+_DELIMITERS = {"comma": ",", ",": ",", "semicolon": ";", ";": ";", "tab": "tab", "\t": "tab"}
+_DECIMALS = {"point": ".", ".": ".", "comma": ",", ",": ","}
+
+
+def _delimiter(text: str) -> str:
+    """argparse ``type=`` of ``--delimiter``: ``,``, ``;`` or ``tab``."""
+    try:
+        return _DELIMITERS[text.strip().lower()]
+    except KeyError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not comma, semicolon or tab") from None
+
+
+def _decimal(text: str) -> str:
+    """argparse ``type=`` of ``--decimal``: ``.`` or ``,``."""
+    try:
+        return _DECIMALS[text.strip().lower()]
+    except KeyError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not point or comma") from None
 
 
 def run(args: argparse.Namespace) -> int:

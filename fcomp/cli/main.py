@@ -8,8 +8,9 @@ What every command shares, enforced here:
 * a problem with the input is one line ``fcomp: error: ...`` on stderr and
   exit status 2, never a traceback; an error raised from inside the user's
   ``--effects`` module names that file and line (:mod:`fcomp.usercode`);
-* warnings (``fcomp: warning: ...``, one line each) are printed after a
-  successful run; Python and numpy warnings raised on the way are collected
+* warnings (``fcomp: warning: ...``) are printed after a successful run, on
+  stderr, grouped: one line each, or one counted line for several of one kind
+  (:func:`fcomp.conclusions.grouped_warnings`); Python and numpy warnings raised on the way are collected
   and printed the same way, never as raw multi-line warnings; a failed run
   prints only its error line;
 * Ctrl-C and SIGTERM interrupt cleanly: outputs are staged, so an
@@ -40,7 +41,12 @@ COMMANDS = ("simulate", "fit", "compare", "diagnose", "sweep", "compensate", "st
 
 
 class _Parser(argparse.ArgumentParser):
-    """argparse with one-line errors and exit status 2."""
+    """argparse with one-line errors and exit status 2, its help in plain text
+    (:class:`fcomp.cli.common.HelpFormatter`, whatever formatter a command asks for)."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        kwargs["formatter_class"] = common.HelpFormatter
+        super().__init__(*args, **kwargs)
 
     def error(self, message: str) -> None:  # type: ignore[override]
         sys.stderr.write(f"{self.prog}: error: {plain(message)} (see --help)\n")
@@ -112,8 +118,10 @@ def _signals_interrupt() -> Iterator[None]:
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    common.say_deprecated(args)
     common.ARGV = list(sys.argv[1:] if argv is None else argv)
     common.WARNINGS.clear()
+    common.WRITTEN.clear()
     with warnings.catch_warnings(record=True) as caught, _signals_interrupt():
         common.PYTHON_WARNINGS = caught
         try:
@@ -124,8 +132,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             for w in caught:
                 common.warn(*common.python_warning(w))
     if code == 0:
-        for item in common.WARNINGS:
-            sys.stderr.write(f"fcomp: warning: {plain(item['message'])}\n")
+        from fcomp.conclusions import grouped_warnings
+
+        for line in grouped_warnings(common.WARNINGS):
+            sys.stderr.write(f"fcomp: warning: {plain(line)}\n")
     return code
 
 

@@ -3,7 +3,9 @@
 
 Plants: motion (input: velocity, m/s), hydraulic (valve current, A),
 pneumatic (valve command, -1..1), presliding-rig (differential valve
-command, V), force-rig (external force, N). ``--set NAME=VALUE`` changes a
+command, V), force-rig (external force, N). ``--params`` takes a parameter
+set (the plant's and the friction's values), a fit's JSON or a model file (the
+friction's values; the plant keeps its own). ``--set NAME=VALUE`` changes a
 friction *or* plant parameter (SI units, e.g. ``--set mass=50``); ``--x0
 NAME=VALUE`` changes one state of the documented default initial state
 (e.g. ``--x0 x=0.05``). The ODE plants run on the engine of
@@ -26,6 +28,7 @@ from __future__ import annotations
 
 import argparse
 
+from fcomp.cli import common
 from fcomp.cli.common import add_model_options, finite_float, provided
 
 
@@ -34,9 +37,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                        description=__doc__)
     p.add_argument("plant", help="plant name: motion, hydraulic, pneumatic, presliding-rig, "
                    "force-rig")
-    p.add_argument("--friction", required=True, metavar="NAME|MODEL.json",
-                   help="friction model name, or a model file (fcomp fit --save-model)")
-    p.add_argument("--params", default=None, help="parameter set name (default: the plant's)")
+    common.add_friction_option(p)
+    common.add_params_option(p, "the plant's parameter set; a set gives the plant's values "
+                             "too")
     p.add_argument("--plant-params", default=None, metavar="PLANT.toml",
                    help="a plant file (hydraulic or pneumatic; fcomp plant template) instead "
                    "of the built-in plant's parameters")
@@ -44,7 +47,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="sine:amplitude=A,frequency=F | step:amplitude=A | csv:PATH")
     p.add_argument("--duration", required=True, type=finite_float, help="simulated time, s")
     p.add_argument("--rate", type=finite_float, default=1000.0, help="output sample rate, Hz")
-    p.add_argument("-o", "--output", required=True, metavar="OUT.csv")
+    p.add_argument("-o", "--output", required=True, metavar="OUT.csv",
+                   help="the measurement written (OUT.csv and its sidecar OUT.toml)")
     p.add_argument("--x0", action="append", default=[], metavar="STATE=VALUE",
                    help="initial value of one state (SI: pressures absolute, x within the "
                    "stroke); repeatable; default: the plant's documented initial state")
@@ -59,7 +63,6 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--coupling", type=finite_float, default=None, metavar="S",
                    help="longest coupling interval (s) for friction with discrete memory "
                    "(nmlgm-hysteresis; default 1e-4)")
-    p.add_argument("--no-progress", action="store_true",
-                   help="no progress line on a terminal during long runs")
+    common.add_progress_option(p)
     add_model_options(p)
     p.set_defaults(func=provided("simulate"))

@@ -1,4 +1,4 @@
-"""``fcomp study NAME [--out DIR] [--fast] [--scheduler ADDRESS]`` -- run a study; writes
+"""``fcomp study NAME [--out DIR] [--fast|--full] [--jobs N] [--scheduler ADDRESS]`` -- run a study; writes
 DIR/summary.json, figures and DIR/report.html (``all``: every study in DIR/NAME/ and
 DIR/index.html). ``--scheduler`` sends the study's independent jobs (the closed-loop runs
 of ``compensators``, the candidate refits of ``missing-physics``) to a Dask cluster; the
@@ -27,22 +27,18 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    "available)")
     p.add_argument("--out", default=None, metavar="DIR",
                    help="output directory (default: study-NAME in the current directory)")
-    p.add_argument("--fast", action="store_true",
-                   help="fast mode: shorter runs, as in CI")
-    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
-                   help="run the independent jobs (closed-loop runs, candidate refits) on the "
-                   "Dask distributed scheduler at ADDRESS (tcp://host:8786); default: local "
-                   "processes")
-    p.add_argument("--workers", type=int, default=None, metavar="N",
-                   help="local worker processes (default: the study's choice)")
-    p.add_argument("--no-progress", action="store_true", help="no progress bars on stderr")
+    common.add_length_options(p, "full", fast="shorter runs, as in CI",
+                              full="the study's full runs")
+    common.add_parallel_options(p, "--workers", what="the study's independent jobs (closed-loop "
+                                "runs, candidate refits)", default="the study's choice")
+    common.add_progress_option(p)
     p.add_argument("--plant-params", default=None, metavar="PLANT.toml",
                    help="compensators: run on the plant of a plant file (fcomp plant template) "
                    "instead of the built-in hydraulic and pneumatic plants")
-    p.add_argument("--friction", default=None, metavar="NAME|MODEL.json",
-                   help="compensators: the plant's true friction, a model name or a model file "
-                   "(default nmlgm); the controllers get the same model with the study's "
-                   "mismatch")
+    common.add_friction_option(p, required=False,
+                               help="compensators: the plant's true friction, a model name or "
+                               "a model file (default nmlgm); the controllers get the same "
+                               "model with the study's mismatch")
     common.add_effects_option(p, "registers the user's own effects a --friction model file "
                               "names (compensators)")
     p.set_defaults(func=provided("study"))

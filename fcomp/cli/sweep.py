@@ -1,5 +1,6 @@
 """``fcomp sweep [--plant P] [--task T] [--controllers C,...] [--samples N | --grid
-PARAM=F1,F2,...] [--json OUT] [--report DIR] [--scheduler ADDRESS]`` -- Monte Carlo and
+PARAM=F1,F2,...] [--fast|--full] [--json OUT] [--report DIR] [--jobs N]
+[--scheduler ADDRESS]`` -- Monte Carlo and
 parameter grids over compensators and friction-model mismatch.
 
 Every controller (``pid``, ``pid-ff``, ``lugre-observer``, ``ekf``, ``mpc``) runs
@@ -24,7 +25,7 @@ files (``MODEL.json``, docs/model-file.md; their measurement terms are dropped
 with a warning). A friction model *named* takes the values of the built-in
 plant of the plant's kind.
 
-The runs are independent jobs: local processes by default (``--workers``),
+The runs are independent jobs: local processes by default (``--jobs``),
 or the Dask distributed cluster at ``--scheduler ADDRESS``; the results are
 the same. JSON: ``{"mode", "plant", "task", "controllers", "runs": [{"controller",
 "sample", "mismatch", "noise", "controller_friction", "status", "metrics"}, ...],
@@ -64,12 +65,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--controller-friction", default=None, metavar="M1,M2,...",
                    help="grid over the friction models the controllers are built with "
                    "(e.g. lugre,nmlgm; friction-model mismatch)")
-    p.add_argument("--friction", default="nmlgm", metavar="NAME|MODEL.json",
-                   help="the plant's true friction model: a name or a model file (default "
-                   "nmlgm)")
+    common.add_friction_option(p, required=False, default="nmlgm",
+                               help="the plant's true friction model: a name or a model file "
+                               "(default nmlgm)")
     common.add_effects_option(p)
     p.add_argument("--seed", type=int, default=2026, help="seed of the draws and the noise")
-    p.add_argument("--full", action="store_true",
-                   help="full task durations (default: the fast ones)")
+    common.add_length_options(p, "fast", fast="the tasks' short durations",
+                              full="full task durations")
     common.add_closed_loop_run_options(p)
     p.set_defaults(func=provided("sweep"))

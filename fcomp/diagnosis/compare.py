@@ -248,6 +248,10 @@ def fitted_model(fit: Any) -> tuple[FrictionModel, float | None]:
 COMPARE_SAMPLES = 200_000
 
 
+#: A predicted force beyond this (N) is no cylinder's: the values given are wrong.
+MAX_FORCE = 1e9
+
+
 def compare(model: str | FrictionModel, data: Measurement | Sequence[Measurement] | DiagnosisData,
             *, fit: bool = False, mass: float | None = None, split: str = "auto",
             cutoff_hz: float | None = None) -> Comparison:
@@ -297,10 +301,17 @@ def compare(model: str | FrictionModel, data: Measurement | Sequence[Measurement
                                  "mass: give it (mass, a fit's params.mass) or fit the model")
             values["mass"] = float(mass)
         refit = Refit(d, sp, seg.d_pre, max_samples=COMPARE_SAMPLES, noise=floor)
-        res = refit.result(mdl, values, 0)
+        with np.errstate(over="ignore", invalid="ignore"):  # judged just below
+            res = refit.result(mdl, values, 0)
         judged, label = seg.valid, "usable"
     r = res.residual  # scored (:func:`.scoring.scored_residual`): what decides
     plain, located = res.plain_residual, res.located
+    if not (np.abs(res.F_hat[judged]) < MAX_FORCE).all():  # also catches nan
+        huge = {k: v for k, v in res.model.flat_params().items() if abs(v) > 1e100}
+        raise FcompError(f"{', '.join(d.labels[:3])}: the model {res.model.describe()} gives "
+                         f"forces beyond {MAX_FORCE:.0e} N or not finite on this record"
+                         + (f" (values {', '.join(f'{k} = {v:.3g}' for k, v in huge.items())})"
+                            if huge else "") + ": check the parameter values")
     rms = float(np.sqrt(np.mean(r[judged] ** 2))) if judged.any() else math.nan
     width = max(10, int(round(0.25 / d.scales.dt)))
     bounds = [e.start for e in d.experiments[1:]]

@@ -57,7 +57,7 @@ from fcomp.diagnosis.verdict import VERDICTS, VerdictRule
 from fcomp.diagnosis.workers import worker_pool
 from fcomp.diagnosis.writers import model_file, signals, to_dict
 from fcomp.effects import EFFECTS, Effect
-from fcomp.errors import FcompError
+from fcomp.errors import FcompError, deprecated
 from fcomp.measurement import Measurement
 from fcomp.models import MODELS, FrictionModel, make_model
 from fcomp.progress import Tick, counter, quiet
@@ -215,8 +215,10 @@ class Diagnosis(FittedAttributes):
     ----------
     baseline
         Model name (``coulomb`` ... ``gms``) or a :class:`~fcomp.models.base.FrictionModel`.
-    effects
-        Candidate effect names (default: every registered effect at :meth:`fit` time).
+    candidates
+        Candidate effect names (default: every registered effect at :meth:`fit` time;
+        the command line's ``--candidates``). ``effects=`` is its deprecated spelling
+        (a DeprecationWarning; it works for one release).
     add
         Effects to add first, in order, whatever the rule says (one step each).
     search
@@ -291,7 +293,7 @@ class Diagnosis(FittedAttributes):
         self,
         baseline: str | FrictionModel,
         *,
-        effects: Sequence[str] | None = None,
+        candidates: Sequence[str] | None = None,
         add: Sequence[str | Effect] = (),
         search: bool = True,
         split: str = "auto",
@@ -305,9 +307,19 @@ class Diagnosis(FittedAttributes):
         check_baseline: bool | str = "auto",
         rule: AcceptanceRule | None = None,
         verdict_rule: VerdictRule | None = None,
+        **deprecated_names: Any,
     ) -> None:
+        if "effects" in deprecated_names:
+            if candidates is not None:
+                raise TypeError("Diagnosis() got both candidates= and its deprecated spelling "
+                                "effects=; give candidates=")
+            deprecated("Diagnosis(effects=...)", "Diagnosis(candidates=...)")
+            candidates = deprecated_names.pop("effects")
+        if deprecated_names:
+            raise TypeError(f"Diagnosis() got an unexpected keyword argument "
+                            f"{next(iter(deprecated_names))!r}")
         self.baseline = baseline
-        self.effects = effects
+        self.candidates = candidates
         self.add = add
         self.search = search
         self.split = split
@@ -326,7 +338,7 @@ class Diagnosis(FittedAttributes):
     def config(self) -> DiagnosisConfig:
         """The constructor's arguments as one validated value."""
         return DiagnosisConfig(
-            self.baseline, None if self.effects is None else tuple(self.effects),
+            self.baseline, None if self.candidates is None else tuple(self.candidates),
             tuple(self.add), self.search, self.split, self.cutoff_hz, self.max_steps,
             self.n_jobs, self.scheduler, self.max_nfev, self.max_samples, self.check_baseline,
             self.rule or AcceptanceRule(), self.verdict_rule or VerdictRule())
@@ -346,6 +358,11 @@ class Diagnosis(FittedAttributes):
 
     def __getstate__(self) -> dict[str, Any]:
         return {k: v for k, v in self.__dict__.items() if k != "_search"}
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        if "effects" in state and "candidates" not in state:  # pickled before the rename
+            state = {("candidates" if k == "effects" else k): v for k, v in state.items()}
+        self.__dict__.update(state)
 
     # ------------------------------------------------------------------ fit
     def fit(self, data: Measurement | Sequence[Measurement] | DiagnosisData) -> Diagnosis:

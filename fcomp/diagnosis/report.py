@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, cast
 
 from fcomp import figstyle as fs
+from fcomp.conclusions import of_comparison, of_diagnosis, of_fit
 from fcomp.diagnosis.figures import (
     check_fitted,
     comparison_figures,
@@ -114,8 +115,7 @@ def build_comparison_report(comp: Comparison, *, command: str | None = None,
                                           "split": comp.split,
                                           **({"values from": values_from} if values_from
                                              else {})})
-    # The conclusion (what was found, how sure, what to do next) opens the page here, as
-    # the first block under the title (issue 27, item 3).
+    rep.conclusion(of_comparison(d))
     if d["warnings"]:
         rep.section("What a careful engineer would question", level=3)
         rep.table(["warning", "parameter", "what it means"],
@@ -168,8 +168,7 @@ def build_fit_report(fit: Any, comp: Comparison | None, *, command: str | None =
                  subtitle=f"{fit.method_} fit, target {fit.target_}, RMS {fit.rms_:.4g} N over "
                  f"{fit.n_samples_} samples", command=command,
                  config={"model": d["model"], "method": d["method"]})
-    # The conclusion (what was found, how sure, what to do next) opens the page here, as
-    # the first block under the title (issue 27, item 3).
+    rep.conclusion(of_fit(d))
     rep.section("Estimates")
     pct = round(100 * fit.confidence)
     rep.table(["parameter", "value", "stderr", f"{pct} % interval", "unit"], fit.rows(),
@@ -221,8 +220,7 @@ def build_report(diag: Diagnosis, *, command: str | None = None) -> Report:
                  command=command,
                  config={"baseline": d["baseline"], "split": diag.split_.description,
                          "effects": [c.effect for c in diag.candidates_] or d["added"]})
-    # The conclusion (what was found, how sure, what to do next) opens the page here, as
-    # the first block under the title (issue 27, item 3).
+    rep.conclusion(of_diagnosis(d))
     rep.section("Summary")
     if d["added"]:
         rep.paragraph(f"Added, in order: {', '.join('`' + e + '`' for e in d['added'])}. "

@@ -372,7 +372,9 @@ class FrictionFit:
         from fcomp.report import format_value
 
         self._check_fitted()
-        out = [[n, format_value(v), format_value(self.stderr_[n]),
+        out = [[n, format_value(v), "-", "at a bound", self.unit(n)]
+               if n in self.at_bound_ else  # its standard error and interval mean nothing
+               [n, format_value(v), format_value(self.stderr_[n]),
                 f"[{format_value(self.ci_[n][0])}, {format_value(self.ci_[n][1])}]", self.unit(n)]
                for n, v in self.params_.items()]
         out += [[n, format_value(v), "-", "held: not determined", self.unit(n)]

@@ -108,6 +108,12 @@ class SyntheticRecord:
     measurement: Measurement
     truth: SyntheticTruth
 
+    def __repr__(self) -> str:  # a summary, never the arrays
+        hidden = ", ".join(self.truth.hidden) or "nothing"
+        return (f"<SyntheticRecord {self.measurement.label!r}: {len(self.measurement)} "
+                f"samples, base {self.truth.base}, hidden {hidden}, noise "
+                f"{self.truth.noise_std:.3g} N>")
+
     def experiments(self) -> list[Measurement]:
         """The measurement split into one :class:`Measurement` per experiment."""
         ids = self.measurement["experiment"]

@@ -30,7 +30,9 @@ def run(args: argparse.Namespace) -> int:
     """Run ``fcomp simulate`` (:mod:`fcomp.cli.simulate`): write the run as a measurement."""
     out = output_path(args.output)
     plant_cls = PLANTS.get(args.plant)
-    params = args.params if args.params is not None else plant_cls.default_params
+    values_file = args.params is not None and is_model_file(args.params)
+    params = args.params if args.params is not None and not values_file \
+        else plant_cls.default_params
     plant_set: Any = params
     if args.plant_params is not None:
         pf = read_plant_file(args.plant_params)
@@ -44,8 +46,9 @@ def run(args: argparse.Namespace) -> int:
         inputs.file(args.input.split(":", 1)[1].strip(), "--input")
     if args.effects is not None:
         inputs.file(args.effects, "--effects")
-    if is_model_file(args.friction):
-        inputs.file(args.friction, "--friction")
+    for option, spec in (("--friction", args.friction), ("--params", args.params)):
+        if spec is not None and is_model_file(spec):
+            inputs.file(spec, option)
     if args.plant_params is not None:
         inputs.file(args.plant_params, "--plant-params")
     check_outputs(inputs, [("-o", out)])
@@ -61,7 +64,7 @@ def run(args: argparse.Namespace) -> int:
                          f"plant {args.plant} evaluates the friction along a prescribed motion")
     overrides = {k: v for k, v in assignments.items() if k in plant_names}
     args.set = [f"{k}={v!r}" for k, v in assignments.items() if k not in plant_names]
-    model = friction_model(args.friction, params, args)
+    model = friction_model(args.friction, args.params if values_file else params, args)
     plant: Any = (plant_cls(model, plant_set, overrides=overrides)  # type: ignore[call-arg]
                   if overrides else plant_cls(model, plant_set))
     x0 = parse_assignments(args.x0, option="--x0") if args.x0 else None

@@ -221,7 +221,7 @@ class AllStudies(Study):
         level = "bad" if results["failed"] else "ok"
         return Finding(f"{len(runs) - len(results['failed'])} of {len(runs)} studies ran", level,
                        f"The studies' claims that {found or 'none'} (each study below, in "
-                       "its colour).")
+                       "its colour).", confidence="low" if results["failed"] else "high")
 
     def main(self, config: Any) -> dict[str, Any]:
         summary = super().main(config)

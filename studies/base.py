@@ -94,6 +94,10 @@ class Finding:
         What to do next.
     flags
         Numbers not to trust, one sentence each (what, and why not).
+    confidence
+        How sure, in a word (:data:`fcomp.conclusions.LEVELS`: ``"high"``, ``"medium"``,
+        ``"low"``), as every command's conclusion says it; a flag makes it ``"medium"`` at
+        best.
     """
 
     status: str
@@ -102,14 +106,32 @@ class Finding:
     sure: str = ""
     next: str = ""
     flags: Sequence[str] = field(default_factory=tuple)
+    confidence: str = "medium"
 
     def __post_init__(self) -> None:
+        from fcomp.conclusions import LEVELS as CONFIDENCE
+
         if self.level not in LEVELS:
             raise FcompError(f"finding level must be one of {', '.join(LEVELS)}, "
                              f"got {self.level!r}")
+        if self.confidence not in CONFIDENCE:
+            raise FcompError(f"finding confidence must be one of {', '.join(CONFIDENCE)}, "
+                             f"got {self.confidence!r}")
         if not self.status.strip() or not self.found.strip():
             raise FcompError("a finding needs a status and what was found")
         object.__setattr__(self, "flags", tuple(self.flags))
+        if self.flags and self.confidence == "high":
+            object.__setattr__(self, "confidence", "medium")
+
+    def conclusion(self) -> Any:
+        """The finding as every command states its result (:class:`fcomp.conclusions.Conclusion`:
+        what was found, how sure and why -- the flags first --, what next)."""
+        from fcomp.conclusions import Conclusion
+
+        status = self.status[:1].upper() + self.status[1:]
+        return Conclusion(f"{status}. {self.found}", self.confidence,
+                          (*self.flags, *([self.sure] if self.sure else [])),
+                          (self.next,) if self.next else ())
 
     @property
     def shown_level(self) -> str:
@@ -125,25 +147,19 @@ class Finding:
         """The finding of :meth:`as_dict` (``shown_level`` is derived, not read)."""
         return cls(status=str(data["status"]), level=str(data["level"]),
                    found=str(data["found"]), sure=str(data.get("sure", "")),
-                   next=str(data.get("next", "")), flags=tuple(data.get("flags", ())))
+                   next=str(data.get("next", "")), flags=tuple(data.get("flags", ())),
+                   confidence=str(data.get("confidence", "medium")))
 
 
 class StudyReport(Report):
     """A study's report: a :class:`fcomp.report.Report` that opens with the study's conclusion."""
 
-    def conclusion(self, finding: Finding) -> StudyReport:
-        """Put ``finding`` first, before every section added so far: what was found (in the
-        finding's colour), each flag, how sure, what to do next."""
-        blocks, toc = len(self._blocks), len(self._toc)
-        self.section("Conclusion")
-        status = finding.status[:1].upper() + finding.status[1:]
-        self.note(f"{status}. {finding.found}", kind=finding.shown_level)
-        for flag in finding.flags:
-            self.note(f"Check: {flag}", kind="warn")
-        self.bullets([f"How sure: {finding.sure}"] * bool(finding.sure)
-                     + [f"Next: {finding.next}"] * bool(finding.next))
+    def lead(self, finding: Finding) -> StudyReport:
+        """Open the report with ``finding``, before every section added so far, in the form
+        every command's report opens with (:meth:`fcomp.report.Report.conclusion`)."""
+        blocks = len(self._blocks)
+        self.conclusion(finding.conclusion())
         self._blocks[:] = self._blocks[blocks:] + self._blocks[:blocks]
-        self._toc[:] = self._toc[toc:] + self._toc[:toc]
         return self
 
     def raw(self, markup: str) -> StudyReport:
@@ -428,7 +444,7 @@ class Study(ABC):
         if "meta" in results:
             raise RuntimeError(f"study {self.name}: 'meta' is reserved in summary.json")
         finding = self.finding(results)
-        report.conclusion(finding)
+        report.lead(finding)
         key = self.key_figure(results)
         key_file = f"fig-{key}.png" if key else None
         if key_file is not None and directory / key_file not in out.figures:

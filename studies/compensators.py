@@ -405,7 +405,7 @@ class CompensatorsStudy(Study):
             next="identify your cylinder's friction (fcomp fit), check what it buys on your "
                  "plant (fcomp compensate --plant-params PLANT.toml), then take the best "
                  "compensator to the rig as C code (fcomp export).",
-            flags=worse_than_pid(results["results"], plants))
+            flags=worse_than_pid(results["results"], plants), confidence="medium")
 
     def key_figure(self, results: dict[str, Any]) -> str | None:
         return "robustness"

@@ -63,7 +63,8 @@ class CoulombViscousStudy(Study):
             next="for a compensator or a simulation take the break-away force as the static "
                  "level and the sliding force from the constant-speed runs (section \"What it "
                  "means for a control engineer\"); on a time series, fcomp diagnose tells "
-                 "which law the seal follows.")
+                 "which law the seal follows.",
+            confidence="high")
 
     def key_figure(self, results: dict[str, Any]) -> str | None:
         return "force-speed"

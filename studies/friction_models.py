@@ -412,7 +412,8 @@ def finding(res: dict[str, Any]) -> Finding:
              "the outcome says what these values do, not what the paper's did.",
         next="get the paper's Table 3 (or identify sigma0, sigma1 of LuGre and the NMLGM on "
              "the rig) and rerun; the sweep says the claim needs a bristle damping that "
-             "outweighs the bristle stiffness at the oil-column frequency.")
+             "outweighs the bristle stiffness at the oil-column frequency.",
+        confidence="low")
 
 
 # -------------------------------------------------------------------- report

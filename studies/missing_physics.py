@@ -39,6 +39,7 @@ from typing import Any
 
 import numpy as np
 
+from fcomp.conclusions import BELOW_FLOOR
 from fcomp.errors import FcompError
 from fcomp.measurement import Measurement
 from fcomp.parallel import run_tasks
@@ -46,8 +47,6 @@ from fcomp.progress import progress_bar, ticker
 from fcomp.report import Link
 from studies.base import Finding, Study, StudyConfig, StudyOutput, legend_above
 
-#: A final held-out RMS below this fraction of the estimated noise floor is flagged.
-BELOW_FLOOR = 0.9
 #: Colours of the models in the stretch figure (baseline, then the final model).
 STRETCH_COLORS = ("#c0392b", "#2356a8", "#27864a")
 
@@ -227,7 +226,8 @@ def finding(res: dict[str, Any]) -> Finding:
         next="run fcomp diagnose on your own records; where the final error sits at or below "
              "the noise floor, confirm the added effects on a second record (or a longer one) "
              "before building them into a compensator.",
-        flags=[f for f in (below_floor(c) for c in (*gen, *real)) if f])
+        flags=[f for f in (below_floor(c) for c in (*gen, *real)) if f],
+        confidence="high" if len(gen) >= 3 and n_ok == len(gen) else "medium")
 
 
 @dataclass(frozen=True)

@@ -497,7 +497,7 @@ def finding(res: dict[str, Any]) -> Finding:
         next="compare with measured force-displacement loops (the paper's Figs. 4-12) before "
              "using the new model's pre-sliding displacements; identify the break-away force "
              "at the pre-sliding pressures (Table 4's Fs is from 0.3 MPa).",
-        flags=[mismatch_text(m) for m in res["paper_mismatches"]])
+        flags=[mismatch_text(m) for m in res["paper_mismatches"]], confidence="medium")
 
 
 def _pct(values: Sequence[float]) -> str:

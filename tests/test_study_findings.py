@@ -5,7 +5,6 @@ constructed runs, the report's lead from a small report."""
 from __future__ import annotations
 
 import json
-import re
 from pathlib import Path
 
 import numpy as np
@@ -88,7 +87,8 @@ def test_index_shows_a_study_that_did_not_run_as_failed() -> None:
 
 
 def test_finding_round_trips_and_refuses_an_unknown_colour() -> None:
-    f = Finding("not confirmed", "bad", "No.", sure="one seed", next="more", flags=["x"])
+    f = Finding("not confirmed", "bad", "No.", sure="one seed", next="more", flags=["x"],
+                confidence="low")
     assert Finding.from_dict(json.loads(json.dumps(f.as_dict()))) == f
     with pytest.raises(Exception, match="level"):
         Finding("fine", "green", "Yes.")
@@ -99,16 +99,27 @@ def test_the_conclusion_opens_the_report_before_the_sections_written_first() -> 
     rep = StudyReport("t")
     rep.section("Method").paragraph("how").section("Results").paragraph("what")
     rep.section("Parameters").paragraph("values")
-    rep.conclusion(Finding("partly reproduced", "warn", "Two of three claims hold.",
-                           sure="assumed parameters", next="measure", flags=["x is 10x off"]))
+    rep.lead(Finding("partly reproduced", "warn", "Two of three claims hold.",
+                     sure="assumed parameters", next="measure", flags=["x is 10x off"],
+                     confidence="high"))
     page = rep.to_html()
     body = page[page.index("</nav>"):]
-    assert body.index("Conclusion") < body.index("Method") < body.index("Results")
-    toc = re.findall(r'<li><a href="#([^"]+)">', page)
-    assert toc[:2] == ["conclusion", "method"]
-    assert '<div class="note warn"><p>Partly reproduced. Two of three claims hold.' in page
-    assert "Check: x is 10x off" in page
-    assert "How sure: assumed parameters" in page and "Next: measure" in page
+    assert body.index("Two of three claims hold") < body.index("Method") < body.index("Results")
+    # the form every command's report opens with (fcomp.report.Report.conclusion); a flag
+    # makes a high confidence medium
+    assert ('<div class="note warn conclusion"><p><strong>Conclusion:</strong> Partly '
+            "reproduced. Two of three claims hold.</p><p><strong>How sure:</strong> medium, "
+            "because</p><ul><li>x is 10x off</li><li>assumed parameters</li></ul>") in page
+    assert "<p><strong>Next:</strong></p><ul><li>measure</li></ul>" in page
+
+
+def test_a_finding_reads_as_a_command_conclusion() -> None:
+    c = Finding("not reproduced", "bad", "It fails.", sure="one seed", next="rerun",
+                confidence="low").conclusion()
+    assert c.lines() == ["Conclusion: Not reproduced. It fails.", "How sure: low, because",
+                         "  - one seed", "Next:", "  - rerun"]
+    with pytest.raises(Exception, match="confidence"):
+        Finding("fine", "ok", "Yes.", confidence="certain")
 
 
 class _Claimed(Study):
@@ -140,7 +151,7 @@ def test_study_all_index_shows_the_finding_the_paper_and_the_key_figure(
     assert sub["meta"]["finding"]["status"] == "not reproduced"
     assert sub["meta"]["key_figure"] == "fig-key.png" and sub["meta"]["paper"].startswith("Some")
     report = (tmp_path / "claimed-test" / "report.html").read_text()
-    assert report.index("Conclusion") < report.index("Details")
+    assert report.index("The claim fails here.") < report.index("Details")
     index = (tmp_path / "index.html").read_text()
     assert '<div class="note bad"><p><strong>Not reproduced.</strong>' in index
     assert "Reproduces Someone (1999)" in index
@@ -201,14 +212,16 @@ def test_missing_physics_flags_a_held_out_error_below_the_noise_floor() -> None:
     assert flag is not None and "0.230 N" in flag and "0.417 N" in flag and "45 %" in flag
     assert "over-fits" in flag and "not confirmed" in flag
     assert missing_physics._verdict(low) == "explained (below the noise floor: check)"
-    at_floor = {"case": "c", "diagnosis": _diagnosis(0.40, 0.417)}
+    # the threshold of every command's conclusion (fcomp.conclusions): 0.8 x the floor
+    assert missing_physics.below_floor({"case": "c", "diagnosis": _diagnosis(0.32, 0.417)})
+    at_floor = {"case": "c", "diagnosis": _diagnosis(0.35, 0.417)}
     assert missing_physics.below_floor(at_floor) is None  # within the floor's own scatter
     assert missing_physics._verdict(at_floor) == "explained"
     gen = {"case": "generated-x", "hidden": "x", "recovered": True, "true_noise_std": 0.4,
            "diagnosis": _diagnosis(0.49, 0.398)}
     f = missing_physics.finding({"generated": [gen], "real": [low]})
     assert (f.status, f.shown_level) == ("confirmed", "warn")  # recovered, but a flag
-    assert f.flags == (flag,)
+    assert f.flags == (flag,) and f.confidence == "medium"
     clean = missing_physics.finding({"generated": [gen], "real": []})
     assert clean.shown_level == "ok" and not clean.flags
 

@@ -264,17 +264,25 @@ def paper_mismatches(fig4: dict[str, list[dict[str, Any]]],
     return out
 
 
-def mismatch_text(m: dict[str, Any]) -> str:
-    """One flag of :func:`paper_mismatches` in words (mm, MPa as the paper prints them)."""
-    who = "the new model" if m["model"] == "nmlgm-hysteresis" else "the NMLGM"
-    return (f"Fig. {({1: 4, 2: 7, 3: 8})[m['cylinder']]} (cylinder {m['cylinder']}, p1 = "
-            f"{m['p1_max'] / 1e6:.3g} MPa): {FIG4_QUANTITIES[m['quantity']]} "
-            f"{m['value'] * 1e3:.3f} mm with {who}, the paper measured "
-            f"{m['paper'] * 1e3:.3f} mm ({m['ratio']:.1f}x). A {PAPER_FACTOR:g}-fold mismatch "
-            "with the paper's figure: the model's pre-sliding response at this pressure is not "
-            "the paper's rig (its Table 2 boundaries are read as metres, the rig's mass and "
-            "valves are assumed); do not read the model's pre-sliding displacements as the "
-            "paper's.")
+def mismatch_flags(ms: Sequence[dict[str, Any]]) -> list[str]:
+    """The flags of :func:`paper_mismatches` in words (mm, MPa as the paper prints them): one
+    per figure quantity, both models in it, and why once at the end; empty without any."""
+    groups: dict[tuple[int, float, str], list[dict[str, Any]]] = {}
+    for m in ms:
+        groups.setdefault((m["cylinder"], m["p1_max"], m["quantity"]), []).append(m)
+    who = {"nmlgm-hysteresis": "new model", "nmlgm": "NMLGM"}
+    out = [f"Fig. {({1: 4, 2: 7, 3: 8})[cyl]} (cylinder {cyl}, p1 = {p1 / 1e6:.3g} MPa): "
+           f"{FIG4_QUANTITIES[q]} "
+           + " and ".join(f"{m['value'] * 1e3:.3f} mm ({who[m['model']]})" for m in group)
+           + f" against the paper's {group[0]['paper'] * 1e3:.3f} mm, "
+           + " and ".join(f"{m['ratio']:.1f}x" for m in group)
+           for (cyl, p1, q), group in groups.items()]
+    if out:
+        out.append(f"A {PAPER_FACTOR:g}-fold or larger mismatch with the paper's figures: the "
+                   "model's pre-sliding response at these pressures is not the paper's rig "
+                   "(its Table 2 boundaries are read as metres, the rig's mass and valves are "
+                   "assumed); do not read the model's pre-sliding displacements as the paper's.")
+    return out
 
 
 def analyse(cases: list[Case], fast: bool) -> dict[str, Any]:
@@ -497,7 +505,7 @@ def finding(res: dict[str, Any]) -> Finding:
         next="compare with measured force-displacement loops (the paper's Figs. 4-12) before "
              "using the new model's pre-sliding displacements; identify the break-away force "
              "at the pre-sliding pressures (Table 4's Fs is from 0.3 MPa).",
-        flags=[mismatch_text(m) for m in res["paper_mismatches"]], confidence="medium")
+        flags=mismatch_flags(res["paper_mismatches"]), confidence="medium")
 
 
 def _pct(values: Sequence[float]) -> str:

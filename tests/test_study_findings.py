@@ -178,8 +178,13 @@ def test_presliding_flags_a_tenfold_mismatch_with_the_paper_and_not_less() -> No
     flags = pa.paper_mismatches(_fig4(0.713e-3, 0.5e-3))
     assert [(m["model"], m["quantity"]) for m in flags] == [("nmlgm-hysteresis", "x_peak")]
     assert flags[0]["ratio"] == pytest.approx(10.19, abs=0.01)
-    text = pa.mismatch_text(flags[0])
-    assert "0.713 mm" in text and "0.070 mm" in text and "10.2x" in text
+    text = pa.mismatch_flags(flags)
+    assert text[0] == ("Fig. 4 (cylinder 1, p1 = 0.017 MPa): peak displacement 0.713 mm (new "
+                       "model) against the paper's 0.070 mm, 10.2x")
+    assert len(text) == 2 and "10-fold or larger mismatch" in text[1]
+    both = pa.mismatch_flags(pa.paper_mismatches(_fig4(0.713e-3, 0.95e-3)))
+    assert len(both) == 2 and "0.950 mm (NMLGM) and 0.713 mm (new model)" in both[0]
+    assert pa.mismatch_flags([]) == []
     assert pa.paper_mismatches(_fig4(0.69e-3, 0.5e-3)) == []  # 9.9x: not flagged
     assert pa.paper_mismatches(_fig4(0.006e-3, 0.07e-3))[0]["ratio"] < 0.1  # 10x too small
     # the paper's zero (back to 0 after release) has no ratio: never a flag
@@ -201,7 +206,7 @@ def test_presliding_table_and_conclusion_carry_the_flag() -> None:
     f = pa.finding(res)
     assert (f.status, f.shown_level) == ("partly reproduced", "warn")
     assert "not shown: it wipes out internal loops" in f.found
-    assert len(f.flags) == 1 and "10.2x" in f.flags[0]
+    assert len(f.flags) == 2 and "10.2x" in f.flags[0]
 
 
 # ------------------------------------------------------ missing physics

@@ -67,8 +67,9 @@ __all__ = [
     "plot_gapped", "read_record", "save", "scale_of", "scaled", "style", "text_inside",
 ]
 
-#: Width of the report column at desktop width, CSS px (``main`` is 64rem minus 2 x 1rem).
-COLUMN_PX = 992
+#: Width a figure is shown at, at most, at desktop width, CSS px (``main`` is 64rem minus
+#: 2 x 1rem = 992 px; the image's 1 px border each side leaves 990).
+COLUMN_PX = 990
 #: Dots per inch of every PNG.
 DPI = 100
 #: Width of a full-column figure, inches (``WIDTH * DPI`` a little below :data:`COLUMN_PX`).

@@ -8,6 +8,14 @@ does the rest, always the same way::
     DIR/fig-*.png       every figure of the report, also as a file
     DIR/report.html     the self-contained report (fcomp.report)
 
+Every report opens with the study's conclusion (:meth:`Study.finding`, a
+:class:`Finding`: what was found, how sure, what next, the numbers to check),
+whatever order the study wrote its sections in; ``summary.json`` keeps it
+under ``meta.finding``, with the report's key figure (:meth:`Study.key_figure`)
+and the paper the study reproduces (:attr:`Study.paper`), for the index of
+``study all``. Figures are made in the shared style (:meth:`StudyOutput.subplots`,
+:mod:`fcomp.figstyle`).
+
 Each study module exposes ``STUDY`` (its instance) and ``main(config) ->
 results``; it is selected by name through ``studies.STUDIES``. The whole
 folder is built in a temporary sibling folder and swapped into place only
@@ -26,8 +34,8 @@ import math
 import os
 import shutil
 from abc import ABC, abstractmethod
-from collections.abc import Mapping
-from dataclasses import dataclass, replace
+from collections.abc import Mapping, Sequence
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any, ClassVar
 
@@ -38,7 +46,8 @@ from fcomp.outputs import staged_folder, write_files, write_text
 from fcomp.report import Report, render_png
 from fcomp.version import __version__
 
-__all__ = ["Study", "StudyConfig", "StudyError", "StudyOutput", "to_jsonable"]
+__all__ = ["Finding", "Study", "StudyConfig", "StudyError", "StudyOutput", "StudyReport",
+           "to_jsonable"]
 
 
 #: :class:`StudyConfig` fields that only some studies take (:attr:`Study.options`), with
@@ -58,6 +67,105 @@ def _option_label(value: Any) -> str:
 
 class StudyError(RuntimeError):
     """One or more studies raised an error (their output says which and why)."""
+
+
+#: The colours of a finding (the report's note kinds): the claim holds, holds in part or
+#: carries a number not to trust, fails.
+LEVELS = ("ok", "warn", "bad")
+
+
+@dataclass(frozen=True)
+class Finding:
+    """What a study found, in an engineer's words: the top of its report, its entry on the index.
+
+    Attributes
+    ----------
+    status
+        The finding in a few words: ``"reproduced"``, ``"partly reproduced"``, ``"not
+        reproduced"`` (a paper's claim), ``"confirmed"``, ... (the study's own claim).
+    level
+        Its colour, one of :data:`LEVELS`: ``"ok"`` the claim holds, ``"warn"`` it holds in
+        part, ``"bad"`` it fails.
+    found
+        What was found: one or two sentences, with units.
+    sure
+        How sure: what the result rests on, what is assumed.
+    next
+        What to do next.
+    flags
+        Numbers not to trust, one sentence each (what, and why not).
+    confidence
+        How sure, in a word (:data:`fcomp.conclusions.LEVELS`: ``"high"``, ``"medium"``,
+        ``"low"``), as every command's conclusion says it; a flag makes it ``"medium"`` at
+        best.
+    """
+
+    status: str
+    level: str
+    found: str
+    sure: str = ""
+    next: str = ""
+    flags: Sequence[str] = field(default_factory=tuple)
+    confidence: str = "medium"
+
+    def __post_init__(self) -> None:
+        from fcomp.conclusions import LEVELS as CONFIDENCE
+
+        if self.level not in LEVELS:
+            raise FcompError(f"finding level must be one of {', '.join(LEVELS)}, "
+                             f"got {self.level!r}")
+        if self.confidence not in CONFIDENCE:
+            raise FcompError(f"finding confidence must be one of {', '.join(CONFIDENCE)}, "
+                             f"got {self.confidence!r}")
+        if not self.status.strip() or not self.found.strip():
+            raise FcompError("a finding needs a status and what was found")
+        object.__setattr__(self, "flags", tuple(self.flags))
+        if self.flags and self.confidence == "high":
+            object.__setattr__(self, "confidence", "medium")
+
+    def conclusion(self) -> Any:
+        """The finding as every command states its result (:class:`fcomp.conclusions.Conclusion`:
+        what was found, how sure and why -- the flags first --, what next)."""
+        from fcomp.conclusions import Conclusion
+
+        status = self.status[:1].upper() + self.status[1:]
+        return Conclusion(f"{status}. {self.found}", self.confidence,
+                          (*self.flags, *([self.sure] if self.sure else [])),
+                          (self.next,) if self.next else ())
+
+    @property
+    def shown_level(self) -> str:
+        """The colour shown: a claim that holds but carries a flag is amber, not green."""
+        return "warn" if self.level == "ok" and self.flags else self.level
+
+    def as_dict(self) -> dict[str, Any]:
+        """The finding as ``summary.json`` holds it (``meta.finding``)."""
+        return {**asdict(self), "flags": list(self.flags), "shown_level": self.shown_level}
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> Finding:
+        """The finding of :meth:`as_dict` (``shown_level`` is derived, not read)."""
+        return cls(status=str(data["status"]), level=str(data["level"]),
+                   found=str(data["found"]), sure=str(data.get("sure", "")),
+                   next=str(data.get("next", "")), flags=tuple(data.get("flags", ())),
+                   confidence=str(data.get("confidence", "medium")))
+
+
+class StudyReport(Report):
+    """A study's report: a :class:`fcomp.report.Report` that opens with the study's conclusion."""
+
+    def lead(self, finding: Finding) -> StudyReport:
+        """Open the report with ``finding``, before every section added so far, in the form
+        every command's report opens with (:meth:`fcomp.report.Report.conclusion`)."""
+        blocks = len(self._blocks)
+        self.conclusion(finding.conclusion())
+        self._blocks[:] = self._blocks[blocks:] + self._blocks[:blocks]
+        return self
+
+    def raw(self, markup: str) -> StudyReport:
+        """A block of markup made here (already escaped): the index's study cards."""
+        self._blocks.append(markup)
+        return self
 
 
 @dataclass(frozen=True)
@@ -193,37 +301,62 @@ class StudyOutput:
     directory
         Where the files go.
     report
-        The :class:`fcomp.report.Report` being built.
+        The :class:`StudyReport` being built.
     figures
         Paths of the figure files written so far.
     """
 
-    def __init__(self, directory: Path, report: Report) -> None:
+    def __init__(self, directory: Path, report: StudyReport) -> None:
         self.directory = directory
         self.report = report
         self.figures: list[Path] = []
+        self.captions: dict[str, str] = {}
 
     @staticmethod
-    def subplots(*args: Any, **kwargs: Any) -> tuple[Any, Any]:
-        """``matplotlib.pyplot.subplots`` on the Agg backend (no display needed)."""
-        import matplotlib
+    def subplots(nrows: int = 1, ncols: int = 1, *, figsize: tuple[float, float] | None = None,
+                 **kwargs: Any) -> tuple[Any, Any]:
+        """A figure in the report style and its axes, like ``matplotlib.pyplot.subplots``
+        (:func:`fcomp.figstyle.new_figure`: fonts readable at 1400 px, constrained layout).
+        A ``figsize`` wider than the column (:data:`fcomp.figstyle.WIDTH`) is scaled down
+        to it, aspect kept: a wider figure would be shown smaller, its text below 9 pt."""
+        from fcomp import figstyle
 
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
+        width, height = figsize or (figstyle.WIDTH, 3.2)
+        if width > figstyle.WIDTH:
+            width, height = figstyle.WIDTH, height * figstyle.WIDTH / width
+        return figstyle.new_figure(height=height, width=width, nrows=nrows, ncols=ncols,
+                                   **kwargs)
 
-        return plt.subplots(*args, **kwargs)
-
-    def figure(self, fig: Any, name: str, caption: str, *, dpi: int = 110) -> Path:
+    def figure(self, fig: Any, name: str, caption: str, *, dpi: int | None = None) -> Path:
         """Write ``fig`` (a matplotlib figure, or PNG bytes rendered elsewhere) to
-        ``DIR/fig-NAME.png`` and embed the same image in the report."""
+        ``DIR/fig-NAME.png`` and embed the same image in the report. A matplotlib figure's
+        texts below :data:`fcomp.figstyle.FONT_MIN` are raised to it first."""
+        from fcomp import figstyle
+
         if not name.replace("-", "").replace("_", "").isalnum():
             raise FcompError(f"figure name {name!r}: use letters, digits, '-' and '_'")
+        if not isinstance(fig, bytes):
+            figstyle.apply_floor(fig)
         png = fig if isinstance(fig, bytes) else render_png(fig, dpi=dpi)
         path = self.directory / f"fig-{name}.png"
         write_files({path: png})
         self.figures.append(path)
+        self.captions[path.name] = caption
         self.report.figure(png, caption, alt=f"{name}: {caption}")
         return path
+
+
+def legend_above(ax: Any, ncol: int = 3) -> Any:
+    """:func:`fcomp.figstyle.legend_above` (the legend above the data) with the axes' title,
+    if any, as the legend's title: above the axes both would be drawn over each other."""
+    from fcomp import figstyle
+
+    title = ax.get_title()
+    if not title or not ax.get_legend_handles_labels()[0]:
+        return figstyle.legend_above(ax, ncol=ncol)
+    ax.set_title("")
+    return figstyle.legend_above(ax, ncol=ncol, title=title, alignment="left",
+                                 title_fontsize=figstyle.FONT)
 
 
 class Study(ABC):
@@ -244,6 +377,9 @@ class Study(ABC):
     cost: ClassVar[float] = 1.0
     #: The optional :class:`StudyConfig` fields (:data:`STUDY_OPTIONS`) this study takes.
     options: ClassVar[tuple[str, ...]] = ()
+    #: The paper the study reproduces (authors, year, title; the index names the study by
+    #: it), or ``None`` for a study of the package's own claims.
+    paper: ClassVar[str | None] = None
 
     def check(self, config: StudyConfig) -> list[str]:
         """Check the configuration's inputs before anything is written (:meth:`main` calls
@@ -262,6 +398,16 @@ class Study(ABC):
     def headline(self, results: dict[str, Any]) -> str:
         """One line of result for the index of ``fcomp study all`` (default: the summary)."""
         return self.summary
+
+    def finding(self, results: dict[str, Any]) -> Finding:
+        """What the run found (:class:`Finding`): the conclusion the report opens with and
+        the study's entry on the index. The default judges nothing: the headline."""
+        return Finding("ran", "ok", self.headline(results))
+
+    def key_figure(self, results: dict[str, Any]) -> str | None:
+        """The name of the report's most telling figure (``fig-NAME.png``): the index shows
+        it. ``None``: no figure."""
+        return None
 
     @abstractmethod
     def build(self, out: StudyOutput, config: StudyConfig) -> dict[str, Any]:
@@ -290,13 +436,19 @@ class Study(ABC):
         except OSError as exc:
             raise FcompError(f"{cfg.out_label} {cfg.out}: cannot create it ({exc.strerror})") \
                 from None
-        report = Report(self.title, subtitle=self.subtitle(cfg), command=cfg.command,
+        report = StudyReport(self.title, subtitle=self.subtitle(cfg), command=cfg.command,
                         config={"study": self.name, **cfg.as_dict()},
                         table_label=self.table_label, figure_label=self.figure_label)
         out = StudyOutput(directory, report)
         results = self.build(out, replace(cfg, workdir=directory))
         if "meta" in results:
             raise RuntimeError(f"study {self.name}: 'meta' is reserved in summary.json")
+        finding = self.finding(results)
+        report.lead(finding)
+        key = self.key_figure(results)
+        key_file = f"fig-{key}.png" if key else None
+        if key_file is not None and directory / key_file not in out.figures:
+            raise RuntimeError(f"study {self.name}: key figure {key_file} was not written")
         summary = to_jsonable({
             **results,
             "meta": {
@@ -306,6 +458,10 @@ class Study(ABC):
                 "fast": cfg.fast,
                 "command": cfg.command,
                 "figures": [p.name for p in out.figures],
+                "finding": finding.as_dict(),
+                "key_figure": key_file,
+                "key_caption": out.captions.get(key_file) if key_file else None,
+                "paper": self.paper,
                 "reports": list(self.report_files),
             },
         })

@@ -75,7 +75,7 @@ from controllers.tasks import TASKS
 from fcomp.errors import FcompError
 from fcomp.models.base import FrictionModel
 from fcomp.progress import progress_bar, ticker
-from studies.base import Study, StudyConfig, StudyOutput
+from studies.base import Finding, Study, StudyConfig, StudyOutput, legend_above
 
 #: The built-in plants the study runs on (without a plant file).
 PLANTS = ("hydraulic", "pneumatic")
@@ -377,9 +377,42 @@ class CompensatorsStudy(Study):
 
     def headline(self, results: dict[str, Any]) -> str:
         v = results["verdict"]
-        parts = [f"{k}: {d['best']} {d['ratio']:.2f}x pid" for k, d in v.items()
+        parts = [f"{k}: {d['best']} {100 * d['ratio']:.0f} % of PID's" for k, d in v.items()
                  if d["ratio"] is not None]
-        return "best compensator RMS error vs PID at low velocity -- " + "; ".join(parts)
+        return "RMS tracking error of the best compensator at low velocity -- " + "; ".join(parts)
+
+    def finding(self, results: dict[str, Any]) -> Finding:
+        v = {k: d for k, d in results["verdict"].items() if d["ratio"] is not None}
+        halved = [k for k, d in v.items() if d["halved"]]
+        plants = list(dict.fromkeys(r["plant"] for r in results["results"]))
+        if v and len(halved) == len(results["verdict"]):
+            status, level = "confirmed", "ok"
+        elif halved:
+            status, level = "partly confirmed", "warn"
+        else:
+            status, level = "not confirmed", "bad"
+        best = ", ".join(f"{k} {d['best']} {100 * d['ratio']:.0f} %" for k, d in v.items())
+        draws = results.get("robustness_draws", {})
+        n = min((d["draws"] for d in draws.values()), default=0)
+        return Finding(
+            status, level,
+            f"A friction compensator halves PID's RMS tracking error at low velocity in "
+            f"{len(halved)} of {len(results['verdict'])} plant/task pairs (best compensator, "
+            f"its error in % of PID's: {best}), with the controllers' friction model off by "
+            "15-50 % per parameter.",
+            sure=f"simulation only, one run per task on the shipped plants; the Monte Carlo "
+                 f"check of friction mismatch and sensor noise ran {n} draws per plant"
+                 + (" (fast mode: too few for intervals; run without --fast)." if
+                    any(not d["decisions"] or all(not x.get("interval") for x in
+                                                  d["decisions"].values())
+                        for d in draws.values()) else "."),
+            next="identify your cylinder's friction (fcomp fit), check what it buys on your "
+                 "plant (fcomp compensate --plant-params PLANT.toml), then take the best "
+                 "compensator to the rig as C code (fcomp export).",
+            flags=worse_than_pid(results["results"], plants), confidence="medium")
+
+    def key_figure(self, results: dict[str, Any]) -> str | None:
+        return "robustness"
 
     # ---------------------------------------------------------------- report
     def _report(self, out: StudyOutput, config: StudyConfig, plants: list[StudyPlant],
@@ -391,7 +424,7 @@ class CompensatorsStudy(Study):
         rep.section("Settings")
         base = plants[0].base
         if config.friction is None:
-            what = ("the plant integrates the *true* NMLGM friction (its parameter set), "
+            what = ("the plant integrates the true NMLGM friction (its parameter set), "
                     "the controller is built on its own plant model whose NMLGM parameters "
                     "are multiplied by the mismatch factors below")
         else:
@@ -399,7 +432,7 @@ class CompensatorsStudy(Study):
             spec = config.friction
             given = (f" (model file `{spec}`)" if isinstance(spec, str | os.PathLike)
                      and str(spec).lower().endswith(".json") else "")
-            what = (f"the plant integrates the *true* friction `{true}`{given}, "
+            what = (f"the plant integrates the true friction `{true}`{given}, "
                     f"the controller is built on its own plant model with the same friction "
                     f"model, its parameters multiplied by the mismatch factors below (a "
                     f"factor on a parameter the model lacks is ignored)")
@@ -415,23 +448,12 @@ class CompensatorsStudy(Study):
         for sp in plants:
             if sp.base.plant_file is not None:
                 self._plant_file_table(out, sp)
-        rows = []
-        for sp in plants:
-            s, tu = sp.settings, control_model(sp.base).tuning
-            rows.append([sp.label, s.control_rate, s.u_max, s.du_max, tu.pid_bandwidth,
-                         tu.force_bandwidth, tu.margins.gain_db, tu.margins.phase,
-                         tu.observer_gain, tu.mpc_horizon(500.0), s.sensors.x_quantum * 1e6,
-                         s.sensors.x_noise * 1e6, s.sensors.p_quantum, s.sensors.p_noise])
         source = ("the built-in plants'" if all(sp.source == "built-in" for sp in plants)
                   else "the plant file's")
-        rep.table(["plant", "rate [Hz]", "u_max", "du_max [1/s]", "PID bw [rad/s]",
-                   "force bw [rad/s]", "GM [dB]", "PM [deg]", "observer k [1/s]",
-                   "MPC horizon", "x quantum [um]", "x noise [um]", "p quantum [Pa]",
-                   "p noise [Pa]"], rows,
+        rep.table(["setting", *(sp.label for sp in plants)], settings_rows(plants),
                   caption=f"Controller settings: {source} control rate, valve limits and "
                   "sensors; the tuning derived from the plant (controllers.tuning; values "
-                  "the plant file gives explicitly win) with its margins; MPC at 500 Hz.",
-                  digits=[None, 0, 3, 3, 1, 0, 1, 0, 1, 0, 2, 2, 0, 0])
+                  "the plant file gives explicitly win) with its margins; MPC at 500 Hz.")
         rep.table(["task", "what it exercises", "duration [s]"],
                   [[t, TASKS.get(t).description, TASKS.get(t).run_duration(config.fast)]
                    for t in TASK_ORDER], caption="Tasks.", digits=[None, None, 1])
@@ -445,6 +467,8 @@ class CompensatorsStudy(Study):
             rep.note(f"{key}: best compensator `{d['best']}` has {d['ratio']:.2f} times the "
                      f"RMS error of `pid` ({'halved or better' if d['halved'] else 'NOT halved'}).",
                      kind=kind)
+        for flag in worse_than_pid(results, [sp.label for sp in plants]):
+            rep.note(flag, kind="warn")
 
         rep.section("Ranked results")
         for p in (sp.label for sp in plants):
@@ -465,16 +489,16 @@ class CompensatorsStudy(Study):
                                   else r["hunting_amplitude"] * 1e6,
                                   None if r["reversal_error"] is None
                                   else r["reversal_error"] * 1e6,
-                                  ratio, r["valve_activity"], r["solve_time_median"] * 1e6,
-                                  r["solve_time_max"] * 1e3, r["fallbacks"], "ok"])
+                                  ratio, r["valve_activity"]])
                 for r in bad:
-                    table.append([None, r["controller"], None, None, None, None, None, None,
-                                  None, None, None, None, r["status"]])
+                    table.append([None, f"{r['controller']}: {r['status']}", None, None, None,
+                                  None, None, None, None])
                 rep.table(["rank", "controller", "RMS [um]", "max [um]", "steady [um]",
-                           "hunting [um]", "reversal [um]", "RMS/pid", "valve act. [1/s]",
-                           "step median [us]", "step max [ms]", "fallbacks", "status"],
-                          table, caption=f"{p}, task `{t}`, ranked by RMS tracking error.",
-                          digits=[0, None, 1, 1, 1, 1, 1, 2, 2, 0, 2, 0, None])
+                           "hunting [um]", "reversal [um]", "RMS/pid", "valve act. [1/s]"],
+                          table, caption=f"{p}, task `{t}`, ranked by RMS tracking error "
+                          "(errors in micrometres; the step times of the EKF and the MPC are "
+                          "in the last section).",
+                          digits=[0, None, 1, 1, 1, 1, 1, 2, 2])
         self._tracking_figures(out, runs, plants)
         self._friction_figures(out, runs, plants)
         self._robustness(out, robust, sweeps, draws)
@@ -577,23 +601,25 @@ class CompensatorsStudy(Study):
                 r = d["rms_error"]
                 k = dec.get(c, {})
                 ci = k.get("interval")
-                rows.append([p, c, r["median"] * 1e6, r["p10"] * 1e6, r["p90"] * 1e6,
+                rows.append([p, c, r["median"] * 1e6,
+                             f"{r['p10'] * 1e6:.1f}-{r['p90'] * 1e6:.1f}",
                              d["max_error"]["median"] * 1e6, k.get("median_ratio"),
                              "-" if not k else (f"{ci[0]:.2f}-{ci[1]:.2f}" if ci else "too few"),
-                             k.get("verdict", "reference"), d["runs"], d["failed"]])
-        rep.table(["plant", "controller", "RMS median [um]", "RMS p10 [um]", "RMS p90 [um]",
-                   "max-error median [um]", "RMS / pid (median)", "interval",
-                   "vs pid", "runs", "failed"], rows,
-                  caption="Distribution of the metrics over the draws; the median of the "
-                  "per-draw ratio to pid with its confidence interval.",
-                  digits=[None, None, 1, 1, 1, 1, 2, None, None, 0, 0])
+                             k.get("verdict", "reference"),
+                             f"{d['runs']}" + (f" ({d['failed']} failed)" if d["failed"] else "")])
+        rep.table(["plant", "controller", "RMS [um]", "p10-p90 [um]", "max [um]", "RMS/pid",
+                   "interval", "vs pid", "runs"], rows,
+                  caption="Distribution of the metrics over the draws: the median RMS error, "
+                  "its 10-90 % range, the median max error; RMS/pid: the median of the "
+                  "per-draw ratio to pid, with its confidence interval.",
+                  digits=[None, None, 1, None, 1, 2, None, None, None])
         fig, axes = out.subplots(1, len(robust), figsize=(10, 3.8))
         axes = np.atleast_1d(axes)
         for ax, (p, dist) in zip(axes, robust.items(), strict=True):
             shown = draw_distribution(ax, dist, CONTROLLER_ORDER, scale=1e6)
+            plain_log_ticks(ax)
             ax.set_title(p, fontsize=9)
             ax.set_ylabel("RMS error [um]")
-        fig.tight_layout()
         how = ("box: quartiles, whiskers: 10-90 %" if shown == "box" else
                "every draw as a point: too few draws for quantiles")
         out.figure(fig, "robustness", f"RMS tracking error over the Monte Carlo draws, per "
@@ -615,32 +641,34 @@ class CompensatorsStudy(Study):
         for k, v in timing.items():
             period = v["period"]
             ok = v["cpu_max"] <= period
-            rows.append([k, v["median_of_medians"] * 1e6, v["p99"] * 1e3, v["max"] * 1e3,
-                         v["cpu_p99"] * 1e3, v["cpu_max"] * 1e3, v["descheduled"],
-                         period * 1e3, "yes" if ok else "NO", v["fallbacks"]])
+            rows.append([k, v["median_of_medians"] * 1e6, _pair(v["p99"], v["max"], 2),
+                         _pair(v["cpu_p99"], v["cpu_max"], 2), v["descheduled"],
+                         f"{'yes' if ok else 'NO'} ({period * 1e3:g} ms)", v["fallbacks"]])
             if not ok:
                 late.append(f"`{k}` {v['cpu_max'] * 1e3:.3g} ms > {period * 1e3:g} ms")
-        rep.table(["plant/controller", "median step [us]", "p99 [ms]", "max [ms]",
-                   "CPU p99 [ms]", "CPU max [ms]", "descheduled", "period [ms]", "real-time",
-                   "fallbacks"], rows,
+        rep.table(["controller", "median [us]", "p99 / max [ms]", "CPU p99 / max [ms]",
+                   "descheduled", "real-time (period)", "fallbacks"], rows,
                   caption="Controller step time in the closed-loop runs above (whole step: "
-                  "EKF + law/QP; this machine) against the sampling period of the loop; "
-                  "real-time: the largest CPU time of a step within the period.",
-                  digits=[None, 0, 2, 2, 2, 2, 0, 2, None, 0])
+                  "EKF + law/QP; this machine; wall clock unless CPU) against the sampling "
+                  "period of the loop; real-time: the largest CPU time of a step within the "
+                  "period.",
+                  digits=[None, 0, None, None, 0, None, 0])
         if late:
             rep.note("Worst step's CPU time longer than the sampling period -- not real-time on "
                      "this machine: " + "; ".join(late) + ".", kind="bad")
-        loops = [[f"{k}/{task}", d["median"] * 1e6, d["p99"] * 1e3, d["max"] * 1e3,
-                  d["cpu_median"] * 1e6, d["cpu_p99"] * 1e3, d["cpu_max"] * 1e3,
+        loops = [[f"{k}/{task}", d["median"] * 1e6, _pair(d["p99"], d["max"], 2),
+                  d["cpu_median"] * 1e6, _pair(d["cpu_p99"], d["cpu_max"], 2),
                   d["descheduled"]]
                  for k, v in timing.items() if k.endswith("/mpc")
                  for task, d in v["loops"].items()]
-        rep.table(["closed loop", "p50 [us]", "p99 [ms]", "max [ms]", "CPU p50 [us]",
-                   "CPU p99 [ms]", "CPU max [ms]", "descheduled"], loops,
+        rep.table(["closed loop", "median [us]", "p99 / max [ms]", "CPU median [us]",
+                   "CPU p99 / max [ms]", "descheduled"], loops,
                   caption="MPC step (EKF + QP) in every closed loop: wall clock and CPU time.",
-                  digits=[None, 0, 3, 2, 0, 3, 3, 0])
-        if not bench.get("available"):
-            rep.note(bench.get("note", "do-mpc comparison not run"), kind="warn")
+                  digits=[None, 0, None, 0, None, 0])
+        if not bench.get("available"):  # an optional package: one line, not a warning box
+            rep.paragraph("The comparison with do-mpc, an optional package "
+                          "(`pip install 'fcomp[bench]'`, `benchmarks/bench_mpc.py`), was not "
+                          "run: it is not installed here.")
             return
         rows = [[name, d["median"] * 1e3, d["max"] * 1e3, d["steps"]]
                 for name, d in bench["solvers"].items()]
@@ -652,6 +680,76 @@ class CompensatorsStudy(Study):
                       f"{bench['speedup_median']:.1f}x, max {bench['speedup_max']:.1f}x.")
 
 
+def _pair(a: float, b: float, digits: int) -> str:
+    """Two times (s) as ``"a / b"`` in ms."""
+    return f"{a * 1e3:.{digits}f} / {b * 1e3:.{digits}f}"
+
+
+def plain_log_ticks(ax: Any) -> None:
+    """A log y axis labelled with plain numbers (:func:`fcomp.figstyle.plain_log_ticks`) at
+    1, 2 and 5 x 10^k: the errors span one or two decades, one label per decade is too few."""
+    from matplotlib.ticker import LogLocator
+
+    from fcomp import figstyle
+
+    figstyle.plain_log_ticks(ax)
+    ax.yaxis.set_major_locator(LogLocator(base=10.0, subs=(1.0, 2.0, 5.0)))
+
+
+def settings_rows(plants: list[StudyPlant]) -> list[list[Any]]:
+    """The controller settings of each plant as rows ``[setting (unit), value, ...]``, one
+    column per plant; the valve command in the plant's own unit (A, or normalised)."""
+    from plants import PLANTS as PLANT_KINDS
+
+    cols = []
+    for sp in plants:
+        s, tu = sp.settings, control_model(sp.base).tuning
+        unit = PLANT_KINDS.get(sp.base.plant).input_units[0]
+        cols.append([
+            f"{s.control_rate:g}",
+            f"{s.u_max:g} A" if unit == "A" else f"{s.u_max:g} (normalised: full opening)"
+            if unit == "-" else f"{s.u_max:g} {unit}",
+            f"{s.du_max:g}", f"{tu.pid_bandwidth:.1f}", f"{tu.force_bandwidth:.0f}",
+            f"{tu.margins.gain_db:.1f}", f"{tu.margins.phase:.0f}",
+            f"{tu.observer_gain:.1f}", f"{tu.mpc_horizon(500.0):.0f}",
+            f"{s.sensors.x_quantum * 1e6:.2f}", f"{s.sensors.x_noise * 1e6:.2f}",
+            f"{s.sensors.p_quantum:.0f}", f"{s.sensors.p_noise:.0f}"])
+    names = ["control rate [Hz]", "valve command limit u_max", "valve rate limit du_max "
+             "[1/s]", "PID bandwidth [rad/s]", "force-loop bandwidth [rad/s]",
+             "gain margin [dB]", "phase margin [deg]", "observer gain [1/s]",
+             "MPC horizon [steps]", "position quantum [um]", "position noise [um]",
+             "pressure quantum [Pa]", "pressure noise [Pa]"]
+    return [[n, *(c[i] for c in cols)] for i, n in enumerate(names)]
+
+
+def worse_than_pid(results: list[dict[str, Any]], plants: list[str],
+                   controller: str = "pid-ff") -> list[str]:
+    """A sentence per plant where ``controller`` tracks worse than plain PID (RMS error), with
+    the reason the friction-estimate figure shows; empty where it does not."""
+    out = []
+    for p in plants:
+        pid = {r["task"]: r["rms_error"] for r in results
+               if r["plant"] == p and r["controller"] == "pid" and r["status"] == "ok"}
+        worse = {r["task"]: r["rms_error"] / pid[r["task"]] for r in results
+                 if r["plant"] == p and r["controller"] == controller and r["status"] == "ok"
+                 and r["task"] in pid and r["rms_error"] > pid[r["task"]]}
+        if not worse:
+            continue
+        lo, hi = min(worse.values()), max(worse.values())
+        span = f"{lo:.1f}x" if len(worse) == 1 else f"{lo:.1f}-{hi:.1f}x"
+        out.append(
+            f"`{controller}` tracks worse than plain `pid` on the {p} plant: {span} its RMS "
+            f"error on {len(worse)} of {len(pid)} tasks ({', '.join(sorted(worse))}). Not a "
+            "fault of the run: the static feed-forward adds the friction of the reference "
+            "velocity, the full break-away level as soon as the reference moves, while the "
+            "piston is still in pre-sliding; where that force is a large share of the drive "
+            "(a compressible plant) the piston jumps ahead of the reference and then moves "
+            "against it, and the feed-forward pushes with the wrong sign (friction estimate "
+            "against the true friction, below). Use an observer-based compensator there, or "
+            "fade the feed-forward in with the measured velocity.")
+    return out
+
+
 def _panel(ax: Any, title: str, ylabel: str) -> None:
     ax.set_title(title, fontsize=9)
     ax.set_ylabel(ylabel)
@@ -659,9 +757,8 @@ def _panel(ax: Any, title: str, ylabel: str) -> None:
 
 
 def _finish(out: StudyOutput, fig: Any, axes: Any, ncol: int, name: str, caption: str) -> None:
-    axes[0].legend(fontsize=7, ncol=ncol)
+    legend_above(axes[0], ncol=ncol)
     axes[-1].set_xlabel("t [s]")
-    fig.tight_layout()
     out.figure(fig, name, caption)
 
 

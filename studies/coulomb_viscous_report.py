@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from fcomp.report import Comparison, Report
-from studies.base import StudyOutput
+from studies.base import StudyOutput, legend_above
 from studies.coulomb_viscous_analysis import (
     ALPHA,
     B_CONSISTENCY_TOL,
@@ -42,10 +42,9 @@ def write_report(out: StudyOutput, data: Seed001Data, res: dict[str, Any],
     rows = res["reproduction"]["comparisons"]
     c1 = [r for r in rows if r["cylinder"] == "C1"]
     n_match = sum(r["match"] for r in c1)
-    rep.section("Summary")
-    rep.note(f"The paper's Table 8, cylinder C1: {n_match} of {len(c1)} numbers reproduced to "
-             "the printed digits from the single values of Tables 2-5.",
-             kind="ok" if n_match == len(c1) else "warn")
+    rep.section("Findings")
+    rep.paragraph(f"The paper's Table 8, cylinder C1: {n_match} of {len(c1)} numbers reproduced "
+                  "to the printed digits from the single values of Tables 2-5.")
     rep.bullets(res["findings"])
     _method(rep)
     _table8(out, data, res)
@@ -470,12 +469,12 @@ def _conclusion(rep: Report, data: Seed001Data, res: dict[str, Any]) -> None:
 
 
 # ------------------------------------------------------------------- figures
-def _decorate(ax: Any, title: str, xlabel: str, *, legend: float | None = None) -> None:
+def _decorate(ax: Any, title: str, xlabel: str, *, legend: bool = False) -> None:
     ax.set_title(title)
     ax.set_xlabel(xlabel)
     ax.grid(alpha=0.3)
     if legend:
-        ax.legend(fontsize=legend)
+        legend_above(ax, ncol=1)
 
 
 def _fig_table8(out: StudyOutput, res: dict[str, Any]) -> None:
@@ -494,8 +493,7 @@ def _fig_table8(out: StudyOutput, res: dict[str, Any]) -> None:
         ax.set_xticks(range(len(labels)), labels)
         ax.set_ylabel(f"{kind} [{unit}] (95 % interval)")
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=8)
-    fig.tight_layout()
+        legend_above(ax)
     out.figure(fig, "table8",
                "The paper's Table 8: 95 % intervals computed here (blue) and printed (red). C1 "
                "coincide. C2 Fc differs because only the experiment averages are printed (the "
@@ -523,8 +521,7 @@ def _fig_position(out: StudyOutput, data: Seed001Data, res: dict[str, Any]) -> N
         _decorate(ax, f"{d} (C1), ANOVA p = {format_p(pos[d]['anova_p'])}",
                   "position step (1 = first break-away from rest at the stroke end)")
     axes[0].set_ylabel("break-away force Fc [N]")
-    axes[0].legend(fontsize=8, loc="upper right")
-    fig.tight_layout()
+    legend_above(axes[0], ncol=1)
     out.figure(fig, "fc-position",
                "Break-away force of C1 at the 12 positions along the stroke (Tables 2-3; each "
                "dot one experiment, step 1 in red). Green: the mean and its 95 % interval. "
@@ -546,9 +543,8 @@ def _fig_normal(out: StudyOutput, data: Seed001Data, res: dict[str, Any]) -> Non
         ax.plot(osm, M.mean() + M.std(ddof=1) * osm, "k--", lw=1,
                 label="normal with the sample mean and std")
         _decorate(ax, f"{d}: Shapiro-Wilk p = {format_p(nor[d]['Fc_shapiro_p'])}",
-                  "normal quantile", legend=8)
+                  "normal quantile", legend=True)
     axes[0].set_ylabel("break-away force Fc [N]")
-    fig.tight_layout()
     out.figure(fig, "fc-normal",
                "Normal probability plots of the 120 break-away forces per direction (C1). The "
                "upper tail is heavier than normal; step-1 values (red) populate it.")
@@ -594,8 +590,7 @@ def _fig_force_speed(out: StudyOutput, data: Seed001Data, res: dict[str, Any]) -
     ax.set_ylabel("friction force F [N] (opposing extension > 0)")
     ax.set_ylim(-40, 40)
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=7.5, loc="upper left")
-    fig.tight_layout()
+    legend_above(ax, ncol=2)
     out.figure(fig, "force-speed",
                "C1 friction force against velocity. Green: the Coulomb-viscous model with the "
                "two-step means of Table 8 (fcomp model `coulomb-viscous`). Dots: the "
@@ -619,9 +614,8 @@ def _fig_b_speed(out: StudyOutput, data: Seed001Data, res: dict[str, Any],
         ax.axhline(B[d].mean(), color="tab:green", label=f"mean B = {B[d].mean():.1f} Ns/m")
         ax.axhline(s["line"]["slope"], color="tab:purple", ls=":",
                    label=f"slope of F_ext(v) = {s['line']['slope']:.0f} Ns/m")
-        _decorate(ax, f"{d} (C1)", "speed v [m/s]", legend=7.5)
+        _decorate(ax, f"{d} (C1)", "speed v [m/s]", legend=True)
     axes[0].set_ylabel("B [Ns/m]")
-    fig.tight_layout()
     out.figure(fig, "b-speed",
                "Two-step viscous coefficients against the speed of their run (C1). A constant "
                "B would show no trend. Purple: the slope of the force-speed line through the "

@@ -62,7 +62,11 @@ from fcomp.models import FrictionModel, make_model
 from fcomp.paramsets import get as get_paramset
 from fcomp.piston import chamber_volumes, piston_areas
 from fcomp.progress import progress_bar
-from studies.base import Study, StudyConfig, StudyOutput
+from studies.base import Finding, Study, StudyConfig, StudyOutput, legend_above
+
+#: The paper (seed 002).
+PAPER = ("Tran, Dao & Yanada (2014), \"Effect of friction model on simulation of hydraulic "
+         "actuator\", Proc. IMechE Part I")
 
 #: Parameter set of the study.
 PARAMSET = "seed002-type1"
@@ -80,6 +84,9 @@ CYCLES = 3
 RATE = 4000.0
 #: Samples per line in the time-series figures.
 PLOT_POINTS = 3000
+#: Upper frequency (Hz) of the spectrum figure, and the decades of PSD it shows.
+SPECTRUM_MAX_HZ = 120.0
+PSD_DECADES = 8.0
 
 #: LuGre bristle parameters swept (N/m, Ns/m): full run and fast mode.
 SWEEP_SIGMA0 = (2e5, 6e5, 2e6, 6e6, 2e7)
@@ -300,6 +307,10 @@ def run_study(fast: bool, progress: bool = True) -> tuple[dict[str, Any], Runs]:
                                "hf_pressure_rms": "Pa", "sigma0": "N/m", "sigma1": "Ns/m"}},
         "parameters": {k: plants[k].friction.flat_params() for k in MODEL_KEYS},
         "plant_parameters": plants["lugre"].plant_params.flat(),
+        "parameter_units": {**{n: spec.unit for k in MODEL_KEYS
+                               for n, spec in plants[k].friction.param_specs().items()},
+                            **{spec.name: spec.unit
+                               for spec in plants["lugre"].plant_params.SPECS}},
     }
     return results, Runs(paper, grid, sweep)
 
@@ -377,6 +388,36 @@ def findings(res: dict[str, Any]) -> list[str]:
     return out
 
 
+def finding(res: dict[str, Any]) -> Finding:
+    """The conclusion: does LuGre oscillate where the NMLGM does not, how sure, what next."""
+    r = res["paper_case"]["ratio_lugre_to_nmlgm"]
+    holds = [s for s in res["sweep"] if s["claim_holds"]]
+    ratios_text = (f"LuGre's high-frequency content is {r['velocity']:.2f}x the NMLGM's in "
+                   f"velocity, {r['force']:.2f}x in force and {r['pressure']:.2f}x in pressure "
+                   f"(the claim needs {CLAIM_RATIO:g}x in all three)")
+    sweep = (f"; LuGre oscillates as the paper says at {len(holds)} of {len(res['sweep'])} "
+             "points of the sweep of its bristle stiffness and damping, those with a large "
+             "damping sigma1 (at least "
+             f"{min(s['sigma1'] for s in holds):.3g} Ns/m)" if holds else
+             f"; at none of the {len(res['sweep'])} points of the bristle-parameter sweep")
+    if res["claim_reproduced"]:
+        status, level = "reproduced", "ok"
+        found = f"With the assumed friction parameters {ratios_text}{sweep}."
+    else:
+        status, level = "not reproduced", "bad"
+        found = (f"With the assumed friction parameters LuGre does not oscillate more than the "
+                 f"NMLGM: {ratios_text}{sweep}.")
+    return Finding(
+        status, level, found,
+        sure="the plant follows the paper's Table 2, but the paper does not print its "
+             "friction parameters (its Table 3): every friction value here is assumed, so "
+             "the outcome says what these values do, not what the paper's did.",
+        next="get the paper's Table 3 (or identify sigma0, sigma1 of LuGre and the NMLGM on "
+             "the rig) and rerun; the sweep says the claim needs a bristle damping that "
+             "outweighs the bristle stiffness at the oil-column frequency.",
+        confidence="low")
+
+
 # -------------------------------------------------------------------- report
 def _decorate(ax: Any, title: str, xlabel: str, ylabel: str) -> None:
     ax.set_title(title, fontsize=10)
@@ -386,6 +427,8 @@ def _decorate(ax: Any, title: str, xlabel: str, ylabel: str) -> None:
 
 
 COLORS = {"steady-state": "#2f6db5", "lugre": "#c0392b", "nmlgm": "#27864a"}
+#: Colours of the claim in the sweep map: holds, rings more but not enough, fails.
+CLAIM_COLORS = {"ok": "#8fd19e", "warn": "#f5d67b", "bad": "#ee9a8f"}
 LABELS = {"steady-state": "steady-state (Eq. 12)", "lugre": "LuGre", "nmlgm": "NMLGM"}
 
 
@@ -402,15 +445,14 @@ def _fig_time(out: StudyOutput, runs: Runs, freq: float) -> None:
     for j, k in enumerate(MODEL_KEYS):
         c = _thin(runs.paper[k].columns)
         t = c["t"]
-        axes[0, j].plot(t, c["v"], color=COLORS[k], lw=0.8)
+        axes[0, j].plot(t, c["v"] * 1e3, color=COLORS[k], lw=0.8)
         axes[1, j].plot(t, c["F"], color=COLORS[k], lw=0.8)
-        axes[2, j].plot(t, c["p1"] / 1e6, color="#444", lw=0.8, label="P1")
-        axes[2, j].plot(t, c["p2"] / 1e6, color="#999", lw=0.8, label="P2")
-        _decorate(axes[0, j], LABELS[k], "", "v [m/s]" if j == 0 else "")
+        axes[2, j].plot(t, c["p1"] / 1e5, color="#444", lw=0.8, label="P1")
+        axes[2, j].plot(t, c["p2"] / 1e5, color="#999", lw=0.8, label="P2")
+        _decorate(axes[0, j], LABELS[k], "", "v [mm/s]" if j == 0 else "")
         _decorate(axes[1, j], "", "", "F [N]" if j == 0 else "")
-        _decorate(axes[2, j], "", "t [s]", "p [MPa gauge]" if j == 0 else "")
-        axes[2, j].legend(fontsize=8, loc="lower right")
-    fig.tight_layout()
+        _decorate(axes[2, j], "", "t [s]", "p [bar gauge]" if j == 0 else "")
+    legend_above(axes[2, 0])
     out.figure(fig, "time-series",
                "Seed 002 Fig. 5 conditions simulated (valve current 4.5 mA at 1 Hz, 118 kg, "
                "from rest): piston velocity, friction force and chamber pressures (gauge) for "
@@ -421,10 +463,9 @@ def _fig_force_velocity(out: StudyOutput, runs: Runs, freq: float) -> None:
     fig, ax = out.subplots(1, 1, figsize=(7.0, 4.6))
     for k in MODEL_KEYS:
         c = _thin(runs.paper[k].columns, runs.paper[k].columns["t"] >= 1.0 / freq)
-        ax.plot(c["v"], c["F"], color=COLORS[k], lw=0.8, label=LABELS[k])
-    _decorate(ax, "Friction force against velocity (cycles 2-3)", "v [m/s]", "F [N]")
-    ax.legend(fontsize=9)
-    fig.tight_layout()
+        ax.plot(c["v"] * 1e3, c["F"], color=COLORS[k], lw=0.8, label=LABELS[k])
+    _decorate(ax, "Friction force against velocity (cycles 2-3)", "v [mm/s]", "F [N]")
+    legend_above(ax)
     out.figure(fig, "force-velocity",
                "Friction force against piston velocity at the paper's input, after the first "
                "cycle. The loops near v = 0 are the reversals; the spikes are the ringing.")
@@ -434,23 +475,37 @@ def _fig_spectrum(out: StudyOutput, runs: Runs, res: dict[str, Any], freq: float
     from scipy import signal
 
     fig, ax = out.subplots(1, 1, figsize=(7.0, 4.2))
+    shown: list[np.ndarray] = []
     for k in MODEL_KEYS:
         c = runs.paper[k].columns
         keep = c["t"] >= 1.0 / freq
         rate = (c["t"].size - 1) / (c["t"][-1] - c["t"][0])
         f, P = signal.welch(c["v"][keep], fs=rate, nperseg=min(4096, int(keep.sum())))
         ax.semilogy(f, P, color=COLORS[k], lw=0.9, label=LABELS[k])
+        shown.append(P[(f > 0) & (f <= SPECTRUM_MAX_HZ)])
+    ax.set_ylim(*psd_limits(np.concatenate(shown)))
     ph = res["physics"]
     ax.axvline(HF_CUTOFF, color="k", ls=":", lw=0.8, label=f"cutoff {HF_CUTOFF:g} Hz")
     ax.axvline(ph["oil_column_hz"], color="#8e44ad", ls="--", lw=0.8,
                label=f"oil column {ph['oil_column_hz']:.1f} Hz")
-    ax.set_xlim(0, 120)
+    ax.set_xlim(0, SPECTRUM_MAX_HZ)
     _decorate(ax, "Velocity spectrum (Welch)", "f [Hz]", "PSD [(m/s)$^2$/Hz]")
-    ax.legend(fontsize=8)
-    fig.tight_layout()
+    legend_above(ax)
     out.figure(fig, "spectrum",
                "Power spectral density of the velocity at the paper's input: the content above "
                "the cutoff is the high-frequency measure; its peak sits at the oil-column mode.")
+
+
+def psd_limits(P: np.ndarray, decades: float = PSD_DECADES) -> tuple[float, float]:
+    """The y range of a spectrum plot: from the curves' top (rounded up to a decade) down
+    ``decades`` decades, or to the lowest value shown if that is higher -- numerical floors
+    far below the content (1e-23) would squeeze the curves into the top of the axes."""
+    P = P[np.isfinite(P) & (P > 0)]
+    if not P.size:
+        return 1e-12, 1.0
+    top = 10.0 ** math.ceil(math.log10(float(P.max())))
+    low = 10.0 ** math.floor(math.log10(float(np.percentile(P, 1))))
+    return max(low, top * 10.0 ** -decades), top
 
 
 def _fig_sweep(out: StudyOutput, res: dict[str, Any]) -> None:
@@ -460,24 +515,31 @@ def _fig_sweep(out: StudyOutput, res: dict[str, Any]) -> None:
     M = np.full((len(s0s), len(s1s)), np.nan)
     for s in sweep:
         M[s0s.index(s["sigma0"]), s1s.index(s["sigma1"])] = min(s["ratio_to_nmlgm"].values())
+    from matplotlib.colors import BoundaryNorm, ListedColormap
+
     fig, ax = out.subplots(1, 1, figsize=(7.2, 0.9 + 0.75 * len(s0s) + 1.4))
-    im = ax.imshow(M, origin="lower", cmap="RdYlGn_r", vmin=0.5, vmax=max(3.0, np.nanmax(M)),
-                   aspect="auto")
+    # green where the claim holds, amber where LuGre rings more but not enough, red where
+    # it rings no more than the NMLGM
+    cmap = ListedColormap([CLAIM_COLORS["bad"], CLAIM_COLORS["warn"], CLAIM_COLORS["ok"]])
+    top = max(CLAIM_RATIO + 1.0, float(np.nanmax(M)) + 1.0)
+    im = ax.imshow(M, origin="lower", cmap=cmap, norm=BoundaryNorm([0.0, 1.0, CLAIM_RATIO, top],
+                                                                   3), aspect="auto")
     for i in range(len(s0s)):
         for j in range(len(s1s)):
-            mark = " *" if M[i, j] >= CLAIM_RATIO else ""
-            ax.text(j, i, f"{M[i, j]:.2f}{mark}", ha="center", va="center", fontsize=9)
+            word = "holds" if M[i, j] >= CLAIM_RATIO else "fails"
+            ax.text(j, i, f"{M[i, j]:.2f}\n{word}", ha="center", va="center", fontsize=9)
     ax.set_xticks(range(len(s1s)), [f"{v:.0e}" for v in s1s])
     ax.set_yticks(range(len(s0s)), [f"{v:.0e}" for v in s0s])
     ax.set_xlabel("LuGre sigma1 [Ns/m]")
     ax.set_ylabel("LuGre sigma0 [N/m]")
-    ax.set_title("min over v, F, p of LuGre/NMLGM high-frequency content", fontsize=10)
-    fig.colorbar(im, ax=ax, label="ratio")
-    fig.tight_layout()
+    ax.set_title("smallest LuGre/NMLGM high-frequency ratio (v, F, p)", fontsize=10)
+    bar = fig.colorbar(im, ax=ax, ticks=[0.5, 0.5 * (1.0 + CLAIM_RATIO), 0.5 * (CLAIM_RATIO + top)])
+    bar.ax.set_yticklabels(["< 1: fails", f"1-{CLAIM_RATIO:g}: fails", f">= {CLAIM_RATIO:g}: holds"])
     out.figure(fig, "sweep",
                "Sweep of LuGre's bristle stiffness and damping (NMLGM at the assumed values): "
-               f"the smallest of the three high-frequency ratios; * marks the claim (ratio >= "
-               f"{CLAIM_RATIO:g} in all three).")
+               "the smallest of the three high-frequency ratios LuGre/NMLGM. Green: the claim "
+               f"holds (ratio >= {CLAIM_RATIO:g} in velocity, force and pressure); amber: LuGre "
+               "rings more, but not enough; red: LuGre rings no more than the NMLGM.")
 
 
 def _fig_claim_case(out: StudyOutput, res: dict[str, Any], freq: float) -> None:
@@ -494,13 +556,12 @@ def _fig_claim_case(out: StudyOutput, res: dict[str, Any], freq: float) -> None:
         c = _thin(run.columns)
         lab = (f"LuGre sigma0={s['sigma0']:.0e}, sigma1={s['sigma1']:.0e}" if k == "lugre"
                else "NMLGM (assumed)")
-        axes[0].plot(c["t"], c["v"], color=COLORS[k], lw=0.8, label=lab)
+        axes[0].plot(c["t"], c["v"] * 1e3, color=COLORS[k], lw=0.8, label=lab)
         axes[1].plot(c["t"], c["F"], color=COLORS[k], lw=0.8)
-    _decorate(axes[0], "A sweep point where the claim holds", "", "v [m/s]")
+    _decorate(axes[0], "A sweep point where the claim holds", "", "v [mm/s]")
     _decorate(axes[1], "", "t [s]", "F [N]")
-    axes[0].legend(fontsize=8)
+    legend_above(axes[0])
     axes[0].set_xlim(1.0 / freq, 2.2 / freq)
-    fig.tight_layout()
     out.figure(fig, "claim-case",
                "Velocity and friction force over one cycle at the smallest LuGre sigma1 of the "
                "sweep for which the claim holds, beside the NMLGM with the assumed parameters.")
@@ -521,8 +582,7 @@ def _fig_grid(out: StudyOutput, res: dict[str, Any]) -> None:
                     label=LABELS[k], ms=4)
         _decorate(ax, f"{f:g} Hz", "amplitude [mA]", "HF velocity RMS [mm/s]" if f == freqs[0]
                   else "")
-    axes[0].legend(fontsize=8)
-    fig.tight_layout()
+    legend_above(axes[0])
     out.figure(fig, "grid",
                "High-frequency velocity content over the valve-current amplitude, at each input "
                "frequency, for the three models.")
@@ -532,13 +592,7 @@ def write_report(out: StudyOutput, res: dict[str, Any], runs: Runs, fast: bool) 
     rep = out.report
     pc = res["paper_case"]
     freq = pc["frequency"]
-    rep.section("Summary")
-    rep.note(("The claim reproduces" if res["claim_reproduced"] else
-              "The claim does not reproduce") + " with the assumed parameters: LuGre/NMLGM "
-             f"high-frequency ratio {pc['ratio_lugre_to_nmlgm']['velocity']:.2f} (velocity), "
-             f"{pc['ratio_lugre_to_nmlgm']['force']:.2f} (force), "
-             f"{pc['ratio_lugre_to_nmlgm']['pressure']:.2f} (pressure); the claim needs "
-             f"{CLAIM_RATIO:g} in all three.", kind="ok" if res["claim_reproduced"] else "warn")
+    rep.section("Findings")
     rep.bullets(findings(res))
     if fast:
         rep.note("Fast mode (CI): the paper's input only and a reduced sweep; run without "
@@ -600,17 +654,21 @@ def write_report(out: StudyOutput, res: dict[str, Any], runs: Runs, fast: bool) 
     srows = []
     for s in res["sweep"]:
         ctrl = s.get("nmlgm_same_bristles")
-        srows.append([s["sigma0"], s["sigma1"], s["ratio_to_nmlgm"]["velocity"],
-                      s["ratio_to_nmlgm"]["force"], s["ratio_to_nmlgm"]["pressure"],
-                      s["damper_over_spring"], s["dissipative_below"], s["peak_force"],
-                      "yes" if s["claim_holds"] else "no",
-                      "" if ctrl is None else ("yes" if ctrl["claim_holds"] else "no")])
-    rep.table(["sigma0 [N/m]", "sigma1 [Ns/m]", "ratio v", "ratio F", "ratio p",
-               "sigma1 w_h/sigma0", "dissipative below [m/s]", "peak |F| [N]", "claim",
-               "claim vs NMLGM with same bristles"], srows,
-              caption="LuGre/NMLGM high-frequency ratios over the sweep (summary.json `sweep`); "
-              "`w_h` = 2 pi x the oil-column frequency.",
-              digits=[None, None, 2, 2, 2, 2, 4, 0, None, None])
+        r = s["ratio_to_nmlgm"]
+        srows.append([f"{s['sigma0']:.0e}", f"{s['sigma1']:.0e}",
+                      f"{r['velocity']:.2f} / {r['force']:.2f} / {r['pressure']:.2f}",
+                      s["damper_over_spring"], s["dissipative_below"] * 1e3, s["peak_force"],
+                      ("holds" if s["claim_holds"] else "fails")
+                      + ("" if ctrl is None else
+                         f" ({'holds' if ctrl['claim_holds'] else 'fails'})")])
+    rep.table(["sigma0 [N/m]", "sigma1 [Ns/m]", "ratio v / F / p", "damper/spring",
+               "passive below [mm/s]", "peak |F| [N]", "claim"], srows,
+              caption="LuGre/NMLGM high-frequency ratios (velocity / force / pressure) over "
+              "the sweep (summary.json `sweep`); damper/spring: `sigma1 w_h/sigma0`, `w_h` = "
+              "2 pi x the oil-column frequency; passive below: LuGre dissipative below "
+              "`4 Fc/sigma1`; in brackets: the claim against the NMLGM given the same sigma0, "
+              "sigma1 (control run).",
+              digits=[None, None, None, 2, 1, 0, None])
     _fig_sweep(out, res)
     _fig_claim_case(out, res, freq)
 
@@ -628,12 +686,15 @@ def write_report(out: StudyOutput, res: dict[str, Any], runs: Runs, fast: bool) 
     rep.section("Parameters")
     rep.paragraph("Every number below is what produced this report (SI units). Friction "
                   "parameters: `seed002-type1` (assumed: the seed's Table 3 is not in its text).")
-    rep.table(["parameter", *(LABELS[k] for k in MODEL_KEYS)],
-              [[n, *(res["parameters"][k].get(n) for k in MODEL_KEYS)]
+    units = res["parameter_units"]
+    rep.table(["parameter", "unit", *(LABELS[k] for k in MODEL_KEYS)],
+              [[n, units.get(n, ""), *(res["parameters"][k].get(n) for k in MODEL_KEYS)]
                for n in sorted({n for k in MODEL_KEYS for n in res["parameters"][k]})],
-              caption="Friction parameters of the three models.")
-    rep.table(["plant parameter", "value"], list(res["plant_parameters"].items()),
-              caption="Plant parameters (`hydraulic`, `seed002-type1`).")
+              caption="Friction parameters of the three models (SI units).")
+    rep.table(["plant parameter", "unit", "value"],
+              [[n, units.get(n, ""), v] for n, v in res["plant_parameters"].items()],
+              caption="Plant parameters (`hydraulic`, `seed002-type1`; SI units, pressures "
+              "absolute).")
 
 
 # ------------------------------------------------------------------- study
@@ -642,10 +703,17 @@ class FrictionModelsStudy(Study):
 
     name = "friction-models"
     cost = 5.0
-    title = "Seed 002 reproduced: friction models in an electrohydraulic servo simulation"
-    summary = ("Steady-state, LuGre and NMLGM friction in the seed 002 hydraulic servo: "
+    title = "Friction models in an electrohydraulic servo: Tran, Dao & Yanada (2014) reproduced"
+    summary = ("Steady-state, LuGre and NMLGM friction in the hydraulic servo of seed 002: "
                "high-frequency content, the paper's claim tested, and when it holds.")
+    paper = PAPER
     figure_label = "Report figure"
+
+    def finding(self, results: dict[str, Any]) -> Finding:
+        return finding(results)
+
+    def key_figure(self, results: dict[str, Any]) -> str | None:
+        return "sweep"
 
     def headline(self, results: dict[str, Any]) -> str:
         r = results["paper_case"]["ratio_lugre_to_nmlgm"]

@@ -32,16 +32,23 @@ All errors in newtons, on held-out data.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
+from fcomp.conclusions import BELOW_FLOOR
 from fcomp.errors import FcompError
 from fcomp.measurement import Measurement
 from fcomp.parallel import run_tasks
 from fcomp.progress import progress_bar, ticker
 from fcomp.report import Link
-from studies.base import Study, StudyConfig, StudyOutput
+from studies.base import Finding, Study, StudyConfig, StudyOutput, legend_above
+
+#: Colours of the models in the stretch figure (baseline, then the final model).
+STRETCH_COLORS = ("#c0392b", "#2356a8", "#27864a")
 
 
 @dataclass(frozen=True)
@@ -188,6 +195,51 @@ def findings(res: dict[str, Any]) -> list[str]:
     return out
 
 
+def below_floor(case: dict[str, Any], limit: float = BELOW_FLOOR) -> str | None:
+    """A flag when a case's final held-out RMS error lies below ``limit`` times the noise
+    floor estimated from its data (a model cannot beat the noise on samples it was not
+    fitted to), else ``None``."""
+    d = case["diagnosis"]
+    final, floor = d.get("rms_final"), d.get("noise_floor")
+    if final is None or not floor or final >= limit * floor:
+        return None
+    name = case.get("file") or case["case"]
+    return (f"`{name}`: the final model's held-out RMS error, {final:.3f} N, is "
+            f"{100 * (1 - final / floor):.0f} % below the noise floor estimated from the data, "
+            f"{floor:.3f} N. No model beats the noise on data it was not fitted to: either it "
+            "over-fits (the held-out samples are not independent of the fitted ones) or the "
+            f"floor estimate is too high. Its verdict `{d['verdict']}` is not confirmed.")
+
+
+def finding(res: dict[str, Any]) -> Finding:
+    """The conclusion: does the loop find the hidden effect, what it does on real data, and
+    the numbers not to trust (a held-out error below the noise floor)."""
+    gen, real = res["generated"], res["real"]
+    n_ok = sum(g["recovered"] for g in gen)
+    status, level = (("confirmed", "ok") if n_ok == len(gen) else
+                     ("partly confirmed", "warn") if n_ok else ("not confirmed", "bad"))
+    found = (f"The diagnose loop found the hidden effect in {n_ok} of {len(gen)} generated "
+             "cases (" + "; ".join(
+                 f"{g['hidden']}: {g['diagnosis']['rms_baseline']:.2f} -> "
+                 f"{g['diagnosis']['rms_final']:.2f} N held-out RMS against "
+                 f"{g['true_noise_std']:.2f} N of noise" for g in gen) + ")")
+    if real:
+        found += ("; on the real records it lowered the held-out error " + "; ".join(
+            f"of {r['file']} from {r['diagnosis']['rms_baseline']:.2f} to "
+            f"{r['diagnosis']['rms_final']:.2f} N by adding "
+            f"{', '.join(r['diagnosis']['added']) or 'nothing'}" for r in real))
+    return Finding(
+        status, level, found + ".",
+        sure=f"{len(gen)} generated case(s), one noise seed each, and {len(real)} real "
+             "record(s); on real data there is no truth to check the added effects against, "
+             "only the held-out error and the noise floor estimated from the same data.",
+        next="run fcomp diagnose on your own records; where the final error sits at or below "
+             "the noise floor, confirm the added effects on a second record (or a longer one) "
+             "before building them into a compensator.",
+        flags=[f for f in (below_floor(c) for c in (*gen, *real)) if f],
+        confidence="high" if len(gen) >= 3 and n_ok == len(gen) else "medium")
+
+
 @dataclass(frozen=True)
 class CaseJob:
     """One case of the study as a picklable job (:func:`run_case`): the case, how to run it
@@ -208,6 +260,7 @@ def run_case(job: CaseJob) -> tuple[dict[str, Any], dict[str, bytes]]:
     """
     from fcomp.diagnosis.figures import fig_before_after, fig_error_fall
     from fcomp.diagnosis.report import write_report as write_diagnosis
+    from fcomp.figstyle import apply_floor
     from fcomp.report import render_png
 
     if isinstance(job.case, GeneratedCase):
@@ -215,8 +268,64 @@ def run_case(job: CaseJob) -> tuple[dict[str, Any], dict[str, bytes]]:
     else:
         res, diag = run_real(job.case, job.options)
     write_diagnosis(diag, job.folder, command=job.command)
-    return res, {"error-fall": render_png(fig_error_fall(diag)),
-                 "before-after": render_png(fig_before_after(diag))}
+    fall = fig_error_fall(diag)
+    apply_floor(fall)
+    return res, {"error-fall": render_png(fall),
+                 "before-after": render_png(fig_stretch(diag, fig_before_after(diag)))}
+
+
+def with_gaps(t: np.ndarray, *ys: np.ndarray, starts: Sequence[int] = ()
+              ) -> tuple[np.ndarray, ...]:
+    """``t`` and ``ys`` with a NaN sample at every gap (:func:`fcomp.figstyle.break_gaps`: a
+    jump in time) and at every experiment boundary (an index of ``starts``): a plotted line
+    breaks there instead of drawing a straight line across samples that do not exist."""
+    from fcomp.figstyle import break_gaps
+
+    at = sorted({int(i) for i in starts if 0 < i < len(t)})
+    cols = [np.insert(np.asarray(a, dtype=float), at, np.nan) for a in (t, *ys)]
+    return break_gaps(cols[0], *cols[1:])
+
+
+def fig_stretch(diag: Any, chosen: Any) -> Any:
+    """The held-out stretch of ``chosen`` (the diagnosis figure that picks where the added
+    effects matter most; its time range is reused): measured force, baseline and final
+    model, with the velocity and the position that explain them beneath; lines break at
+    gaps and experiment boundaries."""
+    from fcomp import figstyle
+    from fcomp.diagnosis.figures import view
+
+    lines = chosen.axes[0].lines if chosen.axes else []
+    span = lines[0].get_xdata() if lines else np.array([])
+    vw = view(diag)
+    t = vw.data.signal("t")
+    a, b = ((int(np.searchsorted(t, span[0])), int(np.searchsorted(t, span[-1], "right")))
+            if len(span) else (0, t.size))
+    starts = [e.start - a for e in vw.data.experiments if a < e.start < b]
+    sig = {"v": figstyle.scaled("v", vw.data.signal("v")[a:b])}
+    if vw.data.available.get("x"):  # a measured position
+        sig["x"] = figstyle.scaled("x", vw.data.signal("x")[a:b])
+    fig, axes = figstyle.new_figure(height=2.4 + 1.6 * len(sig), nrows=1 + len(sig),
+                                    sharex=True,
+                                    gridspec_kw={"height_ratios": [2.0] + [1.0] * len(sig)})
+    tt, y, *models = with_gaps(t[a:b], vw.data.y[a:b], *(sr.fit.F_hat[a:b] for sr in vw.series),
+                               starts=starts)
+    axes[0].plot(tt, y, color="#222222", lw=1.1, label="measured")
+    for k, (sr, F) in enumerate(zip(vw.series, models, strict=True)):
+        axes[0].plot(tt, F, lw=1.3, ls="--" if k == len(models) - 1 and k else "-",
+                     color=STRETCH_COLORS[k % len(STRETCH_COLORS)],
+                     label=sr.label.split(":")[0])
+    axes[0].set_ylabel("force (N)")
+    legend_above(axes[0], ncol=len(vw.series) + 1)
+    labels = {"v": figstyle.label("velocity", "v"), "x": figstyle.label("position", "x")}
+    for ax, (key, values) in zip(axes[1:], sig.items(), strict=True):
+        ax.plot(*with_gaps(t[a:b], values, starts=starts), color="#4a6fa5", lw=1.1)
+        ax.set_ylabel(labels[key])
+        if key == "v":
+            ax.axhline(0.0, color="#999999", lw=0.8)
+    axes[-1].set_xlabel("time (s)")
+    for ax in axes:
+        ax.grid(alpha=0.3)
+    return fig
 
 
 def _case_section(out: StudyOutput, name: str, title: str, res: dict[str, Any],
@@ -237,8 +346,26 @@ def _case_section(out: StudyOutput, name: str, title: str, res: dict[str, Any],
     out.figure(figures["error-fall"], f"{name}-error-fall",
                f"`{name}`: held-out RMS error after each accepted step; dashed: noise floor.")
     out.figure(figures["before-after"], f"{name}-before-after",
-               f"`{name}`: measured force, baseline and final model over a held-out stretch.")
+               f"`{name}`: measured force, baseline and final model over a held-out stretch, "
+               "with the piston's velocity (and position, where measured) that explain it; "
+               "lines break where samples are missing.")
     rep.bullets([Link(f"full diagnosis report of {name}", link)])
+
+
+def _added(d: dict[str, Any]) -> str:
+    """The effects added, and in brackets those tied with them."""
+    ties = "; ".join(", ".join(t) for t in d["ties"])
+    return (", ".join(d["added"]) or "nothing") + (f" ({ties})" if ties else "")
+
+
+def _fall(d: dict[str, Any]) -> str:
+    return f"{d['rms_baseline']:.3f} -> {d['rms_final']:.3f}"
+
+
+def _verdict(case: dict[str, Any]) -> str:
+    """The verdict, with a flag where the final error lies below the noise floor."""
+    verdict = case["diagnosis"]["verdict"]
+    return verdict + (" (below the noise floor: check)" if below_floor(case) else "")
 
 
 class MissingPhysicsStudy(Study):
@@ -259,6 +386,13 @@ class MissingPhysicsStudy(Study):
                 f"generated cases; real data: " + ", ".join(
                     f"{x['file']} {x['diagnosis']['rms_baseline']:.2f} -> "
                     f"{x['diagnosis']['rms_final']:.2f} N" for x in r))
+
+    def finding(self, results: dict[str, Any]) -> Finding:
+        return finding(results)
+
+    def key_figure(self, results: dict[str, Any]) -> str | None:
+        cases = [*results["real"], *results["generated"]]
+        return f"{cases[0]['case']}-before-after" if cases else None
 
     def build(self, out: StudyOutput, config: StudyConfig) -> dict[str, Any]:
         gen = FAST_GENERATED if config.fast else GENERATED
@@ -293,10 +427,7 @@ class MissingPhysicsStudy(Study):
             raise FcompError("missing-physics: no case was run")
 
         rep = out.report
-        rep.section("Summary")
-        n_ok = sum(g["recovered"] for g in results["generated"])
-        rep.note(f"Hidden effect recovered in {n_ok} of {len(results['generated'])} generated "
-                 "cases.", kind="ok" if n_ok == len(results["generated"]) else "warn")
+        rep.section("Findings")
         rep.bullets(results["findings"])
         if config.fast:
             rep.note("Fast mode (CI): one generated case, one real file, at most two steps and "
@@ -316,16 +447,16 @@ class MissingPhysicsStudy(Study):
             f"force noise of {GENERATED[0].noise_std:g} N. The truth is used only afterwards, "
             "to judge the outcome.")
         rep.section("Generated cases")
-        rep.table(["case", "hidden", "added", "ties", "RMS baseline [N]", "RMS final [N]",
-                   "true noise [N]", "floor estimate [N]", "verdict", "recovered"],
-                  [[g["case"], g["hidden"], ", ".join(g["diagnosis"]["added"]) or "-",
-                    "; ".join(", ".join(t) for t in g["diagnosis"]["ties"]) or "-",
-                    g["diagnosis"]["rms_baseline"], g["diagnosis"]["rms_final"],
-                    g["true_noise_std"], g["diagnosis"]["noise_floor"],
-                    g["diagnosis"]["verdict"], g["recovered"]]
+        rep.table(["hidden", "added (tied)", "RMS [N]", "noise / floor [N]", "verdict",
+                   "recovered"],
+                  [[g["hidden"], _added(g["diagnosis"]), _fall(g["diagnosis"]),
+                    f"{g['true_noise_std']:.2f} / {g['diagnosis']['noise_floor']:.3f}",
+                    _verdict(g), "yes" if g["recovered"] else "no"]
                    for g in results["generated"]],
-                  caption="The loop against the hidden truth.",
-                  digits=[None, None, None, None, 3, 3, 2, 3, None, None])
+                  caption="The loop against the hidden truth: the effect hidden in the data, "
+                  "the effects added (in brackets: tied with them), the held-out RMS error of "
+                  "the baseline and the final model, the true noise and the floor estimated "
+                  "from the data.")
         for g in results["generated"]:
             _case_section(out, g["case"], f"Hidden {g['hidden']}", g, figures[g["case"]],
                           f"diagnosis-{g['case']}/report.html")
@@ -335,15 +466,13 @@ class MissingPhysicsStudy(Study):
             "constant pressure, the piston pushed back and forth over about 40 mm at 5-20 mm/s "
             "by a load cell; friction F = p A + F_ext - m a. No measured mass is given; the "
             "diagnosis treats the inertia term like any other candidate.")
-        rep.table(["file", "baseline", "added", "ties", "RMS baseline [N]", "RMS final [N]",
-                   "noise floor [N]", "verdict"],
-                  [[r["file"], r["diagnosis"]["baseline"], ", ".join(r["diagnosis"]["added"])
-                    or "-", "; ".join(", ".join(t) for t in r["diagnosis"]["ties"]) or "-",
-                    r["diagnosis"]["rms_baseline"], r["diagnosis"]["rms_final"],
-                    r["diagnosis"]["noise_floor"], r["diagnosis"]["verdict"]]
+        rep.table(["file", "baseline", "added (tied)", "RMS [N]", "noise floor [N]",
+                   "verdict"],
+                  [[r["file"], r["diagnosis"]["baseline"], _added(r["diagnosis"]),
+                    _fall(r["diagnosis"]), r["diagnosis"]["noise_floor"], _verdict(r)]
                    for r in results["real"]],
-                  caption="The loop on real measurements.", digits=[None, None, None, None, 3,
-                                                                   3, 3, None])
+                  caption="The loop on real measurements: held-out RMS error of the baseline "
+                  "and the final model.", digits=[None, None, None, None, 3, None])
         for r in results["real"]:
             _case_section(out, r["case"], r["file"], r, figures[r["case"]],
                           f"diagnosis-{r['case']}/report.html")

@@ -82,8 +82,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from studies.base import Study, StudyConfig, StudyOutput
-from studies.presliding_analysis import analyse, findings
+from studies.base import Finding, Study, StudyConfig, StudyOutput
+from studies.presliding_analysis import analyse, finding, findings
 from studies.presliding_report import write_report
 from studies.presliding_runs import run_cases
 
@@ -93,17 +93,30 @@ class PreslidingStudy(Study):
 
     name = "presliding"
     cost = 10.0
-    title = "Seed 000 reproduced: pre-sliding friction of pneumatic cylinders"
+    title = "Pre-sliding friction of pneumatic cylinders: Tran, Dao & Yanada reproduced"
     summary = ("Pressure cycles of seed 000 on the pre-sliding rig: force-displacement loops, "
                "the NMLGM's failure on nonlocal memory and the new model's success.")
+    paper = ("Tran, Dao & Yanada, \"Dynamic friction behavior in pre-sliding regime of "
+             "pneumatic actuators\"")
     figure_label = "Report figure"
     table_label = "Report table"
 
     def headline(self, results: dict[str, Any]) -> str:
         n, h = results["nmlgm"], results["nmlgm-hysteresis"]
-        return (f"minor loops closed / wiping-out: NMLGM {n['minor_loops_closed']}/"
-                f"{n['wiping_out']}, new model {h['minor_loops_closed']}/{h['wiping_out']}; "
-                f"NMLGM friction-work error {100 * n['loop_area_error']:+.0f} %")
+
+        def yes(flag: bool) -> str:
+            return "yes" if flag else "no"
+
+        return (f"minor loops closed: NMLGM {yes(n['minor_loops_closed'])}, new model "
+                f"{yes(h['minor_loops_closed'])}; wiping-out: NMLGM {yes(n['wiping_out'])}, "
+                f"new model {yes(h['wiping_out'])}; NMLGM friction-work error "
+                f"{100 * n['loop_area_error']:+.0f} %")
+
+    def finding(self, results: dict[str, Any]) -> Finding:
+        return finding(results)
+
+    def key_figure(self, results: dict[str, Any]) -> str | None:
+        return "memory"
 
     def build(self, out: StudyOutput, config: StudyConfig) -> dict[str, Any]:
         cases = run_cases(config.fast, progress=config.progress)

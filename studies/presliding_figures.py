@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from studies.base import StudyOutput
+from studies.base import StudyOutput, legend_above
 from studies.presliding_analysis import MEM_LOOP_DEPTH, MEM_LOOP_START, MODELS
 from studies.presliding_runs import Case
 
@@ -29,17 +29,16 @@ def axes_style(ax: Any, title: str, xl: str, yl: str) -> None:
 def fig_case(out: StudyOutput, case: Case, name: str, caption: str) -> None:
     fig, axes = out.subplots(1, 3, figsize=(11.5, 3.5))
     r = case.new
-    axes[0].plot(r.t, r.p1 / 1e6, color="#444", lw=0.9, label="p1")
-    axes[0].plot(r.t, r.p2 / 1e6, color="#999", lw=0.9, label="p2")
-    axes_style(axes[0], "pressures", "t [s]", "p [MPa gauge]")
-    axes[0].legend(fontsize=8)
+    axes[0].plot(r.t, r.p1 / 1e5, color="#444", lw=0.9, label="p1")
+    axes[0].plot(r.t, r.p2 / 1e5, color="#999", lw=0.9, label="p2")
+    axes_style(axes[0], "pressures", "t [s]", "p [bar gauge]")
+    legend_above(axes[0])
     for key, run in (("nmlgm", case.nmlgm), ("nmlgm-hysteresis", case.new)):
         axes[1].plot(run.t, run.x * 1e3, color=COLORS[key], lw=0.9, label=LABELS[key])
         axes[2].plot(run.x * 1e3, run.F, color=COLORS[key], lw=0.9)
     axes_style(axes[1], "displacement", "t [s]", "x [mm]")
-    axes[1].legend(fontsize=8)
+    legend_above(axes[1], ncol=1)
     axes_style(axes[2], "friction force - displacement", "x [mm]", "F [N]")
-    fig.tight_layout()
     out.figure(fig, name, caption)
 
 
@@ -50,8 +49,7 @@ def fig_fig4(out: StudyOutput, cases: list[Case], cyl: int) -> None:
         for key, run in (("nmlgm", c.nmlgm), ("nmlgm-hysteresis", c.new)):
             ax.plot(run.x * 1e3, run.F, color=COLORS[key], lw=0.9, label=LABELS[key])
         axes_style(ax, c.programme.label, "x [mm]", "F [N]")
-    np.atleast_1d(axes)[0].legend(fontsize=7)
-    fig.tight_layout()
+    legend_above(np.atleast_1d(axes)[0], ncol=1)
     paper_fig = {1: "4", 2: "7", 3: "8"}[cyl]
     out.figure(fig, f"fig{paper_fig}-cylinder{cyl}",
                f"Seed 000 Fig. {paper_fig} conditions, cylinder {cyl}: p1 raised to the paper's "
@@ -66,13 +64,12 @@ def fig_replay(out: StudyOutput, cases: list[Case], res: dict[str, Any]) -> None
         axes[0].plot(ref.x * 1e3, res["_replays"][key], color=COLORS[key], lw=0.9, ls="--",
                      label=f"{LABELS[key]}, driven by its velocity")
     axes_style(axes[0], "force-displacement (seed 000 Figs. 14, 19)", "x [mm]", "F [N]")
-    axes[0].legend(fontsize=7)
+    legend_above(axes[0], ncol=1)
     axes[1].plot(ref.t, ref.F, color="k", lw=1.4, label="reference")
     for key in MODELS:
         axes[1].plot(ref.t, res["_replays"][key], color=COLORS[key], lw=0.9, ls="--",
                      label=LABELS[key])
     axes_style(axes[1], "friction force in time (seed 000 Fig. 20)", "t [s]", "F [N]")
-    fig.tight_layout()
     out.figure(fig, "replay",
                "Each model driven by the velocity of the reference run (Fig. 10 programme, "
                "cylinder 1), as the seed drove its Figs. 14 and 19: the NMLGM's loops have the "
@@ -88,8 +85,7 @@ def fig_memory(out: StudyOutput, res: dict[str, Any]) -> None:
         ax.plot(c["x_with"] * 1e3, c["F_with"], color=COLORS[key], lw=0.9,
                 label="with two internal loops")
         axes_style(ax, LABELS[key], "x [mm]", "F [N]")
-        ax.legend(fontsize=7)
-    fig.tight_layout()
+        legend_above(ax, ncol=1)
     out.figure(fig, "memory",
                "Memory protocol: a displacement cycle with two internal loops (starting at x = "
                f"{MEM_LOOP_START * 1e3:g} mm, {MEM_LOOP_DEPTH * 1e3:g} mm deep) over the same "
@@ -102,22 +98,21 @@ def fig_size(out: StudyOutput, cases: list[Case], res: dict[str, Any]) -> None:
     fig, axes = out.subplots(1, 2, figsize=(11.0, 3.8))
     for c in rows:
         p = max(w[1] for w in c.programme.waypoints)
-        axes[0].plot(c.new.x * 1e3, c.new.F, lw=0.9, label=f"p1 to {p / 1e6:.3f} MPa")
+        axes[0].plot(c.new.x * 1e3, c.new.F, lw=0.9, label=f"p1 to {p / 1e5:.2f} bar")
     axes_style(axes[0], "new model, Fig. 12a programmes", "x [mm]", "F [N]")
-    axes[0].legend(fontsize=7)
+    legend_above(axes[0], ncol=1)
     ls = np.array(res["loop_size_vs_pressure"])
-    axes[1].plot(ls[:, 0] / 1e6, ls[:, 1] * 1e3, "o-", color=COLORS["nmlgm-hysteresis"],
+    axes[1].plot(ls[:, 0] / 1e5, ls[:, 1] * 1e3, "o-", color=COLORS["nmlgm-hysteresis"],
                  label="new model (p1 varied)")
     ln = np.array(res["loop_size_vs_pressure_nmlgm"])
-    axes[1].plot(ln[:, 0] / 1e6, ln[:, 1] * 1e3, "s--", color=COLORS["nmlgm"],
+    axes[1].plot(ln[:, 0] / 1e5, ln[:, 1] * 1e3, "s--", color=COLORS["nmlgm"],
                  label="NMLGM (p1 varied)")
     if "loop_size_vs_p2" in res:
         l2 = np.array(res["loop_size_vs_p2"])
-        axes[1].plot(l2[:, 0] / 1e6, l2[:, 1] * 1e3, "^-", color="#8e44ad",
+        axes[1].plot(l2[:, 0] / 1e5, l2[:, 1] * 1e3, "^-", color="#8e44ad",
                      label="new model (p2 varied)")
-    axes_style(axes[1], "loop size against pressure (Fig. 12)", "peak pressure [MPa]",
+    axes_style(axes[1], "loop size against pressure (Fig. 12)", "peak pressure [bar gauge]",
         "displacement span [mm]")
-    axes[1].legend(fontsize=7)
-    fig.tight_layout()
+    legend_above(axes[1], ncol=1)
     out.figure(fig, "loop-size",
                "Seed 000 Fig. 12: the loop grows with the peak pressure (cylinder 1).")

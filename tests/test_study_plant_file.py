@@ -121,7 +121,8 @@ def test_edited_plant_file_on_the_command_line(tmp_path: Path, short_plan: None,
                   "orientation horizontal"):  # the file's values, not the built-in plant's
         assert shown in text, shown
     assert "Controller settings: the plant file's control rate" in text
-    assert "true* friction lugre (model file" in text and f"model file {friction}" in text
+    assert "the true friction lugre (model file" in text and f"model file {friction}" in text
+    assert "*true*" not in text  # plain words: the report renders no markdown
 
 
 def test_plant_file_settings_replace_the_builtin_table(tmp_path: Path) -> None:

@@ -185,7 +185,7 @@ def atomic_write_text(path: str | Path, text: str) -> Path:
     return write_text(path, text)
 
 
-def _inline(text: str) -> str:
+def inline(text: str) -> str:
     """Escape ``text``; ```code``` spans become ``<code>``."""
     parts = str(text).split("`")
     out = []
@@ -200,7 +200,7 @@ def _inline(text: str) -> str:
 def _cell(value: Any, digits: int | None = None) -> tuple[str, bool]:
     """HTML of a table cell and whether it is numeric."""
     if isinstance(value, Link):
-        return f'<a href="{html.escape(value.href)}">{_inline(value.text)}</a>', False
+        return f'<a href="{html.escape(value.href)}">{inline(value.text)}</a>', False
     numeric = isinstance(value, int | float) and not isinstance(value, bool)
     if not numeric:
         try:
@@ -211,7 +211,7 @@ def _cell(value: Any, digits: int | None = None) -> tuple[str, bool]:
             numeric = False
     if numeric:
         return html.escape(_tiny(value, digits) or format_value(value, digits)), True
-    return _inline("" if value is None else str(value)), False
+    return inline("" if value is None else str(value)), False
 
 
 def _tiny(value: Any, digits: int | None) -> str | None:
@@ -295,12 +295,12 @@ class Report:
             raise FcompError(f"section level must be 2 or 3, got {level}")
         slug = _slug(heading, self._slugs)
         self._toc.append((level, slug, heading))
-        self._blocks.append(f'<h{level} id="{slug}">{_inline(heading)}</h{level}>')
+        self._blocks.append(f'<h{level} id="{slug}">{inline(heading)}</h{level}>')
         return self
 
     def paragraph(self, text: str) -> Report:
         """A paragraph of plain text (escaped; ```code``` spans allowed)."""
-        self._blocks.append(f"<p>{_inline(text)}</p>")
+        self._blocks.append(f"<p>{inline(text)}</p>")
         return self
 
     def bullets(self, items: Iterable[Any], *, ordered: bool = False) -> Report:
@@ -314,23 +314,30 @@ class Report:
         """A highlighted remark: ``kind`` is ``info``, ``ok``, ``warn`` or ``bad``."""
         if kind not in _NOTE_KINDS:
             raise FcompError(f"note kind must be one of {', '.join(_NOTE_KINDS)}, got {kind!r}")
-        self._blocks.append(f'<div class="note {kind}"><p>{_inline(text)}</p></div>')
+        self._blocks.append(f'<div class="note {kind}"><p>{inline(text)}</p></div>')
         return self
 
-    def conclusion(self, found: Any) -> Report:
+    def markup(self, html_text: str) -> Report:
+        """A block of markup the caller built and escaped (e.g. the study index's cards)."""
+        self._blocks.append(html_text)
+        return self
+
+    def conclusion(self, found: Any, *, first: bool = False) -> Report:
         """The report's opening: what was found, how sure, what next.
 
         ``found`` is a :class:`fcomp.conclusions.Conclusion` (or any object with its
         ``finding``, ``confidence``, ``reasons`` and ``next_steps``); shown as a note whose
-        colour is its confidence (high: ok, medium: warn, low: bad), every reason listed.
+        colour is its confidence (high: ok, medium: warn, low: bad), every reason listed;
+        ``first``: before every block added so far (the report opens with it).
         """
         kind = {"high": "ok", "medium": "warn"}.get(found.confidence, "bad")
-        reasons = "".join(f"<li>{_inline(r)}</li>" for r in found.reasons)
-        steps = "".join(f"<li>{_inline(s)}</li>" for s in found.next_steps)
-        self._blocks.append(
+        reasons = "".join(f"<li>{inline(r)}</li>" for r in found.reasons)
+        steps = "".join(f"<li>{inline(s)}</li>" for s in found.next_steps)
+        self._blocks.insert(
+            0 if first else len(self._blocks),
             f'<div class="note {kind} conclusion"><p><strong>Conclusion:</strong> '
-            f"{_inline(found.finding)}</p><p><strong>How sure:</strong> "
-            f"{_inline(found.confidence)}" + (", because" if reasons else "") + "</p>"
+            f"{inline(found.finding)}</p><p><strong>How sure:</strong> "
+            f"{inline(found.confidence)}" + (", because" if reasons else "") + "</p>"
             + (f"<ul>{reasons}</ul>" if reasons else "")
             + (f"<p><strong>Next:</strong></p><ul>{steps}</ul>" if steps else "") + "</div>")
         return self
@@ -363,8 +370,8 @@ class Report:
         parts = ['<div class="table-wrap"><table>']
         if caption:
             parts.append(f"<caption>{html.escape(self.table_label)} {self._tables}. "
-                         f"{_inline(caption)}</caption>")
-        parts.append("<thead><tr>" + "".join(f'<th scope="col">{_inline(h)}</th>'
+                         f"{inline(caption)}</caption>")
+        parts.append("<thead><tr>" + "".join(f'<th scope="col">{inline(h)}</th>'
                                              for h in header) + "</tr></thead><tbody>")
         for i, row in enumerate(rows):
             row = list(row)
@@ -456,7 +463,7 @@ class Report:
             data = base64.b64encode(bytes(fig)).decode("ascii")
             body = f'<img src="data:image/png;base64,{data}" alt="{alt_text}">'
         self._blocks.append(
-            f"<figure>{body}<figcaption><strong>{label}</strong> {_inline(caption)}"
+            f"<figure>{body}<figcaption><strong>{label}</strong> {inline(caption)}"
             "</figcaption></figure>"
         )
         return self
@@ -471,12 +478,12 @@ class Report:
             f"<meta name=\"generator\" content=\"fcomp {html.escape(__version__)}\">\n"
             f"<title>{html.escape(self.title)}</title>\n<style>{_CSS}</style>\n</head>\n"
         )
-        parts = [head, "<body>\n<main>\n<header>", f"<h1>{_inline(self.title)}</h1>"]
+        parts = [head, "<body>\n<main>\n<header>", f"<h1>{inline(self.title)}</h1>"]
         if self.subtitle:
-            parts.append(f'<p class="subtitle">{_inline(self.subtitle)}</p>')
+            parts.append(f'<p class="subtitle">{inline(self.subtitle)}</p>')
         parts.append("</header>")
         if sum(1 for lvl, _, _ in self._toc if lvl == 2) >= 3:
-            items = "".join(f'<li><a href="#{slug}">{_inline(h)}</a></li>'
+            items = "".join(f'<li><a href="#{slug}">{inline(h)}</a></li>'
                             for lvl, slug, h in self._toc if lvl == 2)
             # headings that carry their own numbers ("2. Where the model fails") are listed
             # as written, not numbered again ("2. 2. Where ...")
@@ -490,7 +497,7 @@ class Report:
                 ("generated", now)]
         if self.command:
             meta.insert(1, ("command", self.command))
-        dl = "".join(f"<dt>{html.escape(k)}</dt><dd>{_inline(f'`{v}`' if k == 'command' else v)}"
+        dl = "".join(f"<dt>{html.escape(k)}</dt><dd>{inline(f'`{v}`' if k == 'command' else v)}"
                      "</dd>" for k, v in meta)
         parts.append(f'<footer><dl class="meta">{dl}</dl>')
         if self.config:

@@ -30,7 +30,7 @@ from typing import Any
 
 from fcomp.parallel import run_tasks
 from fcomp.progress import ProgressRelay, progress_bar, relay_progress, running, ticker
-from fcomp.report import Link, _inline
+from fcomp.report import Link, inline
 from studies.base import Finding, Study, StudyConfig, StudyError, StudyOutput, StudyReport
 
 
@@ -100,7 +100,7 @@ def run_study(job: StudyJob) -> dict[str, Any]:
 
 def _esc(text: str) -> str:
     """``text`` for the page: escaped, with ```code``` spans (as the report's own text)."""
-    return _inline(str(text))
+    return inline(str(text))
 
 
 def finding_words(run: Mapping[str, Any]) -> tuple[str, str]:
@@ -158,7 +158,7 @@ def write_index(rep: StudyReport, runs: Mapping[str, Mapping[str, Any]]) -> None
               digits=[None, None, None, 0, 0])
     for n, r in runs.items():
         rep.section(r["title"], level=3)
-        rep.raw(study_card(n, r))
+        rep.markup(study_card(n, r))
 
 
 class AllStudies(Study):

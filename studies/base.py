@@ -157,14 +157,7 @@ class StudyReport(Report):
     def lead(self, finding: Finding) -> StudyReport:
         """Open the report with ``finding``, before every section added so far, in the form
         every command's report opens with (:meth:`fcomp.report.Report.conclusion`)."""
-        blocks = len(self._blocks)
-        self.conclusion(finding.conclusion())
-        self._blocks[:] = self._blocks[blocks:] + self._blocks[:blocks]
-        return self
-
-    def raw(self, markup: str) -> StudyReport:
-        """A block of markup made here (already escaped): the index's study cards."""
-        self._blocks.append(markup)
+        self.conclusion(finding.conclusion(), first=True)
         return self
 
 

@@ -51,13 +51,30 @@ def run(args: argparse.Namespace) -> int:
     for warning in study.check(config):  # bad inputs: one line, before anything is written
         common.warn("measurement-terms", warning, "--friction")
     try:
-        study.main(config)
+        results = study.main(config)
     except StudyError as exc:
         sys.stderr.write(f"fcomp: error: {exc}\n")
         return 1
+    print("\n".join(_conclusion(results)))
     reports = " and ".join(str(out / f) for f in study.report_files)
     print(f"wrote {out / 'summary.json'}, {reports}")
     return 0
+
+
+def _conclusion(results: dict) -> list[str]:
+    """What the study found, first (its finding as a conclusion); for ``all`` one line per
+    study after it: its status in words and what it found."""
+    from studies.base import Finding
+
+    meta = results.get("meta") or {}
+    lines = (Finding.from_dict(meta["finding"]).conclusion().lines()
+             if meta.get("finding") else [])
+    for name, run in (results.get("studies") or {}).items():
+        found = run.get("finding")
+        said = (f"{found['status']} ({found.get('confidence', 'medium')} confidence): "
+                f"{found['found']}" if found else f"failed: {run.get('error')}")
+        lines.append(f"  {name}: {said}")
+    return lines
 
 
 COMMANDS.register("study", run)

@@ -321,3 +321,14 @@ def test_study_figures_are_column_wide_at_most_and_their_text_9pt_or_more(tmp_pa
     rec = figstyle.read_record(path.read_bytes())
     assert float(rec[figstyle.KEY_MIN_FONT]) >= figstyle.FONT_MIN
     assert figstyle.check_readable(path.read_bytes()) is None
+
+
+def test_the_study_command_prints_its_finding_first(tmp_path, capsys) -> None:
+    from fcomp.cli.main import main
+
+    assert main(["study", "coulomb-viscous", "--fast", "--out", str(tmp_path / "cv"),
+                 "--no-progress"]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert out[0].startswith("Conclusion: Partly reproduced. Table 8 (cylinder C1): 12 of 12 ")
+    assert out[1].startswith("How sure: high")
+    assert out[-1].startswith("wrote ")

@@ -283,6 +283,15 @@ MEANING: dict[str, str] = {
 }
 
 
+def _subject(message: str) -> str:
+    """What a warning without a parameter concerns: its message's lead-in, after any
+    baseline/final-model context (``"speed slow: 28 held-out ..."`` -> ``"speed slow"``)."""
+    m = _CONTEXT.match(message)
+    head = message[m.end():] if m else message
+    lead = head.split(":", 1)[0].strip()
+    return lead if lead and len(lead) <= 40 and lead != head else "the fit"
+
+
 def grouped_warnings(items: Sequence[Mapping[str, Any]]) -> list[str]:
     """The warnings ``items`` (``{"code", "parameter", "message"}``) as lines to print: a code
     met once keeps its message; several of one code become one counted line naming what
@@ -297,8 +306,10 @@ def grouped_warnings(items: Sequence[Mapping[str, Any]]) -> list[str]:
             continue
         where: dict[str, list[str]] = {}
         for w in ws:
-            names = where.setdefault(context(str(w.get("message", ""))) or "", [])
-            name = str(w.get("parameter") or "the fit")
+            message, parameter = str(w.get("message", "")), w.get("parameter")
+            ctx = context(message)
+            names = where.setdefault((ctx or "") if parameter else "", [])
+            name = str(parameter or ctx or _subject(message))
             if name not in names:
                 names.append(name)
         subjects = "; ".join(", ".join(n) + (f" ({c})" if c else "") for c, n in where.items())

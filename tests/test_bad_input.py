@@ -43,6 +43,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import scipy.io
+from helpers.terminal import drain
 from test_effects import USER_MODULE
 
 from fcomp import datasets
@@ -1039,14 +1040,7 @@ def test_long_run_shows_progress_and_a_signal_leaves_nothing(lab: Path, sig: int
     assert b"simulate hydraulic:" in seen and b"% (t = " in seen, seen
     proc.send_signal(sig)
     proc.communicate(timeout=60)
-    while select.select([master], [], [], 0.5)[0]:
-        try:
-            chunk = os.read(master, 4096)
-        except OSError:
-            break
-        if not chunk:
-            break
-        seen += chunk
+    seen += drain(master)
     os.close(master)
     assert proc.returncode == code
     assert seen.decode().rsplit("\x1b[K", 1)[-1].strip() == line, seen

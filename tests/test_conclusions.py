@@ -182,3 +182,13 @@ def test_the_verdicts_reasons_are_split_at_top_level_only() -> None:
 
     assert _clauses("structure: x (strength 0.30 >= 0.15; it carries 0.28 N); at a bound") == [
         "structure: x (strength 0.30 >= 0.15; it carries 0.28 N)", "at a bound"]
+
+
+def test_grouped_warnings_without_a_parameter_name_what_they_concern() -> None:
+    items = [_w("heldout-coverage", None, "speed slow: 28 held-out of 57 usable samples"),
+             _w("heldout-coverage", None, "reversal: 3 held-out of 9 usable samples"),
+             _w("not-converged", None, "final model cv: the fit did not converge: ..."),
+             _w("not-converged", None, "baseline cv: the fit did not converge: ...")]
+    lines = grouped_warnings(items)
+    assert lines[0].startswith("2 x heldout-coverage: speed slow, reversal -- ")
+    assert lines[1].startswith("2 x not-converged: final model, baseline -- ")

@@ -24,7 +24,7 @@ def record():
 @pytest.mark.parametrize("kwargs", [
     {"check_baseline": "sometimes"}, {"split": "random"}, {"max_steps": -1},
     {"max_steps": 2.5}, {"n_jobs": 0}, {"max_nfev": 0}, {"cutoff_hz": -3.0},
-    {"effects": ["no-such-effect"]}, {"add": ["no-such-effect"]}, {"rule": 0.05},
+    {"candidates": ["no-such-effect"]}, {"add": ["no-such-effect"]}, {"rule": 0.05},
     {"verdict_rule": {"structure_min": 0.2}},
 ])
 def test_every_argument_is_checked_before_any_work(kwargs) -> None:

@@ -6,6 +6,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers.terminal import drain
 
 from fcomp.inputs import parse_input
 from fcomp.models import make_model
@@ -122,9 +123,10 @@ def test_a_study_of_all_says_it_is_running() -> None:
 
     class Tiny:
         title = summary = "tiny"
+        paper = None
 
         def main(self, config: object) -> dict:
-            return {}
+            return {"meta": {"finding": None}}
 
         def headline(self, results: dict) -> str:
             return "done"
@@ -185,7 +187,6 @@ def test_diagnose_draws_one_bar_on_a_terminal(tmp_path: Path) -> None:
     import fcntl
     import os
     import pty
-    import select
     import struct
     import subprocess
     import sys
@@ -197,25 +198,15 @@ def test_diagnose_draws_one_bar_on_a_terminal(tmp_path: Path) -> None:
     proc = subprocess.Popen([sys.executable, "-m", "fcomp.cli.main", *DIAGNOSE], cwd=tmp_path,
                             stdout=subprocess.PIPE, stderr=slave)
     os.close(slave)
-    seen = b""
-    while True:
-        if select.select([master], [], [], 0.5)[0]:
-            try:
-                chunk = os.read(master, 4096)
-            except OSError:
-                break
-            if not chunk:
-                break
-            seen += chunk
-        elif proc.poll() is not None:
-            break
+    seen = drain(master, proc)
     os.close(master)
     proc.communicate(timeout=600)
     assert proc.returncode == 0
     text = seen.decode()
     assert "diagnose: " in text and "fit/s" in text, text
     assert text.count("diagnose: 0fit") == 1, text  # the check's fits counted on
-    assert text.rstrip(" ").endswith("\r"), text  # erased: the line blanked at the end
+    bar = text.split("fcomp: warning")[0]  # the warnings follow the finished run
+    assert bar.rstrip(" ").endswith("\r"), text  # erased: the line blanked at the end
 
 
 @pytest.mark.slow

@@ -552,8 +552,7 @@ def figure_ratios(result: CompensateResult, error: str = "rms_error") -> Any:
     ax.set_xlim(-0.6, len(result.controllers) - 0.4)
     ax.set_ylabel(f"{error.replace('_', ' ')} / baseline's")
     ax.grid(alpha=0.3, axis="y")
-    ax.legend(handles=handles, loc="lower left", bbox_to_anchor=(0.0, 1.01), ncol=3,
-              frameon=False, borderaxespad=0.0, fontsize=fs.FONT_MIN)
+    fs.legend_above(ax, handles=handles)
     return fig
 
 

@@ -71,7 +71,8 @@ def of_sweep(doc: Mapping[str, Any]) -> Conclusion:
     """The conclusion of ``fcomp sweep --json``: the most robust controller (Monte Carlo), or
     how the error grows across the grid."""
     failed = sum(r.get("status") != "ok" for r in doc["runs"])
-    reasons = [f"{failed} of {len(doc['runs'])} runs failed (counted, not dropped)"] \
+    reasons = [f"{failed} of {len(doc['runs'])} runs failed (counted, not dropped; see the "
+               "table)"] \
         if failed else []
     if doc["mode"] == "monte-carlo":
         dist = {c: d["rms_error"] for c, d in doc["distributions"].items()

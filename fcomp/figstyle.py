@@ -192,13 +192,20 @@ def new_figure(height: float = 3.2, width: float = WIDTH, *, nrows: int = 1, nco
     return fig, axes
 
 
-def legend_above(ax: Any, ncol: int = 3, **kw: Any) -> Any:
-    """A legend above the axes, never over the data (only if something is labelled)."""
-    handles, labels = ax.get_legend_handles_labels()
+def legend_above(ax: Any, ncol: int = 3, *, handles: Any = None, **kw: Any) -> Any:
+    """A legend above the axes, never over the data (only if something is labelled:
+    ``handles``, or else the axes' labelled artists). The axes' title, if any, becomes the
+    legend's title: above the axes the two would be drawn over each other."""
+    if handles is None:
+        handles = ax.get_legend_handles_labels()[0]
     if not handles:
         return None
+    title = ax.get_title()
+    if title and "title" not in kw:
+        ax.set_title("")
+        kw.update(title=title, alignment="left", title_fontsize=FONT)
     kw.setdefault("fontsize", FONT_MIN)
-    return ax.legend(loc="lower left", bbox_to_anchor=(0.0, 1.01), ncol=ncol,
+    return ax.legend(handles=handles, loc="lower left", bbox_to_anchor=(0.0, 1.01), ncol=ncol,
                      frameon=False, borderaxespad=0.0, **kw)
 
 

@@ -164,15 +164,13 @@ def evaluate(variables: Mapping[str, Any], expr: str, *, path: str | Path, colum
     tokens = [s.strip() for s in split_outside_quotes(text, "*")]
     if any(not s for s in tokens):
         raise FcompError(f"{p}: column {column!r}: cannot parse {expr!r}")
+    factors = [_factor(variables, token, p, column, noun) for token in tokens]  # looked up once
     value: np.ndarray = np.asarray(sign)
     with np.errstate(over="ignore", invalid="ignore"):
-        for token in tokens:
-            value = value * _factor(variables, token, p, column, noun)
+        for f in factors:
+            value = value * f
     out = np.asarray(value, dtype=float)
-    finite = [np.all(np.isfinite(np.asarray(_factor(variables, tk, p, column, noun),
-                                            dtype=float)))
-              for tk in tokens]
-    if all(finite) and not np.all(np.isfinite(out)):
+    if all(np.isfinite(f).all() for f in factors) and not np.all(np.isfinite(out)):
         raise FcompError(f"{p}: column {column!r}: {expr!r} overflows (the product is beyond "
                          "floating-point range); check the factors")
     return out

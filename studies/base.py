@@ -339,19 +339,6 @@ class StudyOutput:
         return path
 
 
-def legend_above(ax: Any, ncol: int = 3) -> Any:
-    """:func:`fcomp.figstyle.legend_above` (the legend above the data) with the axes' title,
-    if any, as the legend's title: above the axes both would be drawn over each other."""
-    from fcomp import figstyle
-
-    title = ax.get_title()
-    if not title or not ax.get_legend_handles_labels()[0]:
-        return figstyle.legend_above(ax, ncol=ncol)
-    ax.set_title("")
-    return figstyle.legend_above(ax, ncol=ncol, title=title, alignment="left",
-                                 title_fontsize=figstyle.FONT)
-
-
 class Study(ABC):
     """Base of every study: subclasses set ``name``, ``title``, ``summary`` and write ``build``."""
 

@@ -73,9 +73,10 @@ from controllers.robustness import (
 )
 from controllers.tasks import TASKS
 from fcomp.errors import FcompError
+from fcomp.figstyle import legend_above
 from fcomp.models.base import FrictionModel
 from fcomp.progress import progress_bar, ticker
-from studies.base import Finding, Study, StudyConfig, StudyOutput, legend_above
+from studies.base import Finding, Study, StudyConfig, StudyOutput
 
 #: The built-in plants the study runs on (without a plant file).
 PLANTS = ("hydraulic", "pneumatic")
@@ -252,9 +253,9 @@ class CompensatorsStudy(Study):
         tick = ticker(bar)
 
         def run(batch: list[Job]) -> list[dict[str, Any]]:
-            # each configuration's tuning derived once, not by every worker that runs it
-            tuned = with_tunings(batch, workers=config.local_workers(),
-                                 scheduler=_scheduler(config))
+            # each configuration's tuning derived once, here: a plant's costly part once for
+            # the whole study (cached), not by every worker of every batch; the report reuses it
+            tuned = with_tunings(batch, workers=1)
             order = sorted(range(len(batch)), key=lambda i: -_cost(batch[i]))
             done = run_jobs([tuned[i] for i in order], workers=config.local_workers(),
                             scheduler=_scheduler(config), progress=tick)
@@ -616,8 +617,7 @@ class CompensatorsStudy(Study):
         fig, axes = out.subplots(1, len(robust), figsize=(10, 3.8))
         axes = np.atleast_1d(axes)
         for ax, (p, dist) in zip(axes, robust.items(), strict=True):
-            shown = draw_distribution(ax, dist, CONTROLLER_ORDER, scale=1e6)
-            plain_log_ticks(ax)
+            shown = draw_distribution(ax, dist, CONTROLLER_ORDER, scale=1e6)  # plain ticks
             ax.set_title(p, fontsize=9)
             ax.set_ylabel("RMS error [um]")
         how = ("box: quartiles, whiskers: 10-90 %" if shown == "box" else
@@ -683,17 +683,6 @@ class CompensatorsStudy(Study):
 def _pair(a: float, b: float, digits: int) -> str:
     """Two times (s) as ``"a / b"`` in ms."""
     return f"{a * 1e3:.{digits}f} / {b * 1e3:.{digits}f}"
-
-
-def plain_log_ticks(ax: Any) -> None:
-    """A log y axis labelled with plain numbers (:func:`fcomp.figstyle.plain_log_ticks`) at
-    1, 2 and 5 x 10^k: the errors span one or two decades, one label per decade is too few."""
-    from matplotlib.ticker import LogLocator
-
-    from fcomp import figstyle
-
-    figstyle.plain_log_ticks(ax)
-    ax.yaxis.set_major_locator(LogLocator(base=10.0, subs=(1.0, 2.0, 5.0)))
 
 
 def settings_rows(plants: list[StudyPlant]) -> list[list[Any]]:

@@ -14,8 +14,9 @@ from typing import Any
 
 import numpy as np
 
+from fcomp.figstyle import legend_above
 from fcomp.report import Comparison, Report
-from studies.base import StudyOutput, legend_above
+from studies.base import StudyOutput
 from studies.coulomb_viscous_analysis import (
     ALPHA,
     B_CONSISTENCY_TOL,

@@ -57,12 +57,13 @@ from typing import Any
 import numpy as np
 
 from fcomp.errors import FcompError
+from fcomp.figstyle import legend_above
 from fcomp.measurement import Measurement
 from fcomp.models import FrictionModel, make_model
 from fcomp.paramsets import get as get_paramset
 from fcomp.piston import chamber_volumes, piston_areas
 from fcomp.progress import progress_bar
-from studies.base import Finding, Study, StudyConfig, StudyOutput, legend_above
+from studies.base import Finding, Study, StudyConfig, StudyOutput
 
 #: The paper (seed 002).
 PAPER = ("Tran, Dao & Yanada (2014), \"Effect of friction model on simulation of hydraulic "

@@ -39,13 +39,14 @@ from typing import Any
 
 import numpy as np
 
-from fcomp.conclusions import BELOW_FLOOR
+from fcomp import conclusions
 from fcomp.errors import FcompError
+from fcomp.figstyle import legend_above
 from fcomp.measurement import Measurement
 from fcomp.parallel import run_tasks
 from fcomp.progress import progress_bar, ticker
 from fcomp.report import Link
-from studies.base import Finding, Study, StudyConfig, StudyOutput, legend_above
+from studies.base import Finding, Study, StudyConfig, StudyOutput
 
 #: Colours of the models in the stretch figure (baseline, then the final model).
 STRETCH_COLORS = ("#c0392b", "#2356a8", "#27864a")
@@ -195,13 +196,13 @@ def findings(res: dict[str, Any]) -> list[str]:
     return out
 
 
-def below_floor(case: dict[str, Any], limit: float = BELOW_FLOOR) -> str | None:
-    """A flag when a case's final held-out RMS error lies below ``limit`` times the noise
-    floor estimated from its data (a model cannot beat the noise on samples it was not
-    fitted to), else ``None``."""
+def below_floor(case: dict[str, Any]) -> str | None:
+    """A flag when a case's final held-out RMS error lies below the noise floor estimated
+    from its data, by the rule of ``fcomp diagnose`` (:func:`fcomp.conclusions.below_floor`:
+    a model cannot beat the noise on samples it was not fitted to), else ``None``."""
     d = case["diagnosis"]
     final, floor = d.get("rms_final"), d.get("noise_floor")
-    if final is None or not floor or final >= limit * floor:
+    if not conclusions.below_floor(final, floor):
         return None
     name = case.get("file") or case["case"]
     return (f"`{name}`: the final model's held-out RMS error, {final:.3f} N, is "

@@ -11,7 +11,8 @@ from typing import Any
 
 import numpy as np
 
-from studies.base import StudyOutput, legend_above
+from fcomp.figstyle import legend_above
+from studies.base import StudyOutput
 from studies.presliding_analysis import MEM_LOOP_DEPTH, MEM_LOOP_START, MODELS
 from studies.presliding_runs import Case
 

@@ -307,7 +307,8 @@ def test_sweep_map_is_green_where_the_claim_holds(tmp_path: Path) -> None:
 
 def test_study_figures_are_column_wide_at_most_and_their_text_9pt_or_more(tmp_path: Path) -> None:
     from fcomp import figstyle
-    from studies.base import StudyOutput, legend_above
+    from fcomp.figstyle import legend_above
+    from studies.base import StudyOutput
 
     out = StudyOutput(tmp_path, StudyReport("t"))
     fig, axes = out.subplots(1, 2, figsize=(12.0, 4.0), sharey=True)

@@ -117,8 +117,6 @@ def run(args: argparse.Namespace) -> int:
                          effects=args.effects)
     finally:
         bar.close()
-    for w in res.warnings:
-        common.warn(w["code"], w["message"], w["parameter"])
     doc = common.with_warnings(res.as_dict())
     command = "fcomp " + shlex.join(common.ARGV) if common.ARGV else None
     if folder is not None:

@@ -147,9 +147,6 @@ def report(doc: dict[str, Any], command: str | None) -> Any:
                  f"{', '.join(doc['controllers'])}", command=command,
                  config={k: doc[k] for k in ("mode", "plant", "task", "fast")})
     rep.conclusion(of_sweep(doc))
-    failed = sum(r["status"] != "ok" for r in doc["runs"])
-    if failed:
-        rep.note(f"{failed} run(s) failed (counted, not dropped): see the table.", kind="warn")
     fig, ax = fs.new_figure(height=3.8, width=fs.HALF_WIDTH + 1.6)
     if doc["mode"] == "monte-carlo":
         shown = draw_distribution(ax, doc["distributions"], doc["controllers"], scale=1e6)

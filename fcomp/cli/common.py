@@ -141,10 +141,6 @@ class _AppendSpellings(_Spellings, argparse._AppendAction):
     pass
 
 
-class _StoreConstSpellings(_Spellings, argparse._StoreConstAction):
-    pass
-
-
 def add_option(p: argparse.ArgumentParser | Any, flag: str, *deprecated: str,
                **kwargs: Any) -> argparse.Action:
     """``p.add_argument(flag, ...)`` with the ``deprecated`` old spellings of the option
@@ -153,8 +149,7 @@ def add_option(p: argparse.ArgumentParser | Any, flag: str, *deprecated: str,
     if not deprecated:
         return p.add_argument(flag, **kwargs)
     kind = kwargs.pop("action", "store")
-    cls = {"store": _StoreSpellings, "append": _AppendSpellings,
-           "store_const": _StoreConstSpellings}[kind]
+    cls = {"store": _StoreSpellings, "append": _AppendSpellings}[kind]
     action = type(cls.__name__, (cls,), {"deprecated": tuple(deprecated)})
     kwargs.setdefault("dest", flag.lstrip("-").replace("-", "_"))
     return p.add_argument(flag, *deprecated, action=action, **kwargs)
@@ -397,25 +392,29 @@ def friction_model(spec: str, params: str | None, args: argparse.Namespace, *,
 
 
 def model_with_params(args: argparse.Namespace, *, use: str = "plant friction",
-                      measured: bool = False) -> tuple[FrictionModel, float | None]:
+                      measured: bool = False, document: dict[str, Any] | None = None
+                      ) -> tuple[FrictionModel, float | None]:
     """The model of ``--friction`` with the values of ``--params`` (``SET``, ``FIT.json``
     or ``MODEL.json``), ``--add-effect`` and ``--set``; and the moving mass (kg) a fit's
     JSON or a model file gives (``None`` otherwise).
 
     ``measured``: the model as fitted to its records (a model file's or a fit's offset
     kept as an effect; ``compare``); otherwise the seal's friction (measurement terms
-    dropped with a warning).
+    dropped with a warning). ``document``: the ``--params`` file already read
+    (:func:`params_document`), not read again.
     """
     from fcomp.modelfile import is_model_file
 
     if args.params is not None and is_model_file(args.friction):
         raise FcompError(f"--params {args.params}: the model file {args.friction} gives the "
                          "values; change one with --set NAME=VALUE")
-    return _friction(args.friction, args.params, args, use, measured=measured)
+    return _friction(args.friction, args.params, args, use, measured=measured,
+                     document=document)
 
 
 def _friction(spec: str, params: str | None, args: argparse.Namespace, use: str, *,
-              measured: bool) -> tuple[FrictionModel, float | None]:
+              measured: bool, document: dict[str, Any] | None = None
+              ) -> tuple[FrictionModel, float | None]:
     from fcomp.modelfile import is_model_file, read_model, seal_friction
 
     mass: float | None = None
@@ -431,7 +430,7 @@ def _friction(spec: str, params: str | None, args: argparse.Namespace, use: str,
             if dropped:
                 warn("measurement-terms", dropped, "friction")
     elif params is not None and is_model_file(params):
-        model, mass = _values_file(spec, params, args.effects, use, measured)
+        model, mass = _values_file(spec, params, args.effects, use, measured, document)
     else:
         return build_model(spec, params, args), None
     if args.add_effect:
@@ -440,22 +439,32 @@ def _friction(spec: str, params: str | None, args: argparse.Namespace, use: str,
     return (model.with_params(**overrides) if overrides else model), mass
 
 
-def _values_file(name: str, path: str, effects: str | None, use: str, measured: bool
-                 ) -> tuple[FrictionModel, float | None]:
-    """The model ``name`` with the values of ``--params FILE.json``: a fit's JSON (``fcomp
-    fit --json``) or a model file (``fcomp fit --save-model``) of that model."""
-    from fcomp.diagnosis.compare import model_from_fit
-    from fcomp.modelfile import read_model
+def params_document(path: str) -> dict[str, Any]:
+    """The JSON object of ``--params FILE.json`` (a fit's JSON or a model file), read once;
+    one line naming the file on any problem."""
     from fcomp.textdata import check_path, read_text
 
-    source = f"--params {path}"
     try:
         doc = json.loads(read_text(check_path(path, "parameter file"), path, what="JSON"))
     except json.JSONDecodeError as exc:
-        raise FcompError(f"{source}: not valid JSON ({exc.msg}, line {exc.lineno})") from None
+        raise FcompError(f"--params {path}: not valid JSON ({exc.msg}, line {exc.lineno})") \
+            from None
     if not isinstance(doc, dict):
-        raise FcompError(f"{source}: neither a fit's JSON nor a model file (a JSON object is "
-                         "expected)")
+        raise FcompError(f"--params {path}: neither a fit's JSON nor a model file (a JSON "
+                         "object is expected)")
+    return doc
+
+
+def _values_file(name: str, path: str, effects: str | None, use: str, measured: bool,
+                 doc: dict[str, Any] | None = None) -> tuple[FrictionModel, float | None]:
+    """The model ``name`` with the values of ``--params FILE.json``: a fit's JSON (``fcomp
+    fit --json``) or a model file (``fcomp fit --save-model``) of that model (``doc``: the
+    file already read)."""
+    from fcomp.diagnosis.compare import model_from_fit
+    from fcomp.modelfile import read_model
+
+    source = f"--params {path}"
+    doc = params_document(path) if doc is None else doc
     if isinstance(doc.get("records"), list):
         raise FcompError(f"{source}: the JSON of a fit of several records; give the fit of "
                          "one record")
@@ -609,13 +618,13 @@ def guard_outputs(data: list[str], effects: str | None, files: list[tuple[str, P
 
 
 def with_warnings(doc: dict[str, Any]) -> dict[str, Any]:
-    """``doc`` with the command's warnings added to its ``"warnings"`` list (the contract's
-    ``[{"code", "parameter", "message"}, ...]``, present even when empty)."""
-    items = list(doc.get("warnings") or [])
-    for w in current_warnings():
-        if w not in items:
-            items.append(w)
-    return {**doc, "warnings": items}
+    """``doc`` with one ``"warnings"`` list (the contract's ``[{"code", "parameter",
+    "message"}, ...]``, present even when empty): its own warnings, recorded as the
+    command's so that they are printed too (on stderr, grouped, by :func:`fcomp.cli.main.main`),
+    and every other warning of the command."""
+    for w in doc.get("warnings") or []:
+        warn(w["code"], w["message"], w.get("parameter"))
+    return {**doc, "warnings": current_warnings()}
 
 
 def write_measurement(meas: Any, out: Path) -> tuple[Path, Path]:

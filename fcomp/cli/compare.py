@@ -34,21 +34,21 @@ fit) and runs in the command's own process.
 from __future__ import annotations
 
 import argparse
-import json
 import shlex
-from pathlib import Path
+from dataclasses import replace
 from typing import Any
 
 from fcomp.cli import common
 from fcomp.cli.common import emit_result, finite_float, json_target, report_dir, result_text
-from fcomp.errors import FcompError
+from fcomp.errors import FcompError, term
+from fcomp.identification.plausibility import FitWarning
 from fcomp.parallel import check_scheduler
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("compare", help="put one given model beside measurements: errors per "
                        "regime, residual against every feature, loops, worst windows",
-                       description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+                       description=__doc__)
     p.add_argument("data", nargs="+", metavar="DATA.csv",
                    help="measurement(s) (CSV + TOML sidecar); several files = several experiments")
     common.add_friction_option(p, "--model", help="the friction model: a name (fcomp list "
@@ -106,41 +106,28 @@ def summary(doc: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
-def _fit_cutoff(params: str | None) -> float | None:
-    """The cut-off (Hz) a fit's JSON given as ``--params`` was fitted with, if not the
-    default: compared with it, the model scores the fit's RMS."""
+def _fit_cutoff(doc: dict[str, Any] | None) -> float | None:
+    """The cut-off (Hz) of a fit's JSON given as ``--params``, if not the default: compared
+    with it, the model scores the fit's RMS."""
     from fcomp.identification.target import CUTOFF_HZ
 
-    if params is None or not params.lower().endswith(".json"):
-        return None
-    try:
-        doc = json.loads(Path(params).read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return None  # read and reported by the model's loader
-    cutoff = doc.get("cutoff_hz") if isinstance(doc, dict) else None
+    cutoff = None if doc is None else doc.get("cutoff_hz")
     if isinstance(cutoff, int | float) and not isinstance(cutoff, bool) and cutoff > 0 \
             and cutoff != CUTOFF_HZ:
         return float(cutoff)
     return None
 
 
-def _values_from(args: argparse.Namespace) -> str:
-    """Where the compared model's values come from, in words (the report's subtitle); called
-    once ``--params`` has been read (a JSON file with a ``format`` is a model file)."""
-    import json
-
+def _values_from(args: argparse.Namespace, doc: dict[str, Any] | None) -> str:
+    """Where the compared model's values come from, in words (the report's subtitle): the
+    model file, the ``--params`` file ``doc`` (a model file has a ``format``), a set."""
     from fcomp.modelfile import is_model_file
 
     spec, friction = args.params, args.friction
     if is_model_file(friction):
         where = f"the model file `{friction}`"
-    elif spec is not None and is_model_file(spec):
-        try:
-            with open(spec, encoding="utf-8") as fh:
-                kind = "model file" if "format" in json.load(fh) else "fit file"
-        except (OSError, ValueError, TypeError):
-            kind = "file"
-        where = f"the {kind} `{spec}`"
+    elif doc is not None:
+        where = f"the {'model file' if 'format' in doc else 'fit file'} `{spec}`"
     elif spec is not None:
         where = f"the parameter set `{spec}`"
     else:
@@ -151,6 +138,7 @@ def _values_from(args: argparse.Namespace) -> str:
 def run(args: argparse.Namespace) -> int:
     from fcomp.api import compare
     from fcomp.measurement import Measurement
+    from fcomp.modelfile import is_model_file
     from fcomp.outputs import staged_folder
     from fcomp.registry import PLANT_TOOLS, PLANTS
 
@@ -181,21 +169,26 @@ def run(args: argparse.Namespace) -> int:
         inputs.file(args.effects, "--effects")
     common.check_outputs(inputs, [("--json", out)], [("--report", report, "report")])
     given = bool(args.params or args.set or args.fit or args.friction.lower().endswith(".json"))
-    model, mass = common.model_with_params(args, use="model compared", measured=True)
-    cutoff = args.cutoff if args.cutoff is not None else _fit_cutoff(args.params)
-    values_from = _values_from(args)
+    document = (common.params_document(args.params)  # read once, for all three uses
+                if args.params is not None and is_model_file(args.params)
+                and not is_model_file(args.friction) else None)
+    model, mass = common.model_with_params(args, use="model compared", measured=True,
+                                           document=document)
+    cutoff = args.cutoff if args.cutoff is not None else _fit_cutoff(document)
+    values_from = _values_from(args, document)
     data = [Measurement.read(p) for p in args.data]
     for d in data:
         common.warn_sidecar(d)
-    if not given:
-        common.warn("default-params", f"the model {model.describe()} is compared with its "
-                    "default values: give params (a fit's JSON or a parameter set) or --fit "
-                    "for a model that belongs to these records", "params")
     with common.Activity(f"compare {args.friction}", enabled=not args.no_progress):
         comp = compare(data, model, fit=args.fit,
                        mass=args.mass if args.mass is not None else mass, split=args.split,
                        cutoff_hz=cutoff, plant=args.plant, plant_params=plant_params,
                        jobs=args.jobs, scheduler=scheduler)
+    if not given:  # part of the result: the report's conclusion weighs it as the console's
+        comp = replace(comp, warnings=[*comp.warnings, FitWarning(
+            "default-params", "params", f"the model {model.describe()} is compared with its "
+            f"default values: give {term('params')} (a fit's JSON or a parameter set) or "
+            "--fit for a model that belongs to these records")])
     doc = common.with_warnings(comp.to_dict())
     text = result_text(doc)
     command = "fcomp " + shlex.join(common.ARGV) if common.ARGV else None

@@ -42,7 +42,7 @@ from fcomp.cli.common import finite_float, provided
 def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("compensate", help="every compensator built with each friction model "
                        "(baseline vs diagnosed) on your plant: what the better model buys",
-                       description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+                       description=__doc__)
     p.add_argument("--plant", default=None,
                    help="hydraulic or pneumatic: a built-in plant; with --plant-params, its kind")
     p.add_argument("--plant-params", default=None, metavar="PLANT.toml",

@@ -34,8 +34,7 @@ from fcomp.parallel import check_scheduler
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("diagnose", help="compare a model with measurements, find and add the "
-                       "missing effect", description=__doc__,
-                       formatter_class=argparse.RawDescriptionHelpFormatter)
+                       "missing effect", description=__doc__)
     p.add_argument("data", nargs="+", metavar="DATA.csv",
                    help="measurement(s) (CSV + TOML sidecar); several files = several experiments")
     common.add_friction_option(p, "--baseline", help="the baseline friction model: a name "
@@ -173,10 +172,7 @@ def run(args: argparse.Namespace) -> int:
                      check_baseline=(True if args.baseline_check else
                                      False if args.no_baseline_check else "auto"))
     diag.fit(data)
-    found = diag.to_dict()
-    for w in found.get("warnings", []):  # printed on stderr after the summary, grouped
-        common.warn(w["code"], w["message"], w["parameter"])
-    doc = common.with_warnings({**found,
+    doc = common.with_warnings({**diag.to_dict(),
                                 "model_file": diag.model_file(common.model_source(args.data))})
     text = result_text(doc)
     command = "fcomp " + shlex.join(common.ARGV) if common.ARGV else None

@@ -32,7 +32,7 @@ from fcomp.cli.common import add_model_options, finite_float, provided
 def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("export", help="a controller's step as C code (CasADi), compiled, "
                        "checked against the Python controller and timed",
-                       description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+                       description=__doc__)
     p.add_argument("controller", help="pid, pid-ff, lugre-observer, ekf or mpc (its "
                    "fixed-iteration form)")
     p.add_argument("--plant", default=None, help="hydraulic (default) or pneumatic; with "

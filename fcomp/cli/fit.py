@@ -63,8 +63,7 @@ if TYPE_CHECKING:
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("fit", help="identify a friction model from a measurement, with "
-                       "standard errors", description=__doc__,
-                       formatter_class=argparse.RawDescriptionHelpFormatter)
+                       "standard errors", description=__doc__)
     p.add_argument("data", nargs="+", metavar="DATA.csv",
                    help="measurement (CSV + TOML sidecar); several files are fitted one by "
                    "one, in parallel (--jobs, --scheduler)")
@@ -115,7 +114,7 @@ def _table(f: FrictionFit, doc: dict[str, Any]) -> str:
     plausibility warnings follow on stderr as ``fcomp: warning:`` lines)."""
     from fcomp.conclusions import of_fit
 
-    lines = [*of_fit(doc).lines(), "", f"model {f.to_dict()['model']}  ({f.method_} fit, target {f.target_}, "
+    lines = [*of_fit(doc).lines(), "", f"model {doc['model']}  ({f.method_} fit, target {f.target_}, "
              f"{f.n_samples_} samples)"]
     pct = round(100 * f.confidence)
     head = f"{'parameter':12s} {'value':>12s} {'stderr':>11s}   {pct}% interval{'':14s} unit"
@@ -176,8 +175,6 @@ def run(args: argparse.Namespace) -> int:
     fit = FrictionFit(model, **options)
     with Activity(f"fit {args.friction}", enabled=not args.no_progress):
         fit.fit(data)
-    for w in fit.warnings_:  # printed under the table, recorded in the JSON
-        warn(w.code, w.message, w.parameter)
     doc = with_warnings({**fit.to_dict(), "model_file": fit.model_file(model_source(args.data))})
     if report is not None:
         _write_report(fit, data, report, args)

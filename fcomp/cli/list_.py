@@ -66,10 +66,10 @@ def entries(group: str) -> list[tuple[str, str]]:
     from fcomp.registry import CONTROLLERS, PLANTS, STUDIES
 
     if group == "params":
-        return [(n, paramsets.get(n).source) for n in paramsets.names()]
+        return [(n, paramsets.SOURCES[n]) for n in paramsets.names()]  # no file parsed
     if group == "effects":
-        return [(n, f"{description(EFFECTS.get(n))} [{EFFECTS.get(n).signature}]")
-                for n in EFFECTS.names()]
+        return [(n, f"{description(e)} [{e.signature}]")
+                for n in EFFECTS.names() for e in [EFFECTS.get(n)]]
     registry: Any = {"models": MODELS, "plants": PLANTS, "controllers": CONTROLLERS,
                      "studies": STUDIES}[group]
     return [(n, description(registry.get(n))) for n in registry.names()]

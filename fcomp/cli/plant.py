@@ -35,7 +35,7 @@ from fcomp.cli.common import provided
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("plant", help="your plant as a file: print a template, check a file",
-                       description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+                       description=__doc__)
     actions = p.add_subparsers(dest="action", metavar="ACTION", parser_class=type(p))
     actions.required = True
     t = actions.add_parser("template", help="print a commented plant file to start from")

@@ -44,7 +44,7 @@ from fcomp.cli.common import finite_float, provided
 def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("sweep", help="Monte Carlo and parameter grids over compensators and "
                        "friction-model mismatch (local processes or a Dask cluster)",
-                       description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+                       description=__doc__)
     p.add_argument("--plant", default=None,
                    help="hydraulic (default) or pneumatic; with --plant-params, its kind")
     p.add_argument("--plant-params", default=None, metavar="PLANT.toml",

@@ -343,15 +343,13 @@ def compare(model: str | FrictionModel, data: Measurement | Sequence[Measurement
                          + (f" (values {', '.join(f'{k} = {v:.3g}' for k, v in huge.items())})"
                             if huge else "") + ": check the parameter values")
     scored = float(np.sqrt(np.mean(r[judged] ** 2))) if judged.any() else math.nan
-    rms, how = scored, HELD_OUT
-    if not fit:
-        rms, how = scored, SCORED
-        if not isinstance(data, DiagnosisData):  # the one RMS of a model on a record
-            with contextlib.suppress(FcompError):  # steady points a run cannot take
-                carried = {"mass": values["mass"]} if "mass" in values else {}
-                rms = model_rms(mdl.with_measurement(carried), data,
-                                cutoff_hz=cutoff_hz if cutoff_hz is not None else CUTOFF_HZ)
-                how = MEASURED
+    rms, how = scored, (HELD_OUT if fit else SCORED)
+    if not fit and not isinstance(data, DiagnosisData):  # the one RMS of a model on a record
+        with contextlib.suppress(ValueError):  # steady points a run cannot take (as in fit)
+            carried = {"mass": values["mass"]} if "mass" in values else {}
+            rms = model_rms(mdl.with_measurement(carried), data,
+                            cutoff_hz=cutoff_hz if cutoff_hz is not None else CUTOFF_HZ)
+            how = MEASURED
     width = max(10, int(round(0.25 / d.scales.dt)))
     bounds = [e.start for e in d.experiments[1:]]
     features = residual_structure(located, d, seg, sp.train, sp.test)

@@ -445,7 +445,8 @@ class FrictionFit:
         ax2.set_xlabel(fs.label("velocity v", "v"))
         ax1.set_ylabel("force (N)")
         fs.legend_top(fig, ax1, ncol=2)
-        ax2.set_title(f"RMS error {self.score(data):.3g} N")
+        rms = self.rms_ if data is self.data_ else self.score(data)  # not simulated again
+        ax2.set_title(f"RMS error {rms:.3g} N")
         return fig
 
     def rows(self) -> list[list[str]]:

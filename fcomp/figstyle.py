@@ -264,10 +264,10 @@ def good_bad_cmap(higher_is_better: bool = True) -> str:
 
 
 # ------------------------------------------------------------------ gaps
-def break_gaps(x: Any, *ys: Any, max_step: float | None = None,
-               factor: float = 3.0) -> tuple[np.ndarray, ...]:
-    """``x`` and ``ys`` with a NaN inserted wherever ``x`` jumps, so a line is not drawn over
-    the gap.
+def break_gaps(x: Any, *ys: Any, max_step: float | None = None, factor: float = 3.0,
+               starts: Any = ()) -> tuple[np.ndarray, ...]:
+    """``x`` and ``ys`` with a NaN inserted wherever ``x`` jumps and before every index of
+    ``starts`` (where an experiment begins), so a line is not drawn over the gap.
 
     Parameters
     ----------
@@ -277,27 +277,28 @@ def break_gaps(x: Any, *ys: Any, max_step: float | None = None,
         Series of the same length.
     max_step
         Largest step that is not a gap; default ``factor`` times the median step.
+    starts
+        Indices where a new experiment begins: a break there whatever the step.
     """
     xa = np.asarray(x, dtype=float)
     yas = [np.asarray(y, dtype=float) for y in ys]
-    if xa.size < 3:
-        return (xa, *yas)
+    cut = np.unique([int(i) for i in starts if 0 < int(i) < xa.size]).astype(int)
     d = np.diff(xa)
-    if max_step is None:
-        pos = d[np.isfinite(d) & (d > 0)]
-        if not pos.size:
-            return (xa, *yas)
+    pos = d[np.isfinite(d) & (d > 0)]
+    if max_step is None and xa.size >= 3 and pos.size:
         max_step = factor * float(np.median(pos))
-    cut = np.flatnonzero(~(np.abs(d) <= max_step)) + 1
+    if max_step is not None:
+        cut = np.union1d(cut, np.flatnonzero(~(np.abs(d) <= max_step)) + 1).astype(int)
     if not cut.size:
         return (xa, *yas)
     return (np.insert(xa, cut, np.nan), *(np.insert(y, cut, np.nan) for y in yas))
 
 
 def plot_gapped(ax: Any, x: Any, y: Any, *args: Any, max_step: float | None = None,
-                **kw: Any) -> list[Any]:
-    """``ax.plot(x, y, ...)`` with the line broken where ``x`` jumps (:func:`break_gaps`)."""
-    xs, ys = break_gaps(x, y, max_step=max_step)
+                starts: Any = (), **kw: Any) -> list[Any]:
+    """``ax.plot(x, y, ...)`` with the line broken where ``x`` jumps and where an experiment
+    starts (:func:`break_gaps`)."""
+    xs, ys = break_gaps(x, y, max_step=max_step, starts=starts)
     return ax.plot(xs, ys, *args, **kw)  # type: ignore[no-any-return]
 
 

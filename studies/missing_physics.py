@@ -32,7 +32,6 @@ All errors in newtons, on held-out data.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -275,18 +274,6 @@ def run_case(job: CaseJob) -> tuple[dict[str, Any], dict[str, bytes]]:
                  "before-after": render_png(fig_stretch(diag, fig_before_after(diag)))}
 
 
-def with_gaps(t: np.ndarray, *ys: np.ndarray, starts: Sequence[int] = ()
-              ) -> tuple[np.ndarray, ...]:
-    """``t`` and ``ys`` with a NaN sample at every gap (:func:`fcomp.figstyle.break_gaps`: a
-    jump in time) and at every experiment boundary (an index of ``starts``): a plotted line
-    breaks there instead of drawing a straight line across samples that do not exist."""
-    from fcomp.figstyle import break_gaps
-
-    at = sorted({int(i) for i in starts if 0 < i < len(t)})
-    cols = [np.insert(np.asarray(a, dtype=float), at, np.nan) for a in (t, *ys)]
-    return break_gaps(cols[0], *cols[1:])
-
-
 def fig_stretch(diag: Any, chosen: Any) -> Any:
     """The held-out stretch of ``chosen`` (the diagnosis figure that picks where the added
     effects matter most; its time range is reused): measured force, baseline and final
@@ -308,8 +295,8 @@ def fig_stretch(diag: Any, chosen: Any) -> Any:
     fig, axes = figstyle.new_figure(height=2.4 + 1.6 * len(sig), nrows=1 + len(sig),
                                     sharex=True,
                                     gridspec_kw={"height_ratios": [2.0] + [1.0] * len(sig)})
-    tt, y, *models = with_gaps(t[a:b], vw.data.y[a:b], *(sr.fit.F_hat[a:b] for sr in vw.series),
-                               starts=starts)
+    tt, y, *models = figstyle.break_gaps(t[a:b], vw.data.y[a:b],
+                                         *(sr.fit.F_hat[a:b] for sr in vw.series), starts=starts)
     axes[0].plot(tt, y, color="#222222", lw=1.1, label="measured")
     for k, (sr, F) in enumerate(zip(vw.series, models, strict=True)):
         axes[0].plot(tt, F, lw=1.3, ls="--" if k == len(models) - 1 and k else "-",
@@ -319,7 +306,7 @@ def fig_stretch(diag: Any, chosen: Any) -> Any:
     legend_above(axes[0], ncol=len(vw.series) + 1)
     labels = {"v": figstyle.label("velocity", "v"), "x": figstyle.label("position", "x")}
     for ax, (key, values) in zip(axes[1:], sig.items(), strict=True):
-        ax.plot(*with_gaps(t[a:b], values, starts=starts), color="#4a6fa5", lw=1.1)
+        ax.plot(*figstyle.break_gaps(t[a:b], values, starts=starts), color="#4a6fa5", lw=1.1)
         ax.set_ylabel(labels[key])
         if key == "v":
             ax.axhline(0.0, color="#999999", lw=0.8)

@@ -232,8 +232,10 @@ def test_missing_physics_flags_a_held_out_error_below_the_noise_floor() -> None:
 
 
 def test_the_stretch_figure_breaks_its_lines_at_gaps_and_experiment_boundaries() -> None:
+    from fcomp import figstyle
+
     t = np.array([0.0, 0.01, 0.02, 0.03, 0.5, 0.51, 0.52, 0.53])
-    tt, y = missing_physics.with_gaps(t, t * 2.0, starts=[2])
+    tt, y = figstyle.break_gaps(t, t * 2.0, starts=[2])
     pieces = [p for p in np.split(tt, np.flatnonzero(np.isnan(tt))) if np.isfinite(p).any()]
     assert [p[np.isfinite(p)].tolist() for p in pieces] == [[0.0, 0.01], [0.02, 0.03],
                                                            [0.5, 0.51, 0.52, 0.53]]

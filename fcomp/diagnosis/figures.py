@@ -203,12 +203,13 @@ def fig_loops(obj: Diagnosis | Comparison | View) -> Figure:
 
 def _window_plot(ax: Any, vw: View, a: int, b: int, title: str) -> None:
     t = vw.data.signal("t")
+    starts = [e.start - a for e in vw.data.experiments[1:] if a < e.start < b]  # no line across
     fs.plot_gapped(ax, t[a:b], vw.data.y[a:b], color=_COLORS["measured"], lw=1.0,
-                   label="measured")
+                   label="measured", starts=starts)
     for k, s in enumerate(vw.series):
         fs.plot_gapped(ax, t[a:b], s.fit.F_hat[a:b], color=_COLORS[s.colour], lw=1.0,
                        ls="--" if k and k == len(vw.series) - 1 else "-",
-                       label=s.label.split(":")[0])
+                       label=s.label.split(":")[0], starts=starts)
     ax.set_title(title)
     ax.set_xlabel("t (s)")
     ax.set_ylabel("F (N)")

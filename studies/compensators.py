@@ -253,9 +253,9 @@ class CompensatorsStudy(Study):
         tick = ticker(bar)
 
         def run(batch: list[Job]) -> list[dict[str, Any]]:
-            # each configuration's tuning derived once, here: a plant's costly part once for
-            # the whole study (cached), not by every worker of every batch; the report reuses it
-            tuned = with_tunings(batch, workers=1)
+            # each configuration's tuning derived once, not by every worker that runs it
+            tuned = with_tunings(batch, workers=config.local_workers(),
+                                 scheduler=_scheduler(config))
             order = sorted(range(len(batch)), key=lambda i: -_cost(batch[i]))
             done = run_jobs([tuned[i] for i in order], workers=config.local_workers(),
                             scheduler=_scheduler(config), progress=tick)

@@ -423,3 +423,12 @@ def test_docs_cli_lists_every_option_of_every_command() -> None:
                 if (flag in old) == bool(re.search(rf"[`\s]{re.escape(flag)}[ `,]", body)):
                     missing.append(f"{name} {flag}")
     assert not missing, "docs/cli.md out of step with the parsers: " + ", ".join(missing)
+
+
+def test_bad_input_with_an_old_spelling_is_still_one_line(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """The contract's one-line error holds for the old spellings too: the deprecation line
+    comes only after a run that succeeded."""
+    code, _, err = _run(["fit", str(tmp_path / "nope.csv"), "--model", "lugre"], capsys)
+    assert code == 2
+    assert err.splitlines() == [f"fcomp: error: {tmp_path / 'nope.csv'}: file not found"]

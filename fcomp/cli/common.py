@@ -99,8 +99,8 @@ class _Spellings:
 
     The action holds every spelling (``option_strings``; the first is the canonical one)
     and stores into the canonical destination whichever is given. A deprecated spelling
-    is noted in ``args._deprecated`` and :func:`say_deprecated` prints it once the command
-    line is parsed: one line ``fcomp: warning: OLD is deprecated, use NEW ...`` on stderr
+    is noted in ``args._deprecated`` and :func:`say_deprecated` prints it after a run that
+    succeeded: one line ``fcomp: warning: OLD is deprecated, use NEW ...`` on stderr
     (once per run, however often it is given); the old and the new spelling given together
     are one error (exit 2, no warning). The help lists only the canonical spelling
     (:class:`HelpFormatter`).
@@ -128,7 +128,8 @@ class _Spellings:
 
 
 def say_deprecated(args: argparse.Namespace) -> None:
-    """Print the deprecated spellings the command line used, one line each, on stderr."""
+    """Print the deprecated spellings the command line used, one line each, on stderr (after
+    a successful run, before its other warnings: a failed one says only its error)."""
     for line in getattr(args, "_deprecated", ()):
         sys.stderr.write(f"fcomp: warning: {line}\n")
 

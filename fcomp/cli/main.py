@@ -118,7 +118,6 @@ def _signals_interrupt() -> Iterator[None]:
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
-    common.say_deprecated(args)
     common.ARGV = list(sys.argv[1:] if argv is None else argv)
     common.WARNINGS.clear()
     common.WRITTEN.clear()
@@ -131,8 +130,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         if code == 0:
             for w in caught:
                 common.warn(*common.python_warning(w))
-    if code == 0:
+    if code == 0:  # a failed run prints its one error line and nothing else
         from fcomp.conclusions import grouped_warnings
+
+        common.say_deprecated(args)
 
         for line in grouped_warnings(common.WARNINGS):
             sys.stderr.write(f"fcomp: warning: {plain(line)}\n")

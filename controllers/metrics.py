@@ -34,6 +34,11 @@ metric                            definition
 ``fallbacks`` (-)                 steps where the controller could not apply its
                                   law and used its stated fallback (MPC solve
                                   failure): counted, never hidden
+``travel``, ``reference_travel``  ``max(x) - min(x)`` of the true position and of the
+(m)                               reference over the run: a piston that never
+                                  moved travels next to nothing
+``saturated_share`` (-)           share of the samples whose valve command sits at
+                                  its limit ``+-u_max``
 ================================ =================================================
 """
 
@@ -72,6 +77,9 @@ class Metrics:
     solve_time_cpu_p99: float = math.nan
     solve_time_cpu_max: float = math.nan
     solve_time_descheduled: int = 0
+    travel: float = math.nan
+    reference_travel: float = math.nan
+    saturated_share: float = math.nan
 
     def as_dict(self) -> dict[str, Any]:
         return asdict(self)
@@ -121,7 +129,9 @@ def compute_metrics(
         CPU time of the controller's thread in each step (s), if measured.
     """
     t = np.asarray(t, dtype=float)
-    e = np.asarray(r, dtype=float) - np.asarray(x, dtype=float)
+    r = np.asarray(r, dtype=float)
+    x = np.asarray(x, dtype=float)
+    e = r - x
     if t.size < 2 or e.shape != t.shape:
         raise FcompError("metrics need at least two samples of equal length")
     if not np.all(np.isfinite(e)):
@@ -166,6 +176,9 @@ def compute_metrics(
         solve_time_cpu_p99=_quantile(ct, 0.99),
         solve_time_cpu_max=_quantile(ct, 1.0),
         solve_time_descheduled=int(np.sum(st - ct > DESCHEDULED)) if ct.size else 0,
+        travel=float(np.ptp(x)),
+        reference_travel=float(np.ptp(r)),
+        saturated_share=float(np.mean(np.abs(u) >= u_max * (1.0 - 1e-9))) if u.size else 0.0,
     )
 
 

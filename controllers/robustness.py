@@ -208,13 +208,33 @@ class Sweep:
                              f"got {self.noise}")
 
     def draws(self) -> list[tuple[dict[str, float], float]]:
-        """``(mismatch factors, noise factor)`` of every sample (reproducible)."""
+        """``(mismatch factors, noise factor)`` of every sample (reproducible).
+
+        The draws lie within the controller model's constraints: a draw that makes its
+        friction invalid (a static level below the Coulomb level, ``Fc > Fs``; a value
+        beyond its bound) is drawn again -- the log-normal truncated to the valid models,
+        not a failed run counted against the controllers.
+        """
+        from controllers.harness import _friction
+        from controllers.plant_model import friction_with_mismatch
+
+        model = _friction(self.base.controller_friction, self.base)
         rng = np.random.default_rng(self.seed)
         out = []
         for _ in range(self.samples):
-            f = np.exp(self.spread * rng.standard_normal(len(MISMATCH_PARAMS)))
-            noise = float(rng.uniform(*self.noise))
-            out.append(({k: float(v) for k, v in zip(MISMATCH_PARAMS, f, strict=True)}, noise))
+            for _try in range(1000):
+                f = np.exp(self.spread * rng.standard_normal(len(MISMATCH_PARAMS)))
+                noise = float(rng.uniform(*self.noise))
+                factors = {k: float(v) for k, v in zip(MISMATCH_PARAMS, f, strict=True)}
+                try:
+                    friction_with_mismatch(model, factors)
+                except (FcompError, ValueError):
+                    continue
+                out.append((factors, noise))
+                break
+            else:
+                raise FcompError(f"robustness sweep: no valid draw of {model.describe()} in "
+                                 "1000 tries; lower the spread")
         return out
 
     def jobs(self, samples: range | None = None,

@@ -1,0 +1,180 @@
+"""Estimator tuning from the model's own uncertainty: the EKF's process noise.
+
+An extended Kalman filter (:mod:`controllers.ekf`, and the MPC's state
+estimate) weighs its model against the measurements: its process noise ``Q``
+says how far the model's prediction may drift per unit time. Fixed noise
+levels (a thousandth of each state's scale, half the bristle's scale per
+``sqrt(s)``) make the filter trust an exact model exactly as little as a crude
+one: the estimate of the exact model then follows the measurement noise as
+freely as that of a wrong model, and what a better model should buy is given
+away. Here the friction's share of ``Q`` follows from what the model's
+identification says of its own accuracy.
+
+Rules (SI units)
+----------------
+1. **The friction's uncertainty** ``sigma_F`` (N) of the controller's model:
+
+   * from the standard errors of its values (a fit's or a model file's ``stderr``,
+     :attr:`fcomp.models.base.FrictionModel.stderr`), propagated to first order
+     through the steady-state map over the speeds a servo tracks
+     (:data:`SPEEDS`, both directions)::
+
+         sigma_F^2 = mean_v sum_i (dF_ss/dtheta_i (v) * sigma_i)^2
+
+     the derivatives by central differences (the parameters a draw may vary:
+     :func:`controllers.truths.varied_names`); the parameters' correlations are not
+     in the model files, so the terms add as if independent;
+   * without standard errors (a parameter set from a paper, a model by name):
+     :data:`DEFAULT_RELATIVE` (10 %) of the RMS friction level over those speeds
+     -- a model whose values nobody estimated is trusted to a tenth.
+
+2. **Its correlation time** ``tau`` (s): the position loop's time constant
+   ``1/w_P`` (:mod:`controllers.tuning`, rule 2) -- a friction error the estimate
+   must follow within the time the loop reacts to it.
+
+3. **Process noise of the friction states**: a state ``s`` through which the
+   model's force moves with sensitivity ``|dF/ds|`` (the bristle ``z``:
+   ``sigma0``; the film ``h``: the level's share of it), evaluated at the model's
+   steady state at :data:`SENSITIVITY_SPEED`, gets the rate-noise intensity
+   ``q_s = sigma_F/(|dF/ds| sqrt(n tau))`` with ``n`` the number of such states
+   -- over ``tau`` the random walks move the force by ``sigma_F`` together --
+   capped at the state's own scale per ``sqrt(tau)``. A static map (no such state)
+   absorbs its error through the velocity instead: ``q_v = sigma_F sqrt(tau)/m``
+   (a force error ``sigma_F`` acting for ``tau`` on the mass ``m``).
+
+4. **The plant's states** (position, velocity where the friction states carry the
+   friction's uncertainty, chamber pressures, valve): a thousandth of their
+   scales. Their models are the plant file's (moving mass, valve flow gain, bulk
+   modulus), which carries no standard errors. The velocity must not carry the
+   friction's uncertainty twice: a velocity noise of ``sigma_F`` beside the
+   bristle's lets the estimate of an exact model follow the position noise
+   (the hydraulic servo's steps: 35 um against 14 um with the velocity at its
+   plant share), and gives away what the better model buys.
+
+The measurement noise is the sensors' (:meth:`controllers.plant_model.ControlModel.
+sensor_std`, rule 5 of :mod:`controllers.tuning`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from fcomp.models import FrictionModel
+
+if TYPE_CHECKING:
+    from controllers.plant_model import ControlModel
+
+#: Relative accuracy of a model whose values nobody estimated (no standard errors).
+DEFAULT_RELATIVE = 0.1
+#: Speeds (m/s) the friction's uncertainty is averaged over: a servo's tracking speeds.
+SPEEDS = np.geomspace(1e-4, 0.3, 25)
+#: Speed (m/s) of the steady state where the force's sensitivity to its states is taken.
+SENSITIVITY_SPEED = 0.01
+#: Process noise of the plant's own states, per unit of their scale and sqrt(s).
+PLANT_STATE_NOISE = 1e-3
+
+
+@dataclass(frozen=True)
+class FrictionUncertainty:
+    """The friction force's uncertainty of a model (rule 1).
+
+    Attributes
+    ----------
+    sigma_F
+        Standard uncertainty of the friction force (N).
+    level
+        RMS friction level over :data:`SPEEDS` (N).
+    source
+        ``"standard errors"`` or ``"default"`` (:data:`DEFAULT_RELATIVE` of the level).
+    """
+
+    sigma_F: float
+    level: float
+    source: str
+
+
+def _map(model: FrictionModel) -> np.ndarray:
+    v = np.concatenate([SPEEDS, -SPEEDS])
+    return np.asarray(model.steady_state(v), dtype=float)
+
+
+def friction_uncertainty(model: FrictionModel) -> FrictionUncertainty:
+    """``sigma_F`` of ``model`` (rule 1): from its standard errors, else the default share of
+    its level."""
+    from controllers.truths import varied_names
+
+    base = _map(model)
+    level = float(np.sqrt(np.mean(base**2)))
+    se = model.stderr
+    names = [k for k in varied_names(model) if se.get(k, 0.0) > 0 and math.isfinite(se[k])]
+    if not names:
+        return FrictionUncertainty(DEFAULT_RELATIVE * level, level, "default")
+    flat = model.flat_params()
+    specs = model.param_specs()
+    var = np.zeros_like(base)
+    for k in names:
+        h = 1e-4 * max(abs(flat[k]), se[k])
+        lo, hi = max(flat[k] - h, specs[k].lower), min(flat[k] + h, specs[k].upper)
+        try:
+            d = (_map(model.with_params(**{k: hi})) - _map(model.with_params(**{k: lo})))
+        except ValueError:  # a step across a constraint (Fc at Fs): one side only
+            try:
+                d = _map(model.with_params(**{k: lo})) - base
+                hi = flat[k]
+            except ValueError:
+                continue
+        if hi > lo:
+            var += (d / (hi - lo) * se[k]) ** 2
+    return FrictionUncertainty(float(np.sqrt(np.mean(var))), level, "standard errors")
+
+
+def state_sensitivities(model: ControlModel) -> dict[str, float]:
+    """``|dF/ds|`` (N per state unit) of the friction force to each friction state at the
+    model's steady state at :data:`SENSITIVITY_SPEED` (rule 3); states without effect left
+    out."""
+    import casadi as ca
+
+    from fcomp.backend import CASADI, NUMPY
+    from fcomp.models.base import Signals
+
+    friction = model.friction
+    if not friction.n_states:
+        return {}
+    v = SENSITIVITY_SPEED
+    sig = Signals(v=v, a=0.0, x=0.5 * model.stroke, p1=0.0, p2=0.0, s=1.0)
+    xs = [float(np.asarray(c)) for c in
+          friction.steady_state_states(NUMPY, sig, friction.param_values(NUMPY))]
+    x = ca.SX.sym("x", friction.n_states)
+    ssig, sigv = Signals.symbolic()
+    F = friction.force(CASADI, [x[i] for i in range(friction.n_states)], ssig,
+                       friction.param_values(CASADI))
+    J = ca.Function("dF_dx", [x, sigv], [ca.jacobian(F, x)])(xs, [v, 0.0, sig.x, 0.0, 0.0,
+                                                                  1.0])
+    grads = np.abs(np.asarray(J, dtype=float).ravel())
+    return {n: float(g) for n, g in zip(friction.state_names, grads, strict=True) if g > 0}
+
+
+def process_noise(model: ControlModel) -> np.ndarray:
+    """The EKF's process-noise intensities per state of ``model.prediction`` (state unit per
+    sqrt(s); module docstring, rules 1-4)."""
+    sc = np.asarray(model.prediction.scales, dtype=float)
+    names = model.prediction.state_names
+    q = PLANT_STATE_NOISE * sc
+    u = friction_uncertainty(model.friction)
+    tau = 1.0 / model.tuning.pid_bandwidth
+    sens = {n: s for n, s in state_sensitivities(model).items() if n in names}
+    for n, s in sens.items():
+        i = names.index(n)
+        q[i] = min(u.sigma_F / (s * math.sqrt(len(sens) * tau)), sc[i] / math.sqrt(tau))
+    if "v" in names and not sens:
+        q[names.index("v")] = u.sigma_F * math.sqrt(tau) / model.mass
+    return q
+
+
+__all__ = ["DEFAULT_RELATIVE", "PLANT_STATE_NOISE", "SENSITIVITY_SPEED", "SPEEDS",
+           "FrictionUncertainty", "friction_uncertainty", "process_noise",
+           "state_sensitivities"]

@@ -34,10 +34,16 @@ controller from its measurement, as :meth:`controllers.base.Controller.reset`
 does from ``y0`` (the harness resets with the first sample's measurement).
 The compensation states are
 
-* ``pid``, ``pid-ff``: none (the feedforward map is static);
+* ``pid``, and ``pid-ff`` on a static map: none;
+* ``pid-ff`` on a dynamic model: its friction states along the reference, then the
+  side of motion;
 * ``lugre-observer``: the observer's friction states, then the side of motion;
 * ``ekf``: the scaled state estimate (``nx``), its covariance (``nx*nx``,
-  column-major) and the previous command.
+  column-major) and the previous command;
+
+and, for every controller that uses its friction model, last, the previous friction
+estimate ``F_prev`` (its lead through the force loop,
+:meth:`controllers.pid.PIDController.friction_demand`).
 
 The model functions a controller evaluates (force-rate grid, observer step,
 steady-state map, EKF prediction and friction) are the controller's own
@@ -287,14 +293,16 @@ def step_function(ctrl: Any) -> StepExport:
     law = ctrl.law
     g = ctrl.gains
     dt = float(ctrl.dt)
-    if isinstance(ctrl, LuGreObserverController):
+    dynamic_ff = isinstance(ctrl, PIDFeedforwardController) and ctrl.dynamic
+    if isinstance(ctrl, LuGreObserverController) or dynamic_ff:
         nc = m.friction.n_states + 1
     elif isinstance(ctrl, EKFController):
         nx = ctrl.ekf.model.nx
         nc = nx + nx * nx + 1
     else:
         nc = 0
-    ns = 4 + nc
+    lead = bool(ctrl.uses_friction)
+    ns = 4 + nc + int(lead)
     s = ca.MX.sym("state", ns)
     y = ca.MX.sym("y", 3)
     ref = ca.MX.sym("ref", 3)
@@ -349,14 +357,30 @@ def step_function(ctrl: Any) -> StepExport:
         comp_next = [xi_new, ca.reshape(P_new, nx * nx, 1)]  # u_prev appended below
         layout += [("ekf_x", nx), ("ekf_P", nx * nx), ("u_prev", 1)]
         note = "PID + EKF friction estimate (filterpy's EKF equations) + force-to-valve inversion"
+    elif dynamic_ff:
+        nf = m.friction.n_states
+        xf0 = np.asarray(m.friction.initial_state(), dtype=float).ravel()
+        xf = ca.if_else(started, s[4:4 + nf], ca.DM(xf0))
+        side_prev = ca.if_else(started, s[4 + nf], 1.0)
+        side = ca.if_else(dr != 0, ca.if_else(dr > 0, 1.0, -1.0), side_prev)
+        xf_next, F_hat = ctrl._step(xf, ca.vertcat(dr, ddr, r, p1g, p2g, side), 0.0, dt)
+        comp_next = [xf_next, side]
+        layout += [("feedforward", nf), ("side", 1)]
+        state0[4:4 + nf] = xf0
+        state0[4 + nf] = 1.0
+        note = "PID + friction feedforward along the reference + force-to-valve inversion"
     elif isinstance(ctrl, PIDFeedforwardController):
-        F_map = ctrl._map(dr, x, p1g, p2g)
+        F_map = ctrl._map(dr, r, p1g, p2g)
         F_hat = ca.if_else(dr == 0, 0.0, F_map * ca.fmin(ca.fabs(dr) / ctrl.band, 1.0))
         note = "PID + static friction feedforward + force-to-valve inversion"
     else:
         F_hat = ca.MX(0.0)
         note = "PID + force-to-valve inversion"
-    demand = m.mass * ddr + m.weight + (g.kp * e + g.ki * integral + g.kd * (dr - v_f)) + F_hat
+    F_dem = F_hat
+    if lead:  # PIDController.friction_demand: the estimate's lead through the force loop
+        F_prev = ca.if_else(started, s[ns - 1], F_hat)
+        F_dem = F_hat + (F_hat - F_prev) / (dt * ctrl.valve.bandwidth)
+    demand = m.mass * ddr + m.weight + (g.kp * e + g.ki * integral + g.kd * (dr - v_f)) + F_dem
     applied = ca.fmin(ca.fmax(demand, m.force_min), m.force_max)
     u, sat = _valve_command(ctrl.valve, applied, y, v_inv)
     if g.ki == 0:
@@ -366,6 +390,9 @@ def step_function(ctrl: Any) -> StepExport:
                                    integral + dt * (e + g.kt * (applied - demand) / g.ki))
     if isinstance(ctrl, EKFController):
         comp_next.append(u)
+    if lead:
+        comp_next.append(F_hat)
+        layout += [("F_prev", 1)]
     s_next = ca.vertcat(1.0, integral_next, v_f, x, *comp_next)
     fn = ca.Function(CASADI_NAME, [s, y, ref], [u, s_next], ["state", "y", "ref"],
                      ["u", "state_next"])
@@ -696,6 +723,7 @@ def python_state(ctrl: Any) -> np.ndarray:
     """The Python controller's state in the exported layout (:class:`StepExport`; after its
     ``reset``, so ``started = 1``)."""
     from controllers.ekf import EKFController
+    from controllers.feedforward import PIDFeedforwardController
     from controllers.lugre_observer import LuGreObserverController
     from controllers.mpc_fixed import FixedIterationMPC
 
@@ -708,13 +736,21 @@ def python_state(ctrl: Any) -> np.ndarray:
                                [ctrl._u_prev], np.asarray(ctrl.solver.U, dtype=float),
                                np.zeros(2 * N) if lam is None else np.asarray(lam, dtype=float)])
     law = ctrl.law
-    parts = [np.array([1.0, law.integral, law.v_f, law.x_prev], dtype=float)]
+    # not stepped since its reset: the exported step resets itself from the measurement
+    # (started = 0), as the Python reset did; that is also where the lead has no
+    # previous estimate
+    started = 0.0 if ctrl._F_prev is None else 1.0
+    parts = [np.array([started, law.integral, law.v_f, law.x_prev], dtype=float)]
     if isinstance(ctrl, LuGreObserverController):
         parts += [np.asarray(ctrl.x_hat, dtype=float).ravel(), np.array([ctrl._side])]
     elif isinstance(ctrl, EKFController):
         kf = ctrl.ekf.kf
         parts += [np.asarray(kf.x, dtype=float)[:, 0],
                   np.asarray(kf.P, dtype=float).ravel(order="F"), np.array([ctrl._u_prev])]
+    elif isinstance(ctrl, PIDFeedforwardController) and ctrl.dynamic:
+        parts += [np.asarray(ctrl.x_ff, dtype=float).ravel(), np.array([ctrl._side])]
+    if ctrl.uses_friction:
+        parts.append(np.array([0.0 if ctrl._F_prev is None else ctrl._F_prev]))
     return np.concatenate(parts)
 
 

@@ -334,17 +334,23 @@ def test_sweep_names_a_model_file_in_its_json(tmp_path: Path,
                                               capsys: pytest.CaptureFixture) -> None:
     """Issue 42 item 1: ``--controller-friction lugre,MODEL.json`` ended in a TypeError
     (a model object where its name belongs)."""
-    model = make_model("nmlgm", params="seed002-type1")
+    model = make_model("nmlgm", params="seed002-type1").with_measurement({"mass": 2.0})
     model.save(tmp_path / "mine.json")
+    model.save(tmp_path / "other.json")
     out = tmp_path / "s.json"
-    code, _, err = _run(["sweep", "--controllers", "pid-ff", "--grid", "Fc=1",
-                         "--controller-friction", f"lugre,{tmp_path / 'mine.json'}",
-                         "--task", "steps", "--jobs", "1", "--json", str(out),
-                         "--no-progress"], capsys)
+    args = ["sweep", "--controllers", "pid-ff", "--grid", "Fc=1", "--controller-friction",
+            f"lugre,{tmp_path / 'mine.json'},{tmp_path / 'other.json'}", "--task", "steps",
+            "--jobs", "1", "--no-progress"]
+    code, _, err = _run([*args, "--json", str(out)], capsys)
     assert code == 0, err
     doc = json.loads(out.read_text())
-    assert doc["controller_frictions"] == ["lugre", str(tmp_path / "mine.json")]
+    assert doc["controller_frictions"] == ["lugre", str(tmp_path / "mine.json"),
+                                           str(tmp_path / "other.json")]
     assert [p["controller_friction"] for p in doc["points"]] == doc["controller_frictions"]
+    # issue 42 item 2: the grouped warning names the JSON written, or says none was
+    assert f"each in full in the JSON ({out})" in err
+    code, _, err = _run(args, capsys)
+    assert code == 0 and "each in full in the JSON (give --json OUT to keep them)" in err
 
 
 def test_sweep_draws_only_valid_models() -> None:
@@ -364,3 +370,43 @@ def test_sweep_draws_only_valid_models() -> None:
     ratio = np.array([f["Fc"] / f["Fs"] for f, _ in draws]) * 120.0 / 260.0
     assert ratio.max() <= 1.0 and ratio.max() > 0.8  # truncated at the constraint, not far
     assert math.isclose(np.median(np.log([f["vs"] for f, _ in draws])), 0.0, abs_tol=0.15)
+
+
+# ------------------------------------------------------------------ from a diagnosis
+def test_a_diagnosis_model_file_gives_its_uncertainty_and_rivals(tmp_path: Path,
+                                                                 capsys: pytest.CaptureFixture
+                                                                 ) -> None:
+    """``fcomp diagnose --save-model``: the final fit's standard errors and the diagnosis's
+    rivals are in the file; read back, the model carries its standard errors, and the
+    candidate truths of ``compensate`` draw from them (the values within a few standard
+    errors of the fit's) and run its rivals."""
+    from controllers.compensate_inputs import resolve_compared, resolve_plant
+    from controllers.truths import candidate_truths
+    from fcomp.modelfile import read_model
+    from fcomp.synthetic import generate
+
+    rec = tmp_path / "press.csv"
+    generate(["pressure-dependence"], duration=12.0, seed=1).measurement.write(rec)
+    code, _, err = _run(["diagnose", str(rec), "--friction", "lugre", "--candidates",
+                         "pressure-dependence,force-offset,direction-asymmetry",
+                         "--save-model", str(tmp_path / "d.json"), "--no-progress"], capsys)
+    assert code == 0, err
+    doc = json.loads((tmp_path / "d.json").read_text())
+    assert doc["description"] == "lugre + pressure-dependence"
+    se = doc["stderr"]
+    assert {"Fc", "Fs", "kp"} <= set(se) and all(v is None or v >= 0 for v in se.values())
+    rivals = doc["source"]["diagnosis"]["rivals"]
+    assert isinstance(rivals, list)
+    for r in rivals:
+        assert r["why"] and read_model(r["model_file"]).model.describe()
+    mf = read_model(tmp_path / "d.json")
+    assert mf.model.stderr == {k: v for k, v in se.items() if v is not None
+                               and k in mf.model.flat_params()}
+    warns: list = []
+    c = resolve_compared(str(tmp_path / "d.json"), resolve_plant("hydraulic"), warns)
+    cast = candidate_truths({"d": c}, draws=3, seed=1)
+    assert [t.label for t in cast][:4] == ["d", "d~1", "d~2", "d~3"]
+    assert len(cast) == 4 + min(len(rivals), 2)
+    for t in cast[1:4]:
+        f, f0 = t.model.flat_params(), mf.model.flat_params()
+        assert all(abs(f[k] - f0[k]) <= 6 * se[k] for k in f if se.get(k))

@@ -17,7 +17,8 @@ Rules (SI units)
    * from the standard errors of its values (a fit's or a model file's ``stderr``,
      :attr:`fcomp.models.base.FrictionModel.stderr`), propagated to first order
      through the steady-state map over the speeds a servo tracks
-     (:data:`SPEEDS`, both directions)::
+     (:data:`SPEEDS`, both directions), at mid stroke with the chamber pressures
+     that hold the load there (:func:`operating_point`)::
 
          sigma_F^2 = mean_v sum_i (dF_ss/dtheta_i (v) * sigma_i)^2
 
@@ -32,15 +33,22 @@ Rules (SI units)
    ``1/w_P`` (:mod:`controllers.tuning`, rule 2) -- a friction error the estimate
    must follow within the time the loop reacts to it.
 
-3. **Process noise of the friction states**: a state ``s`` through which the
-   model's force moves with sensitivity ``|dF/ds|`` (the bristle ``z``:
-   ``sigma0``; the film ``h``: the level's share of it), evaluated at the model's
-   steady state at :data:`SENSITIVITY_SPEED`, gets the rate-noise intensity
-   ``q_s = sigma_F/(|dF/ds| sqrt(n tau))`` with ``n`` the number of such states
-   -- over ``tau`` the random walks move the force by ``sigma_F`` together --
-   capped at the state's own scale per ``sqrt(tau)``. A static map (no such state)
-   absorbs its error through the velocity instead: ``q_v = sigma_F sqrt(tau)/m``
-   (a force error ``sigma_F`` acting for ``tau`` on the mass ``m``).
+3. **Process noise of the friction state that carries the force**: the state ``s``
+   through which the model's force moves most directly -- the largest
+   ``|dF/ds|*scale_s``, the force one state scale is worth, at the model's steady
+   state at :data:`SENSITIVITY_SPEED`: the bristle ``z`` of the LuGre family,
+   ``|dF/dz| = sigma0`` -- gets the rate-noise intensity
+   ``q_s = sigma_F/(|dF/ds| sqrt(tau))``: over ``tau`` its random walk moves the
+   force by ``sigma_F``. The
+   model's other friction states (the film ``h``, an effect's) follow their own
+   equations with the plant states' share (rule 4): a film free to wander would
+   take the force error the bristle should (``h`` moves the force only through
+   the bristle's equilibrium, ``|dF/dh|`` held ``z`` is small, so its noise
+   would be large) and let the estimate of an exact NMLGM follow the noise (the
+   hydraulic servo's slow sine: 2.65 times the error with plain LuGre). A static
+   map (no state) absorbs its error through the velocity instead:
+   ``q_v = sigma_F sqrt(tau)/m`` (a force error ``sigma_F`` acting for ``tau`` on
+   the mass ``m``).
 
 4. **The plant's states** (position, velocity where the friction states carry the
    friction's uncertainty, chamber pressures, valve): a thousandth of their
@@ -97,17 +105,45 @@ class FrictionUncertainty:
     source: str
 
 
-def _map(model: FrictionModel) -> np.ndarray:
+@dataclass(frozen=True)
+class Operating:
+    """Where the map is evaluated besides the speeds: the position ``x`` (m) and the
+    chambers' gauge pressures ``p1``, ``p2`` (Pa) -- a pressure-dependent level is nil at
+    zero gauge pressure, which would make the uncertainty of its model nil too."""
+
+    x: float = 0.0
+    p1: float = 0.0
+    p2: float = 0.0
+
+
+def _map(model: FrictionModel, at: Operating) -> np.ndarray:
     v = np.concatenate([SPEEDS, -SPEEDS])
-    return np.asarray(model.steady_state(v), dtype=float)
+    return np.asarray(model.steady_state(v, x=at.x, p1=at.p1, p2=at.p2), dtype=float)
 
 
-def friction_uncertainty(model: FrictionModel) -> FrictionUncertainty:
-    """``sigma_F`` of ``model`` (rule 1): from its standard errors, else the default share of
-    its level."""
+def operating_point(model: ControlModel) -> Operating:
+    """Mid stroke, with the chambers' gauge pressures holding the load there (the plant's
+    equilibrium, :func:`plants.equilibrium.equilibrium`)."""
+    from controllers.plant_model import equilibrium
+
+    x = 0.5 * model.stroke
+    try:
+        x0, _ = equilibrium(model.plant, x)
+    except Exception:  # noqa: BLE001 -- no equilibrium: the run itself will say why
+        return Operating(x=x)
+    names = model.plant.state_names
+    return Operating(x=x, p1=float(x0[names.index("p1")]) - model.p_atm,
+                     p2=float(x0[names.index("p2")]) - model.p_atm)
+
+
+def friction_uncertainty(model: FrictionModel, at: Operating | None = None
+                         ) -> FrictionUncertainty:
+    """``sigma_F`` of ``model`` (rule 1) at the operating point ``at`` (default position and
+    pressures zero): from its standard errors, else the default share of its level."""
     from controllers.truths import varied_names
 
-    base = _map(model)
+    at = at or Operating()
+    base = _map(model, at)
     level = float(np.sqrt(np.mean(base**2)))
     se = model.stderr
     names = [k for k in varied_names(model) if se.get(k, 0.0) > 0 and math.isfinite(se[k])]
@@ -120,10 +156,11 @@ def friction_uncertainty(model: FrictionModel) -> FrictionUncertainty:
         h = 1e-4 * max(abs(flat[k]), se[k])
         lo, hi = max(flat[k] - h, specs[k].lower), min(flat[k] + h, specs[k].upper)
         try:
-            d = (_map(model.with_params(**{k: hi})) - _map(model.with_params(**{k: lo})))
+            d = (_map(model.with_params(**{k: hi}), at)
+                 - _map(model.with_params(**{k: lo}), at))
         except ValueError:  # a step across a constraint (Fc at Fs): one side only
             try:
-                d = _map(model.with_params(**{k: lo})) - base
+                d = _map(model.with_params(**{k: lo}), at) - base
                 hi = flat[k]
             except ValueError:
                 continue
@@ -132,7 +169,7 @@ def friction_uncertainty(model: FrictionModel) -> FrictionUncertainty:
     return FrictionUncertainty(float(np.sqrt(np.mean(var))), level, "standard errors")
 
 
-def state_sensitivities(model: ControlModel) -> dict[str, float]:
+def state_sensitivities(model: ControlModel, at: Operating | None = None) -> dict[str, float]:
     """``|dF/ds|`` (N per state unit) of the friction force to each friction state at the
     model's steady state at :data:`SENSITIVITY_SPEED` (rule 3); states without effect left
     out."""
@@ -145,15 +182,16 @@ def state_sensitivities(model: ControlModel) -> dict[str, float]:
     if not friction.n_states:
         return {}
     v = SENSITIVITY_SPEED
-    sig = Signals(v=v, a=0.0, x=0.5 * model.stroke, p1=0.0, p2=0.0, s=1.0)
+    at = at or Operating(x=0.5 * model.stroke)
+    sig = Signals(v=v, a=0.0, x=at.x, p1=at.p1, p2=at.p2, s=1.0)
     xs = [float(np.asarray(c)) for c in
           friction.steady_state_states(NUMPY, sig, friction.param_values(NUMPY))]
     x = ca.SX.sym("x", friction.n_states)
     ssig, sigv = Signals.symbolic()
     F = friction.force(CASADI, [x[i] for i in range(friction.n_states)], ssig,
                        friction.param_values(CASADI))
-    J = ca.Function("dF_dx", [x, sigv], [ca.jacobian(F, x)])(xs, [v, 0.0, sig.x, 0.0, 0.0,
-                                                                  1.0])
+    J = ca.Function("dF_dx", [x, sigv], [ca.jacobian(F, x)])(xs, [v, 0.0, at.x, at.p1,
+                                                                  at.p2, 1.0])
     grads = np.abs(np.asarray(J, dtype=float).ravel())
     return {n: float(g) for n, g in zip(friction.state_names, grads, strict=True) if g > 0}
 
@@ -164,17 +202,19 @@ def process_noise(model: ControlModel) -> np.ndarray:
     sc = np.asarray(model.prediction.scales, dtype=float)
     names = model.prediction.state_names
     q = PLANT_STATE_NOISE * sc
-    u = friction_uncertainty(model.friction)
+    at = operating_point(model)
+    u = friction_uncertainty(model.friction, at)
     tau = 1.0 / model.tuning.pid_bandwidth
-    sens = {n: s for n, s in state_sensitivities(model).items() if n in names}
-    for n, s in sens.items():
+    sens = {n: s for n, s in state_sensitivities(model, at).items() if n in names}
+    if sens:
+        n = max(sens, key=lambda k: sens[k] * sc[names.index(k)])
         i = names.index(n)
-        q[i] = min(u.sigma_F / (s * math.sqrt(len(sens) * tau)), sc[i] / math.sqrt(tau))
-    if "v" in names and not sens:
+        q[i] = u.sigma_F / (sens[n] * math.sqrt(tau))
+    elif "v" in names:
         q[names.index("v")] = u.sigma_F * math.sqrt(tau) / model.mass
     return q
 
 
 __all__ = ["DEFAULT_RELATIVE", "PLANT_STATE_NOISE", "SENSITIVITY_SPEED", "SPEEDS",
-           "FrictionUncertainty", "friction_uncertainty", "process_noise",
-           "state_sensitivities"]
+           "FrictionUncertainty", "Operating", "friction_uncertainty", "operating_point",
+           "process_noise", "state_sensitivities"]

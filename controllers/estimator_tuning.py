@@ -46,18 +46,22 @@ Rules (SI units)
    the bristle's equilibrium, ``|dF/dh|`` held ``z`` is small, so its noise
    would be large) and let the estimate of an exact NMLGM follow the noise (the
    hydraulic servo's slow sine: 2.65 times the error with plain LuGre). A static
-   map (no state) absorbs its error through the velocity instead:
-   ``q_v = sigma_F sqrt(tau)/m`` (a force error ``sigma_F`` acting for ``tau`` on
-   the mass ``m``).
+   map has no state to carry its error: the estimator trusts it, and what it
+   misses is a bias the PID's integral takes. Putting its uncertainty on the
+   velocity instead (``q_v = sigma_F sqrt(tau)/m``, a force error acting for
+   ``tau`` on the mass) makes the velocity estimate follow the position noise, and
+   the map's force at it -- a sign function at rest -- chatter: the EKF on the
+   *exact* Coulomb-viscous friction of the hydraulic servo then tracked worse than
+   on a Coulomb level 30 % off (ramp 44 against 40 um; with the velocity at its
+   plant share 17 against 90 um).
 
-4. **The plant's states** (position, velocity where the friction states carry the
-   friction's uncertainty, chamber pressures, valve): a thousandth of their
-   scales. Their models are the plant file's (moving mass, valve flow gain, bulk
+4. **The plant's states** (position, velocity, chamber pressures, valve): a
+   thousandth of their scales. Their models are the plant file's (moving mass, valve flow gain, bulk
    modulus), which carries no standard errors. The velocity must not carry the
-   friction's uncertainty twice: a velocity noise of ``sigma_F`` beside the
-   bristle's lets the estimate of an exact model follow the position noise
-   (the hydraulic servo's steps: 35 um against 14 um with the velocity at its
-   plant share), and gives away what the better model buys.
+   friction's uncertainty: beside the bristle's it lets the estimate of an exact
+   LuGre follow the position noise too (the hydraulic servo's steps: 35 um against
+   14 um with the velocity at its plant share), and gives away what the better
+   model buys.
 
 The measurement noise is the sensors' (:meth:`controllers.plant_model.ControlModel.
 sensor_std`, rule 5 of :mod:`controllers.tuning`).
@@ -210,8 +214,6 @@ def process_noise(model: ControlModel) -> np.ndarray:
         n = max(sens, key=lambda k: sens[k] * sc[names.index(k)])
         i = names.index(n)
         q[i] = u.sigma_F / (sens[n] * math.sqrt(tau))
-    elif "v" in names:
-        q[names.index("v")] = u.sigma_F * math.sqrt(tau) / model.mass
     return q
 
 

@@ -21,8 +21,8 @@ too (a git worktree of ``main`` at 2d5cfbf), each tree in its own process::
 
     git worktree add /tmp/main-2d5cfbf 2d5cfbf
     PYTHONPATH=. python3 benchmarks/bench_model_payoff.py --tree /tmp/main-2d5cfbf \\
-        [--plants hydraulic,pneumatic,axis50] [--controllers pid-ff,...] [--samples 4]
-        [--jobs 2] [--json OUT]
+        [--plants hydraulic,pneumatic,axis50] [--truths lugre,...] [--controllers pid-ff,...]
+        [--samples 4] [--jobs 2] [--json OUT]
 """
 
 from __future__ import annotations
@@ -52,12 +52,12 @@ def _payoff() -> Any:
 
 
 def matrix(plants: list[str], controllers: tuple[str, ...], samples: int,
-           jobs: int | None) -> list[dict[str, Any]]:
-    """Every row of the matrix on the code importable here."""
+           jobs: int | None, truths: list[str] | None = None) -> list[dict[str, Any]]:
+    """Every row of the matrix on the code importable here (the truths named, or all)."""
     rows = []
     for plant in plants:
-        rows += _payoff().payoff_rows(plant, controllers=controllers, samples=samples,
-                                      workers=jobs)
+        rows += _payoff().payoff_rows(plant, truths, controllers=controllers,
+                                      samples=samples, workers=jobs)
         print(f"  {plant} done", file=sys.stderr, flush=True)
     return rows
 
@@ -85,6 +85,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--plants", default="hydraulic,pneumatic,axis50")
     ap.add_argument("--controllers", default="pid-ff,lugre-observer,ekf,mpc")
+    ap.add_argument("--truths", default=None, help="the truths to run (default all)")
     ap.add_argument("--samples", type=int, default=4)
     ap.add_argument("--jobs", type=int, default=None)
     ap.add_argument("--tree", default=None, help="another source tree to run beside this one")
@@ -94,7 +95,8 @@ def main() -> None:
     plants = args.plants.split(",")
     controllers = tuple(args.controllers.split(","))
     if args.rows_only:  # a child process on its tree: the rows as JSON on stdout
-        json.dump(matrix(plants, controllers, args.samples, args.jobs), sys.stdout)
+        json.dump(matrix(plants, controllers, args.samples, args.jobs,
+                         args.truths.split(",") if args.truths else None), sys.stdout)
         return
     out: dict[str, Any] = {}
     for label, tree in (("before", args.tree), ("after", str(ROOT))):
@@ -104,6 +106,8 @@ def main() -> None:
                args.plants, "--controllers", args.controllers, "--samples", str(args.samples)]
         if args.jobs:
             cmd += ["--jobs", str(args.jobs)]
+        if args.truths:
+            cmd += ["--truths", args.truths]
         env = {**os.environ, "PYTHONPATH": tree}
         print(f"{label}: {tree}", file=sys.stderr, flush=True)
         done = subprocess.run(cmd, env=env, cwd=tree, capture_output=True, text=True,

@@ -133,8 +133,8 @@ class CompensateResult:
     across
         ``across[controller][model]``: ``per_truth`` (truth -> median-task RMS ratio or
         ``None``), ``better_under``, ``worse_under``, ``ranked_truths``, ``truths``,
-        ``best``, ``worst`` and ``holds`` (``better``, ``worse``, ``same``, ``mixed``,
-        ``not ranked``).
+        ``best``, ``worst`` and ``holds`` (``better``, ``worse``, ``same``, ``partly
+        ranked``, ``mixed``, ``not ranked``).
     robustness
         The Monte Carlo (module docstring): ``task``, ``samples``, ``spread``, ``seed``,
         ``draws`` (each with its ``truth``) and, per controller, ``rms_error`` per model
@@ -368,6 +368,8 @@ def compensate(plant: Any, true_friction: Any, models: Sequence[Any] | Mapping[s
     refused = {(c, k): classes[c].refuses(m) for c in controllers for k, m in built.items()}
     _check_comparable(controllers, classes, refused, labels)
     free_force = _check_plant(pf, cast, built, refused, controllers, fast)
+    if not given:
+        cast = _plausible(warns, cast, free_force, stroke)
     _range_warnings(warns, pf, cast, built, tasks, fast, free_force)
 
     jobs: list[Job] = []
@@ -457,6 +459,28 @@ def _say_circular(warns: list[dict[str, Any]], cast: Sequence[Truth], given: boo
           f"({', '.join(str(t.equals) for t in same)}): under its own truth a model wins by "
           "construction, so a model is recommended only where it wins under every "
           "candidate truth", None)
+
+
+def _plausible(warns: list[dict[str, Any]], cast: Sequence[Truth], free: float,
+               stroke: float) -> list[Truth]:
+    """The candidate truths a plant can move: a draw or a rival whose steady friction at mid
+    stroke reaches the whole force ``free`` (N) the actuator has left after holding its
+    load (a draw of values its record does not determine: ``Fs`` +- 4e6 N) is left out
+    with a warning; the compared models are kept (warned later if they come near)."""
+    from controllers.model_range import SPEEDS, steady_level
+
+    out = []
+    for t in cast:
+        level = (steady_level(t.model, np.array([0.5 * stroke]), np.array(SPEEDS), 0.0)
+                 if t.origin in ("uncertainty", "rival") else 0.0)
+        if level >= free:
+            warn_once(warns, "truth-left-out",
+                      f"candidate truth {t.label} ({t.note}) left out: its friction reaches "
+                      f"{level:.4g} N, beyond the {free:.4g} N the actuator has left after "
+                      "holding its load (values the record does not determine)", t.label)
+            continue
+        out.append(t)
+    return out
 
 
 def _check_comparable(controllers: Sequence[str], classes: Mapping[str, Any],
@@ -590,8 +614,9 @@ def across_truths(per_truth: Mapping[str, Any], controllers: Sequence[str],
                   models: Sequence[str], tasks: Sequence[str]) -> dict[str, Any]:
     """Per controller and compared model, the median-task RMS ratio under each truth and
     whether the model is better (``holds = "better"``), worse or the same (``"same"``, a
-    ratio of 1 to :data:`SAME`) under every truth -- its runs ranked under all of them --, or
-    ``"mixed"`` (module docstring)."""
+    ratio of 1 to :data:`SAME`) under every truth -- its runs ranked under all of them --;
+    ``"partly ranked"`` where the ranked truths agree but some truth ranked none of its
+    runs; ``"mixed"`` where the truths disagree (module docstring)."""
     out: dict[str, Any] = {}
     for c in controllers:
         for m in models[1:]:
@@ -603,11 +628,11 @@ def across_truths(per_truth: Mapping[str, Any], controllers: Sequence[str],
             ranked = [v for v in per.values() if v is not None]
             better = sum(v < 1.0 - SAME for v in ranked)
             worse = sum(v > 1.0 + SAME for v in ranked)
+            same = len(ranked) - better - worse
             holds = ("not ranked" if not ranked else
-                     "better" if better == len(per) else
-                     "worse" if worse == len(per) else
-                     "same" if better == worse == 0 and len(ranked) == len(per) else
-                     "mixed")
+                     "mixed" if better and (worse or same) or worse and same else
+                     "partly ranked" if len(ranked) < len(per) else
+                     "better" if better else "worse" if worse else "same")
             out.setdefault(c, {})[m] = {
                 "per_truth": per, "better_under": better, "worse_under": worse,
                 "ranked_truths": len(ranked), "truths": len(per),

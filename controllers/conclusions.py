@@ -61,6 +61,7 @@ def of_compensation(doc: Mapping[str, Any]) -> Conclusion:
     better = sorted((p for p in pairs if p[2]["holds"] == "better"),
                     key=lambda p: p[2]["worst"])
     mixed = [p for p in pairs if p[2]["holds"] == "mixed"]
+    partly = [p for p in pairs if p[2]["holds"] == "partly ranked"]
     worse = [p for p in pairs if p[2]["holds"] == "worse"]
     level = "high"
     blind = [c for c in doc["controllers"] if not uses.get(c, True)]
@@ -83,6 +84,12 @@ def of_compensation(doc: Mapping[str, Any]) -> Conclusion:
         level = "low"
         reasons.append("the truths disagree: the answer depends on which friction the plant "
                        "really has")
+    elif partly:
+        c, m, a = min(partly, key=lambda p: p[2]["worst"])
+        finding = (f"{c} with {m}: median-task ratio {_span(a)} under the "
+                   f"{a['ranked_truths']} of {a['truths']} truths where its runs could be "
+                   "ranked, none under the others")
+        level = "low"
     elif worse:
         names = sorted({m for _, m, _ in worse})
         finding = (f"{under}, {' and '.join(names)} instead of {base} does not lower the RMS "
@@ -94,6 +101,9 @@ def of_compensation(doc: Mapping[str, Any]) -> Conclusion:
         finding = "no compared model could be ranked against the baseline"
         level = "low"
     finding += tail
+    if partly and (better or mixed):
+        reasons.append("ranked under only some truths: " + ", ".join(
+            f"{c} with {m} ({a['ranked_truths']} of {a['truths']})" for c, m, a in partly[:3]))
     if mixed and better:
         level = "medium"
         reasons.append("the truths disagree for " + ", ".join(

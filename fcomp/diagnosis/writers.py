@@ -87,16 +87,22 @@ def model_file(result: DiagnosisResult, source: Mapping[str, Any] | None = None
                                   **dict(source or {})})
 
 
+#: The other baseline's final model is a rival if its held-out RMS is within this factor of
+#: the final model's.
+RIVAL_RMS = 1.5
+
+
 def rivals(result: DiagnosisResult) -> list[dict[str, Any]]:
     """The models the record could not tell from the final one, as model documents with why:
-    the other baseline's final model (when the baseline check ran), then each tied
-    candidate of an accepted step, refitted at that step (without the effects added after
-    it). ``fcomp compensate`` runs them as candidate truths."""
+    the other baseline's final model (when the baseline check ran and its held-out RMS is
+    within :data:`RIVAL_RMS` of the final one's), then each tied candidate of an accepted
+    step, refitted at that step (without the effects added after it). ``fcomp compensate``
+    runs them as candidate truths."""
     from fcomp.models.document import model_document
 
     out: list[dict[str, Any]] = []
     other = result.other
-    if other is not None:
+    if other is not None and other.fit.rms_test <= RIVAL_RMS * result.fit.rms_test:
         out.append({"why": f"the diagnosis from {other.baseline_name} ends there (held-out "
                            f"RMS {other.fit.rms_test:.4g} N)",
                     "rms_heldout": _num(other.fit.rms_test),

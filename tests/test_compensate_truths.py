@@ -39,6 +39,7 @@ def _metrics(**kw: float) -> dict:
     (_metrics(travel=1e-5, max_error=2e-3), "never moved"),
     (_metrics(saturated_share=0.95), "saturated throughout"),
     (_metrics(hunting_amplitude=1e-3), "limit cycle: +-1e+03 um"),  # the +-1000 um of issue 42
+    (_metrics(reference_travel=2e-3, travel=2e-3, hunting_amplitude=5.25e-4), "limit cycle"),
     (_metrics(fallbacks=300), "solver failed"),
     (_metrics(max_error=9e-3), "lost the reference"),
 ])
@@ -50,6 +51,15 @@ def test_a_run_that_did_not_do_the_task_is_flagged(metrics: dict, words: str) ->
     assert run_status("ok", metrics).startswith("flagged: ")
     assert run_status("ok", _metrics()) == "ok"
     assert run_status("failed: boom", None) == "failed: boom"
+
+
+def test_stick_slip_a_compensator_should_remove_is_ranked() -> None:
+    """+-350 um of stick-slip on the 2.7 mm of the fast ramp is the task's point, not a
+    run to leave out."""
+    from controllers.run_checks import run_flags
+
+    assert run_flags(_metrics(reference_travel=2.7e-3, travel=2.7e-3,
+                              hunting_amplitude=3.5e-4)) == []
 
 
 def test_a_hold_is_judged_by_saturation_and_the_solver_alone() -> None:

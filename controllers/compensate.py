@@ -357,7 +357,10 @@ def compensate(plant: Any, true_friction: Any, models: Sequence[Any] | Mapping[s
     else:
         named = {model_label(t): resolve_friction(t, pf, "plant friction", warns, effects)
                  for t in truths}
-        cast = candidate_truths(compared, truth_draws, seed, named)
+        not_drawn: list[str] = []
+        cast = candidate_truths(compared, truth_draws, seed, named, not_drawn)
+        for why in not_drawn:
+            warn_once(warns, "truth-left-out", f"uncertainty draws left out: {why}", None)
     _say_circular(warns, cast, given)
     tasks: list[str | Task] = ([ref_task] if ref_task is not None
                                else [task] if task is not None else list(TASKS.names()))

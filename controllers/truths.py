@@ -127,11 +127,28 @@ def varied_names(model: FrictionModel) -> list[str]:
             if k not in fixed and math.isfinite(v) and v != 0.0]
 
 
+def _truncated(rng: np.random.Generator, mean: float, sd: float, spec: Any) -> float | None:
+    """A draw of ``N(mean, sd^2)`` within ``spec``'s bounds (drawn again while outside;
+    ``None`` if :data:`TRIES` draws all fall outside)."""
+    for _ in range(TRIES):
+        v = mean + sd * float(rng.standard_normal())
+        if spec.lower <= v <= spec.upper and not (spec.lower_open and v <= spec.lower):
+            return v
+    return None
+
+
 def uncertainty_draws(model: FrictionModel, stderr: Mapping[str, float], n: int,
                       rng: np.random.Generator) -> list[FrictionModel]:
     """``n`` draws of ``model`` from its standard errors (module docstring): each varied
-    parameter with a positive finite standard error from ``N(value, stderr^2)`` within its
-    bounds, the draw redrawn while the model refuses it. Empty without standard errors."""
+    parameter with a positive finite standard error from ``N(value, stderr^2)`` truncated to
+    its bounds (drawn again while outside), the whole draw again while the model refuses it
+    (``Fc > Fs``). Empty without standard errors.
+
+    Raises
+    ------
+    FcompError
+        No valid draw in :data:`TRIES` tries.
+    """
     specs = model.param_specs()
     flat = model.flat_params()
     names = [k for k in varied_names(model)
@@ -141,23 +158,18 @@ def uncertainty_draws(model: FrictionModel, stderr: Mapping[str, float], n: int,
     out: list[FrictionModel] = []
     for _ in range(n):
         for _try in range(TRIES):
-            values = {}
-            for k in names:
-                spec = specs[k]
-                v = flat[k] + stderr[k] * float(rng.standard_normal())
-                values[k] = v
-                if v < spec.lower or v > spec.upper or (spec.lower_open and v <= spec.lower):
-                    break
-            else:
-                try:
-                    out.append(model.with_params(**values))
-                except (ValueError, FcompError):
-                    continue
+            values = {k: _truncated(rng, flat[k], stderr[k], specs[k]) for k in names}
+            if any(v is None for v in values.values()):
                 break
-        else:
-            raise FcompError(f"no valid draw of {model.describe()} from its standard errors in "
-                             f"{TRIES} tries (its values sit at a bound, or its errors are "
-                             "far larger than its values)")
+            try:
+                out.append(model.with_params(**values))  # type: ignore[arg-type]
+            except (ValueError, FcompError):
+                continue
+            break
+        if len(out) < _ + 1:
+            raise FcompError(f"no valid draw of {model.describe()} from its standard errors "
+                             f"in {TRIES} tries (its values sit at a bound, or its errors "
+                             "are far larger than its values)")
     return out
 
 
@@ -183,7 +195,8 @@ def rivals_of(document: Mapping[str, Any], effects: str | None = None
 
 
 def candidate_truths(compared: Mapping[str, Compared], draws: int, seed: int,
-                     named: Mapping[str, FrictionModel] | None = None) -> list[Truth]:
+                     named: Mapping[str, FrictionModel] | None = None,
+                     not_drawn: list[str] | None = None) -> list[Truth]:
     """The candidate truths (module docstring), in order: each compared model, its
     uncertainty draws and rivals, then the ``named`` ones; a candidate equal to an earlier
     one is left out.
@@ -198,9 +211,12 @@ def candidate_truths(compared: Mapping[str, Compared], draws: int, seed: int,
         Seed of the draws.
     named
         Label -> friction: truths the user names.
+    not_drawn
+        Appended to: why a model's uncertainty could not be drawn (its draws are left out).
     """
     rng = np.random.default_rng(seed)
     out: list[Truth] = []
+    skipped = not_drawn if not_drawn is not None else []
 
     def add(truth: Truth) -> None:
         if any(same_friction(truth.model, t.model) for t in out):
@@ -212,7 +228,12 @@ def candidate_truths(compared: Mapping[str, Compared], draws: int, seed: int,
     for label, c in compared.items():
         add(Truth(label, c.model, "compared", f"the compared model {label} ({c.source})"))
     for label, c in compared.items():
-        for i, m in enumerate(uncertainty_draws(c.model, c.stderr, draws, rng), start=1):
+        try:
+            drawn = uncertainty_draws(c.model, c.stderr, draws, rng)
+        except FcompError as exc:  # said, and the comparison goes on without them
+            skipped.append(f"{label}: {exc}")
+            drawn = []
+        for i, m in enumerate(drawn, start=1):
             add(Truth(f"{label}~{i}", m, "uncertainty",
                       f"draw {i} of {label}'s values from its standard errors"))
         for i, (name, m, why) in enumerate(c.rivals, start=1):

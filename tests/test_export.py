@@ -61,13 +61,18 @@ def test_export_is_equivalent_and_timed(controller: str, tmp_path: Path,
 def test_the_check_sees_a_different_controller(tmp_path: Path) -> None:
     """The compiled observer with gain 0.5 checked against a Python observer with gain 0.6."""
     from controllers import make_controller
-    from controllers.export import CompiledController, check_equivalence, step_function, write_c
+    from controllers.export import (
+        CompiledController,
+        check_equivalence,
+        guarded_step_function,
+        write_c,
+    )
     from controllers.plant_model import ControlModel
     from fcomp.models import make_model
 
     model = ControlModel("hydraulic", make_model("nmlgm", params="seed002-type1"))
     ctrl = make_controller("lugre-observer", model, observer_gain=0.5)
-    step = step_function(ctrl)
+    step = guarded_step_function(ctrl)
     write_c(step, tmp_path / "c", controller="lugre-observer", plant=model.describe(),
             unit="A", u_max=model.u_max, dt=ctrl.dt, y_example=[0.1, 1e6, 1e6], r_example=0.1)
     cc = find_compiler()

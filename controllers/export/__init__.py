@@ -77,18 +77,33 @@ from __future__ import annotations
 
 from controllers.export.cfiles import CFLAGS, write_c
 from controllers.export.check import (
+    HOSTILE_EVENTS,
     RTOL,
     CheckResult,
     block_difference,
     check_equivalence,
+    hostile_script,
     python_state,
     relative_difference,
 )
 from controllers.export.compiled import CompiledController, find_compiler
-from controllers.export.pipeline import ExportResult, export_controller
-from controllers.export.step import CASADI_INT, CASADI_NAME, EXPORTABLE, StepExport, step_function
+from controllers.export.pipeline import (
+    MAX_TIMING_STEPS,
+    ExportResult,
+    check_friction,
+    export_controller,
+)
+from controllers.export.step import (
+    CASADI_INT,
+    CASADI_NAME,
+    EXPORTABLE,
+    StepExport,
+    guarded_step_function,
+    step_function,
+)
 
-__all__ = ["CASADI_INT", "CASADI_NAME", "CFLAGS", "EXPORTABLE", "RTOL", "CheckResult",
-           "CompiledController", "ExportResult", "StepExport", "block_difference",
-           "check_equivalence", "export_controller", "find_compiler", "python_state",
-           "relative_difference", "step_function", "write_c"]
+__all__ = ["CASADI_INT", "CASADI_NAME", "CFLAGS", "EXPORTABLE", "HOSTILE_EVENTS",
+           "MAX_TIMING_STEPS", "RTOL", "CheckResult", "CompiledController", "ExportResult",
+           "StepExport", "block_difference", "check_equivalence", "check_friction",
+           "export_controller", "find_compiler", "guarded_step_function", "hostile_script",
+           "python_state", "relative_difference", "step_function", "write_c"]

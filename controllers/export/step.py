@@ -4,6 +4,7 @@ controller's step holds")."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -105,8 +106,25 @@ def _all_finite(*ms: Any) -> Any:
     return bad == 0
 
 
-def _mpc_step(ctrl: Any) -> StepExport:
-    """The step of :class:`controllers.mpc_fixed.FixedIterationMPC` (module docstring)."""
+@dataclass
+class _Law:
+    """A controller's law as a graph builder: ``graph(s, y, ref, reenter, u_hold) -> (u,
+    s_next)`` on the state ``s`` of ``layout`` (``reenter`` None: the plain step; else the
+    fail-safe layer's re-entry flag and held command, :mod:`controllers.safety`)."""
+
+    graph: Callable[[Any, Any, Any, Any, Any], tuple[Any, Any]]
+    state0: np.ndarray
+    layout: list[tuple[str, int]]
+    note: str
+    n_ref: int = 3
+
+    @property
+    def n_state(self) -> int:
+        return int(self.state0.size)
+
+
+def _mpc_law(ctrl: Any) -> _Law:
+    """The law of :class:`controllers.mpc_fixed.FixedIterationMPC` (module docstring)."""
     m = ctrl.model
     ekf = ctrl.ekf
     sol = ctrl.solver
@@ -116,83 +134,195 @@ def _mpc_step(ctrl: Any) -> StepExport:
     dt = float(ctrl.dt)
     layout = [("ekf_x", nx), ("ekf_P", nx * nx), ("u_prev", 1), ("U", N), ("lam", 2 * N)]
     ns = sum(k for _, k in layout)
-    s = ca.MX.sym("state", ns)
-    y = ca.MX.sym("y", 3)
-    ref = ca.MX.sym("ref", 3 + N)
-    r, dr, ddr = ref[0], ref[1], ref[2]
-    i = 0
-    xi = s[i:i + nx]
-    i += nx
-    P = ca.reshape(s[i:i + nx * nx], nx, nx)
-    i += nx * nx
-    u_prev = s[i]
-    i += 1
-    U = s[i:i + N]
-    i += N
-    lam = s[i:i + 2 * N]
-    xi_new, P_new, F_hat = _ekf_update(ekf, xi, P, u_prev, y)
-    x_hat = xi_new * ca.DM(ekf.scale)
-    R = ref[3:3 + N]
-    V = (R - ca.vertcat(r, R[:N - 1])) / dt
-    U_s = ca.vertcat(U[1:], U[N - 1])
-    H, g, _cost, _X = sol._lin.fn(x_hat, U_s, u_prev, R, V, ca.DM(sol.p), ca.DM(sol.scales))
-    ok_lin = _all_finite(H, g)
-    eye = ca.DM.eye(N)
-    H = H + (sol.reg * ca.fmax(ca.trace(H) / N, 1.0)) * eye
-    D = ca.DM(sol.D)
-    du = pb.du_max * pb.dt
-    diff = ca.mtimes(D, U_s) - ca.vertcat(u_prev, ca.DM.zeros(N - 1))
-    upper = ca.vertcat(pb.u_max - U_s, du - diff)
-    lower = ca.vertcat(-pb.u_max - U_s, -du - diff)
-    A = ca.DM(sol.A)
-    rho = sol.rho_rel * ca.trace(H) / N
-    sigma = 1e-6 * rho
-    Kinv = ca.inv(H + sigma * eye + rho * ca.DM(sol.A.T @ sol.A))
-    x = ca.DM.zeros(N)
-    z = ca.fmin(ca.fmax(ca.DM.zeros(2 * N), lower), upper)
-    for _ in range(sol.qp_iterations):
-        x = ca.mtimes(Kinv, sigma * x - g + ca.mtimes(A.T, rho * z - lam))
-        Ax = ca.mtimes(A, x)
-        z = ca.fmin(ca.fmax(Ax + lam / rho, lower), upper)
-        lam = lam + rho * (Ax - z)
-    ok = ca.logic_and(ok_lin, _all_finite(x, lam))
-    U_new = ca.fmin(ca.fmax(U_s + x, -pb.u_max), pb.u_max)
-    # the fallback law (MPCController._fallback)
-    fg = ctrl.fallback_gains
-    v = x_hat[ctrl.iv]
-    demand = m.mass * ddr + m.weight + fg.kp * (r - y[0]) + fg.kd * (dr - v) + F_hat
-    demand = ca.fmin(ca.fmax(demand, m.force_min), m.force_max)
-    u_fb, _sat = _valve_command(ctrl.valve, demand, y, v)
-    u_fb = ca.fmin(ca.fmax(u_fb, u_prev - pb.du_max * dt), u_prev + pb.du_max * dt)
-    u = ca.if_else(ok, U_new[0], u_fb)
-    U_next = ca.if_else(ok, U_new, ca.repmat(u_fb, N, 1))
-    lam_next = ca.if_else(ok, lam, ca.DM.zeros(2 * N))
-    s_next = ca.vertcat(xi_new, ca.reshape(P_new, nx * nx, 1), u, U_next, lam_next)
-    fn = ca.Function(CASADI_NAME, [s, y, ref], [u, s_next], ["state", "y", "ref"],
-                     ["u", "state_next"])
-    return StepExport(fn=fn, state0=np.zeros(ns), layout=layout, n_ref=3 + N,
-                      note=f"MPC real-time iteration (EKF, condensed Gauss-Newton, QP by "
-                      f"{sol.qp_iterations} ADMM iterations, not DAQP) with its fallback law")
+    # re-entry (MPCController.reenter): the EKF from the measurement, the warm start at u
+    sc = np.asarray(ekf.scale, dtype=float)
+    xi0, Pi0 = _ekf_start(m, ekf, sc)
+
+    def graph(s: Any, y: Any, ref: Any, reenter: Any, u_hold: Any) -> tuple[Any, Any]:
+        r, dr, ddr = ref[0], ref[1], ref[2]
+        i = 0
+        xi = s[i:i + nx]
+        i += nx
+        P = ca.reshape(s[i:i + nx * nx], nx, nx)
+        i += nx * nx
+        u_prev = s[i]
+        i += 1
+        U = s[i:i + N]
+        i += N
+        lam = s[i:i + 2 * N]
+        if reenter is not None:
+            xi = ca.if_else(reenter, xi0(y), xi)
+            P = ca.if_else(reenter, Pi0, P)
+            u_prev = ca.if_else(reenter, u_hold, u_prev)
+            U = ca.if_else(reenter, ca.repmat(u_hold, N, 1), U)
+            lam = ca.if_else(reenter, ca.DM.zeros(2 * N), lam)
+        xi_new, P_new, F_hat = _ekf_update(ekf, xi, P, u_prev, y)
+        x_hat = xi_new * ca.DM(ekf.scale)
+        R = ref[3:3 + N]
+        V = (R - ca.vertcat(r, R[:N - 1])) / dt
+        U_s = ca.vertcat(U[1:], U[N - 1])
+        H, g, _cost, _X = sol._lin.fn(x_hat, U_s, u_prev, R, V, ca.DM(sol.p),
+                                      ca.DM(sol.scales))
+        ok_lin = _all_finite(H, g)
+        eye = ca.DM.eye(N)
+        H = H + (sol.reg * ca.fmax(ca.trace(H) / N, 1.0)) * eye
+        D = ca.DM(sol.D)
+        du = pb.du_max * pb.dt
+        diff = ca.mtimes(D, U_s) - ca.vertcat(u_prev, ca.DM.zeros(N - 1))
+        upper = ca.vertcat(pb.u_max - U_s, du - diff)
+        lower = ca.vertcat(-pb.u_max - U_s, -du - diff)
+        A = ca.DM(sol.A)
+        rho = sol.rho_rel * ca.trace(H) / N
+        sigma = 1e-6 * rho
+        Kinv = ca.inv(H + sigma * eye + rho * ca.DM(sol.A.T @ sol.A))
+        x = ca.DM.zeros(N)
+        z = ca.fmin(ca.fmax(ca.DM.zeros(2 * N), lower), upper)
+        for _ in range(sol.qp_iterations):
+            x = ca.mtimes(Kinv, sigma * x - g + ca.mtimes(A.T, rho * z - lam))
+            Ax = ca.mtimes(A, x)
+            z = ca.fmin(ca.fmax(Ax + lam / rho, lower), upper)
+            lam = lam + rho * (Ax - z)
+        ok = ca.logic_and(ok_lin, _all_finite(x, lam))
+        U_new = ca.fmin(ca.fmax(U_s + x, -pb.u_max), pb.u_max)
+        # the fallback law (MPCController._fallback)
+        fg = ctrl.fallback_gains
+        v = x_hat[ctrl.iv]
+        demand = m.mass * ddr + m.weight + fg.kp * (r - y[0]) + fg.kd * (dr - v) + F_hat
+        demand = ca.fmin(ca.fmax(demand, m.force_min), m.force_max)
+        u_fb, _sat = _valve_command(ctrl.valve, demand, y, v)
+        u_fb = ca.fmin(ca.fmax(u_fb, u_prev - pb.du_max * dt), u_prev + pb.du_max * dt)
+        u = ca.if_else(ok, U_new[0], u_fb)
+        U_next = ca.if_else(ok, U_new, ca.repmat(u_fb, N, 1))
+        lam_next = ca.if_else(ok, lam, ca.DM.zeros(2 * N))
+        return u, ca.vertcat(xi_new, ca.reshape(P_new, nx * nx, 1), u, U_next, lam_next)
+
+    return _Law(graph=graph, state0=np.zeros(ns), layout=layout, n_ref=3 + N,
+                note=f"MPC real-time iteration (EKF, condensed Gauss-Newton, QP by "
+                f"{sol.qp_iterations} ADMM iterations, not DAQP) with its fallback law")
 
 
-def step_function(ctrl: Any) -> StepExport:
-    """The step of the Python controller ``ctrl`` (built, not yet reset) as a CasADi function.
+def _ekf_start(m: Any, ekf: Any, sc: np.ndarray) -> tuple[Callable[[Any], Any], Any]:
+    """The EKF's start from a measurement (:meth:`controllers.ekf.FrictionEKF.reset` with
+    :meth:`~controllers.plant_model.ControlModel.estimator_initial`), scaled: ``(xi0(y), P0)``:
+    the model at rest with the measured states set."""
+    nx = ekf.model.nx
+    x0 = np.asarray(m.initial_state(np.zeros(3)), dtype=float)
+    _, P0 = m.estimator_initial(np.zeros(3))
+    sel = np.zeros((nx, 3))
+    keep = np.ones(nx)
+    for row, i in enumerate(ekf.model.measured):
+        sel[i, row] = 1.0 / sc[i]
+        keep[i] = 0.0
+    Pi0 = ca.DM(np.asarray(P0, dtype=float) / np.outer(sc, sc))
+    return (lambda y: ca.DM(keep * x0 / sc) + ca.mtimes(ca.DM(sel), y)), Pi0
 
-    Raises
-    ------
-    FcompError
-        For a controller that is not exported (``mpc`` with DAQP; module docstring).
-    """
+
+def _pid_law(ctrl: Any) -> _Law:
+    """The law of a PID-based controller (module docstring)."""
     from controllers.ekf import EKFController
     from controllers.feedforward import PIDFeedforwardController
     from controllers.lugre_observer import LuGreObserverController
+    from controllers.safety import SYMBOLIC, bumpless_integral, clamp_integral
+
+    m = ctrl.model
+    law = ctrl.law
+    g = ctrl.gains
+    dt = float(ctrl.dt)
+    layout = [("started", 1), ("integral", 1), ("v_f", 1), ("x_prev", 1)]
+    if isinstance(ctrl, LuGreObserverController):
+        nf = m.friction.n_states
+        xh0 = np.asarray(m.friction.initial_state(), dtype=float).ravel()
+        layout += [("observer", nf), ("side", 1)]
+        note = "PID + LuGre observer (Canudas de Wit et al. 1995) + force-to-valve inversion"
+    elif isinstance(ctrl, EKFController):
+        ekf = ctrl.ekf
+        nx = ekf.model.nx
+        sc = np.asarray(ekf.scale, dtype=float)
+        xi0, Pi0 = _ekf_start(m, ekf, sc)
+        layout += [("ekf_x", nx), ("ekf_P", nx * nx), ("u_prev", 1)]
+        note = "PID + EKF friction estimate (filterpy's EKF equations) + force-to-valve inversion"
+    elif isinstance(ctrl, PIDFeedforwardController):
+        note = "PID + static friction feedforward + force-to-valve inversion"
+    else:
+        note = "PID + force-to-valve inversion"
+    state0 = np.zeros(sum(k for _, k in layout))
+    if isinstance(ctrl, LuGreObserverController):
+        state0[4:4 + nf] = xh0
+        state0[4 + nf] = 1.0
+    bounds = ctrl.integral_bounds
+
+    def graph(s: Any, y: Any, ref: Any, reenter: Any, u_hold: Any) -> tuple[Any, Any]:
+        r, dr, ddr = ref[0], ref[1], ref[2]
+        started = s[0] != 0
+        if reenter is not None:  # re-entry resets as the first step does (PIDController.reenter)
+            started = ca.logic_and(started, ca.logic_not(reenter))
+        x = y[0]
+        # reset on the first step (Controller.reset from y0)
+        v_f_prev = ca.if_else(started, s[2], 0.0)
+        x_prev = ca.if_else(started, s[3], x)
+        e = r - x
+        v_f = (law.Tf * v_f_prev + x - x_prev) / (law.Tf + dt)
+        p1g = y[1] - m.p_atm
+        p2g = y[2] - m.p_atm
+        comp_next: list[Any] = []
+        v_inv = v_f
+        if isinstance(ctrl, LuGreObserverController):
+            xh = ca.if_else(started, s[4:4 + nf], ca.DM(xh0))
+            side_prev = ca.if_else(started, s[4 + nf], 1.0)
+            side = ca.if_else(v_f != 0, ca.if_else(v_f > 0, 1.0, -1.0), side_prev)
+            sig = ca.vertcat(v_f, ddr, x, p1g, p2g, side)
+            c = -ctrl.k * (x - r)
+            xh_next, F_hat = ctrl._step(xh, sig, c, dt)
+            comp_next = [xh_next, side]
+        elif isinstance(ctrl, EKFController):
+            xi = ca.if_else(started, s[4:4 + nx], xi0(y))
+            P = ca.if_else(started, ca.reshape(s[4 + nx:4 + nx + nx * nx], nx, nx), Pi0)
+            u_start = 0.0 if reenter is None else ca.if_else(reenter, u_hold, 0.0)
+            u_prev = ca.if_else(started, s[4 + nx + nx * nx], u_start)
+            xi_new, P_new, F_hat = _ekf_update(ekf, xi, P, u_prev, y)
+            v_inv = xi_new[ctrl.iv] * float(sc[ctrl.iv])
+            comp_next = [xi_new, ca.reshape(P_new, nx * nx, 1)]  # u_prev appended below
+        elif isinstance(ctrl, PIDFeedforwardController):
+            F_map = ctrl._map(dr, x, p1g, p2g)
+            F_hat = ca.if_else(dr == 0, 0.0, F_map * ca.fmin(ca.fabs(dr) / ctrl.band, 1.0))
+        else:
+            F_hat = ca.MX(0.0)
+        if reenter is None:
+            integral0: Any = 0.0
+        else:  # bumpless: the demand equals the measured actuator force
+            other = m.mass * ddr + m.weight + (g.kp * e + g.kd * (dr - v_f)) + F_hat
+            F_a = p1g * m.A1 - p2g * m.A2
+            integral0 = ca.if_else(reenter, bumpless_integral(SYMBOLIC, F_a, other, g.ki, bounds),
+                                   0.0)
+        integral = ca.if_else(started, s[1], integral0)
+        demand = (m.mass * ddr + m.weight + (g.kp * e + g.ki * integral + g.kd * (dr - v_f))
+                  + F_hat)
+        applied = ca.fmin(ca.fmax(demand, m.force_min), m.force_max)
+        u, sat = _valve_command(ctrl.valve, applied, y, v_inv)
+        if g.ki == 0:
+            integral_next = integral
+        else:
+            integral_next = ca.if_else(sat * e > 0, integral,
+                                       integral + dt * (e + g.kt * (applied - demand) / g.ki))
+        integral_next = clamp_integral(SYMBOLIC, integral_next, bounds)
+        if isinstance(ctrl, EKFController):
+            comp_next.append(u)
+        return u, ca.vertcat(1.0, integral_next, v_f, x, *comp_next)
+
+    return _Law(graph=graph, state0=state0, layout=layout, note=note)
+
+
+def _law(ctrl: Any) -> _Law:
+    """The law of the Python controller ``ctrl`` (behind its fail-safe layer or not)."""
     from controllers.mpc import MPCController
     from controllers.mpc_fixed import FixedIterationMPC
     from controllers.pid import PIDController
+    from controllers.safety import unwrap
 
+    ctrl = unwrap(ctrl)
     name = getattr(ctrl, "name", type(ctrl).__name__)
     if isinstance(ctrl, FixedIterationMPC):
-        return _mpc_step(ctrl)
+        return _mpc_law(ctrl)
     if isinstance(ctrl, MPCController):
         raise FcompError("export: this mpc solves its QP with DAQP, an active-set solver CasADi "
                          "cannot generate as C; export controllers.mpc_fixed.FixedIterationMPC "
@@ -200,90 +330,62 @@ def step_function(ctrl: Any) -> StepExport:
     if not isinstance(ctrl, PIDController) or name not in EXPORTABLE:
         raise FcompError(f"export: controller {name} is not exported (exported: "
                          f"{', '.join(EXPORTABLE)})")
-    m = ctrl.model
-    law = ctrl.law
-    g = ctrl.gains
-    dt = float(ctrl.dt)
-    if isinstance(ctrl, LuGreObserverController):
-        nc = m.friction.n_states + 1
-    elif isinstance(ctrl, EKFController):
-        nx = ctrl.ekf.model.nx
-        nc = nx + nx * nx + 1
-    else:
-        nc = 0
-    ns = 4 + nc
-    s = ca.MX.sym("state", ns)
+    return _pid_law(ctrl)
+
+
+def step_function(ctrl: Any) -> StepExport:
+    """The step of the Python controller ``ctrl`` (built, not yet reset) as a CasADi function:
+    the controller's law alone, without the fail-safe layer (a controller behind the layer
+    is unwrapped: :func:`controllers.safety.unwrap`).
+
+    Raises
+    ------
+    FcompError
+        For a controller that is not exported (``mpc`` with DAQP; module docstring).
+    """
+    law = _law(ctrl)
+    s = ca.MX.sym("state", law.n_state)
     y = ca.MX.sym("y", 3)
-    ref = ca.MX.sym("ref", 3)
-    r, dr, ddr = ref[0], ref[1], ref[2]
-    started = s[0] != 0
-    x = y[0]
-    # reset on the first step (Controller.reset from y0)
-    integral = ca.if_else(started, s[1], 0.0)
-    v_f_prev = ca.if_else(started, s[2], 0.0)
-    x_prev = ca.if_else(started, s[3], x)
-    e = r - x
-    v_f = (law.Tf * v_f_prev + x - x_prev) / (law.Tf + dt)
-    p1g = y[1] - m.p_atm
-    p2g = y[2] - m.p_atm
-    comp_next: list[Any] = []
-    v_inv = v_f
-    layout = [("started", 1), ("integral", 1), ("v_f", 1), ("x_prev", 1)]
-    state0 = np.zeros(ns)
-    if isinstance(ctrl, LuGreObserverController):
-        nf = m.friction.n_states
-        xh0 = np.asarray(m.friction.initial_state(), dtype=float).ravel()
-        xh = ca.if_else(started, s[4:4 + nf], ca.DM(xh0))
-        side_prev = ca.if_else(started, s[4 + nf], 1.0)
-        side = ca.if_else(v_f != 0, ca.if_else(v_f > 0, 1.0, -1.0), side_prev)
-        sig = ca.vertcat(v_f, ddr, x, p1g, p2g, side)
-        c = -ctrl.k * (x - r)
-        xh_next, F_hat = ctrl._step(xh, sig, c, dt)
-        comp_next = [xh_next, side]
-        layout += [("observer", nf), ("side", 1)]
-        state0[4:4 + nf] = xh0
-        state0[4 + nf] = 1.0
-        note = "PID + LuGre observer (Canudas de Wit et al. 1995) + force-to-valve inversion"
-    elif isinstance(ctrl, EKFController):
-        ekf = ctrl.ekf
-        sc = np.asarray(ekf.scale, dtype=float)
-        meas = list(ekf.model.measured)
-        # EKF.reset: x0 = the model at rest with the measured states set, P0 (model units)
-        x0 = np.asarray(m.initial_state(np.zeros(3)), dtype=float)
-        _, P0 = m.estimator_initial(np.zeros(3))
-        sel = np.zeros((nx, 3))
-        keep = np.ones(nx)
-        for row, i in enumerate(meas):
-            sel[i, row] = 1.0 / sc[i]
-            keep[i] = 0.0
-        xi0 = ca.DM(keep * x0 / sc) + ca.mtimes(ca.DM(sel), y)
-        Pi0 = ca.DM(np.asarray(P0, dtype=float) / np.outer(sc, sc))
-        xi = ca.if_else(started, s[4:4 + nx], xi0)
-        P = ca.if_else(started, ca.reshape(s[4 + nx:4 + nx + nx * nx], nx, nx), Pi0)
-        u_prev = ca.if_else(started, s[4 + nx + nx * nx], 0.0)
-        xi_new, P_new, F_hat = _ekf_update(ekf, xi, P, u_prev, y)
-        v_inv = xi_new[ctrl.iv] * float(sc[ctrl.iv])
-        comp_next = [xi_new, ca.reshape(P_new, nx * nx, 1)]  # u_prev appended below
-        layout += [("ekf_x", nx), ("ekf_P", nx * nx), ("u_prev", 1)]
-        note = "PID + EKF friction estimate (filterpy's EKF equations) + force-to-valve inversion"
-    elif isinstance(ctrl, PIDFeedforwardController):
-        F_map = ctrl._map(dr, x, p1g, p2g)
-        F_hat = ca.if_else(dr == 0, 0.0, F_map * ca.fmin(ca.fabs(dr) / ctrl.band, 1.0))
-        note = "PID + static friction feedforward + force-to-valve inversion"
-    else:
-        F_hat = ca.MX(0.0)
-        note = "PID + force-to-valve inversion"
-    demand = m.mass * ddr + m.weight + (g.kp * e + g.ki * integral + g.kd * (dr - v_f)) + F_hat
-    applied = ca.fmin(ca.fmax(demand, m.force_min), m.force_max)
-    u, sat = _valve_command(ctrl.valve, applied, y, v_inv)
-    if g.ki == 0:
-        integral_next = integral
-    else:
-        integral_next = ca.if_else(sat * e > 0, integral,
-                                   integral + dt * (e + g.kt * (applied - demand) / g.ki))
-    if isinstance(ctrl, EKFController):
-        comp_next.append(u)
-    s_next = ca.vertcat(1.0, integral_next, v_f, x, *comp_next)
+    ref = ca.MX.sym("ref", law.n_ref)
+    u, s_next = law.graph(s, y, ref, None, None)
     fn = ca.Function(CASADI_NAME, [s, y, ref], [u, s_next], ["state", "y", "ref"],
                      ["u", "state_next"])
-    return StepExport(fn=fn, state0=state0, layout=layout, note=note)
+    return StepExport(fn=fn, state0=law.state0, layout=law.layout, note=law.note,
+                      n_ref=law.n_ref)
+
+
+def guarded_step_function(ctrl: Any) -> StepExport:
+    """The step of ``ctrl`` behind the fail-safe layer (:mod:`controllers.safety`, its rules
+    generated from the same functions the Python layer runs) as a CasADi function: the law's
+    state, then the layer's (:data:`controllers.safety.LAYOUT`).
+
+    The law steps on the held and clipped inputs; while the layer does not run it (latched,
+    not started) its state is kept; its ``u_prev`` block (EKF, MPC) takes the command the
+    layer gave, as :meth:`controllers.base.Controller.applied` does in Python.
+    """
+    from controllers.safety import LAYOUT, N_STATE, SYMBOLIC, FailSafe, Limits, U, admit, settle
+    from controllers.safety import initial_state as fs_initial
+
+    law = _law(ctrl)
+    lim = ctrl.limits if isinstance(ctrl, FailSafe) else Limits.of(ctrl.model, ctrl.dt)
+    nl = law.n_state
+    s = ca.MX.sym("state", nl + N_STATE)
+    y = ca.MX.sym("y", 3)
+    ref = ca.MX.sym("ref", law.n_ref)
+    s_law = s[:nl]
+    fs = [s[nl + k] for k in range(N_STATE)]
+    y_used, ref_used, mid, run, _start, reenter = admit(
+        SYMBOLIC, lim, fs, [y[k] for k in range(3)], [ref[k] for k in range(law.n_ref)])
+    u_law, s_law_next = law.graph(s_law, ca.vertcat(*y_used), ca.vertcat(*ref_used), reenter,
+                                  mid[U])
+    u, fs_next = settle(SYMBOLIC, lim, mid, run, u_law)
+    names = [n for n, _ in law.layout]
+    if "u_prev" in names:  # Controller.applied: the estimator predicts with the given command
+        i = sum(k for n, k in law.layout[:names.index("u_prev")])
+        s_law_next = ca.vertcat(s_law_next[:i], u, s_law_next[i + 1:])
+    s_next = ca.vertcat(ca.if_else(run, s_law_next, s_law), *fs_next)
+    fn = ca.Function(CASADI_NAME, [s, y, ref], [u, s_next], ["state", "y", "ref"],
+                     ["u", "state_next"])
+    return StepExport(fn=fn, state0=np.concatenate([law.state0, fs_initial()]),
+                      layout=law.layout + LAYOUT, n_ref=law.n_ref,
+                      note=law.note + ", behind the fail-safe layer")

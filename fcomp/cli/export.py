@@ -53,7 +53,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--duration", type=finite_float, default=0.6,
                    help="length of the closed-loop check, s (default 0.6)")
     p.add_argument("--timing-steps", type=int, default=100_000, metavar="N",
-                   help="compiled steps timed (default and least 100000)")
+                   help="compiled steps timed, 100000 (the default) to 5000000")
     p.add_argument("--option", action="append", default=[], metavar="NAME=VALUE",
                    help="a controller option (observer_gain=30, bandwidth=50, ...); repeatable")
     add_model_options(p)

@@ -24,6 +24,8 @@ and may refine (the defaults serve most controllers):
     resume after the fail-safe layer (:mod:`controllers.safety`) held the valve at
     ``u``: re-seed the states from the measurement ``y`` without a bump (default:
     :meth:`reset`, then :meth:`applied`);
+:meth:`Controller.healthy` ``()``
+    whether its states are all finite (default True; the layer re-seeds it otherwise);
 :meth:`Controller.applied` ``(u)``
     the command the valve was actually given after this step (the layer's range and
     rate limits; default: nothing to do -- a controller whose estimator predicts
@@ -108,6 +110,11 @@ class Controller(ABC):
         :meth:`reset` from ``y``, told the held command."""
         self.reset(t, y, ref)
         self.applied(u)
+
+    def healthy(self) -> bool:
+        """Whether the controller's states are all finite (the fail-safe layer re-seeds it
+        otherwise); True by default (no states to check)."""
+        return True
 
     def applied(self, u: float) -> None:
         """The command ``u`` the valve was given after the last step (after the fail-safe

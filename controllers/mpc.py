@@ -294,6 +294,11 @@ class MPCController(Controller):
         """The EKF and the rate limits take the command the valve was given."""
         self._u_prev = u
 
+    def healthy(self) -> bool:
+        kf, sol = self.ekf.kf, self.solver
+        parts = [kf.x, kf.P, sol.U, [self._u_prev]] + ([] if sol._lam is None else [sol._lam])
+        return all(bool(np.all(np.isfinite(p))) for p in parts)
+
     def _horizon_reference(self, ref: Reference) -> tuple[np.ndarray, np.ndarray]:
         N = self.problem.horizon
         fut = np.asarray(ref.future, dtype=float)

@@ -298,6 +298,10 @@ class PIDController(Controller):
         self.fallback_active = False
         self.reset_compensation(y0, ref)
 
+    def healthy(self) -> bool:
+        law = self.law
+        return all(math.isfinite(v) for v in (law.integral, law.v_f, law.x_prev))
+
     def reenter(self, t: float, y: np.ndarray, ref: Reference, u: float) -> None:
         """Reset from ``y``; the next step sets the integral so that the force demand equals
         the measured actuator force (bumpless: :func:`controllers.safety.bumpless_integral`)."""

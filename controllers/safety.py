@@ -78,7 +78,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, NamedTuple
 
 import casadi as ca
 import numpy as np
@@ -230,8 +230,38 @@ def _clip(ops: Ops, a: Any, lo: float, hi: float) -> Any:
     return ops.fmin(ops.fmax(a, lo), hi)
 
 
-def admit(ops: Ops, lim: Limits, fs: Sequence[Any], y: Sequence[Any], ref: Sequence[Any]
-          ) -> tuple[list[Any], list[Any], list[Any], Any, Any, Any]:
+class Admitted(NamedTuple):
+    """What :func:`admit` decides for one sample.
+
+    Attributes
+    ----------
+    y, ref
+        What the controller steps on (held and clipped): ``[x, p1, p2]``,
+        ``[r, dr, ddr, *future]``.
+    mid
+        The layer's state after the validation (the command not yet updated).
+    run
+        Whether the controller steps this sample.
+    start
+        Whether this is its first good sample (a start).
+    reenter
+        Whether it re-enters (after a latch, a fault of its own, or its states gone
+        non-finite) before stepping.
+    counted
+        Whether this sample counted a fault already.
+    """
+
+    y: list[Any]
+    ref: list[Any]
+    mid: list[Any]
+    run: Any
+    start: Any
+    reenter: Any
+    counted: Any
+
+
+def admit(ops: Ops, lim: Limits, fs: Sequence[Any], y: Sequence[Any], ref: Sequence[Any],
+          healthy: Any = True) -> Admitted:
     """Rules 1-4 before the controller's step (module docstring).
 
     Parameters
@@ -246,16 +276,13 @@ def admit(ops: Ops, lim: Limits, fs: Sequence[Any], y: Sequence[Any], ref: Seque
         The measurement ``[x, p1, p2]``.
     ref
         ``[r, dr, ddr, *future]``.
+    healthy
+        Whether the controller's own states are all finite (else it re-enters now, a
+        fault of cause ``controller``).
 
     Returns
     -------
-    y_used, ref_used
-        What the controller steps on (held and clipped).
-    mid
-        The layer's state after the validation (the command not yet updated).
-    run, start, reenter
-        Whether the controller steps; whether this is its first good sample; whether it
-        re-enters (after a latch or a fault of its own) before stepping.
+    Admitted
     """
     x_ok = ops.and_(y[0] >= lim.x_lo, y[0] <= lim.x_hi)
     p1_ok = ops.and_(y[1] >= lim.p_lo, y[1] <= lim.p_hi)
@@ -281,25 +308,31 @@ def admit(ops: Ops, lim: Limits, fs: Sequence[Any], y: Sequence[Any], ref: Seque
     good = ops.if_else(fault, 0.0, fs[GOOD] + 1.0)
     latched = ops.if_else(was_latched, good < lim.n_recover, consec >= lim.n_latch)
     run = ops.and_(seen, ops.not_(latched))
-    reenter = ops.and_(run, ops.or_(was_latched, fs[PENDING] > 0.5))
+    broken = ops.and_(run, ops.not_(healthy))
+    reenter = ops.and_(run, ops.or_(ops.or_(was_latched, fs[PENDING] > 0.5), broken))
     start = ops.and_(run, ops.not_(was_seen))
+    any_fault = ops.or_(fault, broken)
     mid = [_flag(ops, seen), _flag(ops, latched), consec, good,
-           fs[FAULTS] + ops.if_else(fault, 1.0, 0.0), ops.if_else(fault, bad, fs[CAUSE]),
+           fs[FAULTS] + ops.if_else(any_fault, 1.0, 0.0),
+           ops.if_else(any_fault, bad + ops.if_else(broken, 16.0, 0.0), fs[CAUSE]),
            fs[U], fs[PENDING], *y_used, ref_used[0]]
-    return y_used, ref_used, mid, run, start, reenter
+    return Admitted(y_used, ref_used, mid, run, start, reenter, any_fault)
 
 
-def settle(ops: Ops, lim: Limits, mid: Sequence[Any], run: Any, u_in: Any
+def settle(ops: Ops, lim: Limits, mid: Sequence[Any], run: Any, u_in: Any, counted: Any
            ) -> tuple[Any, list[Any]]:
     """Rules 3-5 after the controller's step (module docstring): ``(u, state_next)``.
 
-    ``u_in`` is the controller's command (ignored unless ``run``); a non-finite one is a
-    fault of cause ``controller``.
+    ``mid``, ``run`` and ``counted`` are :func:`admit`'s (the state after the validation,
+    whether the controller stepped, whether this sample counted a fault already); ``u_in``
+    is the controller's command (ignored unless ``run``): a non-finite one is a fault of
+    cause ``controller``.
     """
     ok = ops.finite(u_in)
     used = ops.and_(run, ok)
     broke = ops.and_(run, ops.not_(ok))
-    consec = ops.if_else(broke, mid[CONSEC] + 1.0, mid[CONSEC])
+    new = ops.and_(broke, ops.not_(counted))  # a faulty sample counts once
+    consec = ops.if_else(new, mid[CONSEC] + 1.0, mid[CONSEC])
     latched = ops.or_(mid[LATCHED] > 0.5, consec >= lim.n_latch)
     u_prev = mid[U]
     safe = u_prev if lim.hold else lim.safe_value
@@ -310,8 +343,9 @@ def settle(ops: Ops, lim: Limits, mid: Sequence[Any], run: Any, u_in: Any
     nxt[LATCHED] = _flag(ops, latched)
     nxt[CONSEC] = consec
     nxt[GOOD] = ops.if_else(broke, 0.0, mid[GOOD])
-    nxt[FAULTS] = mid[FAULTS] + ops.if_else(broke, 1.0, 0.0)
-    nxt[CAUSE] = ops.if_else(broke, 16.0, mid[CAUSE])
+    nxt[FAULTS] = mid[FAULTS] + ops.if_else(new, 1.0, 0.0)
+    with_bit = ops.if_else(mid[CAUSE] >= 16.0, mid[CAUSE], mid[CAUSE] + 16.0)
+    nxt[CAUSE] = ops.if_else(broke, ops.if_else(counted, with_bit, 16.0), mid[CAUSE])
     nxt[U] = u
     nxt[PENDING] = ops.if_else(run, ops.if_else(ok, 0.0, 1.0), mid[PENDING])
     return u, nxt
@@ -466,38 +500,38 @@ class FailSafe(Controller):
         at the first good one: rule 3)."""
         self._fs = initial_state()
         yv = [float(v) for v in np.asarray(y0, dtype=float).ravel()[:3]]
-        y_used, r_used, mid, run, _start, _re = admit(SCALAR, self.limits, self._fs, yv,
-                                                      self._reference(ref))
-        self._started = bool(run)
-        if run:
-            self.inner.reset(t0, np.asarray(y0, dtype=float), _as_reference(r_used))
+        a = admit(SCALAR, self.limits, self._fs, yv, self._reference(ref))
+        self._started = bool(a.run)
+        if a.run:
+            self.inner.reset(t0, np.asarray(y0, dtype=float), _as_reference(a.ref))
             self._fs[SEEN] = 1.0
-            self._fs[Y_HOLD:Y_HOLD + 3] = y_used
-            self._fs[R_HOLD] = r_used[0]
+            self._fs[Y_HOLD:Y_HOLD + 3] = a.y
+            self._fs[R_HOLD] = a.ref[0]
 
     def step(self, t: float, y: np.ndarray, ref: Reference) -> float:
         """One sample through the layer (module docstring): never NaN, within ``+-u_max``,
         rate-limited."""
         lim = self.limits
+        inner = self.inner
         yv = [float(y[0]), float(y[1]), float(y[2])]
-        y_used, r_used, mid, run, start, reenter = admit(SCALAR, lim, self._fs, yv,
-                                                         self._reference(ref))
+        a = admit(SCALAR, lim, self._fs, yv, self._reference(ref),
+                  not self._started or inner.healthy())
         u_in = math.nan
-        if run:
-            ya = np.array(y_used)
-            rf = _as_reference(r_used)
-            if reenter:
-                self.inner.reenter(t, ya, rf, mid[U])
-            elif start:
-                self.inner.reset(t, ya, rf)
+        if a.run:
+            ya = np.array(a.y)
+            rf = _as_reference(a.ref)
+            if a.reenter:
+                inner.reenter(t, ya, rf, a.mid[U])
+            elif a.start:
+                inner.reset(t, ya, rf)
             self._started = True
             try:
-                u_in = float(self.inner.step(t, ya, rf))
+                u_in = float(inner.step(t, ya, rf))
             except NUMERIC_ERRORS:
                 u_in = math.nan
-        u, self._fs = settle(SCALAR, lim, mid, run, u_in)
-        if run:
-            self.inner.applied(u)
+        u, self._fs = settle(SCALAR, lim, a.mid, a.run, u_in, a.counted)
+        if a.run:
+            inner.applied(u)
         return u
 
     def describe(self) -> str:
@@ -514,6 +548,6 @@ def unwrap(ctrl: Any) -> Any:
 
 
 __all__ = ["CAUSES", "FAULT_LATCH", "FAULT_RECOVER", "LAYOUT", "N_STATE", "SAFE_OUTPUTS",
-           "SCALAR", "SYMBOLIC", "FailSafe", "FaultState", "Limits", "Ops", "admit",
+           "SCALAR", "SYMBOLIC", "Admitted", "FailSafe", "FaultState", "Limits", "Ops", "admit",
            "bumpless_integral", "cause_names", "clamp_integral", "initial_state",
            "integral_bounds", "safe_command", "settle", "unwrap"]

@@ -157,6 +157,10 @@ def _write_lab(lab: Path) -> None:
         "exp_key.csv": good, "exp_key.toml": "experiment = 1.5\n[rig]\nmass = 1.0\n",
         "top_mass.csv": good, "top_mass.toml": "mass = 1.0\n",
         "huge_fit.json": '{"model": "coulomb-viscous", "params": {"Fc": 1.0, "B": 1e308}}\n',
+        "lugre_1e308.json": json.dumps({"format": "fcomp-model", "version": 1, "model": "lugre",
+                                        "params": {"Fc": 1e308, "Fs": 1e308, "vs": 0.008,
+                                                   "n": 1.0, "sigma2": 900.0, "sigma0": 2e6,
+                                                   "sigma1": 300.0}}),
         "patm_bar.csv": good, "patm_bar.toml": "p_atm = 1.013\n",
         "typo.csv": good, "typo.toml": "[rig]\nmas = 2.0\n",
         "absneg.csv": "t,x,p1\n0,0,-1000\n1,0.01,200000\n",
@@ -267,6 +271,10 @@ class Case:
     env: dict[str, str] = field(default_factory=dict)
 
 
+#: What ``fcomp export ... -o c --json c.json`` writes (files before their folder).
+EXPORT_FILES = ("c.json", "c/.fcomp-output", "c/fcomp_ctrl.h", "c/fcomp_ctrl.c",
+                "c/fcomp_ctrl_bench.c", "c/example.c", "c/Makefile", "c/fcomp_ctrl_casadi.c",
+                "c/fcomp_ctrl_casadi.h")
 SIM = "simulate motion --friction coulomb --input sine:amplitude=0.01,frequency=1 " \
       "--duration 0.2 --rate 100"
 SIM_NO_INPUT = "simulate motion --friction coulomb --duration 0.2 --rate 100"
@@ -739,6 +747,22 @@ CASES: dict[str, Case] = {
         env={"FCOMP_CACHE": "good.csv"}),
     "warn-import-repeated-times": Case("import zillen z_repeat.csv -o w.csv", code=0,
                                        outputs=("w.csv", "w.toml"), warnings=("rows-dropped",)),
+    # ---- export (issue 42, items 6, 8, 10, 16) ----
+    "export-onto-a-foreign-folder": Case("export pid -o mine", match="holds files fcomp did "
+                                         "not write"),
+    "export-compiler-without-output": Case(
+        "export pid --duration 0.05 -o c --json c.json", code=0, outputs=(*EXPORT_FILES, "c"),
+        warnings=("export",), env={"FCOMP_CC": "true"}),
+    "export-timing-steps-huge": Case("export pid -o c --timing-steps 1000000000000",
+                                     match="--timing-steps 1000000000000: time 100000 to"),
+    "export-friction-1e308": Case("export pid --friction lugre_1e308.json -o c",
+                                  match="gives -1e+308 N at -0.1 m/s, beyond the actuator's"),
+    "export-friction-beyond-the-force-range": Case(
+        "export pid --friction lugre --set Fc=2e4 --set Fs=2e4 -o c",
+        match="beyond the actuator's whole force range"),
+    "export-mpc-rate-said": Case("export mpc --plant pneumatic --option horizon=3 --option "
+                                 "qp_iterations=3 --duration 0.05 -o c --json c.json", code=0,
+                                 outputs=(*EXPORT_FILES, "c"), warnings=("export",)),
 }
 
 

@@ -302,19 +302,35 @@ def test_a_bad_first_sample_waits_for_a_good_one(model: ControlModel) -> None:
     assert ctrl.started
 
 
-def test_a_controller_fault_holds_the_command_and_reseeds(model: ControlModel) -> None:
-    """The law's own state gone non-finite (here the integral set to NaN): a fault of cause
-    controller, the last command held, and the next good sample re-enters from the
-    measurement (the integral finite again)."""
+def test_a_controller_fault_reseeds_it(model: ControlModel,
+                                       monkeypatch: pytest.MonkeyPatch) -> None:
+    """The law's own state gone non-finite (the integral set to NaN): a fault of cause
+    controller, and the controller re-enters at once from the measurement. A step that
+    raises FloatingPointError (as the EKF's prediction does): the last command held, and
+    re-entry at the next sample."""
     ctrl = make_controller("pid", model)
     Y, REF = _record(model, 30, ctrl.dt, 0, seed=8)
     ctrl.reset(0.0, Y[0], _ref(REF[0]))
     u = [ctrl.step(k * ctrl.dt, Y[k], _ref(REF[k])) for k in range(10)]
-    unwrap(ctrl).law.integral = math.nan
-    assert ctrl.step(10 * ctrl.dt, Y[10], _ref(REF[10])) == u[-1]
+    inner = unwrap(ctrl)
+    inner.law.integral = math.nan
+    assert math.isfinite(ctrl.step(10 * ctrl.dt, Y[10], _ref(REF[10])))
     assert ctrl.last_fault == "controller" and ctrl.faults == 1
-    assert math.isfinite(ctrl.step(11 * ctrl.dt, Y[11], _ref(REF[11])))
-    assert math.isfinite(unwrap(ctrl).law.integral) and ctrl.consecutive_faults == 0
+    assert math.isfinite(inner.law.integral) and ctrl.consecutive_faults == 0
+    u11 = ctrl.step(11 * ctrl.dt, Y[11], _ref(REF[11]))
+
+    def broken(*args: object) -> float:
+        raise FloatingPointError("prediction is not finite")
+
+    monkeypatch.setattr(inner, "step", broken)
+    assert ctrl.step(12 * ctrl.dt, Y[12], _ref(REF[12])) == u11
+    assert ctrl.faults == 2 and ctrl.consecutive_faults == 1
+    monkeypatch.undo()
+    calls: list[float] = []
+    monkeypatch.setattr(inner, "reenter", lambda t, y, r, uh: calls.append(uh))
+    ctrl.step(13 * ctrl.dt, Y[13], _ref(REF[13]))
+    assert calls == [u11] and ctrl.consecutive_faults == 0 and not ctrl.latched
+    assert len(u) == 10
 
 
 @pytest.mark.parametrize(("spec", "expect"), [("hold", None), (0.004, 0.004), (-0.002, -0.002)])

@@ -9,7 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from controllers import CONTROLLERS
-from controllers.export import EXPORTABLE, export_controller
+from controllers.export import EXPORTABLE, MAX_TIMING_STEPS, export_controller
 from controllers.plant_model import ControlModel
 from controllers.tasks import TASKS
 from fcomp.cli import common
@@ -89,6 +89,9 @@ def run(args: argparse.Namespace) -> int:
         raise FcompError(f"export: controller {args.controller} is not exported (exported: "
                          f"{', '.join(EXPORTABLE)})")
     TASKS.get(args.task)
+    if not 100_000 <= args.timing_steps <= MAX_TIMING_STEPS:
+        raise FcompError(f"--timing-steps {args.timing_steps}: time 100000 to "
+                         f"{MAX_TIMING_STEPS} steps (two times of each are kept in memory)")
     out = json_target(args.json)
     if not args.output.strip():
         raise FcompError("-o: no folder name given (an empty argument)")

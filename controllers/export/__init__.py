@@ -80,6 +80,7 @@ from controllers.export.check import (
     HOSTILE_EVENTS,
     RTOL,
     CheckResult,
+    block_deviations,
     block_difference,
     check_equivalence,
     hostile_script,
@@ -104,6 +105,6 @@ from controllers.export.step import (
 
 __all__ = ["CASADI_INT", "CASADI_NAME", "CFLAGS", "EXPORTABLE", "HOSTILE_EVENTS",
            "MAX_TIMING_STEPS", "RTOL", "CheckResult", "CompiledController", "ExportResult",
-           "StepExport", "block_difference", "check_equivalence", "check_friction",
+           "StepExport", "block_deviations", "block_difference", "check_equivalence", "check_friction",
            "export_controller", "find_compiler", "guarded_step_function", "hostile_script",
            "python_state", "relative_difference", "step_function", "write_c"]

@@ -68,7 +68,8 @@ class CheckResult:
         the plant).
     state_rel_diff
         Per sample, the largest difference of the compiled step's next state from the
-        Python controller's, relative per block (:func:`block_difference`).
+        Python controller's, relative per block to the block's largest value over the run
+        (:func:`block_difference`).
     Y, REF
         Measurements and references of the run (for the timing loop).
     u_max
@@ -150,21 +151,34 @@ def relative_difference(u_c: np.ndarray, u_py: np.ndarray, u_max: float) -> np.n
     return np.abs(u_c - u_py) / np.maximum(np.abs(u_py), 1e-6 * u_max)
 
 
-def block_difference(s_c: np.ndarray, s_py: np.ndarray, layout: list[tuple[str, int]]) -> float:
-    """Largest over the state's blocks of ``max|s_c - s_py| / max(max|s_py|, 1e-300)``
-    (entries equal or both NaN count as equal; one NaN against a number is ``inf``)."""
-    worst = 0.0
+def block_deviations(s_c: np.ndarray, s_py: np.ndarray, layout: list[tuple[str, int]]
+                     ) -> tuple[np.ndarray, np.ndarray]:
+    """Per block of the state: ``(max|s_c - s_py|, max|s_py|)`` (entries equal or both NaN
+    count as equal; one NaN against a number is ``inf``; non-finite values are left out of
+    the scale)."""
+    diffs, scales = np.zeros(len(layout)), np.zeros(len(layout))
     i = 0
-    for _name, k in layout:
+    for j, (_name, k) in enumerate(layout):
         a, b = s_c[i:i + k], s_py[i:i + k]
         same = (a == b) | (np.isnan(a) & np.isnan(b))
         if not np.all(same):
             diff = np.abs(a - b)[~same]
-            d = float(np.max(np.where(np.isnan(diff), np.inf, diff)))
-            scale = np.abs(b[np.isfinite(b)])
-            worst = max(worst, d / max(float(scale.max()) if scale.size else 0.0, 1e-300))
+            diffs[j] = float(np.max(np.where(np.isnan(diff), np.inf, diff)))
+        fin = np.abs(b[np.isfinite(b)])
+        scales[j] = float(fin.max()) if fin.size else 0.0
         i += k
-    return worst
+    return diffs, scales
+
+
+def block_difference(s_c: np.ndarray, s_py: np.ndarray, layout: list[tuple[str, int]],
+                     scales: np.ndarray | None = None) -> float:
+    """Largest over the state's blocks of ``max|s_c - s_py| / max(scale, 1e-300)``, the scale
+    each block's ``max|s_py|`` here, or ``scales`` (e.g. the block's largest value over a
+    run: a block of multipliers at rounding level, all near zero, is not judged against
+    itself)."""
+    diffs, here = block_deviations(s_c, s_py, layout)
+    ref = here if scales is None else scales
+    return float(np.max(diffs / np.maximum(ref, 1e-300), initial=0.0))
 
 
 #: What :func:`hostile_script` does to a run, in order (module docstring of
@@ -274,7 +288,7 @@ def check_equivalence(ctrl: Any, compiled: CompiledController, plant: Any, *,
     names = plant.state_names
     meas = [names.index(k) for k in ("x", "p1", "p2")]
     state = stepper.reset()
-    u_py, u_step, u_free, s_diff = (np.zeros(n + 1) for _ in range(4))
+    u_py, u_step, u_free = (np.zeros(n + 1) for _ in range(3))
     Y = np.zeros((n + 1, 3))
     preview = int(getattr(ctrl, "preview", 0))
     r_pad = np.concatenate([r, np.full(preview, r[-1])])
@@ -283,6 +297,7 @@ def check_equivalence(ctrl: Any, compiled: CompiledController, plant: Any, *,
     compiled.init()
     compiled.init(synced)
     lay = layout or [("state", compiled.n_state)]
+    dev, scale = np.zeros((n + 1, len(lay))), np.zeros((n + 1, len(lay)))
     u_max = model.u_max
     guarded = isinstance(ctrl, FailSafe)
     fs_py, fs_c = (np.zeros((n + 1, N_STATE)) if guarded else None for _ in range(2))
@@ -301,7 +316,7 @@ def check_equivalence(ctrl: Any, compiled: CompiledController, plant: Any, *,
         compiled.set_state(python_state(ctrl), synced)
         u_step[k] = compiled.step(y, REF[k], synced)
         u_py[k] = ctrl.step(float(t[k]), y, ref)
-        s_diff[k] = block_difference(compiled.state(synced), python_state(ctrl), lay)
+        dev[k], scale[k] = block_deviations(compiled.state(synced), python_state(ctrl), lay)
         u_free[k] = compiled.step(y, REF[k])
         if fs_py is not None and fs_c is not None:
             fs_py[k] = ctrl.state
@@ -311,6 +326,7 @@ def check_equivalence(ctrl: Any, compiled: CompiledController, plant: Any, *,
                              f"t = {t[k]:.4f} s")
         if k < n:
             state = stepper.step(min(max(u_free[k], -u_max), u_max))
+    s_diff = np.max(dev / np.maximum(scale.max(axis=0), 1e-300), axis=1)
     return CheckResult(u_python=u_py, u_step=u_step, u_free=u_free, state_rel_diff=s_diff,
                        Y=Y, REF=REF, u_max=u_max, fault_python=fs_py, fault_free=fs_c,
                        du=model.du_max * dt)

@@ -374,16 +374,16 @@ def guarded_step_function(ctrl: Any) -> StepExport:
     ref = ca.MX.sym("ref", law.n_ref)
     s_law = s[:nl]
     fs = [s[nl + k] for k in range(N_STATE)]
-    y_used, ref_used, mid, run, _start, reenter = admit(
-        SYMBOLIC, lim, fs, [y[k] for k in range(3)], [ref[k] for k in range(law.n_ref)])
-    u_law, s_law_next = law.graph(s_law, ca.vertcat(*y_used), ca.vertcat(*ref_used), reenter,
-                                  mid[U])
-    u, fs_next = settle(SYMBOLIC, lim, mid, run, u_law)
+    a = admit(SYMBOLIC, lim, fs, [y[k] for k in range(3)], [ref[k] for k in range(law.n_ref)],
+              _all_finite(s_law))
+    u_law, s_law_next = law.graph(s_law, ca.vertcat(*a.y), ca.vertcat(*a.ref), a.reenter,
+                                  a.mid[U])
+    u, fs_next = settle(SYMBOLIC, lim, a.mid, a.run, u_law, a.counted)
     names = [n for n, _ in law.layout]
     if "u_prev" in names:  # Controller.applied: the estimator predicts with the given command
         i = sum(k for n, k in law.layout[:names.index("u_prev")])
         s_law_next = ca.vertcat(s_law_next[:i], u, s_law_next[i + 1:])
-    s_next = ca.vertcat(ca.if_else(run, s_law_next, s_law), *fs_next)
+    s_next = ca.vertcat(ca.if_else(a.run, s_law_next, s_law), *fs_next)
     fn = ca.Function(CASADI_NAME, [s, y, ref], [u, s_next], ["state", "y", "ref"],
                      ["u", "state_next"])
     return StepExport(fn=fn, state0=np.concatenate([law.state0, fs_initial()]),

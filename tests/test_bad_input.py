@@ -1200,6 +1200,94 @@ def test_a_signal_stops_a_long_command_at_once(tmp_path: Path, label: str, args:
     assert snapshot(tmp_path) == before
 
 
+def _descendants(root: int) -> dict[int, str]:
+    """The living descendants of process ``root``: pid -> command line (from /proc)."""
+    parent: dict[int, int] = {}
+    for entry in os.listdir("/proc"):
+        if not entry.isdigit():
+            continue
+        try:
+            stat = (Path("/proc") / entry / "stat").read_bytes()
+        except OSError:
+            continue
+        fields = stat[stat.rfind(b")") + 2:].split()
+        if fields[0] != b"Z":
+            parent[int(entry)] = int(fields[1])
+    out = {}
+    for pid in parent:
+        p, hops = parent.get(pid), 0
+        while p not in (None, 0, 1, root) and hops < 64:
+            p, hops = parent.get(p), hops + 1
+        if p == root:
+            try:
+                out[pid] = (Path("/proc") / str(pid) / "cmdline").read_bytes().replace(
+                    b"\0", b" ").decode(errors="replace")
+            except OSError:
+                continue
+    return out
+
+
+def _alive(pids: list[int]) -> list[int]:
+    alive = []
+    for pid in pids:
+        try:
+            stat = (Path("/proc") / str(pid) / "stat").read_bytes()
+        except OSError:
+            continue
+        if stat[stat.rfind(b")") + 2:].split()[0] != b"Z":
+            alive.append(pid)
+    return alive
+
+
+@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs /proc (Linux)")
+@pytest.mark.parametrize(("sig", "code", "line", "args", "marker"), [
+    (signal.SIGINT, 130, "fcomp: interrupted",
+     ["export", "mpc", "--option", "horizon=4", "--option", "qp_iterations=5"], "cc1"),
+    (signal.SIGTERM, 143, "fcomp: terminated", ["export", "mpc"], "fcomp_ctrl_casadi.c"),
+], ids=["ctrl-c-kernel-compile", "sigterm-export-compile"])
+@pytest.mark.slow
+def test_interrupting_export_ends_the_whole_compiler(tmp_path: Path, sig: int, code: int,
+                                                     line: str, args: list[str],
+                                                     marker: str) -> None:
+    """Issue 42 item 4: Ctrl-C (to the process group, as a terminal sends it) while the
+    controller's kernels compile, SIGTERM while the export's C compiles: the compiler runs
+    in a process group of its own, ended whole -- no ``cc1`` left running (5 of 9 runs
+    left one before) -- with the command's one line, exit status, and nothing written."""
+    env = _env(FCOMP_CACHE=str(tmp_path / "cache"))  # a fresh cache: the kernels compile
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "fcomp.cli.main", *args, "-o", "c", "--no-progress"],
+        cwd=tmp_path, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+        start_new_session=True, preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    compilers: list[int] = []
+    end = time.monotonic() + 300
+    try:
+        while not compilers and time.monotonic() < end and proc.poll() is None:
+            found = _descendants(proc.pid)
+            if any("cc1" in c and marker in c for c in found.values()):
+                compilers = list(found)
+            else:
+                time.sleep(0.02)
+        assert compilers, f"no compiler ({marker}) seen before {args} ended"
+        if sig == signal.SIGINT:
+            os.killpg(proc.pid, sig)
+        else:
+            proc.send_signal(sig)
+        out, err = proc.communicate(timeout=60)
+        gone_by = time.monotonic() + 2  # cc1 on the MPC's C alone runs for a minute
+        while _alive(compilers) and time.monotonic() < gone_by:
+            time.sleep(0.05)
+        left = _alive(compilers)
+    finally:
+        for pid in _alive(compilers):
+            with contextlib.suppress(OSError):
+                os.kill(pid, signal.SIGKILL)
+        if proc.poll() is None:
+            proc.kill()
+    assert not left, f"compiler processes left running: {left}"
+    assert proc.returncode == code and err.decode() == line + "\n", err.decode()
+    assert not (tmp_path / "c").exists()
+
+
 def test_messages_show_plain_numbers() -> None:
     from fcomp.cli.main import plain
 
@@ -1208,7 +1296,7 @@ def test_messages_show_plain_numbers() -> None:
 
 def test_case_count() -> None:
     """The closing note of issue 12 gives this count: table cases plus the tests above."""
-    extra = 7 + len(SUBPROCESS) + 2
+    extra = 7 + len(SUBPROCESS) + 2 + 2
     assert len(CASES) + extra >= 150
     print(f"{len(CASES)} table cases + {extra} interrupt/process cases")
 

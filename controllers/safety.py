@@ -111,10 +111,11 @@ SEEN, LATCHED, CONSEC, GOOD, FAULTS, CAUSE, U, PENDING, Y_HOLD, R_HOLD = (0, 1, 
 N_STATE = sum(k for _, k in LAYOUT)
 
 
-@dataclass(frozen=True)
-class Ops:
+class Ops(NamedTuple):
     """The operations the rules are written with (module docstring): a selection, the
-    minimum and maximum, the logical connectives and a finiteness test."""
+    minimum and maximum, the logical connectives, a finiteness test, a range test and a
+    clip -- ``clip(a, lo, hi) = fmin(fmax(a, lo), hi)`` with C's ``fmin``/``fmax``, which
+    take a NaN argument for missing (a NaN clips to ``lo``)."""
 
     if_else: Callable[[Any, Any, Any], Any]
     fmin: Callable[[Any, Any], Any]
@@ -123,6 +124,8 @@ class Ops:
     or_: Callable[[Any, Any], Any]
     not_: Callable[[Any], Any]
     finite: Callable[[Any], Any]
+    within: Callable[[Any, float, float], Any]
+    clip: Callable[[Any, float, float], Any]
 
 
 #: The rules on Python floats.
@@ -134,6 +137,8 @@ SCALAR = Ops(
     or_=lambda a, b: a or b,
     not_=lambda a: not a,
     finite=math.isfinite,
+    within=lambda a, lo, hi: lo <= a <= hi,
+    clip=lambda a, lo, hi: lo if not a >= lo else (hi if a > hi else a),
 )
 #: The rules on CasADi expressions (generated as C by :mod:`controllers.export`).
 SYMBOLIC = Ops(
@@ -144,6 +149,8 @@ SYMBOLIC = Ops(
     or_=ca.logic_or,
     not_=ca.logic_not,
     finite=lambda a: ca.fabs(a) < ca.inf,
+    within=lambda a, lo, hi: ca.logic_and(a >= lo, a <= hi),
+    clip=lambda a, lo, hi: ca.fmin(ca.fmax(a, lo), hi),
 )
 
 
@@ -222,14 +229,6 @@ def initial_state() -> list[float]:
     return [0.0] * N_STATE
 
 
-def _flag(ops: Ops, cond: Any) -> Any:
-    return ops.if_else(cond, 1.0, 0.0)
-
-
-def _clip(ops: Ops, a: Any, lo: float, hi: float) -> Any:
-    return ops.fmin(ops.fmax(a, lo), hi)
-
-
 class Admitted(NamedTuple):
     """What :func:`admit` decides for one sample.
 
@@ -284,37 +283,38 @@ def admit(ops: Ops, lim: Limits, fs: Sequence[Any], y: Sequence[Any], ref: Seque
     -------
     Admitted
     """
-    x_ok = ops.and_(y[0] >= lim.x_lo, y[0] <= lim.x_hi)
-    p1_ok = ops.and_(y[1] >= lim.p_lo, y[1] <= lim.p_hi)
-    p2_ok = ops.and_(y[2] >= lim.p_lo, y[2] <= lim.p_hi)
-    r_ok = ops.and_(ops.and_(ref[0] >= lim.x_lo, ref[0] <= lim.x_hi),
-                    ops.and_(ops.finite(ref[1]), ops.finite(ref[2])))
-    for f in ref[3:]:
-        r_ok = ops.and_(r_ok, ops.and_(f >= lim.x_lo, f <= lim.x_hi))
-    bad = (ops.if_else(x_ok, 0.0, 1.0) + ops.if_else(p1_ok, 0.0, 2.0)
-           + ops.if_else(p2_ok, 0.0, 4.0) + ops.if_else(r_ok, 0.0, 8.0))
+    ie, _fmin, _fmax, and_, or_, not_, finite, within, clip = ops
+    x_lo, x_hi, r_hi = lim.x_lo, lim.x_hi, lim.r_hi
+    x_ok = within(y[0], x_lo, x_hi)
+    p1_ok = within(y[1], lim.p_lo, lim.p_hi)
+    p2_ok = within(y[2], lim.p_lo, lim.p_hi)
+    r_ok = and_(within(ref[0], x_lo, x_hi), and_(finite(ref[1]), finite(ref[2])))
+    future = ref[3:]
+    for f in future:
+        r_ok = and_(r_ok, within(f, x_lo, x_hi))
+    bad = ie(x_ok, 0.0, 1.0) + ie(p1_ok, 0.0, 2.0) + ie(p2_ok, 0.0, 4.0) + ie(r_ok, 0.0, 8.0)
     fault = bad > 0.5
-    y_used = [ops.if_else(x_ok, y[0], fs[Y_HOLD]), ops.if_else(p1_ok, y[1], fs[Y_HOLD + 1]),
-              ops.if_else(p2_ok, y[2], fs[Y_HOLD + 2])]
+    y_used = [ie(x_ok, y[0], fs[Y_HOLD]), ie(p1_ok, y[1], fs[Y_HOLD + 1]),
+              ie(p2_ok, y[2], fs[Y_HOLD + 2])]
     held = fs[R_HOLD]
-    ref_used = [ops.if_else(r_ok, _clip(ops, ref[0], 0.0, lim.r_hi), held),
-                ops.if_else(r_ok, _clip(ops, ref[1], -lim.v_max, lim.v_max), 0.0),
-                ops.if_else(r_ok, _clip(ops, ref[2], -lim.a_max, lim.a_max), 0.0)]
-    ref_used += [ops.if_else(r_ok, _clip(ops, f, 0.0, lim.r_hi), held) for f in ref[3:]]
+    ref_used = [ie(r_ok, clip(ref[0], 0.0, r_hi), held),
+                ie(r_ok, clip(ref[1], -lim.v_max, lim.v_max), 0.0),
+                ie(r_ok, clip(ref[2], -lim.a_max, lim.a_max), 0.0)]
+    ref_used += [ie(r_ok, clip(f, 0.0, r_hi), held) for f in future]
     was_seen = fs[SEEN] > 0.5
     was_latched = fs[LATCHED] > 0.5
-    seen = ops.or_(was_seen, ops.not_(fault))
-    consec = ops.if_else(fault, fs[CONSEC] + 1.0, 0.0)
-    good = ops.if_else(fault, 0.0, fs[GOOD] + 1.0)
-    latched = ops.if_else(was_latched, good < lim.n_recover, consec >= lim.n_latch)
-    run = ops.and_(seen, ops.not_(latched))
-    broken = ops.and_(run, ops.not_(healthy))
-    reenter = ops.and_(run, ops.or_(ops.or_(was_latched, fs[PENDING] > 0.5), broken))
-    start = ops.and_(run, ops.not_(was_seen))
-    any_fault = ops.or_(fault, broken)
-    mid = [_flag(ops, seen), _flag(ops, latched), consec, good,
-           fs[FAULTS] + ops.if_else(any_fault, 1.0, 0.0),
-           ops.if_else(any_fault, bad + ops.if_else(broken, 16.0, 0.0), fs[CAUSE]),
+    seen = or_(was_seen, not_(fault))
+    consec = ie(fault, fs[CONSEC] + 1.0, 0.0)
+    good = ie(fault, 0.0, fs[GOOD] + 1.0)
+    latched = ie(was_latched, good < lim.n_recover, consec >= lim.n_latch)
+    run = and_(seen, not_(latched))
+    broken = and_(run, not_(healthy))
+    reenter = and_(run, or_(or_(was_latched, fs[PENDING] > 0.5), broken))
+    start = and_(run, not_(was_seen))
+    any_fault = or_(fault, broken)
+    mid = [ie(seen, 1.0, 0.0), ie(latched, 1.0, 0.0), consec, good,
+           fs[FAULTS] + ie(any_fault, 1.0, 0.0),
+           ie(any_fault, bad + ie(broken, 16.0, 0.0), fs[CAUSE]),
            fs[U], fs[PENDING], *y_used, ref_used[0]]
     return Admitted(y_used, ref_used, mid, run, start, reenter, any_fault)
 
@@ -328,26 +328,26 @@ def settle(ops: Ops, lim: Limits, mid: Sequence[Any], run: Any, u_in: Any, count
     is the controller's command (ignored unless ``run``): a non-finite one is a fault of
     cause ``controller``.
     """
-    ok = ops.finite(u_in)
-    used = ops.and_(run, ok)
-    broke = ops.and_(run, ops.not_(ok))
-    new = ops.and_(broke, ops.not_(counted))  # a faulty sample counts once
-    consec = ops.if_else(new, mid[CONSEC] + 1.0, mid[CONSEC])
-    latched = ops.or_(mid[LATCHED] > 0.5, consec >= lim.n_latch)
+    ie, _fmin, _fmax, and_, or_, not_, finite, _within, clip = ops
+    ok = finite(u_in)
+    used = and_(run, ok)
+    broke = and_(run, not_(ok))
+    new = and_(broke, not_(counted))  # a faulty sample counts once
+    consec = ie(new, mid[CONSEC] + 1.0, mid[CONSEC])
+    latched = or_(mid[LATCHED] > 0.5, consec >= lim.n_latch)
     u_prev = mid[U]
     safe = u_prev if lim.hold else lim.safe_value
-    target = ops.if_else(used, u_in,
-                         ops.if_else(ops.or_(latched, mid[SEEN] < 0.5), safe, u_prev))
-    u = _clip(ops, _clip(ops, target, -lim.u_max, lim.u_max), u_prev - lim.du, u_prev + lim.du)
+    target = ie(used, u_in, ie(or_(latched, mid[SEEN] < 0.5), safe, u_prev))
+    u = clip(clip(target, -lim.u_max, lim.u_max), u_prev - lim.du, u_prev + lim.du)
     nxt = list(mid)
-    nxt[LATCHED] = _flag(ops, latched)
+    nxt[LATCHED] = ie(latched, 1.0, 0.0)
     nxt[CONSEC] = consec
-    nxt[GOOD] = ops.if_else(broke, 0.0, mid[GOOD])
-    nxt[FAULTS] = mid[FAULTS] + ops.if_else(new, 1.0, 0.0)
-    with_bit = ops.if_else(mid[CAUSE] >= 16.0, mid[CAUSE], mid[CAUSE] + 16.0)
-    nxt[CAUSE] = ops.if_else(broke, ops.if_else(counted, with_bit, 16.0), mid[CAUSE])
+    nxt[GOOD] = ie(broke, 0.0, mid[GOOD])
+    nxt[FAULTS] = mid[FAULTS] + ie(new, 1.0, 0.0)
+    cause = mid[CAUSE]
+    nxt[CAUSE] = ie(broke, ie(counted, ie(cause >= 16.0, cause, cause + 16.0), 16.0), cause)
     nxt[U] = u
-    nxt[PENDING] = ops.if_else(run, ops.if_else(ok, 0.0, 1.0), mid[PENDING])
+    nxt[PENDING] = ie(run, ie(ok, 0.0, 1.0), mid[PENDING])
     return u, nxt
 
 
@@ -364,7 +364,7 @@ def clamp_integral(ops: Ops, integral: Any, bounds: tuple[float, float]) -> Any:
     lo, hi = bounds
     if not (math.isfinite(lo) and math.isfinite(hi)):
         return integral
-    return _clip(ops, integral, lo, hi)
+    return ops.clip(integral, lo, hi)
 
 
 def bumpless_integral(ops: Ops, force: Any, other: Any, ki: float,
@@ -487,7 +487,7 @@ class FailSafe(Controller):
 
     def _reference(self, ref: Reference) -> list[float]:
         """``[r, dr, ddr, *future]`` with the future padded to the preview as the MPC pads it."""
-        n = int(self.inner.preview)
+        n = self.inner.preview
         out = [float(ref.r), float(ref.dr), float(ref.ddr)]
         if n:
             fut = [float(f) for f in ref.future[:n]]
@@ -514,12 +514,13 @@ class FailSafe(Controller):
         lim = self.limits
         inner = self.inner
         yv = [float(y[0]), float(y[1]), float(y[2])]
-        a = admit(SCALAR, lim, self._fs, yv, self._reference(ref),
-                  not self._started or inner.healthy())
+        rv = self._reference(ref)
+        a = admit(SCALAR, lim, self._fs, yv, rv, not self._started or inner.healthy())
         u_in = math.nan
         if a.run:
-            ya = np.array(a.y)
-            rf = _as_reference(a.ref)
+            ya = y if a.y == yv else np.array(a.y)  # nothing held: the caller's arrays
+            rf = ref if a.ref == rv and len(ref.future) == self.inner.preview else \
+                _as_reference(a.ref)
             if a.reenter:
                 inner.reenter(t, ya, rf, a.mid[U])
             elif a.start:

@@ -1132,22 +1132,29 @@ LONG_COMMANDS = [
 ]
 
 
+def _processes() -> dict[int, list[bytes]]:
+    """Every living (not zombie) process: pid -> the fields of /proc/PID/stat after the
+    command name (state, ppid, pgrp, ...)."""
+    out = {}
+    for entry in os.listdir("/proc"):
+        if not entry.isdigit():
+            continue
+        try:
+            stat = (Path("/proc") / entry / "stat").read_bytes()
+        except OSError:
+            continue
+        fields = stat[stat.rfind(b")") + 2:].split()
+        if fields[0] != b"Z":
+            out[int(entry)] = fields
+    return out
+
+
 def _group_gone(pgid: int, seconds: float) -> bool:
     """Whether every process of the group ``pgid`` has ended within ``seconds`` (ended
     ones that nobody reaps count as ended)."""
     end = time.monotonic() + seconds
     while time.monotonic() < end:
-        alive = []
-        for entry in os.listdir("/proc"):
-            if not entry.isdigit():
-                continue
-            try:
-                stat = (Path("/proc") / entry / "stat").read_bytes()
-            except OSError:
-                continue
-            fields = stat[stat.rfind(b")") + 2:].split()
-            if int(fields[3]) == pgid and fields[0] != b"Z":
-                alive.append(int(entry))
+        alive = [pid for pid, fields in _processes().items() if int(fields[2]) == pgid]
         if not alive:
             return True
         time.sleep(0.1)
@@ -1202,17 +1209,7 @@ def test_a_signal_stops_a_long_command_at_once(tmp_path: Path, label: str, args:
 
 def _descendants(root: int) -> dict[int, str]:
     """The living descendants of process ``root``: pid -> command line (from /proc)."""
-    parent: dict[int, int] = {}
-    for entry in os.listdir("/proc"):
-        if not entry.isdigit():
-            continue
-        try:
-            stat = (Path("/proc") / entry / "stat").read_bytes()
-        except OSError:
-            continue
-        fields = stat[stat.rfind(b")") + 2:].split()
-        if fields[0] != b"Z":
-            parent[int(entry)] = int(fields[1])
+    parent = {pid: int(fields[1]) for pid, fields in _processes().items()}
     out = {}
     for pid in parent:
         p, hops = parent.get(pid), 0
@@ -1228,15 +1225,8 @@ def _descendants(root: int) -> dict[int, str]:
 
 
 def _alive(pids: list[int]) -> list[int]:
-    alive = []
-    for pid in pids:
-        try:
-            stat = (Path("/proc") / str(pid) / "stat").read_bytes()
-        except OSError:
-            continue
-        if stat[stat.rfind(b")") + 2:].split()[0] != b"Z":
-            alive.append(pid)
-    return alive
+    living = _processes()
+    return [pid for pid in pids if pid in living]
 
 
 @pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs /proc (Linux)")

@@ -22,7 +22,21 @@ CASADI_INT = "long long int"
 
 
 @dataclass
-class StepExport:
+class _Shape:
+    """The state and reference of an exported step."""
+
+    state0: np.ndarray
+    layout: list[tuple[str, int]]
+    note: str
+    n_ref: int = 3
+
+    @property
+    def n_state(self) -> int:
+        return int(self.state0.size)
+
+
+@dataclass(kw_only=True)
+class StepExport(_Shape):
     """One controller step as a CasADi function (module docstring).
 
     Attributes
@@ -35,19 +49,14 @@ class StepExport:
         ``(name, size)`` of the state's blocks, in order.
     note
         What the exported step does, one line.
+    n_ref
+        Size of the reference (3, the MPC's ``3 + horizon``).
     """
 
     fn: ca.Function
-    state0: np.ndarray
-    layout: list[tuple[str, int]]
-    note: str
-    n_ref: int = 3
-
-    @property
-    def n_state(self) -> int:
-        return int(self.state0.size)
 
 
+# ----------------------------------------------------------------- symbolic step
 def _cummax(v: list[Any]) -> list[Any]:
     out = [v[0]]
     for e in v[1:]:
@@ -106,21 +115,13 @@ def _all_finite(*ms: Any) -> Any:
     return bad == 0
 
 
-@dataclass
-class _Law:
+@dataclass(kw_only=True)
+class _Law(_Shape):
     """A controller's law as a graph builder: ``graph(s, y, ref, reenter, u_hold) -> (u,
     s_next)`` on the state ``s`` of ``layout`` (``reenter`` None: the plain step; else the
     fail-safe layer's re-entry flag and held command, :mod:`controllers.safety`)."""
 
     graph: Callable[[Any, Any, Any, Any, Any], tuple[Any, Any]]
-    state0: np.ndarray
-    layout: list[tuple[str, int]]
-    note: str
-    n_ref: int = 3
-
-    @property
-    def n_state(self) -> int:
-        return int(self.state0.size)
 
 
 def _mpc_law(ctrl: Any) -> _Law:

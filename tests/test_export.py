@@ -228,3 +228,25 @@ def test_the_console_tells_the_rate_the_layer_and_the_times(tmp_path: Path,
     assert "on hostile input 0 over" in out and "2 latches, 2 recoveries" in out
     assert "compiled step time (CPU time of the step): median" in out
     assert "wall-clock worst" in out and "other processes" in out
+
+
+def test_a_check_that_is_not_a_number_is_refused(tmp_path: Path,
+                                                 monkeypatch: pytest.MonkeyPatch) -> None:
+    """Issue 42 item 10: a check whose difference is NaN is never a result ("equivalent: NO
+    (nan)", exit 0, before): one line, and nothing claimed."""
+    import controllers.export.pipeline as pipeline
+    from controllers.plant_model import ControlModel
+    from fcomp.errors import FcompError
+    from fcomp.models import make_model
+
+    real = pipeline.check_equivalence
+
+    def poisoned(*args, **kwargs):  # type: ignore[no-untyped-def]
+        res = real(*args, **kwargs)
+        res.u_step[3] = float("nan")
+        return res
+
+    monkeypatch.setattr(pipeline, "check_equivalence", poisoned)
+    model = ControlModel("hydraulic", make_model("nmlgm", params="seed002-type1"))
+    with pytest.raises(FcompError, match="gave no number"):
+        pipeline.export_controller("pid", model, tmp_path / "c", duration=0.05)

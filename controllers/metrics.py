@@ -39,6 +39,13 @@ metric                            definition
                                   moved travels next to nothing
 ``saturated_share`` (-)           share of the samples whose valve command sits at
                                   its limit ``+-u_max``
+``faults`` (-)                    faulty samples the fail-safe layer counted
+                                  (:mod:`controllers.safety`: implausible inputs
+                                  held, a controller's non-finite command)
+``max_consecutive_faults`` (-)    the longest run of faulty samples
+``latched_steps`` (-)             samples the safe output was latched
+``latches`` (-)                   how often it latched
+``last_fault`` (-)                the last fault's cause (None: none)
 ================================ =================================================
 """
 
@@ -80,6 +87,11 @@ class Metrics:
     travel: float = math.nan
     reference_travel: float = math.nan
     saturated_share: float = math.nan
+    faults: int = 0
+    max_consecutive_faults: int = 0
+    latched_steps: int = 0
+    latches: int = 0
+    last_fault: str | None = None
 
     def as_dict(self) -> dict[str, Any]:
         return asdict(self)
@@ -103,6 +115,11 @@ def compute_metrics(
     periodic: bool = False,
     fallbacks: int = 0,
     cpu_times: np.ndarray | None = None,
+    faults: int = 0,
+    max_consecutive_faults: int = 0,
+    latched_steps: int = 0,
+    latches: int = 0,
+    last_fault: str | None = None,
 ) -> Metrics:
     """Metrics of a run sampled at ``t`` (s).
 
@@ -127,6 +144,8 @@ def compute_metrics(
         Number of fallback steps the controller reported.
     cpu_times
         CPU time of the controller's thread in each step (s), if measured.
+    faults, max_consecutive_faults, latched_steps, latches, last_fault
+        The fail-safe layer's record of the run (:mod:`controllers.safety`).
     """
     t = np.asarray(t, dtype=float)
     r = np.asarray(r, dtype=float)
@@ -179,6 +198,8 @@ def compute_metrics(
         travel=float(np.ptp(x)),
         reference_travel=float(np.ptp(r)),
         saturated_share=float(np.mean(np.abs(u) >= u_max * (1.0 - 1e-9))) if u.size else 0.0,
+        faults=int(faults), max_consecutive_faults=int(max_consecutive_faults),
+        latched_steps=int(latched_steps), latches=int(latches), last_fault=last_fault,
     )
 
 

@@ -73,7 +73,14 @@ from controllers.compensate_inputs import (
     warn_once,
 )
 from controllers.harness import LoopConfig
-from controllers.robustness import Job, distributions, median_interval, paired_ratios, run_jobs
+from controllers.robustness import (
+    MAX_SAMPLES,
+    Job,
+    distributions,
+    median_interval,
+    paired_ratios,
+    run_jobs,
+)
 from controllers.run_checks import run_status
 from controllers.tasks import TASKS, Task, check_fits_stroke
 from controllers.truths import Truth, candidate_truths, same_friction
@@ -94,8 +101,6 @@ RATIO_ERRORS: tuple[str, ...] = ("rms_error", "max_error", "reversal_error", "hu
 CONFIDENCE = 0.9
 #: A ratio this close to 1 is no difference (the same run to rounding).
 SAME = 1e-9
-#: The most robustness draws (each runs every controller with every model).
-MAX_SAMPLES = 1000
 #: The most uncertainty draws per compared model (each a truth every run is repeated on).
 MAX_TRUTH_DRAWS = 50
 #: Run facts copied from the metrics into a run's entry (besides the errors).

@@ -420,3 +420,61 @@ def test_a_diagnosis_model_file_gives_its_uncertainty_and_rivals(tmp_path: Path,
     for t in cast[1:4]:
         f, f0 = t.model.flat_params(), mf.model.flat_params()
         assert all(abs(f[k] - f0[k]) <= 6 * se[k] for k in f if se.get(k))
+
+
+def test_a_partly_failed_comparison_ranks_only_what_ran() -> None:
+    """Issue 42 item 2: one run failed among ranked ones: its pair gets no ratio, under
+    that truth the pair is not counted (not a ratio of a failure), the recommendation rests
+    on the pairs that ran, and the conclusion says which runs were not ranked and why."""
+    from controllers.compensate import across_truths, ratios
+    from controllers.conclusions import of_compensation
+
+    def run(truth: str, c: str, m: str, rms: float | None, status: str = "ok") -> dict:
+        from controllers.compensate import RATIO_ERRORS
+
+        return {"truth": truth, "controller": c, "model": m, "task": "steps",
+                "status": status, **dict.fromkeys(RATIO_ERRORS, rms)}
+
+    runs = {"base": [run("base", "ekf", "base", 2e-5), run("base", "ekf", "diag", 1e-5),
+                     run("base", "pid-ff", "base", 4e-5),
+                     run("base", "pid-ff", "diag", None, "failed: solver diverged")],
+            "diag": [run("diag", "ekf", "base", 3e-5), run("diag", "ekf", "diag", 2.4e-5),
+                     run("diag", "pid-ff", "base", 5e-5), run("diag", "pid-ff", "diag", 1e-5)]}
+    per_truth = {t: ratios(rs, ["base", "diag"]) for t, rs in runs.items()}
+    assert per_truth["base"]["pid-ff"]["steps"]["diag"]["rms_error"] is None
+    assert per_truth["base"]["ekf"]["steps"]["diag"]["rms_error"] == pytest.approx(0.5)
+    across = across_truths(per_truth, ["ekf", "pid-ff"], ["base", "diag"], ["steps"])
+    assert across["ekf"]["diag"]["holds"] == "better"
+    assert across["ekf"]["diag"]["best"] == pytest.approx(0.5)
+    assert across["ekf"]["diag"]["worst"] == pytest.approx(0.8)
+    ff = across["pid-ff"]["diag"]
+    assert ff["holds"] == "partly ranked" and ff["per_truth"] == {"base": None, "diag": 0.2}
+    doc = {"baseline": "base", "models": {"base": "", "diag": ""}, "mode": "candidates",
+           "controllers": ["ekf", "pid-ff"], "uses_friction": {"ekf": True, "pid-ff": True},
+           "tasks": ["steps"], "truths": {"base": {"equals": "base"},
+                                          "diag": {"equals": "diag"}},
+           "runs": runs["base"] + runs["diag"], "across_truths": across,
+           "robustness": {"controllers": {}}, "warnings": []}
+    c = of_compensation(doc)
+    # pid-ff's 0.2 under one truth does not outrank ekf's 0.5-0.8 under both
+    assert c.finding.startswith("under every one of the 2 candidate truths, diag instead of "
+                                "base lowers the RMS tracking error of ekf: median-task "
+                                "ratio 0.50-0.80"), c.finding
+    assert c.confidence != "high"
+    assert "pid-ff with diag (1 of 2)" in " ".join(c.reasons)
+    assert ("1 of 8 runs not ranked: pid-ff with diag (failed: solver diverged; 1 run)"
+            in c.reasons), c.reasons
+
+
+def test_sweep_samples_are_bounded(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    """Issue 42 item 10 (``--samples 1e8`` unbounded, as compensate's): one line, exit 2,
+    before any run and nothing written."""
+    from controllers.robustness import MAX_SAMPLES
+
+    out = tmp_path / "s.json"
+    code, stdout, err = _run(["sweep", "--plant", "hydraulic", "--controllers", "pid",
+                              "--samples", str(10 * MAX_SAMPLES), "--json", str(out),
+                              "--no-progress"], capsys)
+    assert code == 2 and stdout == "" and not out.exists()
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and f"at most {MAX_SAMPLES}" in lines[0], err

@@ -19,10 +19,12 @@ RTOL = 1e-9
 
 
 def python_state(ctrl: Any) -> np.ndarray:
-    """The Python controller's state in the exported layout (:class:`StepExport`; after its
-    ``reset``, so ``started = 1``); behind the fail-safe layer
-    (:class:`controllers.safety.FailSafe`), the law's state (``started`` as the layer
-    started it) followed by the layer's."""
+    """The Python controller's state in the exported layout (:class:`StepExport`):
+    ``started = 1`` once it has stepped; reset but not yet stepped, ``started = 0`` (the
+    exported step then resets itself from the measurement, as the Python reset did, and
+    the friction estimate has no previous value for its lead); behind the fail-safe layer
+    (:class:`controllers.safety.FailSafe`), the law's state (not started while the layer
+    has not started it) followed by the layer's."""
     from controllers.ekf import EKFController
     from controllers.feedforward import PIDFeedforwardController
     from controllers.lugre_observer import LuGreObserverController
@@ -31,8 +33,8 @@ def python_state(ctrl: Any) -> np.ndarray:
 
     if isinstance(ctrl, FailSafe):
         inner = python_state(ctrl.inner)
-        if not isinstance(ctrl.inner, FixedIterationMPC):
-            inner[0] = 1.0 if ctrl.started else 0.0
+        if not isinstance(ctrl.inner, FixedIterationMPC) and not ctrl.started:
+            inner[0] = 0.0
         return np.concatenate([inner, np.asarray(ctrl.state, dtype=float)])
     if isinstance(ctrl, FixedIterationMPC):
         kf = ctrl.ekf.kf

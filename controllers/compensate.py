@@ -420,8 +420,8 @@ def compensate(plant: Any, true_friction: Any, models: Sequence[Any] | Mapping[s
     signals: dict[tuple[str, str, str, str], dict[str, np.ndarray]] = {}
     mc: list[dict[str, Any]] = []
     for slot in slots:
-        res = results[slot.job] if slot.job is not None else {"status": slot.why,
-                                                               "metrics": None}
+        res: Mapping[str, Any] = (results[slot.job] if slot.job is not None
+                                  else {"status": slot.why, "metrics": None})
         entry = _run_entry(slot, res)
         if slot.sample is None:
             runs.append(entry)
@@ -546,12 +546,12 @@ def _range_warnings(warns: list[dict[str, Any]], pf: Any, cast: Sequence[Truth],
         vmax = max(vmax, float(np.abs(dr).max()))
     p = 0.5 * (float(pf.values.get("ps", 0.0)) - float(pf.values.get("p_atm", 101325.0)))
     span = Span(lo, hi, vmax, max(p, 0.0))
-    for t in cast:
-        for code, msg in range_warnings(t.label, t.model, span, truth=True,
+    for truth in cast:
+        for code, msg in range_warnings(truth.label, truth.model, span, truth=True,
                                         free_force=free_force):
-            warn_once(warns, code, msg, t.label)
+            warn_once(warns, code, msg, truth.label)
     for k, m in built.items():
-        if not any(t.label == k for t in cast):
+        if not any(truth.label == k for truth in cast):
             for code, msg in range_warnings(k, m, span, truth=False):
                 warn_once(warns, code, msg, k)
 

@@ -128,7 +128,7 @@ def _map(model: FrictionModel, at: Operating) -> np.ndarray:
 def operating_point(model: ControlModel) -> Operating:
     """Mid stroke, with the chambers' gauge pressures holding the load there (the plant's
     equilibrium, :func:`plants.equilibrium.equilibrium`)."""
-    from controllers.plant_model import equilibrium
+    from plants.equilibrium import equilibrium
 
     x = 0.5 * model.stroke
     try:

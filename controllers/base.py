@@ -45,6 +45,12 @@ and keeps up to date, after every step:
     solve that failed) and how many steps did so far -- counted in the
     metrics, never hidden.
 
+and says, before it is built, whether its law uses the friction model at all
+(``uses_friction``: ``pid`` does not) and why it cannot be built on a friction
+model (:meth:`Controller.refuses`: a LuGre observer on a model without a bristle
+state, an EKF on a model without a symbolic form), so that a comparison skips
+such pairs with the reason instead of failing each run.
+
 The sampled-data loop that calls them is :mod:`controllers.harness`.
 """
 
@@ -53,11 +59,14 @@ from __future__ import annotations
 import math
 from abc import ABC, abstractmethod
 from collections.abc import Mapping
-from typing import Any, ClassVar, NamedTuple
+from typing import TYPE_CHECKING, Any, ClassVar, NamedTuple
 
 import numpy as np
 
 from fcomp.errors import FcompError
+
+if TYPE_CHECKING:
+    from fcomp.models.base import FrictionModel
 
 
 class Reference(NamedTuple):
@@ -79,6 +88,16 @@ class Controller(ABC):
     options: ClassVar[tuple[str, ...]] = ("rate",)
     #: how many future reference samples :meth:`step` wants in ``Reference.future``
     preview: int = 0
+    #: whether the control law uses the controller's friction model
+    uses_friction: ClassVar[bool] = True
+
+    @classmethod
+    def refuses(cls, friction: FrictionModel) -> str | None:
+        """Why this controller cannot be built on ``friction`` (``None``: it can); known
+        before any run. The default: the model's symbolic (CasADi) form, which the
+        controller's own plant model (:class:`~controllers.plant_model.ControlModel`) is
+        built from."""
+        return symbolic_refusal(cls.name, friction)
 
     def __init__(self, model: Any, **options: Any) -> None:
         check_options(f"controller {self.name}", options, self.options)
@@ -123,6 +142,17 @@ class Controller(ABC):
 
     def describe(self) -> str:
         return f"{self.name} at {self.rate:g} Hz on {self.model.describe()}"
+
+
+def symbolic_refusal(name: str, friction: FrictionModel) -> str | None:
+    """Why controller ``name`` cannot use ``friction``'s symbolic form (``None``: it can)."""
+    from fcomp.models.base import NotSymbolicError
+
+    try:
+        friction.require_symbolic()
+    except NotSymbolicError as exc:
+        return f"{name} needs a model with a symbolic form: {exc}"
+    return None
 
 
 def check_options(name: str, given: Mapping[str, Any], known: tuple[str, ...]) -> None:

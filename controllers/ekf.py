@@ -168,6 +168,7 @@ class EKFController(PIDController):
     """
 
     name: ClassVar[str] = "ekf"
+    uses_friction: ClassVar[bool] = True
     options: ClassVar[tuple[str, ...]] = (*PIDController.options, "q_scale", "q_friction")
 
     def __init__(self, model: Any, **options: Any) -> None:

@@ -27,8 +27,8 @@ same way, open loop. The equations are the controller model's own
 correction of ``dz/dt`` is added here.
 
 Discretisation: the exponential Rosenbrock-Euler step of
-:mod:`fcomp.models.stepping` (exact for the bristle equation, linear in ``z`` at
-the held velocity, and unconditionally stable however stiff), with the
+:mod:`controllers.friction_states` (exact for the bristle equation, linear in ``z``
+at the held velocity, and unconditionally stable however stiff), with the
 correction held over the sample.
 
 The velocity is the PID's filtered derivative of the measured position
@@ -43,16 +43,16 @@ import casadi as ca
 import numpy as np
 
 from controllers.base import Reference
+from controllers.friction_states import friction_step
 from controllers.pid import PIDController
 from controllers.tuning import check_observer
-from fcomp.backend import CASADI
 from fcomp.errors import FcompError
-from fcomp.models.base import FrictionModel, Signals
-from fcomp.models.stepping import exponential_euler
+from fcomp.models.base import FrictionModel
 
 
 def observer_step(model: FrictionModel) -> ca.Function:
-    """``(x_hat, sig, c, dt) -> (x_hat_next, F_hat)``: one corrected observer step.
+    """``(x_hat, sig, c, dt) -> (x_hat_next, F_hat)``: one corrected observer step
+    (:func:`controllers.friction_states.friction_step` with the correction on ``z``).
 
     ``c`` (m/s) is added to ``dz/dt``; ``F_hat`` is the friction force at
     ``x_hat`` including ``sigma1*c`` (the damping acts on the corrected
@@ -64,21 +64,7 @@ def observer_step(model: FrictionModel) -> ca.Function:
             f"lugre-observer needs a friction model with a bristle state z; "
             f"{model.describe()!r} has {model.state_names or 'no states'}"
         )
-    nx = model.n_states
-    iz = model.state_names.index("z")
-    x = ca.SX.sym("x", nx)
-    sig, sigv = Signals.symbolic()
-    c = ca.SX.sym("c")
-    dt = ca.SX.sym("dt")
-    P = model.param_values(CASADI)
-    xl = [x[i] for i in range(nx)]
-    f = ca.vertcat(*model.rhs(CASADI, xl, sig, P))
-    f[iz] = f[iz] + c
-    x_next = exponential_euler(f, x, dt)
-    sigma1 = float(model.flat_params().get("sigma1", 0.0))
-    F = model.force(CASADI, xl, sig, P) + sigma1 * c
-    return ca.Function("lugre_observer_step", [x, sigv, c, dt], [x_next, F],
-                       ["x", "sig", "c", "dt"], ["x_next", "F"])
+    return friction_step(model, "z")
 
 
 class LuGreObserverController(PIDController):
@@ -94,8 +80,18 @@ class LuGreObserverController(PIDController):
     """
 
     name: ClassVar[str] = "lugre-observer"
+    uses_friction: ClassVar[bool] = True
     options: ClassVar[tuple[str, ...]] = (*PIDController.options, "observer_gain")
     tuning_options: ClassVar[tuple[str, ...]] = (*PIDController.tuning_options, "observer_gain")
+
+    @classmethod
+    def refuses(cls, friction: FrictionModel) -> str | None:
+        """A model without the bristle state ``z`` (a static map) or without a symbolic
+        form cannot be observed."""
+        if "z" not in friction.state_names:
+            return (f"lugre-observer needs a friction model with a bristle state z; "
+                    f"{friction.describe()!r} has {friction.state_names or 'no states'}")
+        return super().refuses(friction)
 
     def __init__(self, model: Any, **options: Any) -> None:
         super().__init__(model, **options)

@@ -34,6 +34,11 @@ metric                            definition
 ``fallbacks`` (-)                 steps where the controller could not apply its
                                   law and used its stated fallback (MPC solve
                                   failure): counted, never hidden
+``travel``, ``reference_travel``  ``max(x) - min(x)`` of the true position and of the
+(m)                               reference over the run: a piston that never
+                                  moved travels next to nothing
+``saturated_share`` (-)           share of the samples whose valve command sits at
+                                  its limit ``+-u_max``
 ``faults`` (-)                    faulty samples the fail-safe layer counted
                                   (:mod:`controllers.safety`: implausible inputs
                                   held, a controller's non-finite command)
@@ -79,6 +84,9 @@ class Metrics:
     solve_time_cpu_p99: float = math.nan
     solve_time_cpu_max: float = math.nan
     solve_time_descheduled: int = 0
+    travel: float = math.nan
+    reference_travel: float = math.nan
+    saturated_share: float = math.nan
     faults: int = 0
     max_consecutive_faults: int = 0
     latched_steps: int = 0
@@ -140,7 +148,9 @@ def compute_metrics(
         The fail-safe layer's record of the run (:mod:`controllers.safety`).
     """
     t = np.asarray(t, dtype=float)
-    e = np.asarray(r, dtype=float) - np.asarray(x, dtype=float)
+    r = np.asarray(r, dtype=float)
+    x = np.asarray(x, dtype=float)
+    e = r - x
     if t.size < 2 or e.shape != t.shape:
         raise FcompError("metrics need at least two samples of equal length")
     if not np.all(np.isfinite(e)):
@@ -185,6 +195,9 @@ def compute_metrics(
         solve_time_cpu_p99=_quantile(ct, 0.99),
         solve_time_cpu_max=_quantile(ct, 1.0),
         solve_time_descheduled=int(np.sum(st - ct > DESCHEDULED)) if ct.size else 0,
+        travel=float(np.ptp(x)),
+        reference_travel=float(np.ptp(r)),
+        saturated_share=float(np.mean(np.abs(u) >= u_max * (1.0 - 1e-9))) if u.size else 0.0,
         faults=int(faults), max_consecutive_faults=int(max_consecutive_faults),
         latched_steps=int(latched_steps), latches=int(latches), last_fault=last_fault,
     )

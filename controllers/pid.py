@@ -15,7 +15,16 @@ cut-off ``derivative_cutoff`` Hz; backward Euler)::
 
     v_f[k] = (Tf*v_f[k-1] + x[k] - x[k-1]) / (Tf + dt),   Tf = 1/(2*pi*f_d)
 
-and ``F_hat`` the friction estimate (0 for ``pid``). The integral is the
+and ``F_hat`` the friction estimate (0 for ``pid``) *with its lead through the
+force loop* (:meth:`PIDController.friction_demand`): the force loop of
+:mod:`controllers.force_to_valve` follows its demand with the first-order lag
+``1/(1 + s/w_F)``, so an estimate added as it is arrives ``1/w_F`` late (5 ms on
+the hydraulic servo) -- at a reversal, where the friction turns over in tens of
+milliseconds, late enough that an exact estimate compensates worse than a
+crude one that turns early. The estimate's rate is fed forward with it,
+``F_hat + (F_hat[k] - F_hat[k-1])/(dt*w_F)``, the demand whose lagged force is
+the estimate (backstepping: the desired force's derivative fed forward). The
+integral is the
 backward-Euler sum of ``e`` with *anti-windup* by back-calculation (gain
 ``kt``, 1/s; Astrom & Hagglund, *Advanced PID Control*, 2006, sec. 3.5): when
 the force demand exceeds what the actuator can produce
@@ -234,6 +243,7 @@ class PIDController(Controller):
     """
 
     name: ClassVar[str] = "pid"
+    uses_friction: ClassVar[bool] = False
     options: ClassVar[tuple[str, ...]] = (
         "rate", "bandwidth", "kp", "ki", "kd", "derivative_cutoff", "kt", "force_bandwidth",
     )
@@ -275,6 +285,7 @@ class PIDController(Controller):
         self.integral_bounds = integral_bounds(self.gains.ki, model.force_min, model.force_max)
         self._bumpless = False
         self.F_demand = 0.0
+        self._F_prev: float | None = None
 
     # hooks for the compensators ------------------------------------------------
     def reset_compensation(self, y0: np.ndarray, ref: Reference) -> None:
@@ -288,12 +299,21 @@ class PIDController(Controller):
         """Velocity (m/s) the force-to-valve inversion uses (the filtered one here)."""
         return v_f
 
+    def friction_demand(self, F_hat: float) -> float:
+        """The friction estimate as force demand: ``F_hat`` and its lead through the force
+        loop, ``(F_hat - F_hat_prev)/(dt*w_F)`` (module docstring; no lead on the first
+        sample after a reset)."""
+        prev = F_hat if self._F_prev is None else self._F_prev
+        self._F_prev = F_hat
+        return F_hat + (F_hat - prev) / (self.dt * self.valve.bandwidth)
+
     # contract ---------------------------------------------------------------------
     def reset(self, t0: float, y0: np.ndarray, ref: Reference) -> None:
         self.law.reset(float(y0[0]))
         self.valve.reset()
         self._bumpless = False
         self.friction_estimate = 0.0
+        self._F_prev = None
         self.fallbacks = 0
         self.fallback_active = False
         self.reset_compensation(y0, ref)
@@ -316,12 +336,13 @@ class PIDController(Controller):
         self.friction_estimate = F_hat
         m = self.model
         g = self.gains
+        F_dem = self.friction_demand(F_hat)
         if self._bumpless:
-            other = m.mass * ref.ddr + m.weight + (g.kp * e + g.kd * (ref.dr - v_f)) + F_hat
+            other = m.mass * ref.ddr + m.weight + (g.kp * e + g.kd * (ref.dr - v_f)) + F_dem
             self.law.integral = bumpless_integral(SCALAR, m.actuator_force(y), other, g.ki,
                                                   self.integral_bounds)
             self._bumpless = False
-        demand = m.mass * ref.ddr + m.weight + self.law.force(e, ref.dr) + F_hat
+        demand = m.mass * ref.ddr + m.weight + self.law.force(e, ref.dr) + F_dem
         applied = min(max(demand, m.force_min), m.force_max)
         u, sat = self.valve.command(applied, y, self.velocity_estimate(v_f))
         self.law.integrate(e, demand, applied, sat)

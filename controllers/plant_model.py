@@ -383,23 +383,11 @@ class ControlModel:
         return x0
 
     def process_noise(self) -> np.ndarray:
-        """Default EKF process-noise intensities per state (state unit/sqrt(s)).
+        """EKF process-noise intensities per state (state unit/sqrt(s)), from the friction
+        model's own uncertainty (:func:`controllers.estimator_tuning.process_noise`)."""
+        from controllers.estimator_tuning import process_noise
 
-        ``1e-3`` of each state's scale on the plant states (5 mm/s/sqrt(s) on the
-        velocity), ``0.5*z_scale`` on the bristle state ``z`` (it must absorb the
-        friction mismatch: about 1.5 % of the break-away force per millisecond),
-        0.5 on the film ``h``.
-        """
-        sc = self.prediction.scales
-        q = 1e-3 * sc
-        names = self.prediction.state_names
-        if "v" in names:
-            q[names.index("v")] = 0.005
-        if "z" in names:
-            q[names.index("z")] = 0.5 * sc[names.index("z")]
-        if "h" in names:
-            q[names.index("h")] = 0.5
-        return q
+        return process_noise(self)
 
     def sensor_std(self) -> np.ndarray:
         """Measurement noise standard deviations of ``[x, p1, p2]`` for the EKF (rule 5 of

@@ -162,6 +162,11 @@ def with_tunings(jobs: Sequence[Job], *, workers: int | None = None,
             for job, k in zip(jobs, index, strict=True)]
 
 
+#: Most draws a Monte Carlo runs (each runs every controller: 1000 draws of five controllers
+#: on the fast ramp are hours on two cores; the interval of a median needs far fewer).
+MAX_SAMPLES = 1000
+
+
 @dataclass(frozen=True)
 class Sweep:
     """A Monte Carlo sweep (see the module docstring).
@@ -200,6 +205,10 @@ class Sweep:
         if not (isinstance(self.samples, int) and self.samples >= 1):
             raise FcompError(f"robustness sweep: samples must be a positive integer, "
                              f"got {self.samples!r}")
+        if self.samples > MAX_SAMPLES:
+            raise FcompError(f"robustness sweep: samples {self.samples}: at most {MAX_SAMPLES} "
+                             "(each draw runs every controller; the interval of a median "
+                             "needs far fewer)")
         if not (math.isfinite(self.spread) and self.spread >= 0):
             raise FcompError(f"robustness sweep: spread must be >= 0, got {self.spread}")
         lo, hi = self.noise
@@ -208,13 +217,33 @@ class Sweep:
                              f"got {self.noise}")
 
     def draws(self) -> list[tuple[dict[str, float], float]]:
-        """``(mismatch factors, noise factor)`` of every sample (reproducible)."""
+        """``(mismatch factors, noise factor)`` of every sample (reproducible).
+
+        The draws lie within the controller model's constraints: a draw that makes its
+        friction invalid (a static level below the Coulomb level, ``Fc > Fs``; a value
+        beyond its bound) is drawn again -- the log-normal truncated to the valid models,
+        not a failed run counted against the controllers.
+        """
+        from controllers.harness import _friction
+        from controllers.plant_model import friction_with_mismatch
+
+        model = _friction(self.base.controller_friction, self.base)
         rng = np.random.default_rng(self.seed)
         out = []
         for _ in range(self.samples):
-            f = np.exp(self.spread * rng.standard_normal(len(MISMATCH_PARAMS)))
-            noise = float(rng.uniform(*self.noise))
-            out.append(({k: float(v) for k, v in zip(MISMATCH_PARAMS, f, strict=True)}, noise))
+            for _try in range(1000):
+                f = np.exp(self.spread * rng.standard_normal(len(MISMATCH_PARAMS)))
+                noise = float(rng.uniform(*self.noise))
+                factors = {k: float(v) for k, v in zip(MISMATCH_PARAMS, f, strict=True)}
+                try:
+                    friction_with_mismatch(model, factors)
+                except (FcompError, ValueError):
+                    continue
+                out.append((factors, noise))
+                break
+            else:
+                raise FcompError(f"robustness sweep: no valid draw of {model.describe()} in "
+                                 "1000 tries; lower the spread")
         return out
 
     def jobs(self, samples: range | None = None,
@@ -494,6 +523,6 @@ def draw_distribution(ax: Any, dist: Mapping[str, Any], order: Sequence[str],
     return "box" if box else "points"
 
 
-__all__ = ["MIN_BOX_DRAWS", "MISMATCH_PARAMS", "Grid", "Job", "StoppingRule", "Sweep",
+__all__ = ["MAX_SAMPLES", "MIN_BOX_DRAWS", "MISMATCH_PARAMS", "Grid", "Job", "StoppingRule", "Sweep",
            "distributions", "draw_distribution", "median_interval", "paired_ratios", "run_job",
            "run_jobs", "run_sequential"]

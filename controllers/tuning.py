@@ -78,9 +78,9 @@ Rules (SI units; ``dt = 1/f_s`` the control period)
    friction tracks worse than one built on a third of it.
 5. **EKF** (:mod:`controllers.ekf`). The measurement noise is the sensors':
    ``R = diag(sigma_x^2, sigma_p^2, sigma_p^2)`` with noise and quantisation
-   (``sigma^2 = noise^2 + q^2/12``); the process noise is the model's
-   (:meth:`~controllers.plant_model.ControlModel.process_noise`: a thousandth of
-   each state's scale, the bristle free to absorb the friction mismatch).
+   (``sigma^2 = noise^2 + q^2/12``); the process noise follows from the friction
+   model's own uncertainty -- its standard errors, else a default share of its
+   level -- by the rules of :mod:`controllers.estimator_tuning`.
 6. **MPC** (:mod:`controllers.mpc`). The MPC drives the valve itself (no force
    loop, no PID): between its command and the position lie the valve and the
    oil (air) column. Its horizon spans half a period of the column,

@@ -292,10 +292,13 @@ def _subject(message: str) -> str:
     return lead if lead and len(lead) <= 40 and lead != head else "the fit"
 
 
-def grouped_warnings(items: Sequence[Mapping[str, Any]]) -> list[str]:
+def grouped_warnings(items: Sequence[Mapping[str, Any]],
+                     place: str = "in the JSON (--json OUT)") -> list[str]:
     """The warnings ``items`` (``{"code", "parameter", "message"}``) as lines to print: a code
     met once keeps its message; several of one code become one counted line naming what
-    they concern; a last line says where each is in full when any were grouped."""
+    they concern; a last line says where (``place``) each is in full when any were grouped (the
+    command line says which file, or that ``--json OUT`` would write them:
+    :func:`fcomp.cli.main.main`)."""
     groups: dict[str, list[Mapping[str, Any]]] = {}
     for w in items:
         groups.setdefault(str(w.get("code")), []).append(w)
@@ -314,8 +317,8 @@ def grouped_warnings(items: Sequence[Mapping[str, Any]]) -> list[str]:
                 names.append(name)
         subjects = "; ".join(", ".join(n) + (f" ({c})" if c else "") for c, n in where.items())
         out.append(f"{len(ws)} x {code}: {subjects} -- "
-                   f"{MEANING.get(code, 'each in full in the JSON (--json OUT)')}")
+                   f"{MEANING.get(code, f'each in full {place}')}")
     if len(out) < len(items):
         out.append(f"{len(items)} warnings in all, each in full in the JSON's \"warnings\" "
-                   "(--json OUT)")
+                   f"{place.removeprefix('in the JSON ')}")
     return out

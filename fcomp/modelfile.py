@@ -64,7 +64,8 @@ class ModelFile:
     ----------
     model : FrictionModel
         The seal's friction: the model with its effects and values, without the
-        measurement terms.
+        measurement terms, carrying the file's standard errors of its values
+        (:attr:`~fcomp.models.base.FrictionModel.stderr`).
     label : str
         The file as given (or ``"model document"``), for messages.
     measurement_effects : tuple of Effect
@@ -218,11 +219,13 @@ def read_model(source: str | Path | Mapping[str, Any],
     if bad:
         raise FileFormatError(f"{label}: measurement_terms.params.{bad[0]} is not a measurement "
                               f"term (known: {', '.join(MEASUREMENT_PARAMS)})")
-    stderr = {k: v for k, v in _section(doc.get("stderr", {}), label, "stderr").items()
-              if v is not None}
-    return ModelFile(model=model, label=label, measurement_effects=tuple(m_effects),
+    stderr = _values({k: v for k, v in _section(doc.get("stderr", {}), label,
+                                                 "stderr").items() if v is not None},
+                     label, "stderr")
+    return ModelFile(model=model.with_stderr(stderr), label=label,
+                     measurement_effects=tuple(m_effects),
                      measurement_params=m_params,
-                     stderr=_values(stderr, label, "stderr"),
+                     stderr=stderr,
                      source=dict(_section(doc.get("source", {}), label, "source")),
                      document=doc)
 

@@ -56,42 +56,61 @@ def cli_run(tmp_path_factory: pytest.TempPathFactory) -> dict:
 def test_json_contract(cli_run: dict) -> None:
     doc = cli_run["doc"]
     assert {"runs", "ratios", "robustness", "warnings", "models", "baseline", "plant",
-            "controllers", "tasks"} <= set(doc)
+            "controllers", "tasks", "truths", "mode", "across_truths"} <= set(doc)
     assert list(doc["models"]) == ["base", "diag"] and doc["baseline"] == "base"
     assert doc["tasks"] == ["steps"] and doc["controllers"] == ["pid-ff"]
+    assert doc["mode"] == "given" and list(doc["truths"]) == ["true"]
     assert len(doc["runs"]) == 2
     for r in doc["runs"]:
-        assert {"controller", "model", "task", "status", "rms_error", "max_error",
+        assert {"truth", "controller", "model", "task", "status", "rms_error", "max_error",
                 "reversal_error", "hunting"} <= set(r)
-        assert r["status"] == "ok" and r["model"] in ("base", "diag")
+        assert r["status"] == "ok" and r["model"] in ("base", "diag") and r["truth"] == "true"
     rob = doc["robustness"]
     assert rob["task"] == "steps" and rob["samples"] == 1 and len(rob["draws"]) == 1
-    assert set(rob["draws"][0]) >= {"Fc", "Fs", "r_neg", "mass"}
-    assert all(0.8 <= f <= 1.2 for f in rob["draws"][0].values())
+    draw = dict(rob["draws"][0])
+    assert draw.pop("truth") == "true"
+    assert set(draw) >= {"Fc", "Fs", "r_neg", "mass"}
+    assert all(0.8 <= f <= 1.2 for f in draw.values())
     assert rob["controllers"]["pid-ff"]["ratio"]["diag"]["paired_draws"] == 1
+
+
+def test_a_true_friction_that_is_a_compared_model_is_said(cli_run: dict) -> None:
+    """The contract's warning: the given true friction (true.json) is the compared model
+    diag (the same friction): circular, said once, and the conclusion is not sure."""
+    doc = cli_run["doc"]
+    assert doc["truths"]["true"]["equals"] == "diag"
+    said = [w for w in doc["warnings"] if w["code"] == "truth-is-compared"]
+    assert len(said) == 1 and "circular" in said[0]["message"]
+    assert "diag" in said[0]["message"]
+    from controllers.conclusions import of_compensation
+
+    assert of_compensation(doc).confidence == "low"
 
 
 def test_the_report_draws_the_ratios_the_errors_and_the_draws(cli_run: dict) -> None:
     html = (cli_run["folder"] / "report" / "report.html").read_text()
-    for heading in ("Ratios to the baseline", "Tracking errors", "Robustness", "Runs"):
+    for heading in ("What the plant ran", "Across the truths", "Ratios under each truth",
+                    "Not ranked", "Tracking errors", "Robustness", "Runs"):
         assert heading in html
-    assert html.count("<img") + html.count("<svg") >= 3
+    assert html.count("<img") + html.count("<svg") >= 4
 
 
 def test_ratios_follow_from_the_runs(cli_run: dict) -> None:
     doc = cli_run["doc"]
-    runs = {(r["controller"], r["task"], r["model"]): r for r in doc["runs"]}
-    for c, by_task in doc["ratios"].items():
-        for t, by_model in by_task.items():
-            for m, ratios in by_model.items():
-                assert m != doc["baseline"]
-                for e, value in ratios.items():
-                    num, den = runs[(c, t, m)][e], runs[(c, t, doc["baseline"])][e]
-                    if num is None or den is None or den == 0:
-                        assert value is None
-                    else:
-                        assert value == pytest.approx(num / den, rel=1e-12)
-    assert doc["ratios"]["pid-ff"]["steps"]["diag"]["rms_error"] is not None
+    runs = {(r["truth"], r["controller"], r["task"], r["model"]): r for r in doc["runs"]}
+    for truth, by_controller in doc["ratios"].items():
+        for c, by_task in by_controller.items():
+            for t, by_model in by_task.items():
+                for m, ratios in by_model.items():
+                    assert m != doc["baseline"]
+                    for e, value in ratios.items():
+                        num = runs[(truth, c, t, m)][e]
+                        den = runs[(truth, c, t, doc["baseline"])][e]
+                        if num is None or den is None or den == 0:
+                            assert value is None
+                        else:
+                            assert value == pytest.approx(num / den, rel=1e-12)
+    assert doc["ratios"]["true"]["pid-ff"]["steps"]["diag"]["rms_error"] is not None
 
 
 def test_the_python_api_gives_the_same_numbers(cli_run: dict) -> None:
@@ -120,7 +139,8 @@ def test_the_true_model_helps_the_model_based_compensator() -> None:
                      samples=0, workers=1)
     rms = {r["model"]: r["rms_error"] for r in res.runs}
     assert rms["true"] < rms["wrong"], rms
-    assert res.ratios["lugre-observer"]["low-velocity-ramp"]["true"]["rms_error"] < 0.5
+    truth = next(iter(res.truths))
+    assert res.ratios[truth]["lugre-observer"]["low-velocity-ramp"]["true"]["rms_error"] < 0.5
 
 
 def test_a_reference_file_is_tracked(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
@@ -143,7 +163,7 @@ def test_a_reference_file_is_tracked(tmp_path: Path, capsys: pytest.CaptureFixtu
     assert doc["tasks"] == ["move"] and {r["task"] for r in doc["runs"]} == {"move"}
     res = compensate(AXIS, true, [base, diag], controllers=("pid-ff",), reference=ref,
                      samples=0, workers=1, keep_signals=True)
-    sig = res.signals[("pid-ff", "diag", "move")]
+    sig = res.signals[("true", "pid-ff", "diag", "move")]
     assert sig["t"][-1] == pytest.approx(1.2)
     assert np.allclose(sig["r"], np.interp(sig["t"], t, x), atol=1e-12)
     assert abs(sig["x"][0] - x[0]) < 1e-5  # starts at the reference's first position
@@ -161,6 +181,9 @@ def test_a_reference_file_is_tracked(tmp_path: Path, capsys: pytest.CaptureFixtu
     ("outside", "outside the stroke"),
     ("one-model", "at least two models"),
     ("spread", "--spread"),
+    ("samples", "at most 1000"),
+    ("truth-draws", "at most 50"),
+    ("truths-and-friction", "no --truths or --truth-draws"),
 ])
 def test_bad_input_is_one_line_and_writes_nothing(case: str, words: str, tmp_path: Path,
                                                   capsys: pytest.CaptureFixture) -> None:
@@ -190,6 +213,14 @@ def test_bad_input_is_one_line_and_writes_nothing(case: str, words: str, tmp_pat
         args[args.index(f"{base},{diag}")] = str(base)
     elif case == "spread":
         args += ["--spread", "1.5"]
+    elif case == "samples":
+        args[args.index("--samples") + 1] = "100000000"
+    elif case == "truth-draws":
+        i = args.index("--friction")
+        del args[i:i + 2]
+        args += ["--truth-draws", "51"]
+    elif case == "truths-and-friction":
+        args += ["--truths", str(base)]
     code, out, err = _run(args, capsys)
     assert code == 2
     lines = err.strip().splitlines()

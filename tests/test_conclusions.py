@@ -110,25 +110,28 @@ def test_warnings_grouped_and_counted() -> None:
     assert grouped_warnings(items[3:]) == ["final model cv: the fit did not converge"]
 
 
-def _ratios(values: dict[str, dict[str, float]]) -> dict:
-    return {c: {t: {"diag": {"rms_error": r}} for t, r in per.items()}
-            for c, per in values.items()}
-
-
 def test_compensation_says_what_the_better_model_buys() -> None:
+    """A model better under every truth: recommended, with the range of its median-task
+    ratios; the robustness draws that disagree lower the confidence."""
     from controllers.conclusions import of_compensation
 
+    across = {"lugre-observer": {"diag": {"per_truth": {"base": 0.4, "diag": 0.7},
+                                          "holds": "better", "best": 0.4, "worst": 0.7}},
+              "pid": {"diag": {"per_truth": {"base": 1.0, "diag": 1.0}, "holds": "same",
+                               "best": 1.0, "worst": 1.0}}}
     doc = {"baseline": "base", "models": {"base": "b.json", "diag": "d.json"},
-           "controllers": ["pid", "lugre-observer"], "tasks": ["slow-sine", "steps"],
-           "ratios": _ratios({"pid": {"slow-sine": 1.0, "steps": 1.0},
-                              "lugre-observer": {"slow-sine": 0.4, "steps": 0.7}}),
+           "mode": "candidates", "truths": {"base": {"equals": "base"},
+                                            "diag": {"equals": "diag"}},
+           "controllers": ["pid", "lugre-observer"],
+           "uses_friction": {"pid": False, "lugre-observer": True},
+           "tasks": ["slow-sine", "steps"], "across_truths": across,
            "runs": [{"status": "ok"}] * 8,
            "robustness": {"controllers": {"lugre-observer": {"ratio": {"diag": {
-               "better": 0.5}}}}}}
+               "better": 0.5}}}}}, "warnings": []}
     c = of_compensation(doc)
-    assert c.finding.startswith("diag instead of base lowers the RMS tracking error: median "
-                                "ratio 0.55 over 2 controller-task pairs (2 better); best "
-                                "lugre-observer on slow-sine (0.40); pid uses no friction model")
+    assert c.finding == ("under every one of the 2 candidate truths, diag instead of base "
+                         "lowers the RMS tracking error of lugre-observer: median-task ratio "
+                         "0.40-0.70; pid uses no friction model")
     assert c.confidence == "medium"
     assert c.reasons == ("lugre-observer with diag is better in only 50 % of the robustness "
                          "draws",)

@@ -154,13 +154,13 @@ def test_ratio_bars_green_when_better_red_when_worse_plain_ticks() -> None:
 
     from matplotlib.colors import to_hex
 
-    from controllers.compensate import figure_ratios
+    from controllers.compensate_report import figure_ratios
     from fcomp.figstyle import COLORS
 
     res = SimpleNamespace(models={"base": "lugre", "diag": "lugre + x"}, baseline="base",
                           tasks=("steps",), controllers=("pid", "pid-ff"),
-                          ratios={"pid": {"steps": {"diag": {"rms_error": 0.5}}},
-                                  "pid-ff": {"steps": {"diag": {"rms_error": 3.0}}}})
+                          ratios={"true": {"pid": {"steps": {"diag": {"rms_error": 0.5}}},
+                                           "pid-ff": {"steps": {"diag": {"rms_error": 3.0}}}}})
     fig = figure_ratios(res)  # type: ignore[arg-type]
     fig.draw_without_rendering()
     ax = fig.axes[0]

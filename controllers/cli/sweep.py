@@ -12,7 +12,7 @@ import numpy as np
 
 from controllers import CONTROLLERS
 from controllers.conclusions import of_sweep
-from controllers.harness import LoopConfig, control_model
+from controllers.harness import LoopConfig, control_model, friction_label
 from controllers.robustness import Grid, Sweep, distributions, draw_distribution, run_jobs
 from controllers.tasks import TASKS
 from fcomp import figstyle as fs
@@ -110,8 +110,11 @@ def summary(doc: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
-def result(plan: Any, runs: list[dict[str, Any]]) -> dict[str, Any]:
-    """The JSON of a sweep (machine-dependent timings left out of the runs' metrics)."""
+def result(plan: Any, runs: list[dict[str, Any]], labels: list[str] | None = None
+           ) -> dict[str, Any]:
+    """The JSON of a sweep (machine-dependent timings left out of the runs' metrics); the
+    controllers' friction models of a grid are named by ``labels`` (as given: a name, a
+    model file) or by their descriptions."""
     clean = [{**r, "metrics": None if r["metrics"] is None else
               {k: v for k, v in r["metrics"].items() if not k.startswith("solve_time")}}
              for r in runs]
@@ -121,15 +124,20 @@ def result(plan: Any, runs: list[dict[str, Any]]) -> dict[str, Any]:
                            "runs": clean, "units": {"errors": "m"}}
     if isinstance(plan, Grid):
         doc["grid"] = {k: list(v) for k, v in plan.factors.items()}
-        doc["controller_frictions"] = list(plan.controller_frictions)
+        names = list(labels) if labels else [friction_label(f) for f in
+                                             plan.controller_frictions]
+        doc["controller_frictions"] = names
         points = []
-        for i, (mismatch, friction) in enumerate(plan.points()):
+        grid = plan.points()
+        per = len(grid) // max(len(names), 1)  # points per model (frictions outermost)
+        for i, (mismatch, friction) in enumerate(grid):
             mine = [r for r in clean if r["sample"] == i]
+            name = names[i // per] if names else friction_label(friction)
             label = ", ".join([f"{k}x{mismatch[k]:g}" for k in plan.factors]
-                              + ([f"controller model {friction}"]
+                              + ([f"controller model {name}"]
                                  if plan.controller_frictions else []))
             points.append({"point": i, "label": label, "mismatch": mismatch,
-                           "controller_friction": friction,
+                           "controller_friction": name,
                            "rms_error": {r["controller"]: (r["metrics"] or {}).get("rms_error")
                                          for r in mine}})
         doc["points"] = points
@@ -200,7 +208,8 @@ def run(args: argparse.Namespace) -> int:
                         progress=lambda done, total: bar.update(done - bar.n))
     finally:
         bar.close()
-    doc = common.with_warnings(result(plan, runs))
+    doc = common.with_warnings(result(plan, runs, common.name_list(
+        args.controller_friction, "--controller-friction")))
     command = "fcomp " + shlex.join(common.ARGV) if common.ARGV else None
     if folder is not None:
         with staged_folder(folder, "--report", "report", note=command or "fcomp sweep") as tmp:

@@ -34,10 +34,16 @@ controller from its measurement, as :meth:`controllers.base.Controller.reset`
 does from ``y0`` (the harness resets with the first sample's measurement).
 The compensation states are
 
-* ``pid``, ``pid-ff``: none (the feedforward map is static);
+* ``pid``, and ``pid-ff`` on a static map: none;
+* ``pid-ff`` on a dynamic model: its friction states along the reference, then the
+  side of motion;
 * ``lugre-observer``: the observer's friction states, then the side of motion;
 * ``ekf``: the scaled state estimate (``nx``), its covariance (``nx*nx``,
-  column-major) and the previous command.
+  column-major) and the previous command;
+
+and, for every controller that uses its friction model, last, the previous friction
+estimate ``F_prev`` (its lead through the force loop,
+:meth:`controllers.pid.PIDController.friction_demand`).
 
 The model functions a controller evaluates (force-rate grid, observer step,
 steady-state map, EKF prediction and friction) are the controller's own

@@ -19,19 +19,22 @@ RTOL = 1e-9
 
 
 def python_state(ctrl: Any) -> np.ndarray:
-    """The Python controller's state in the exported layout (:class:`StepExport`; after its
-    ``reset``, so ``started = 1``); behind the fail-safe layer
-    (:class:`controllers.safety.FailSafe`), the law's state (``started`` as the layer
-    started it) followed by the layer's."""
+    """The Python controller's state in the exported layout (:class:`StepExport`):
+    ``started = 1`` once it has stepped; reset but not yet stepped, ``started = 0`` (the
+    exported step then resets itself from the measurement, as the Python reset did, and
+    the friction estimate has no previous value for its lead); behind the fail-safe layer
+    (:class:`controllers.safety.FailSafe`), the law's state (not started while the layer
+    has not started it) followed by the layer's."""
     from controllers.ekf import EKFController
+    from controllers.feedforward import PIDFeedforwardController
     from controllers.lugre_observer import LuGreObserverController
     from controllers.mpc_fixed import FixedIterationMPC
     from controllers.safety import FailSafe
 
     if isinstance(ctrl, FailSafe):
         inner = python_state(ctrl.inner)
-        if not isinstance(ctrl.inner, FixedIterationMPC):
-            inner[0] = 1.0 if ctrl.started else 0.0
+        if not isinstance(ctrl.inner, FixedIterationMPC) and not ctrl.started:
+            inner[0] = 0.0
         return np.concatenate([inner, np.asarray(ctrl.state, dtype=float)])
     if isinstance(ctrl, FixedIterationMPC):
         kf = ctrl.ekf.kf
@@ -42,13 +45,21 @@ def python_state(ctrl: Any) -> np.ndarray:
                                [ctrl._u_prev], np.asarray(ctrl.solver.U, dtype=float),
                                np.zeros(2 * N) if lam is None else np.asarray(lam, dtype=float)])
     law = ctrl.law
-    parts = [np.array([1.0, law.integral, law.v_f, law.x_prev], dtype=float)]
+    # not stepped since its reset: the exported step resets itself from the measurement
+    # (started = 0), as the Python reset did; that is also where the lead has no
+    # previous estimate
+    started = 0.0 if ctrl._F_prev is None else 1.0
+    parts = [np.array([started, law.integral, law.v_f, law.x_prev], dtype=float)]
     if isinstance(ctrl, LuGreObserverController):
         parts += [np.asarray(ctrl.x_hat, dtype=float).ravel(), np.array([ctrl._side])]
     elif isinstance(ctrl, EKFController):
         kf = ctrl.ekf.kf
         parts += [np.asarray(kf.x, dtype=float)[:, 0],
                   np.asarray(kf.P, dtype=float).ravel(order="F"), np.array([ctrl._u_prev])]
+    elif isinstance(ctrl, PIDFeedforwardController) and ctrl.dynamic:
+        parts += [np.asarray(ctrl.x_ff, dtype=float).ravel(), np.array([ctrl._side])]
+    if ctrl.uses_friction:
+        parts.append(np.array([0.0 if ctrl._F_prev is None else ctrl._F_prev]))
     return np.concatenate(parts)
 
 

@@ -230,6 +230,7 @@ def _pid_law(ctrl: Any) -> _Law:
     g = ctrl.gains
     dt = float(ctrl.dt)
     layout = [("started", 1), ("integral", 1), ("v_f", 1), ("x_prev", 1)]
+    dynamic_ff = isinstance(ctrl, PIDFeedforwardController) and ctrl.dynamic
     if isinstance(ctrl, LuGreObserverController):
         nf = m.friction.n_states
         xh0 = np.asarray(m.friction.initial_state(), dtype=float).ravel()
@@ -242,12 +243,20 @@ def _pid_law(ctrl: Any) -> _Law:
         xi0, Pi0 = _ekf_start(m, ekf, sc)
         layout += [("ekf_x", nx), ("ekf_P", nx * nx), ("u_prev", 1)]
         note = "PID + EKF friction estimate (filterpy's EKF equations) + force-to-valve inversion"
+    elif dynamic_ff:
+        nf = m.friction.n_states
+        xh0 = np.asarray(m.friction.initial_state(), dtype=float).ravel()
+        layout += [("feedforward", nf), ("side", 1)]
+        note = "PID + friction feedforward along the reference + force-to-valve inversion"
     elif isinstance(ctrl, PIDFeedforwardController):
         note = "PID + static friction feedforward + force-to-valve inversion"
     else:
         note = "PID + force-to-valve inversion"
+    lead = bool(ctrl.uses_friction)
+    if lead:  # PIDController.friction_demand: the previous estimate, last
+        layout += [("F_prev", 1)]
     state0 = np.zeros(sum(k for _, k in layout))
-    if isinstance(ctrl, LuGreObserverController):
+    if isinstance(ctrl, LuGreObserverController) or dynamic_ff:
         state0[4:4 + nf] = xh0
         state0[4 + nf] = 1.0
     bounds = ctrl.integral_bounds
@@ -283,21 +292,31 @@ def _pid_law(ctrl: Any) -> _Law:
             xi_new, P_new, F_hat = _ekf_update(ekf, xi, P, u_prev, y)
             v_inv = xi_new[ctrl.iv] * float(sc[ctrl.iv])
             comp_next = [xi_new, ca.reshape(P_new, nx * nx, 1)]  # u_prev appended below
+        elif dynamic_ff:  # PIDFeedforwardController.compensation: along the reference
+            xf = ca.if_else(started, s[4:4 + nf], ca.DM(xh0))
+            side_prev = ca.if_else(started, s[4 + nf], 1.0)
+            side = ca.if_else(dr != 0, ca.if_else(dr > 0, 1.0, -1.0), side_prev)
+            xf_next, F_hat = ctrl._step(xf, ca.vertcat(dr, ddr, r, p1g, p2g, side), 0.0, dt)
+            comp_next = [xf_next, side]
         elif isinstance(ctrl, PIDFeedforwardController):
-            F_map = ctrl._map(dr, x, p1g, p2g)
+            F_map = ctrl._map(dr, r, p1g, p2g)
             F_hat = ca.if_else(dr == 0, 0.0, F_map * ca.fmin(ca.fabs(dr) / ctrl.band, 1.0))
         else:
             F_hat = ca.MX(0.0)
+        F_dem = F_hat
+        if lead:  # the estimate's lead through the force loop (none on the first step)
+            F_prev = ca.if_else(started, s[-1], F_hat)
+            F_dem = F_hat + (F_hat - F_prev) / (dt * ctrl.valve.bandwidth)
         if reenter is None:
             integral0: Any = 0.0
         else:  # bumpless: the demand equals the measured actuator force
-            other = m.mass * ddr + m.weight + (g.kp * e + g.kd * (dr - v_f)) + F_hat
+            other = m.mass * ddr + m.weight + (g.kp * e + g.kd * (dr - v_f)) + F_dem
             F_a = p1g * m.A1 - p2g * m.A2
             integral0 = ca.if_else(reenter, bumpless_integral(SYMBOLIC, F_a, other, g.ki, bounds),
                                    0.0)
         integral = ca.if_else(started, s[1], integral0)
         demand = (m.mass * ddr + m.weight + (g.kp * e + g.ki * integral + g.kd * (dr - v_f))
-                  + F_hat)
+                  + F_dem)
         applied = ca.fmin(ca.fmax(demand, m.force_min), m.force_max)
         u, sat = _valve_command(ctrl.valve, applied, y, v_inv)
         if g.ki == 0:
@@ -308,6 +327,8 @@ def _pid_law(ctrl: Any) -> _Law:
         integral_next = clamp_integral(SYMBOLIC, integral_next, bounds)
         if isinstance(ctrl, EKFController):
             comp_next.append(u)
+        if lead:
+            comp_next.append(F_hat)
         return u, ca.vertcat(1.0, integral_next, v_f, x, *comp_next)
 
     return _Law(graph=graph, state0=state0, layout=layout, note=note)

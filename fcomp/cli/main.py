@@ -135,7 +135,12 @@ def main(argv: Sequence[str] | None = None) -> int:
 
         common.say_deprecated(args)
 
-        for line in grouped_warnings(common.WARNINGS):
+        where = "in the JSON (--json OUT)"
+        if hasattr(args, "json"):  # say which file, or that none was written
+            where = ("(give --json OUT to keep them)" if args.json is None else
+                     "(on standard output)" if args.json == "-" else f"({args.json})")
+            where = "in the JSON " + where
+        for line in grouped_warnings(common.WARNINGS, where):
             sys.stderr.write(f"fcomp: warning: {plain(line)}\n")
     return code
 

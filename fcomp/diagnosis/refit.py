@@ -122,6 +122,9 @@ class FitResult:
         ``y - F_hat``, the plain residual (reported beside the deciding one).
     boxes : dict or None
         The boxes of parameters widened beyond their data box (:meth:`.boxes.DataBoxes.widen`).
+    stderr : dict or None
+        Standard errors of the fitted values by flat name, set when the fit's plausibility
+        is checked (:meth:`Refit.plausibility`; the model file's ``stderr``).
     timing_spread : (N,) N or None
         Width of the band from the timing windows alone (the prediction along the
         measured motion, widened by :func:`.scoring.timing_windows`): the part of ``spread``
@@ -150,6 +153,7 @@ class FitResult:
     plain: np.ndarray | None = dataclasses.field(default=None, repr=False)
     boxes: dict[str, tuple[float, float]] | None = None
     timing_spread: np.ndarray | None = dataclasses.field(default=None, repr=False)
+    stderr: dict[str, float] | None = None
 
     @property
     def located(self) -> np.ndarray:
@@ -528,6 +532,7 @@ class Refit:
         assert G is not None
         unc = estimate(G, r, theta)
         stderr = dict(zip(names, map(float, unc.stderr), strict=True))
+        fit.stderr = stderr
         ci = {n: (float(lo), float(hi))
               for n, lo, hi in zip(names, unc.ci_low, unc.ci_high, strict=True)}
         bounds = {n: (specs[n].lower, specs[n].upper) for n in names}

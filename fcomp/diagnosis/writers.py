@@ -79,10 +79,47 @@ def model_file(result: DiagnosisResult, source: Mapping[str, Any] | None = None
     from fcomp.models.document import model_document
 
     return model_document(result.fit.model, measurement=result.fit.values,
+                          stderr=result.fit.stderr,
                           source={"diagnosis": {"baseline": result.baseline_name,
                                                 "added": list(result.added),
-                                                "verdict": result.verdict.verdict},
+                                                "verdict": result.verdict.verdict,
+                                                "rivals": rivals(result)},
                                   **dict(source or {})})
+
+
+#: The other baseline's final model is a rival if its held-out RMS is within this factor of
+#: the final model's.
+RIVAL_RMS = 1.5
+
+
+def rivals(result: DiagnosisResult) -> list[dict[str, Any]]:
+    """The models the record could not tell from the final one, as model documents with why:
+    the other baseline's final model (when the baseline check ran and its held-out RMS is
+    within :data:`RIVAL_RMS` of the final one's), then each tied candidate of an accepted
+    step, refitted at that step (without the effects added after it). ``fcomp compensate``
+    runs them as candidate truths."""
+    from fcomp.models.document import model_document
+
+    out: list[dict[str, Any]] = []
+    other = result.other
+    if other is not None and other.fit.rms_test <= RIVAL_RMS * result.fit.rms_test:
+        out.append({"why": f"the diagnosis from {other.baseline_name} ends there (held-out "
+                           f"RMS {other.fit.rms_test:.4g} N)",
+                    "rms_heldout": _num(other.fit.rms_test),
+                    "model_file": model_document(other.fit.model,
+                                                 measurement=other.fit.values)})
+    for i, st in enumerate(result.steps, start=1):
+        if not (st.accepted and st.tie):
+            continue
+        for cand in st.candidates:
+            if cand.effect == st.effect or cand.effect not in st.tie or cand.fit is None:
+                continue
+            out.append({"why": f"tied with {st.effect} at step {i} (held-out RMS "
+                               f"{cand.rms_heldout:.4g} N)",
+                        "rms_heldout": _num(cand.rms_heldout),
+                        "model_file": model_document(cand.fit.model,
+                                                     measurement=cand.fit.values)})
+    return out
 
 
 def to_dict(result: DiagnosisResult) -> dict[str, Any]:

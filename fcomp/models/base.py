@@ -412,6 +412,27 @@ class FrictionModel(PlainValue, ABC):
             new.__dict__["_measurement"] = clean
         return new
 
+    @property
+    def stderr(self) -> dict[str, float]:
+        """Standard errors of the values by flat name, where an identification gave them (a
+        model file's ``stderr``, read by :func:`fcomp.modelfile.read_model`); empty for a
+        model whose values nobody estimated. A copy. The estimators of
+        :mod:`controllers` tune their process noise from it
+        (:mod:`controllers.estimator_tuning`)."""
+        return dict(self.__dict__.get("_stderr") or {})
+
+    def with_stderr(self, stderr: Mapping[str, float] | None) -> FrictionModel:
+        """A copy carrying the standard errors ``stderr`` (:attr:`stderr`; finite, >= 0; names
+        the model lacks are left out), replacing any it had; ``None``: none."""
+        flat = self.flat_params()
+        clean = {k: float(v) for k, v in (stderr or {}).items()
+                 if k in flat and math.isfinite(float(v)) and float(v) >= 0}
+        new = self._rebuild(self.params, self.effects)
+        new.__dict__.pop("_stderr", None)
+        if clean:
+            new.__dict__["_stderr"] = clean
+        return new
+
     def flat_params(self) -> dict[str, float]:
         """All parameters, model and effects, by flat name."""
         out = dict(self.params.flat())

@@ -112,7 +112,8 @@ def model_document(model: FrictionModel, *, stderr: Mapping[str, float] | None =
         effects go to ``measurement_terms``.
     stderr : mapping of str to float, optional
         Standard errors by flat name (names not in the file are left out; NaN
-        is written as ``null``).
+        is written as ``null``); default those the model carries
+        (:attr:`~fcomp.models.base.FrictionModel.stderr`, a model file's read back).
     measurement : mapping of str to float, optional
         Measurement values of a fit or diagnosis (``mass``, ``offset``, ``lag``;
         others are ignored), beside (and over) those the model carries
@@ -159,6 +160,8 @@ def model_document(model: FrictionModel, *, stderr: Mapping[str, float] | None =
         doc["features"] = sorted(fam.features)
     doc["effects"] = effects
     doc["params"] = params
+    if stderr is None:
+        stderr = model.stderr
     if stderr:
         known = set(params) | set(extras) | dropped
         doc["stderr"] = {k: (None if math.isnan(float(v)) else number(v, f"stderr.{k}"))

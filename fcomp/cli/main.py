@@ -32,7 +32,7 @@ from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from typing import Any
 
-from fcomp.cli import common
+from fcomp.cli import common, emit
 from fcomp.errors import FcompError
 from fcomp.version import __version__
 
@@ -118,15 +118,15 @@ def _signals_interrupt() -> Iterator[None]:
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
-    common.ARGV = list(sys.argv[1:] if argv is None else argv)
+    common.ARGV[:] = list(sys.argv[1:] if argv is None else argv)
     common.WARNINGS.clear()
     common.WRITTEN.clear()
     with warnings.catch_warnings(record=True) as caught, _signals_interrupt():
-        common.PYTHON_WARNINGS = caught
+        emit.PYTHON_WARNINGS = caught
         try:
             code = _run(args)
         finally:
-            common.PYTHON_WARNINGS = None
+            emit.PYTHON_WARNINGS = None
         if code == 0:
             for w in caught:
                 common.warn(*common.python_warning(w))

@@ -146,8 +146,22 @@ def process_pool(workers: int, *, spawn: bool = False) -> ProcessPoolExecutor:
     on macOS and Windows) rather than forked. Its workers never run the caller's
     ``__main__`` (:func:`pool_context`) and leave Ctrl-C and SIGTERM to the parent
     (:func:`stopping`)."""
-    return ProcessPoolExecutor(max_workers=workers, mp_context=pool_context(spawn),
-                               initializer=_worker_start, initargs=(user_sources(),))
+    return _Pool(max_workers=workers, mp_context=pool_context(spawn),
+                 initializer=_worker_start, initargs=(user_sources(),))
+
+
+class _Pool(ProcessPoolExecutor):
+    """A process pool that starts each worker with Ctrl-C and SIGTERM held off until the
+    worker is registered in the pool: a signal landing just as a worker started used to
+    leave it out of the pool's list, so :func:`stop` did not end it and the command hung
+    at exit waiting for it. The worker itself starts with the signals held, too, until
+    its first act (:func:`_worker_start`) has set its own handling."""
+
+    def _spawn_process(self) -> None:
+        from fcomp.outputs import signals_held
+
+        with signals_held():
+            super()._spawn_process()  # type: ignore[misc]
 
 
 #: Held while a worker process starts with the caller's ``__main__`` hidden.
@@ -281,6 +295,8 @@ def _worker_start(sources: tuple[tuple[str, str, str], ...]) -> None:
     the user's files are executed (:func:`fcomp.usercode.load_sources`)."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    if hasattr(signal, "pthread_sigmask"):  # held by the parent while it started this one
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT, signal.SIGTERM})
     load_sources(sources)
 
 

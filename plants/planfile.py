@@ -27,7 +27,7 @@ from __future__ import annotations
 import math
 import tomllib
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from importlib import resources
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -83,7 +83,8 @@ _RIG = {
     "rod": _k("plant:rod", "m", "rod diameter"),
     "stroke": _k("plant:stroke", "m", "stroke"),
     "mass": _k("plant:mass", "kg", "moving mass"),
-    "orientation": _k("rig:orientation", "-", "horizontal, vertical-up or vertical-down"),
+    "orientation": _k("rig:orientation", "-", "horizontal, vertical-up or vertical-down",
+                      False),
 }
 _MECHANICS = {
     "F_load": _k("plant:F_load", "N", "constant load opposing extension", False),
@@ -239,9 +240,22 @@ def builtin_path(kind: str) -> Path:
     return Path(str(resources.files("plants").joinpath("data", f"{kind}.toml")))
 
 
+#: The line of a template that names the plant: a placeholder, commented out, so that a file
+#: made from it is named after itself (its stem), never after the built-in plant.
+NAME_LINE = ('# name = "my-axis"          # the plant\'s name in every output (default: this '
+             "file's name without .toml)")
+
+
 def template(kind: str) -> str:
-    """The commented plant file of ``kind`` to start from (the built-in plant's)."""
-    return builtin_path(kind).read_text(encoding="utf-8")
+    """The commented plant file of ``kind`` to start from: the built-in plant's values,
+    its ``name`` line a commented placeholder (:data:`NAME_LINE`)."""
+    lines = builtin_path(kind).read_text(encoding="utf-8").splitlines(keepends=True)
+    return "".join(NAME_LINE + "\n" if line.startswith("name = ") else line
+                   for line in lines)
+
+
+#: Longest plant name (characters): a name becomes part of file names (figures, reports).
+NAME_MAX = 100
 
 
 def read_plant_file(path: str | Path) -> PlantFile:
@@ -271,18 +285,51 @@ def read_plant_file(path: str | Path) -> PlantFile:
         doc = tomllib.loads(read_text(p, label, what="TOML"))
     except tomllib.TOMLDecodeError as exc:
         raise FileFormatError(f"{label}: not valid TOML ({exc})") from None
-    return parse_plant(doc, label, default_name=p.stem)
+    pf = parse_plant(doc, label, default_name=p.stem)
+    builtin = {read_builtin_name(k): k for k in KINDS}
+    if pf.name in builtin and not _is_builtin(p):
+        import warnings
+
+        from fcomp.errors import FcompWarning
+
+        warnings.warn(FcompWarning(
+            "plant-name", f"{label}: name = {pf.name!r} is the built-in {builtin[pf.name]} "
+            f"plant's name (left from the template?): this plant is named {p.stem!r} after its "
+            "file; give it a name of its own (name = \"...\")"), stacklevel=2)
+        pf = replace(pf, name=p.stem)
+    return pf
+
+
+def read_builtin_name(kind: str) -> str:
+    """The name the shipped file of ``kind`` gives its plant."""
+    for line in builtin_path(kind).read_text(encoding="utf-8").splitlines():
+        if line.startswith("name = "):
+            return str(tomllib.loads(line)["name"])
+    return kind
+
+
+def _is_builtin(path: Path) -> bool:
+    from fcomp.outputs import same_file
+
+    return any(same_file(path, builtin_path(k)) for k in KINDS)
 
 
 def parse_plant(doc: Mapping[str, Any], label: str, default_name: str = "plant") -> PlantFile:
     """A plant file's document (parsed TOML) as a :class:`PlantFile`; ``label`` names it
     in messages. Raises :class:`PlantFileError` listing every bad value."""
     kind = doc.get("kind")
-    if kind not in SCHEMA:
+    if not isinstance(kind, str) or kind not in SCHEMA:
         raise PlantFileError([f"{label}: kind must be one of {', '.join(SCHEMA)} "
                               f"(got {kind!r})"])
     schema = SCHEMA[kind]
     problems: list[str] = []
+    name = doc.get("name", default_name)
+    if not isinstance(name, str) or not name.strip() or not name.isprintable():
+        problems.append(f"{label}: name = {name!r} must be text on one line (the plant's name "
+                        "in outputs; leave it out to name the plant after the file)")
+    elif len(name) > NAME_MAX:
+        problems.append(f"{label}: name is {len(name)} characters long, at most {NAME_MAX} (it "
+                        "becomes part of file names)")
     given: dict[str, tuple[str, str, Key, Any]] = {}  # target -> (table, key, Key, value)
     for k, v in doc.items():
         if k in TOP:
@@ -307,16 +354,17 @@ def parse_plant(doc: Mapping[str, Any], label: str, default_name: str = "plant")
     numbers: dict[str, float] = {}
     for target, (table, key, spec, value) in given.items():
         if target == "rig:orientation":
-            if value not in ORIENTATIONS:
+            if not isinstance(value, str) or value not in ORIENTATIONS:
                 problems.append(f"{label}: [rig] orientation must be one of "
                                 f"{', '.join(ORIENTATIONS)}, got {value!r}")
             continue
-        if isinstance(value, bool) or not isinstance(value, int | float) \
-                or not math.isfinite(value):
-            problems.append(f"{label}: [{table}] {key} = {value!r} is not a finite number "
+        number = _finite(value)
+        if number is None:
+            shown = f"{value!r}" if len(repr(value)) < 40 else f"{repr(value)[:20]}..."
+            problems.append(f"{label}: [{table}] {key} = {shown} is not a finite number "
                             f"({spec.unit})")
         else:
-            numbers[target] = float(value)
+            numbers[target] = number
     cls = KINDS[kind]
     values = _plant_values(cls, numbers, given, label, problems)
     sensors = {t.split(":", 1)[1]: v for t, v in numbers.items() if t.startswith("sensors:")}
@@ -324,14 +372,14 @@ def parse_plant(doc: Mapping[str, Any], label: str, default_name: str = "plant")
     for target, v in numbers.items():
         if target.startswith(("sensors:", "control:")):
             table, key, spec, _ = given[target]
-            low_ok = v >= 0 if target.startswith("sensors:") else v > 0
-            if not low_ok:
-                bound = ">= 0" if target.startswith("sensors:") else "> 0"
-                problems.append(f"{label}: [{table}] {key} = {v:g} {spec.unit} must be {bound} "
+            problem = _setting_problem(target, v, values)
+            if problem:
+                problems.append(f"{label}: [{table}] {key} = {v:g} {spec.unit} {problem} "
                                 f"({spec.doc})")
     orientation = given["rig:orientation"][3] if "rig:orientation" in given else "horizontal"
-    values["orient"] = ORIENTATIONS.get(orientation, 0.0)
-    pf = PlantFile(kind=kind, name=str(doc.get("name", default_name)), label=label,
+    values["orient"] = ORIENTATIONS.get(orientation, 0.0) \
+        if isinstance(orientation, str) else 0.0
+    pf = PlantFile(kind=kind, name=str(name), label=label,
                    values=values, sensors=sensors, control=control,
                    rig={"bore": values["bore"], "rod": values["rod"],
                         "stroke": values["stroke"], "mass": values["mass"],
@@ -340,6 +388,42 @@ def parse_plant(doc: Mapping[str, Any], label: str, default_name: str = "plant")
     if problems:
         raise PlantFileError(problems)
     return pf
+
+
+def _finite(value: Any) -> float | None:
+    """A TOML value as a finite float (``None``: not a number, not finite, or an integer
+    too large for a float)."""
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        return None
+    try:
+        number = float(value)
+    except OverflowError:
+        return None
+    return number if math.isfinite(number) else None
+
+
+#: Highest controller sample rate a plant file may give (Hz).
+RATE_MAX = 1e6
+
+
+def _setting_problem(target: str, v: float, values: Mapping[str, float]) -> str | None:
+    """Why a sensor or controller setting is out of range (``None``: it is not). A sensor's
+    quantum and noise are not negative and below the range they measure (the stroke, the
+    supply pressure); a limit, a rate or a tuning value is positive, the rate at most
+    :data:`RATE_MAX`."""
+    if target.startswith("sensors:"):
+        if v < 0:
+            return "must be >= 0"
+        span, what = ((values.get("stroke", math.inf), "the stroke") if target.startswith(
+            "sensors:x_") else (values.get("ps", math.inf), "the supply pressure ps"))
+        if v >= span:
+            return f"must be below {what} ({span:g})"
+        return None
+    if v <= 0:
+        return "must be > 0"
+    if target == "control:control_rate" and v > RATE_MAX:
+        return f"must be at most {RATE_MAX:g} Hz"
+    return None
 
 
 def _plant_values(cls: type[OdePlant], numbers: dict[str, float],
@@ -400,19 +484,50 @@ def _rated_valve(cls: type[OdePlant], numbers: dict[str, float], values: dict[st
             return
         u_max = numbers.get("control:u_max", 0.0)
         q, dp = numbers["rated:flow"], numbers["rated:dp"]
-        if not (q > 0 and dp > 0 and u_max > 0 and values["kv"] > 0 and values["rho"] > 0):
-            problems.append(f"{label}: [valve] rated_flow, rated_dp, u_max, kv and rho must be "
-                            "positive to convert the rating")
+        if not (q > 0 and dp > 0 and u_max > 0 and values["kv"] > 0 and values["rho"] > 0
+                and values["cd"] > 0):
+            problems.append(f"{label}: [valve] rated_flow, rated_dp, u_max, kv, cd and rho must "
+                            "be positive to convert the rating")
             return
-        values["w"] = q / (values["kv"] * u_max * math.sqrt(dp / values["rho"])) / values["cd"]
+        w = q / (values["kv"] * u_max * math.sqrt(dp / values["rho"])) / values["cd"]
+        if not math.isfinite(w):
+            problems.append(f"{label}: [valve] the rating rated_flow = {q:g} m^3/s at rated_dp "
+                            f"= {dp:g} Pa gives no finite area gradient w")
+            return
+        values["w"] = w
     else:
         if "plant:A_valve" in numbers:
             problems.append(f"{label}: [valve] give either A_valve or sonic_conductance, "
                             "not both")
             return
         gam = values["gamma_air"]
+        if not 1.0 < gam <= 2.0 or not values["R_air"] > 0:
+            return  # the bounds of gamma and R say why (below)
         psi_c = math.sqrt(gam * (2.0 / (gam + 1.0)) ** ((gam + 1.0) / (gam - 1.0)))
-        values["A_valve"] = numbers["rated:C"] * RHO0 * math.sqrt(values["R_air"] * T0) / psi_c
+        area = numbers["rated:C"] * RHO0 * math.sqrt(values["R_air"] * T0) / psi_c
+        if not math.isfinite(area):
+            problems.append(f"{label}: [valve] sonic_conductance = {numbers['rated:C']:g} "
+                            "m^3/(s Pa) gives no finite edge area")
+            return
+        values["A_valve"] = area
+
+
+def _hold_problem(pf: PlantFile) -> str | None:
+    """Why the piston cannot hold its load at rest (``None``: it can): the load and the
+    weight beyond the force the supply and return pressures can give
+    (:func:`plants.mechanics.force_range`)."""
+    from plants.mechanics import force_range, hold_force
+
+    v = pf.values
+    if not (v["bore"] > v["rod"] >= 0 and math.isfinite(v["ps"]) and math.isfinite(v["F_load"])):
+        return None
+    low, high = force_range(v)
+    hold = hold_force(v)
+    if low < hold < high:
+        return None
+    return (f"F_load = {v['F_load']:g} N with the weight ({hold - v['F_load']:g} "
+            f"N) asks the piston to hold {hold:.4g} N, beyond the {low:.4g} to {high:.4g} N its "
+            "pressures can give: lower the load or raise the supply pressure")
 
 
 def _cross_checks(pf: PlantFile, given: dict[str, tuple[str, str, Key, Any]]) -> list[str]:
@@ -432,8 +547,13 @@ def _cross_checks(pf: PlantFile, given: dict[str, tuple[str, str, Key, Any]]) ->
         if not v["b_crit"] < v["r_lam"]:
             out.append(f"{label}: [gas] r_lam = {v['r_lam']:g} must exceed b_crit = "
                        f"{v['b_crit']:g}")
+    load = _hold_problem(pf)
+    if load:
+        out.append(f"{label}: [mechanics] {load}")
+    spool = v["omega_v"] if pf.kind == "hydraulic" else v["tau_v"]
     rate = pf.control.get("control_rate")
-    if rate is not None and rate < pf.valve_bandwidth:
+    if rate is not None and spool > 0 and math.isfinite(pf.valve_bandwidth) \
+            and rate < pf.valve_bandwidth:
         key = "omega_v/(2 pi)" if pf.kind == "hydraulic" else "1/(2 pi tau_v)"
         out.append(f"{label}: [control] rate = {rate:g} Hz is below the valve bandwidth "
                    f"{pf.valve_bandwidth:.3g} Hz ({key}): the controller cannot act on the "
@@ -441,5 +561,5 @@ def _cross_checks(pf: PlantFile, given: dict[str, tuple[str, str, Key, Any]]) ->
     return out
 
 
-__all__ = ["KINDS", "PlantFile", "PlantFileError", "builtin_path", "builtin_plant_file",
-           "parse_plant", "read_plant_file", "template"]
+__all__ = ["KINDS", "NAME_MAX", "PlantFile", "PlantFileError", "builtin_path",
+           "builtin_plant_file", "parse_plant", "read_plant_file", "template"]

@@ -105,6 +105,7 @@ def run(args: argparse.Namespace) -> int:
         if not is_model_file(m):
             MODELS.get(m)
     plant = _plant(args)
+    _fitted_ranges(args, plant, models)
     n_jobs = _count(args, controllers, len(models))
     bar = progress_bar("compensate", n_jobs, enabled=not args.no_progress)
     try:
@@ -126,6 +127,20 @@ def run(args: argparse.Namespace) -> int:
         common.wrote(folder / "report.html")
     emit_result(result_text(doc), args.json, out, summary(doc))
     return 0
+
+
+def _fitted_ranges(args: argparse.Namespace, plant: Any, models: list[str]) -> None:
+    """Warn for each model file used beyond the ranges it was fitted on, before any run
+    (:func:`controllers.loop_range.range_warnings`)."""
+    from controllers.compensate import read_reference
+    from controllers.loop_range import range_warnings
+
+    tasks = ([read_reference(args.reference, plant.values["stroke"])] if args.reference
+             else [TASKS.get(args.task)] if args.task else [TASKS.get(n) for n in TASKS.names()])
+    for option, line in range_warnings([("--friction", args.friction),
+                                        *(("--controller-friction", m) for m in models)],
+                                       plant, tasks, args.fast, args.effects):
+        common.warn("fitted-range", line, option)
 
 
 def _count(args: argparse.Namespace, controllers: tuple[str, ...], n_models: int) -> int:

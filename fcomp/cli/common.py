@@ -43,6 +43,8 @@ from fcomp.cli.friction import (  # noqa: F401
     model_source,
     model_with_params,
     params_document,
+    refuse_params_with_model_file,
+    warn_fitted_range,
 )
 from fcomp.cli.helptext import (  # noqa: F401
     HelpFormatter,

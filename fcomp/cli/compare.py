@@ -139,6 +139,7 @@ def run(args: argparse.Namespace) -> int:
     from fcomp.api import compare
     from fcomp.measurement import Measurement
     from fcomp.modelfile import is_model_file
+    from fcomp.models.fitted_range import record_use
     from fcomp.outputs import staged_folder
     from fcomp.registry import PLANT_TOOLS, PLANTS
 
@@ -179,6 +180,8 @@ def run(args: argparse.Namespace) -> int:
     data = [Measurement.read(p) for p in args.data]
     for d in data:
         common.warn_sidecar(d)
+    common.warn_fitted_range(model, args.friction if is_model_file(args.friction) else
+                             args.params or model.describe(), "--friction", **record_use(data))
     with common.Activity(f"compare {args.friction}", enabled=not args.no_progress):
         comp = compare(data, model, fit=args.fit,
                        mass=args.mass if args.mass is not None else mass, split=args.split,

@@ -128,6 +128,24 @@ def wrote(path: Path) -> None:
     WRITTEN.append(path)
 
 
+def write_stdout(text: str, what: str) -> None:
+    """Write ``text`` (the command's product: ``what``) to standard output; one line if
+    standard output is closed (``>&-``: Python then has no ``sys.stdout`` at all)."""
+    from fcomp.errors import FcompError
+
+    if sys.stdout is None:
+        raise FcompError(f"standard output is closed: nowhere to write {what}; redirect it "
+                         "to a file (> FILE)")
+    try:
+        sys.stdout.write(text)
+        sys.stdout.flush()
+    except BrokenPipeError:
+        raise
+    except OSError as exc:
+        raise FcompError(f"standard output: cannot write {what} ({exc.strerror or exc})") \
+            from None
+
+
 def emit_result(text: str, json_arg: str | None, out: Path | None, summary: str) -> None:
     """Write a command's result: the JSON ``text`` alone to standard output for
     ``--json -``; otherwise the human ``summary``, then ``text`` to ``out``
@@ -135,7 +153,7 @@ def emit_result(text: str, json_arg: str | None, out: Path | None, summary: str)
     from fcomp.outputs import write_text
 
     if json_arg == "-":
-        sys.stdout.write(text)
+        write_stdout(text, "the JSON result (--json -)")
         return
     print(summary)
     for path in WRITTEN:

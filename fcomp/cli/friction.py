@@ -4,7 +4,6 @@
 from __future__ import annotations
 
 import argparse
-import json
 from typing import Any
 
 from fcomp.cli import emit
@@ -56,11 +55,7 @@ def model_with_params(args: argparse.Namespace, *, use: str = "plant friction",
     dropped with a warning). ``document``: the ``--params`` file already read
     (:func:`params_document`), not read again.
     """
-    from fcomp.modelfile import is_model_file
-
-    if args.params is not None and is_model_file(args.friction):
-        raise FcompError(f"--params {args.params}: the model file {args.friction} gives the "
-                         "values; change one with --set NAME=VALUE")
+    refuse_params_with_model_file(args.friction, args.params)
     return _friction(args.friction, args.params, args, use, measured=measured,
                      document=document)
 
@@ -92,16 +87,40 @@ def _friction(spec: str, params: str | None, args: argparse.Namespace, use: str,
     return (model.with_params(**overrides) if overrides else model), mass
 
 
+def warn_fitted_range(model: FrictionModel, label: str, option: str, **use: Any) -> None:
+    """Warn (code ``fitted-range``) for each signal of ``use`` (``x``, ``v``, ``p``: what the
+    command will meet) beyond the ranges ``model`` was fitted on; a use where the model is
+    meaningless is refused (:func:`fcomp.modelfile.check_range`)."""
+    from fcomp.modelfile import check_range
+
+    for line in check_range(model, label=label, **use):
+        warn("fitted-range", line, option)
+
+
+def refuse_params_with_model_file(friction: str | None, params: str | None,
+                                  plant_option: bool = False) -> None:
+    """The one rule of every command (docs/cli.md): a model file (``--friction MODEL.json``)
+    gives its friction's values, so ``--params`` beside it is refused -- change one value
+    with ``--set``; ``plant_option``: the command takes the plant's values from
+    ``--plant-params SET|PLANT.toml``, and the line says so."""
+    from fcomp.modelfile import is_model_file
+
+    if params is None or friction is None or not is_model_file(friction):
+        return
+    plant = "; the plant's values: --plant-params SET|PLANT.toml" if plant_option else ""
+    raise FcompError(f"--params {params}: the model file {friction} gives the friction's "
+                     f"values; change one with --set NAME=VALUE{plant}")
+
+
 def params_document(path: str) -> dict[str, Any]:
     """The JSON object of ``--params FILE.json`` (a fit's JSON or a model file), read once;
     one line naming the file on any problem."""
-    from fcomp.textdata import check_path, read_text
+    from fcomp.textdata import read_json
 
     try:
-        doc = json.loads(read_text(check_path(path, "parameter file"), path, what="JSON"))
-    except json.JSONDecodeError as exc:
-        raise FcompError(f"--params {path}: not valid JSON ({exc.msg}, line {exc.lineno})") \
-            from None
+        doc = read_json(path, "parameter file")
+    except FcompError as exc:
+        raise FcompError(f"--params {exc}") from None
     if not isinstance(doc, dict):
         raise FcompError(f"--params {path}: neither a fit's JSON nor a model file (a JSON "
                          "object is expected)")

@@ -8,7 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from fcomp.errors import FcompError
-from fcomp.outputs import InputSet, check_distinct, check_folder_target
+from fcomp.outputs import InputSet, check_distinct, check_folder_target, check_writable
 
 
 def model_target(path: str | None) -> Path | None:
@@ -119,6 +119,8 @@ def check_outputs(inputs: InputSet, files: list[tuple[str, Path | None]],
         check_folder_target(option, folder, kind)
         listed.append((option, folder, True))
     check_distinct(listed)
+    for option, path, _ in listed:  # writable, before the work: not found after a long run
+        check_writable(option, path)
 
 
 def plant_inputs(args: argparse.Namespace) -> InputSet:

@@ -174,8 +174,9 @@ def check_writable(option: str, path: Path) -> None:
     try:
         fd, probe = tempfile.mkstemp(prefix=".fcomp-probe.", suffix=".tmp", dir=where)
     except OSError as exc:
-        raise FcompError(f"{option} {path}: cannot write in {where} ({exc.strerror or exc}); "
-                         "choose another place (checked before any work)") from None
+        folder = "the current folder" if where == Path(".") else f"the folder {where}"
+        raise FcompError(f"{option} {path}: cannot write into {folder} ({exc.strerror or exc}); "
+                         "choose another place (nothing was done)") from None
     os.close(fd)
     os.unlink(probe)
 

@@ -447,11 +447,43 @@ def _plant_values(cls: type[OdePlant], numbers: dict[str, float],
     where = {t.split(":", 1)[1]: (g[0], g[1]) for t, g in given.items() if t.startswith("plant:")}
     for name, value in values.items():
         problem = _out_of_bounds(specs[name], value)
+        if problem is None and name in where:
+            problem = _implausible(name, value)
         if problem:
             table, key = where.get(name, ("defaults", name))
             problems.append(f"{label}: [{table}] {key} = {value:g} {specs[name].unit} "
                             f"{problem}")
     return values
+
+
+#: Plant parameter -> the range a real servo's value lies in (SI), where it is narrower than
+#: the parameter's own bounds (a file's value outside is a typo or a unit slip: refused).
+PLAUSIBLE: dict[str, tuple[float, float, str]] = {
+    "mass": (1e-3, 1e6, "a moving mass of 1 g to 1000 t"),
+    "bore": (1e-3, 2.0, "1 mm to 2 m"), "stroke": (1e-3, 20.0, "1 mm to 20 m"),
+    "ps": (1e4, 1e9, "0.1 to 10 000 bar"), "pt": (0.0, 1e9, "up to 10 000 bar"),
+    "p_atm": (3e4, 2e5, "an atmosphere, 0.3 to 2 bar"),
+    "beta": (1e6, 1e11, "10 bar to 1e6 bar"), "rho": (100.0, 2e4, "100 to 20 000 kg/m^3"),
+    "p_min": (0.0, 1e6, "up to 10 bar"), "dp_lam": (1.0, 1e7, "1 Pa to 100 bar"),
+    "V10": (0.0, 10.0, "up to 10 m^3"), "V20": (0.0, 10.0, "up to 10 m^3"),
+    "kv": (0.0, 1.0, "up to 1 m of spool per command unit"),
+    "omega_v": (1.0, 1e6, "1 to 1e6 rad/s"), "zeta_v": (0.01, 100.0, "0.01 to 100"),
+    "cd": (0.0, 1.0, "at most 1"), "w": (0.0, 1.0, "up to 1 m"),
+    "underlap": (0.0, 0.01, "up to 10 mm"),
+    "A_valve": (0.0, 1.0, "up to 1 m^2"), "tau_v": (1e-6, 10.0, "1 us to 10 s"),
+    "u_max": (1e-9, 1e6, "a command of full opening"),
+    "R_air": (1.0, 1e5, "1 to 1e5 J/(kg K)"), "T_air": (1.0, 5000.0, "1 to 5000 K"),
+    "F_load": (-1e9, 1e9, "within 1 GN"), "k_stop": (1.0, 1e13, "1 to 1e13 N/m"),
+}
+
+
+def _implausible(name: str, value: float) -> str | None:
+    """Why a file's value of the plant parameter ``name`` is no real servo's (``None``:
+    it is plausible, :data:`PLAUSIBLE`)."""
+    rng = PLAUSIBLE.get(name)
+    if rng is None or rng[0] <= value <= rng[1]:
+        return None
+    return f"is implausible (expected {rng[2]}; SI units)"
 
 
 def _out_of_bounds(spec: ParamSpec, value: float) -> str | None:

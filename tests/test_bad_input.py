@@ -959,7 +959,8 @@ def test_measurement_write_interrupted_keeps_the_old_pair(
 def test_unwritable_folder_names_the_output_not_its_temporary(
         lab: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch) -> None:
     """A read-only output folder (simulated: root writes anywhere) is reported with the file
-    asked for, never the hidden temporary name fcomp writes first."""
+    asked for, never the hidden temporary name fcomp writes first -- and before any work
+    (issue 42: it was found only after the whole run)."""
     import fcomp.outputs
 
     def mkstemp(prefix: str = "", suffix: str = "", dir: str | None = None) -> tuple[int, str]:
@@ -971,7 +972,8 @@ def test_unwritable_folder_names_the_output_not_its_temporary(
     before = snapshot(lab)
     code, _, err = _run([*shlex.split(FIT), "--json", "ro.json"], capsys)
     assert code == 2
-    assert err == "fcomp: error: ro.json: cannot write (Permission denied); nothing was written\n"
+    assert err == ("fcomp: error: --json ro.json: cannot write into the current folder "
+                   "(Permission denied); choose another place (nothing was done)\n")
     assert snapshot(lab) == before
 
 

@@ -106,6 +106,33 @@ def summary(doc: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
+def _undetermined(args: argparse.Namespace, document: dict[str, Any] | None
+                  ) -> FitWarning | None:
+    """A ``not-identified`` warning for the parameters the model's own file says were not
+    determined when it was fitted (``stderr`` ``null`` in the model file or the fit's JSON):
+    compare then trusts the model as little as the fit or diagnosis that made it did."""
+    from fcomp.modelfile import is_model_file
+
+    if is_model_file(args.friction):
+        source, doc = args.friction, common.params_document(args.friction)
+    elif document is not None:
+        source, doc = args.params, document
+    else:
+        return None
+    inner = doc.get("model_file")
+    if "format" not in doc and isinstance(inner, dict):
+        doc = inner
+    stderr = doc.get("stderr")
+    names = sorted(k for k, v in (stderr or {}).items() if v is None) \
+        if isinstance(stderr, dict) else []
+    if not names:
+        return None
+    return FitWarning("not-identified", ",".join(names),
+                      f"{source}: {', '.join(names)} not determined by the fit that made this "
+                      "model (no standard error in the file): their values are not to be "
+                      "trusted")
+
+
 def _fit_cutoff(doc: dict[str, Any] | None) -> float | None:
     """The cut-off (Hz) of a fit's JSON given as ``--params``, if not the default: compared
     with it, the model scores the fit's RMS."""
@@ -192,7 +219,10 @@ def run(args: argparse.Namespace) -> int:
             "default-params", "params", f"the model {model.describe()} is compared with its "
             f"default values: give {term('params')} (a fit's JSON or a parameter set) or "
             "--fit for a model that belongs to these records")])
-    doc = common.with_warnings(comp.to_dict())
+    undetermined = _undetermined(args, document)
+    if undetermined is not None:  # as the fit that made the model said: not to be trusted
+        comp = replace(comp, warnings=[*comp.warnings, undetermined])
+    doc = common.with_warnings({**comp.to_dict(), "friction": args.friction})
     text = result_text(doc)
     command = "fcomp " + shlex.join(common.ARGV) if common.ARGV else None
     if report is not None:

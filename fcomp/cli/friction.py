@@ -108,7 +108,7 @@ def refuse_params_with_model_file(friction: str | None, params: str | None,
     if params is None or friction is None or not is_model_file(friction):
         return
     plant = "; the plant's values: --plant-params SET|PLANT.toml" if plant_option else ""
-    raise FcompError(f"--params {params}: the model file {friction} gives the friction's "
+    raise FcompError(f"--params {params}: the model file {friction} gives the "
                      f"values; change one with --set NAME=VALUE{plant}")
 
 

@@ -233,7 +233,7 @@ def build_report(diag: Diagnosis, *, command: str | None = None) -> Report:
                       f"Final model: `{d['model']}`.")
     else:
         rep.paragraph("No effect qualified: the baseline is kept.")
-    kind = "ok" if d["verdict"] == "explained" and not d["baseline_dependent"] else "warn"
+    kind = of_diagnosis(d).tone  # the conclusion's colour: never green beside "How sure: low"
     if d["verdict"] == "explained":
         rep.note(f"Verdict `explained` -- {d['reason']}.", kind=kind)
     else:

@@ -287,6 +287,8 @@ PLANTS: dict[str, tuple[str, list[tuple[str, str, str | None]], str, tuple[str, 
 
 def plant_files(hyd: str, pneu: str) -> dict[str, str | bytes]:
     out: dict[str, str | bytes] = {}
+    hyd = _set(hyd, "", "name", '"lab-hydraulic"')  # a file of the user's, named by them
+    pneu = _set(pneu, "", "name", '"lab-pneumatic"')
     for stem, (base, edits, *_rest) in PLANTS.items():
         text = hyd if base == "h" else pneu
         for table, key, value in edits:
@@ -357,8 +359,7 @@ def model_files() -> dict[str, str | bytes]:
                            '"effects": [{"name": "position-dependence", '
                            '"config": {"x_min": NaN}}]}',
         "m_features_order.json": _model({**LUGRE, "features": [
-            "viscous", "stribeck", "presliding", "damping", "bristle-exponent",
-            "stribeck-form"]}),
+            "viscous", "stribeck", "presliding", "damping"]}),
         "m_features_wrong.json": _model({**LUGRE, "features": ["viscous"]}),
         "m_features_int.json": _model({**LUGRE, "features": 5}),
         "m_param_text.json": _model({**LUGRE, "params": {"Fc": "a"}}),
@@ -385,13 +386,58 @@ def model_files() -> dict[str, str | bytes]:
         "m_range_inverted.json": _model({**LUGRE, "fitted_range": {"x": [0.3, 0.0]}}),
         "m_range_key.json": _model({**LUGRE, "fitted_range": {"colour": [0, 1]}}),
         "m_range_text.json": _model({**LUGRE, "fitted_range": "wide"}),
-        "m_ok_infstring.json": _model({**LUGRE, "effects": [{"name": "stribeck"}],
-                                       "params": {"Fc": 1.0}}),
+        "m_ok_extended.json": _model({"format": "fcomp-model", "version": 1, "model": "coulomb",
+                                      "effects": [{"name": "stribeck"}, {"name": "viscous"}],
+                                      "params": {"Fc": 20.0, "Fs": 35.0, "vs": 0.01, "n": 2.0,
+                                                 "sigma2": 100.0}}),
         "fit_other.json": _model({"model": "coulomb", "params": {"Fc": 1.0}}),
         "fit_multi.json": _model({"model": "lugre", "records": [{}, {}]}),
         "fit_dup.json": '{"model": "lugre", "params": {"Fc": 1.0, "Fc": 3.0}}',
     }
     return m
+
+
+#: Model-file variants: file stem -> (expectation, what the line names, issue item).
+MODELS: dict[str, tuple[str, tuple[str, ...], str]] = {
+    "m_notjson": ("refuse", (), ""), "m_empty": ("refuse", (), ""),
+    "m_array": ("refuse", (), ""), "m_string": ("refuse", (), ""),
+    "m_deep_list": ("refuse", ("too deep",), "8"),
+    "m_deep_dict": ("refuse", ("too deep",), "8"),
+    "m_dup_top": ("refuse", ("model",), "10"), "m_dup_params": ("refuse", ("Fc",), "10"),
+    "m_bigint": ("refuse", ("Fc",), "5"), "m_hugeint": ("refuse", ("Fc",), "8"),
+    "m_1e400": ("refuse", ("Fc",), ""), "m_nan": ("refuse", ("NaN",), ""),
+    "m_infinity": ("refuse", ("Infinity",), ""), "m_version2": ("refuse", ("version",), ""),
+    "m_version_text": ("refuse", ("version",), ""),
+    "m_version_bool": ("refuse", ("version",), ""),
+    "m_version_bigint": ("refuse", ("version",), ""),
+    "m_no_format": ("refuse", ("format",), ""), "m_unknown_key": ("refuse", ("colour",), ""),
+    "m_model_unknown": ("refuse", ("magic",), ""), "m_model_int": ("refuse", ("model",), ""),
+    "m_effects_dict": ("refuse", ("effects",), ""), "m_effects_int": ("refuse", ("effects",), ""),
+    "m_effect_unknown": ("refuse", ("magic",), ""),
+    "m_effect_key": ("refuse", ("colour",), ""),
+    "m_config_typo": ("refuse-or-warn", ("x_mni",), "10"),
+    "m_config_list": ("refuse", ("config",), ""),
+    "m_config_form": ("refuse", ("form",), ""),
+    "m_xmin_eq": ("refuse", ("x_min",), "5"), "m_xmin_gt": ("refuse", ("x_min",), "10"),
+    "m_xmin_text": ("refuse", ("x_min",), ""), "m_xmin_nan": ("refuse", ("NaN",), ""),
+    "m_features_order": ("ok", (), "8"), "m_features_wrong": ("refuse", ("features",), ""),
+    "m_features_int": ("refuse", ("features",), ""),
+    "m_param_text": ("refuse", ("Fc",), ""), "m_param_bool": ("refuse", ("Fc",), ""),
+    "m_param_negative": ("refuse", ("Fc",), ""), "m_param_unknown": ("refuse", ("zz",), ""),
+    "m_param_huge": ("refuse", ("sigma0",), ""), "m_params_list": ("refuse", ("params",), ""),
+    "m_mass_negative": ("refuse", ("mass",), "10"), "m_mass_huge": ("refuse", ("mass",), ""),
+    "m_lag_negative": ("refuse", ("lag",), ""), "m_terms_key": ("refuse", ("colour",), ""),
+    "m_terms_param": ("refuse", ("zz",), ""),
+    "m_terms_ok": ("warn", ("measurement terms",), ""),
+    "m_stderr_text": ("refuse", ("stderr",), ""), "m_source_int": ("refuse", ("source",), ""),
+    "m_user_effect": ("refuse", ("my_effects.py",), ""), "m_binary": ("refuse", (), ""),
+    "m_utf16": ("ok", (), ""), "m_bom": ("ok", (), ""), "m_trailing": ("refuse", (), ""),
+    "m_range_bad": ("refuse", ("fitted_range",), "11"),
+    "m_range_inverted": ("refuse", ("fitted_range",), "11"),
+    "m_range_key": ("refuse", ("colour",), "11"),
+    "m_range_text": ("refuse", ("fitted_range",), "11"),
+    "m_ok_extended": ("ok", (), ""),
+}
 
 
 # ---- references --------------------------------------------------------------------
@@ -499,52 +545,12 @@ def cases() -> list[Case]:
              "{fcomp} plant check my-axis.toml --json check.json", "ok", (), "16", shell=True,
              check=_name_check("seed000-servo")))
     # ---- model files ----
-    model_expect: dict[str, tuple[str, tuple[str, ...], str]] = {
-        "m_notjson": ("refuse", (), ""), "m_empty": ("refuse", (), ""),
-        "m_array": ("refuse", (), ""), "m_string": ("refuse", (), ""),
-        "m_deep_list": ("refuse", ("too deep",), "8"),
-        "m_deep_dict": ("refuse", ("too deep",), "8"),
-        "m_dup_top": ("refuse", ("model",), "10"), "m_dup_params": ("refuse", ("Fc",), "10"),
-        "m_bigint": ("refuse", ("Fc",), "5"), "m_hugeint": ("refuse", ("Fc",), "8"),
-        "m_1e400": ("refuse", ("Fc",), ""), "m_nan": ("refuse", ("Fc",), ""),
-        "m_infinity": ("refuse", ("Fc",), ""), "m_version2": ("refuse", ("version",), ""),
-        "m_version_text": ("refuse", ("version",), ""),
-        "m_version_bool": ("refuse", ("version",), ""),
-        "m_version_bigint": ("refuse", ("version",), ""),
-        "m_no_format": ("refuse", ("format",), ""), "m_unknown_key": ("refuse", ("colour",), ""),
-        "m_model_unknown": ("refuse", ("magic",), ""), "m_model_int": ("refuse", ("model",), ""),
-        "m_effects_dict": ("refuse", ("effects",), ""), "m_effects_int": ("refuse", ("effects",), ""),
-        "m_effect_unknown": ("refuse", ("magic",), ""),
-        "m_effect_key": ("refuse", ("colour",), ""),
-        "m_config_typo": ("refuse-or-warn", ("x_mni",), "10"),
-        "m_config_list": ("refuse", ("config",), ""),
-        "m_config_form": ("refuse", ("form",), ""),
-        "m_xmin_eq": ("refuse", ("x_min",), "5"), "m_xmin_gt": ("refuse", ("x_min",), "10"),
-        "m_xmin_text": ("refuse", ("x_min",), ""), "m_xmin_nan": ("refuse", ("x_min",), ""),
-        "m_features_order": ("ok", (), "8"), "m_features_wrong": ("refuse", ("features",), ""),
-        "m_features_int": ("refuse", ("features",), ""),
-        "m_param_text": ("refuse", ("Fc",), ""), "m_param_bool": ("refuse", ("Fc",), ""),
-        "m_param_negative": ("refuse", ("Fc",), ""), "m_param_unknown": ("refuse", ("zz",), ""),
-        "m_param_huge": ("refuse", ("sigma0",), ""), "m_params_list": ("refuse", ("params",), ""),
-        "m_mass_negative": ("refuse", ("mass",), "10"), "m_mass_huge": ("refuse", ("mass",), ""),
-        "m_lag_negative": ("refuse", ("lag",), ""), "m_terms_key": ("refuse", ("colour",), ""),
-        "m_terms_param": ("refuse", ("zz",), ""),
-        "m_terms_ok": ("warn", ("measurement terms",), ""),
-        "m_stderr_text": ("refuse", ("stderr",), ""), "m_source_int": ("refuse", ("source",), ""),
-        "m_user_effect": ("refuse", ("my_effects.py",), ""), "m_binary": ("refuse", (), ""),
-        "m_utf16": ("ok", (), ""), "m_bom": ("ok", (), ""), "m_trailing": ("refuse", (), ""),
-        "m_range_bad": ("refuse", ("fitted_range",), "11"),
-        "m_range_inverted": ("refuse", ("fitted_range",), "11"),
-        "m_range_key": ("refuse", ("colour",), "11"),
-        "m_range_text": ("refuse", ("fitted_range",), "11"),
-        "m_ok_infstring": ("ok", (), ""),
-    }
-    for stem, (expect, match, item) in model_expect.items():
+    for stem, (expect, match, item) in MODELS.items():
         add(Case(f"simulate-model-{stem}", f"{SIM} --friction {stem}.json", expect,
                  ((f"{stem}.json",) if expect.startswith("refuse") else ()) + match, item))
     for stem in ("m_deep_list", "m_dup_top", "m_bigint", "m_hugeint", "m_xmin_eq",
                  "m_config_typo", "m_features_order", "m_mass_negative"):
-        expect, match, item = model_expect[stem]
+        expect, match, item = MODELS[stem]
         name = (f"{stem}.json",) if expect.startswith("refuse") else ()
         add(Case(f"compare-model-{stem}", f"compare rec.csv --friction {stem}.json",
                  "refuse-or-warn" if expect == "ok" else expect, name + match, item))

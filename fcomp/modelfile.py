@@ -47,7 +47,7 @@ from fcomp.models.document import (
     save_model,
 )
 from fcomp.models.fitted_range import OutOfRangeError, check_range
-from fcomp.parameters import ParamSet
+from fcomp.parameters import MAX_VALUE, ParamSet
 
 #: Keys of a model file (``format`` .. ``source``).
 KEYS = ("format", "version", "model", "description", "features", "effects", "params",
@@ -169,7 +169,8 @@ def is_model_file(spec: str | Path) -> bool:
 
 
 def read_model(source: str | Path | Mapping[str, Any],
-               effects_module: str | Path | None = None) -> ModelFile:
+               effects_module: str | Path | None = None, *, label: str | None = None
+               ) -> ModelFile:
     """Read a model file (a path, or its document as a mapping).
 
     Parameters
@@ -180,6 +181,8 @@ def read_model(source: str | Path | Mapping[str, Any],
     effects_module : str or Path, optional
         A Python file registering the user effects the model uses (``--effects``;
         it is executed).
+    label : str, optional
+        How messages name a document given as a mapping (default ``"model document"``).
 
     Returns
     -------
@@ -193,7 +196,7 @@ def read_model(source: str | Path | Mapping[str, Any],
     if effects_module is not None:
         load_effects_module(effects_module)
     if isinstance(source, Mapping):
-        label, doc = "model document", dict(source)
+        label, doc = label or "model document", dict(source)
     else:
         label, doc = str(source), _read_json(source)
     if "format" not in doc and isinstance(doc.get("model_file"), Mapping):
@@ -333,6 +336,9 @@ def _values(section: Any, label: str, key: str) -> dict[str, float]:
         if number is None:
             raise FileFormatError(f"{label}: {key}.{k} = {_shown(v)} is not a finite number in "
                                   "floating-point range (SI units; \"inf\" for infinity)")
+        if math.isfinite(number) and abs(number) > MAX_VALUE:
+            raise FileFormatError(f"{label}: {key}.{k} = {number:g} is beyond any plausible "
+                                  "value in SI units (\"inf\" for infinity)")
         out[k] = number
     return out
 

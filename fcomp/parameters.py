@@ -136,6 +136,10 @@ class ClassRecipe(NamedTuple):
         return self.factory(*self.args)
 
 
+#: Largest magnitude of a number the user gives in SI units (the command line's values,
+#: a model file's): beyond it no rig has a value, whatever the unit.
+MAX_VALUE = 1e15
+
 #: Class attribute holding a factory-made class's :class:`ClassRecipe`.
 RECIPE = "__recipe__"
 

@@ -94,14 +94,42 @@ def _constant(name: str) -> Any:
     raise _ConstantError(name)
 
 
+#: Most digits of an integer Python converts from text (``sys.get_int_max_str_digits``).
+INT_DIGITS = 4300
+
+
+class HugeInteger(float):
+    """An integer in a JSON file too long for Python to read (more than :data:`INT_DIGITS`
+    digits): an infinite float -- refused wherever a finite number is due -- that says what
+    it was (``<an integer of 5001 digits>``), so the message names its key."""
+
+    digits: int
+
+    def __new__(cls, text: str) -> HugeInteger:
+        obj = super().__new__(cls, -math.inf if text.startswith("-") else math.inf)
+        obj.digits = len(text.lstrip("-"))
+        return obj
+
+    def __repr__(self) -> str:
+        return f"<an integer of {self.digits} digits>"
+
+    __str__ = __repr__
+
+
+def _int(text: str) -> Any:
+    return int(text) if len(text.lstrip("-")) <= INT_DIGITS else HugeInteger(text)
+
+
 def parse_json(text: str, label: str, hint: str = "") -> Any:
     """``text`` as strict JSON; one :class:`~fcomp.errors.FileFormatError` line naming
     ``label`` for anything else: invalid JSON (``hint``, e.g. which command writes such a
     file, appended), a key given twice in one object (JSON readers keep the last one
-    silently: which was meant?), ``NaN`` or ``Infinity`` (not JSON), nesting too deep or a
-    number too long to read."""
+    silently: which was meant?), ``NaN`` or ``Infinity`` (not JSON), nesting too deep. An
+    integer too long for Python (:data:`INT_DIGITS`) is read as a :class:`HugeInteger`, so
+    that the key holding it is named where a finite number is due."""
     try:
-        return json.loads(text, object_pairs_hook=_pairs, parse_constant=_constant)
+        return json.loads(text, object_pairs_hook=_pairs, parse_constant=_constant,
+                          parse_int=_int)
     except _DuplicateKeyError as exc:
         raise FileFormatError(f"{label}: the key {exc.key!r} is given twice in one object "
                               "(a JSON reader would keep the last one silently; keep one)"

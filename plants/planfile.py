@@ -277,14 +277,19 @@ def read_plant_file(path: str | Path) -> PlantFile:
     PlantFileError
         Bad values: one line each, all of them.
     """
+    from fcomp.errors import FcompError
     from fcomp.textdata import check_path, read_text
 
     label = str(path)
-    p = check_path(path, "plant file")
     try:
+        p = check_path(path, "plant file")
         doc = tomllib.loads(read_text(p, label, what="TOML"))
     except tomllib.TOMLDecodeError as exc:
         raise FileFormatError(f"{label}: not valid TOML ({exc})") from None
+    except FileFormatError:
+        raise
+    except FcompError as exc:  # missing, a folder, not text: a file this release cannot read
+        raise FileFormatError(str(exc)) from None
     pf = parse_plant(doc, label, default_name=p.stem)
     builtin = {read_builtin_name(k): k for k in KINDS}
     if pf.name in builtin and not _is_builtin(p):

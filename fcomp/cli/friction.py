@@ -146,7 +146,7 @@ def _values_file(name: str, path: str, effects: str | None, use: str, measured: 
     if effects is not None:
         load_effects_module(effects)
     if "format" in doc or (not measured and isinstance(doc.get("model_file"), dict)):
-        mf = read_model(doc, effects)
+        mf = read_model(doc, effects, label=source)
         if measured:
             return mf.measured_model(), mf.mass
         if mf.measurement_terms:

@@ -10,10 +10,8 @@ from collections.abc import Callable, Sequence
 from typing import Any
 
 from fcomp.errors import FcompError, deprecation_message
+from fcomp.parameters import MAX_VALUE  # noqa: F401 (the one limit of numbers given)
 from fcomp.registry import COMMANDS
-
-#: Largest magnitude accepted for a number given on the command line (SI units).
-MAX_VALUE = 1e15
 
 
 def finite_float(text: str) -> float:

@@ -139,36 +139,50 @@ def name_max(folder: Path) -> int:
         return 255
 
 
+def _exists(path: Path) -> bool:
+    """Whether ``path`` exists; a name the system cannot even look up (too long) does not."""
+    try:
+        os.stat(path)
+    except (OSError, ValueError):
+        return False
+    return True
+
+
 def _existing_folder(path: Path) -> Path:
     """The nearest folder of ``path``'s parents that exists (where writing starts)."""
     p = path.parent
-    while not p.exists() and p != p.parent:
+    while not _exists(p) and p != p.parent:
         p = p.parent
     return p
+
+
+def check_name_length(option: str, path: Path) -> None:
+    """Refuse an output whose name -- or a folder to create on the way -- is longer than
+    the file system takes (before anything looks the path up: such a name fails every
+    call, "File name too long")."""
+    where = _existing_folder(path)
+    limit = name_max(where)
+    p = path
+    while p != where and p != p.parent:
+        size = len(os.fsencode(p.name))
+        if size > limit:
+            raise FcompError(f"{option} {path}: the name {p.name[:24]}... is {size} bytes "
+                             f"long, more than the {limit} a file name may have here; choose "
+                             "a shorter one")
+        p = p.parent
 
 
 def check_writable(option: str, path: Path) -> None:
     """Refuse, before any work, an output ``path`` (a file, or a folder fcomp builds) that
     cannot be written: a name (or a folder to create on the way) longer than the file
-    system takes, or a folder where this process may not create files (read-only, no
-    permission, a read-only file system) -- found by creating and removing a hidden
-    file there, as writing will. A device or named pipe (``/dev/null``) is written as it
-    is and not probed."""
-    if path.exists() and not path.is_file() and not path.is_dir():
+    system takes (:func:`check_name_length`), or a folder where this process may not create
+    files (read-only, no permission, a read-only file system) -- found by creating and
+    removing a hidden file there, as writing will. A device or named pipe (``/dev/null``)
+    is written as it is and not probed."""
+    check_name_length(option, path)
+    if _exists(path) and not path.is_file() and not path.is_dir():
         return
     where = _existing_folder(path)
-    limit = name_max(where)
-    missing = [path.name]
-    p = path.parent
-    while not p.exists() and p != p.parent:
-        missing.append(p.name)
-        p = p.parent
-    for name in missing:
-        size = len(os.fsencode(name))
-        if size > limit:
-            raise FcompError(f"{option} {path}: the name {name[:24]}... is {size} bytes long, "
-                             f"more than the {limit} a file name may have here; choose a "
-                             "shorter one")
     if not where.is_dir():
         return  # a file where a folder should be: said by the callers' own checks
     try:
@@ -332,6 +346,7 @@ def _fcomp_folder(path: Path, kind: str) -> bool:
 
 def check_folder_target(option: str, path: Path, kind: str) -> None:
     """Refuse an output folder fcomp may not replace (before any work is done)."""
+    check_name_length(option, path)
     if path.exists() and not path.is_dir():
         raise FcompError(f"{option} {path}: exists and is not a directory")
     if _within(Path.cwd(), path):

@@ -8,7 +8,13 @@ from pathlib import Path
 from typing import Any
 
 from fcomp.errors import FcompError
-from fcomp.outputs import InputSet, check_distinct, check_folder_target, check_writable
+from fcomp.outputs import (
+    InputSet,
+    check_distinct,
+    check_folder_target,
+    check_name_length,
+    check_writable,
+)
 
 
 def model_target(path: str | None) -> Path | None:
@@ -19,6 +25,7 @@ def model_target(path: str | None) -> Path | None:
     if not path.strip():
         raise FcompError("--save-model: no file name given (an empty argument)")
     out = Path(path)
+    check_name_length("--save-model", out)
     if out.suffix.lower() != ".json" or not out.stem:
         raise FcompError(f"--save-model {path}: a model file ends in .json")
     if out.is_dir():
@@ -45,6 +52,7 @@ def output_path(path: str, suffix: str = ".csv", option: str = "-o") -> Path:
     if not path.strip():
         raise FcompError(f"{option}: no file name given (an empty argument)")
     p = Path(path)
+    check_name_length(option, p)
     if p.suffix != suffix or p.stem == "":
         raise FcompError(f"{option} {path}: the output must end in {suffix}")
     for q in (p, p.with_suffix(".toml")):
@@ -72,6 +80,7 @@ def json_target(path: str | None) -> Path | None:
     if not path.strip():
         raise FcompError("--json: no file name given (an empty argument; '-' is standard output)")
     out = Path(path)
+    check_name_length("--json", out)
     if out.is_dir():
         raise FcompError(f"--json {path}: is a directory")
     _writable_folder("--json", path)
@@ -94,6 +103,7 @@ def report_dir(path: str | None, option: str = "--report") -> Path | None:
         return None
     if not path.strip():
         raise FcompError(f"{option}: no folder name given (an empty argument)")
+    check_name_length(option, Path(path))
     return Path(path)
 
 

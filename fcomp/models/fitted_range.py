@@ -213,7 +213,7 @@ def check_range(model: FrictionModel, *, x: Any = None, v: Any = None, p: Any = 
         if want[0] >= have[0] - tol and want[1] <= have[1] + tol:
             continue
         beyond.append((f"{SIGNALS[key][1]} {_shown(key, have)}",
-                       f"{SIGNALS[key][1].split(' ')[0]} {_shown(key, want)}"))
+                       f"{SIGNALS[key][1].split(' (')[0]} {_shown(key, want)}"))
     if not beyond:
         return []
     return [f"{name} was fitted on {'; '.join(h for h, _ in beyond)}, and this use reaches "

@@ -50,7 +50,7 @@ from controllers.harness import LoopConfig, control_model, friction_label, run_c
 from controllers.plant_model import ControlModel
 from controllers.tasks import Task
 from controllers.tuning import Tuning
-from fcomp.errors import FcompError
+from fcomp.errors import FcompError, term
 from fcomp.figstyle import plain_log_ticks
 from fcomp.models import FrictionModel
 from fcomp.parallel import run_tasks
@@ -198,13 +198,13 @@ class Sweep:
 
     def __post_init__(self) -> None:
         if not (isinstance(self.samples, int) and self.samples >= 1):
-            raise FcompError(f"robustness sweep: samples must be a positive integer, "
+            raise FcompError(f"robustness sweep: {term('samples')} must be a positive integer, "
                              f"got {self.samples!r}")
         if not (math.isfinite(self.spread) and self.spread >= 0):
-            raise FcompError(f"robustness sweep: spread must be >= 0, got {self.spread}")
+            raise FcompError(f"robustness sweep: {term('spread')} must be >= 0, got {self.spread}")
         lo, hi = self.noise
         if not (0 <= lo <= hi and math.isfinite(hi)):
-            raise FcompError(f"robustness sweep: noise range must be 0 <= lo <= hi, "
+            raise FcompError(f"robustness sweep: {term('noise')} range must be 0 <= lo <= hi, "
                              f"got {self.noise}")
 
     def draws(self) -> list[tuple[dict[str, float], float]]:
@@ -264,10 +264,11 @@ class Grid:
     def __post_init__(self) -> None:
         for k, vals in self.factors.items():
             if k not in MISMATCH_PARAMS:
-                raise FcompError(f"grid: {k!r} is not a friction parameter the controllers' "
+                raise FcompError(f"{term('grid')}: {k!r} is not a friction parameter the "
+                                 "controllers' "
                                  f"model is perturbed in ({', '.join(MISMATCH_PARAMS)})")
             if not vals or any(not (math.isfinite(v) and v > 0) for v in vals):
-                raise FcompError(f"grid: {k}: factors must be positive numbers, got "
+                raise FcompError(f"{term('grid')} {k}: factors must be positive numbers, got "
                                  f"{list(vals)}")
         if not self.factors and not self.controller_frictions:
             raise FcompError("grid: give mismatch factors or controller friction models")

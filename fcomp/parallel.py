@@ -327,6 +327,93 @@ def stop(pool: Executor) -> None:
             os.kill(pid, signal.SIGTERM)
 
 
+#: Seconds :func:`end_children` gives processes to end on SIGTERM before it kills them.
+END_GRACE = 1.0
+
+
+def end_children(grace: float = END_GRACE) -> list[int]:
+    """End every process this one started that is still running -- the last act of a
+    command stopped by a signal: nothing of it is left running.
+
+    :func:`stop` ends the workers a pool lists; this ends the rest: a worker a pool was
+    still starting (in another thread, or with the signals held: it takes SIGTERM only
+    once started), the processes workers started, and -- when this process leads its
+    process group, as a command run from a shell does -- any other member of the group
+    that is one of fcomp's processes (a worker's own worker whose parent ended first; not
+    the other programs of a pipeline, ``fcomp ... | tee log``). SIGTERM first; whatever is left
+    after ``grace`` s (a process still starting with its signals held) is killed
+    (SIGKILL). Returns the processes signalled.
+    """
+    import time
+
+    multiprocessing.active_children()  # reaps the ended ones
+    pids = _descendants([os.getpid()])
+    if os.getpgrp() == os.getpid():  # a worker's worker whose parent ended first
+        pids += [p for p in _group_members(os.getpid())
+                 if p not in pids and p != os.getpid() and _ours(p)]
+    for pid in pids:
+        with suppress(ProcessLookupError, PermissionError):
+            os.kill(pid, signal.SIGTERM)
+    end = time.monotonic() + grace
+    while time.monotonic() < end and any(_running(p) for p in pids):
+        multiprocessing.active_children()
+        time.sleep(0.02)
+    for pid in pids:
+        if _running(pid):
+            with suppress(ProcessLookupError, PermissionError):
+                os.kill(pid, signal.SIGKILL)
+    multiprocessing.active_children()
+    return pids
+
+
+def _running(pid: int) -> bool:
+    """Whether ``pid`` is a process that has not ended (a zombie has)."""
+    try:
+        with open(f"/proc/{pid}/stat", "rb") as f:
+            stat = f.read()
+    except OSError:
+        try:
+            os.kill(pid, 0)
+        except (ProcessLookupError, PermissionError):
+            return False
+        return True
+    return stat[stat.rfind(b")") + 2:stat.rfind(b")") + 3] != b"Z"
+
+
+def _ours(pid: int) -> bool:
+    """Whether ``pid`` runs what this process runs (a forked worker: the same command line)
+    or a process multiprocessing started (``spawn_main``, ``forkserver``)."""
+    try:
+        with open(f"/proc/{pid}/cmdline", "rb") as f:
+            theirs = f.read()
+        with open(f"/proc/{os.getpid()}/cmdline", "rb") as f:
+            own = f.read()
+    except OSError:
+        return False
+    return theirs == own or b"multiprocessing" in theirs
+
+
+def _group_members(pgid: int) -> list[int]:
+    """The processes of process group ``pgid`` (from ``/proc``; none without it)."""
+    out = []
+    try:
+        entries = os.listdir("/proc")
+    except OSError:
+        return []
+    for entry in entries:
+        if not entry.isdigit():
+            continue
+        try:
+            with open(f"/proc/{entry}/stat", "rb") as f:
+                stat = f.read()
+        except OSError:
+            continue
+        fields = stat[stat.rfind(b")") + 2:].split()
+        if len(fields) > 2 and fields[2].isdigit() and int(fields[2]) == pgid:
+            out.append(int(entry))
+    return out
+
+
 def _descendants(pids: Sequence[int]) -> list[int]:
     """The processes started by ``pids`` and by theirs, innermost first (from ``/proc``;
     none where there is no ``/proc``)."""
@@ -380,5 +467,6 @@ def run_tasks(fn: Callable[[T], R], items: Sequence[T], *, workers: int | None =
     return results
 
 
-__all__ = ["check_scheduler", "dask_client", "executor", "fresh_workers", "main_objects",
+__all__ = ["check_scheduler", "dask_client", "end_children", "executor", "fresh_workers",
+           "main_objects",
            "pool_context", "process_pool", "run_tasks", "shippable", "stop", "stopping"]

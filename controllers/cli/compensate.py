@@ -84,6 +84,8 @@ def run(args: argparse.Namespace) -> int:
         raise FcompError(f"--samples must be 0 or more, got {args.samples}")
     if not 0 <= args.spread < 1:
         raise FcompError(f"--spread must lie in [0, 1), got {args.spread:g}")
+    if args.seed < 0:
+        raise FcompError(f"--seed must be a non-negative integer, got {args.seed}")
     controllers = tuple(common.name_list(args.controllers, "--controllers")
                         or DEFAULT_CONTROLLERS)
     for c in controllers:

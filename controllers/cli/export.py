@@ -82,6 +82,10 @@ def summary(doc: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
+#: Longest closed-loop check of an export (s): every controller step of it is simulated.
+MAX_CHECK_S = 3600.0
+
+
 def run(args: argparse.Namespace) -> int:
     """Run ``fcomp export``: the controller's step as C, compiled, checked and timed."""
     CONTROLLERS.get(args.controller)
@@ -89,6 +93,9 @@ def run(args: argparse.Namespace) -> int:
         raise FcompError(f"export: controller {args.controller} is not exported (exported: "
                          f"{', '.join(EXPORTABLE)})")
     TASKS.get(args.task)
+    if not 0 < args.duration <= MAX_CHECK_S:  # the closed-loop check runs all of it
+        raise FcompError(f"--duration {args.duration:g}: the check's closed loop lasts more "
+                         f"than 0 and at most {MAX_CHECK_S:g} s")
     out = json_target(args.json)
     if not args.output.strip():
         raise FcompError("-o: no folder name given (an empty argument)")

@@ -159,6 +159,10 @@ def _run(args: argparse.Namespace) -> int:
         if culprit is not None:
             return _error(culprit)
         line, code = stopped or STOPPED[Interrupted]
+        if stopped is not None:  # nothing of a stopped command left running
+            from fcomp.parallel import end_children
+
+            end_children()
         sys.stderr.write(line + "\n")
         return code
     except BrokenPipeError:

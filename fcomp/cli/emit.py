@@ -38,7 +38,8 @@ OPTIONS: dict[str, str] = {
     "out": "--out", "input": "--input", "mapping": "--map", "position_scale": "--position-scale",
     "effects_module": "--effects", "units": "--units", "drop": "--drop",
     "decimal": "--decimal", "delimiter": "--delimiter", "scheduler": "--scheduler",
-    "mass": "--mass",
+    "mass": "--mass", "samples": "--samples", "spread": "--spread", "noise": "--noise",
+    "grid": "--grid", "seed": "--seed",
 }
 
 

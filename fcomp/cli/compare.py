@@ -94,6 +94,7 @@ def summary(doc: dict[str, Any]) -> str:
              f"RMS {doc['rms']:.4g} N {where}over the {doc['judged']} samples "
              f"(scored: a prediction band the motion leaves costs; plain y - F "
              f"{doc['rms_plain']:.4g} N; noise floor {doc['noise_floor']:.3g} N)"]
+    lines.append("  scored RMS per regime:")
     for name, r in doc["regimes"].items():
         rms = "-" if r["rms"] is None else f"{r['rms']:.4g} N"
         lines.append(f"  {name:18s} {rms:>12s}  ({r['n']} samples)")

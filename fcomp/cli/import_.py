@@ -42,7 +42,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("import", help="convert a real data file to the measurement format",
                        description=__doc__)
     p.add_argument("kind", metavar="KIND", help=f"the file's kind: {kinds}")
-    p.add_argument("src", metavar="SRC", help="the file to convert")
+    p.add_argument("src", metavar="SRC", help="the file to convert, or a data set shipped "
+                   "with fcomp by name (fcomp list data: O-ring_3bar, DATA_EMPS, ...)")
     p.add_argument("-o", "--output", required=True, metavar="OUT.csv",
                    help="the measurement written (OUT.csv and its sidecar OUT.toml)")
     p.add_argument("--map", dest="mapping", default=None, metavar="COL=EXPR,...",

@@ -370,7 +370,7 @@ def model_files() -> dict[str, str | bytes]:
         "m_params_list.json": _model({**LUGRE, "params": [1, 2]}),
         "m_mass_negative.json": _model({**LUGRE, "measurement_terms": {"params": {"mass": -5.0}}}),
         "m_mass_huge.json": _model({**LUGRE, "measurement_terms": {"params": {"mass": 1e300}}}),
-        "m_lag_negative.json": _model({**LUGRE, "measurement_terms": {"params": {"lag": -1.0}}}),
+        "m_lag_negative.json": _model({**LUGRE, "measurement_terms": {"params": {"lag": -5.0}}}),
         "m_terms_key.json": _model({**LUGRE, "measurement_terms": {"colour": 1}}),
         "m_terms_param.json": _model({**LUGRE, "measurement_terms": {"params": {"zz": 1.0}}}),
         "m_terms_ok.json": _model({**LUGRE, "measurement_terms": {"params": {"mass": 1.5}}}),

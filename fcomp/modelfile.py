@@ -38,6 +38,7 @@ from typing import Any
 
 from fcomp.effects import EFFECTS, Effect, load_effects_module
 from fcomp.errors import FcompError, FcompWarning, FileFormatError, UnknownNameError, term
+from fcomp.measurement import MAX_MASS
 from fcomp.models import MODELS, FrictionModel, make_model
 from fcomp.models.document import (
     FORMAT,
@@ -343,19 +344,23 @@ def _values(section: Any, label: str, key: str) -> dict[str, float]:
     return out
 
 
-def _check_measurement(values: Mapping[str, float], label: str) -> None:
-    """The measurement terms within what a fit can give (the fit's own bounds,
-    :data:`fcomp.identification.records.EXTRA_SPECS`) and a plausible mass."""
-    from fcomp.identification.records import EXTRA_SPECS
-    from fcomp.measurement import MAX_MASS
+#: Measurement term -> (lowest, highest, what it is): beyond, no record has such a value (a
+#: moving mass as the sidecar's rig.mass allows it; a force channel lags by less than 1 s).
+MEASUREMENT_RANGES: dict[str, tuple[float, float, str]] = {
+    "mass": (0.0, MAX_MASS, "a moving mass"),
+    "offset": (-MAX_VALUE, MAX_VALUE, "a constant force offset"),
+    "lag": (-1.0, 1.0, "the lag of the force channel (negative: it leads)"),
+}
 
+
+def _check_measurement(values: Mapping[str, float], label: str) -> None:
+    """The measurement terms within what a record can have (:data:`MEASUREMENT_RANGES`)."""
     for k, v in values.items():
-        s = EXTRA_SPECS[k]
-        high = MAX_MASS if k == "mass" else s.upper
-        if not (s.lower <= v <= high):
-            raise FileFormatError(f"{label}: measurement_terms.params.{k} = {v:g} {s.unit} is "
-                                  f"outside [{s.lower:g}, {high:g}] ({s.doc}; a fit never "
-                                  "gives such a value)")
+        low, high, what = MEASUREMENT_RANGES[k]
+        if not low <= v <= high:
+            raise FileFormatError(f"{label}: measurement_terms.params.{k} = {v:g} "
+                                  f"{MEASUREMENT_PARAMS[k]} is outside [{low:g}, {high:g}] "
+                                  f"({what}; no fit gives such a value)")
 
 
 def _effect_class(entry: Any, label: str, where: str) -> tuple[type[Effect], dict[str, Any]]:

@@ -60,6 +60,8 @@ from typing import Any
 import numpy as np
 
 HERE = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(HERE / "tests"))  # the suite's process helpers, shared with the runner
+from helpers import processes  # noqa: E402
 
 
 # ------------------------------------------------------------------ cases
@@ -834,40 +836,6 @@ def _snapshot(folder: Path) -> dict[str, str]:
     return out
 
 
-def _sigterm_caught(pid: int) -> bool:
-    try:
-        status = Path(f"/proc/{pid}/status").read_text()
-    except OSError:
-        return False
-    for line in status.splitlines():
-        if line.startswith("SigCgt:"):
-            return bool(int(line.split()[1], 16) & (1 << (signal.SIGTERM - 1)))
-    return False
-
-
-def _children(pid: int) -> list[int]:
-    try:
-        text = Path(f"/proc/{pid}/task/{pid}/children").read_text()
-    except OSError:
-        return []
-    return [int(s) for s in text.split()]
-
-
-def _group_alive(pgid: int) -> list[int]:
-    alive = []
-    for entry in os.listdir("/proc"):
-        if not entry.isdigit():
-            continue
-        try:
-            stat = Path(f"/proc/{entry}/stat").read_bytes()
-        except OSError:
-            continue
-        fields = stat[stat.rfind(b")") + 2:].split()
-        if int(fields[2]) == pgid and fields[0] != b"Z":
-            alive.append(int(entry))
-    return alive
-
-
 @dataclass
 class Result:
     id: str
@@ -1013,9 +981,9 @@ def _run_signal(case: Case, proc: subprocess.Popen, start: float, folder: Path, 
     sig, when, second = case.sig
     limit = 60.0
     while proc.poll() is None and time.monotonic() - start < limit:
-        if when == "handler" and _sigterm_caught(proc.pid):
+        if when == "handler" and processes.sigterm_caught(proc.pid):
             break
-        if when == "children" and _children(proc.pid):
+        if when == "children" and processes.children(proc.pid):
             break
         if isinstance(when, float) and time.monotonic() - start >= when:
             break
@@ -1047,10 +1015,10 @@ def _run_signal(case: Case, proc: subprocess.Popen, start: float, folder: Path, 
         code = None
     took = time.monotonic() - sent
     end = time.monotonic() + 5.0
-    alive = _group_alive(proc.pid)
+    alive = processes.group(proc.pid)
     while alive and time.monotonic() < end:
         time.sleep(0.1)
-        alive = _group_alive(proc.pid)
+        alive = processes.group(proc.pid)
     for pid in alive:
         with contextlib.suppress(ProcessLookupError):
             os.kill(pid, signal.SIGKILL)

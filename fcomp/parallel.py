@@ -46,6 +46,7 @@ import warnings
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import Executor, ProcessPoolExecutor, as_completed
 from contextlib import AbstractContextManager, contextmanager, suppress
+from pathlib import Path
 from typing import Any, TypeVar
 
 from fcomp.errors import FcompError, FcompWarning, term
@@ -322,7 +323,7 @@ def stop(pool: Executor) -> None:
     procs = list((getattr(pool, "_processes", None) or {}).values())
     pool.shutdown(wait=False, cancel_futures=True)
     pids = [p.pid for p in procs if p.is_alive() and p.pid is not None]
-    for pid in [*_descendants(pids), *pids]:  # the innermost first: no new orphan meanwhile
+    for pid in [*descendants(pids), *pids]:  # the innermost first: no new orphan meanwhile
         with suppress(ProcessLookupError, PermissionError):  # ended meanwhile, or not ours
             os.kill(pid, signal.SIGTERM)
 
@@ -347,9 +348,9 @@ def end_children(grace: float = END_GRACE) -> list[int]:
     import time
 
     multiprocessing.active_children()  # reaps the ended ones
-    pids = _descendants([os.getpid()])
+    pids = descendants([os.getpid()])
     if os.getpgrp() == os.getpid():  # a worker's worker whose parent ended first
-        pids += [p for p in _group_members(os.getpid())
+        pids += [p for p in group_members(os.getpid())
                  if p not in pids and p != os.getpid() and _ours(p)]
     for pid in pids:
         with suppress(ProcessLookupError, PermissionError):
@@ -366,18 +367,39 @@ def end_children(grace: float = END_GRACE) -> list[int]:
     return pids
 
 
+def processes() -> dict[int, tuple[str, int, int]]:
+    """Every process: pid -> ``(state, parent pid, process group)`` (from ``/proc``; empty
+    where there is none). ``state`` ``"Z"`` is a process that has ended and is not yet
+    reaped."""
+    out: dict[int, tuple[str, int, int]] = {}
+    try:
+        entries = os.listdir("/proc")
+    except OSError:
+        return out
+    for entry in entries:
+        if not entry.isdigit():
+            continue
+        try:
+            with open(f"/proc/{entry}/stat", "rb") as f:
+                stat = f.read()
+        except OSError:  # ended meanwhile
+            continue
+        fields = stat[stat.rfind(b")") + 2:].split()  # after "pid (name) "
+        if len(fields) > 2 and fields[1].isdigit() and fields[2].lstrip(b"-").isdigit():
+            out[int(entry)] = (fields[0].decode(), int(fields[1]), int(fields[2]))
+    return out
+
+
 def _running(pid: int) -> bool:
     """Whether ``pid`` is a process that has not ended (a zombie has)."""
+    found = processes().get(pid)
+    if found is not None:
+        return found[0] != "Z"
     try:
-        with open(f"/proc/{pid}/stat", "rb") as f:
-            stat = f.read()
-    except OSError:
-        try:
-            os.kill(pid, 0)
-        except (ProcessLookupError, PermissionError):
-            return False
-        return True
-    return stat[stat.rfind(b")") + 2:stat.rfind(b")") + 3] != b"Z"
+        os.kill(pid, 0)
+    except (ProcessLookupError, PermissionError):
+        return False
+    return not Path("/proc").is_dir()  # no /proc: alive as far as can be told
 
 
 def _ours(pid: int) -> bool:
@@ -393,46 +415,18 @@ def _ours(pid: int) -> bool:
     return theirs == own or b"multiprocessing" in theirs
 
 
-def _group_members(pgid: int) -> list[int]:
-    """The processes of process group ``pgid`` (from ``/proc``; none without it)."""
-    out = []
-    try:
-        entries = os.listdir("/proc")
-    except OSError:
-        return []
-    for entry in entries:
-        if not entry.isdigit():
-            continue
-        try:
-            with open(f"/proc/{entry}/stat", "rb") as f:
-                stat = f.read()
-        except OSError:
-            continue
-        fields = stat[stat.rfind(b")") + 2:].split()
-        if len(fields) > 2 and fields[2].isdigit() and int(fields[2]) == pgid:
-            out.append(int(entry))
-    return out
+def group_members(pgid: int) -> list[int]:
+    """The processes of process group ``pgid`` that have not ended."""
+    return [pid for pid, (state, _, group) in processes().items()
+            if group == pgid and state != "Z"]
 
 
-def _descendants(pids: Sequence[int]) -> list[int]:
+def descendants(pids: Sequence[int]) -> list[int]:
     """The processes started by ``pids`` and by theirs, innermost first (from ``/proc``;
     none where there is no ``/proc``)."""
     parents: dict[int, list[int]] = {}
-    try:
-        entries = os.listdir("/proc")
-    except OSError:
-        return []
-    for entry in entries:
-        if not entry.isdigit():
-            continue
-        try:
-            with open(f"/proc/{entry}/stat", "rb") as f:
-                stat = f.read()
-        except OSError:  # ended meanwhile
-            continue
-        fields = stat[stat.rfind(b")") + 2:].split()  # after "pid (name) "
-        if len(fields) > 1 and fields[1].isdigit():
-            parents.setdefault(int(fields[1]), []).append(int(entry))
+    for pid, (_, parent, _) in processes().items():
+        parents.setdefault(parent, []).append(pid)
     found: list[int] = []
     todo = list(pids)
     while todo:
@@ -467,6 +461,6 @@ def run_tasks(fn: Callable[[T], R], items: Sequence[T], *, workers: int | None =
     return results
 
 
-__all__ = ["check_scheduler", "dask_client", "end_children", "executor", "fresh_workers",
-           "main_objects",
+__all__ = ["check_scheduler", "dask_client", "descendants", "end_children", "executor",
+           "fresh_workers", "group_members", "main_objects", "processes",
            "pool_context", "process_pool", "run_tasks", "shippable", "stop", "stopping"]

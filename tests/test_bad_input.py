@@ -24,7 +24,6 @@ there are.
 
 from __future__ import annotations
 
-import hashlib
 import json
 import os
 import shlex
@@ -42,6 +41,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 import scipy.io
+from helpers.cli_cases import run_cli as _run
+from helpers.cli_cases import snapshot
 from helpers.processes import PATIENCE, children, group, group_gone, send, wait_for
 from helpers.terminal import drain
 from test_effects import USER_MODULE
@@ -233,20 +234,6 @@ def lab(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Path]:
         del EFFECTS._items[name]
     for f in set(USER_FILES) - files:
         del USER_FILES[f]
-
-
-def snapshot(folder: Path) -> dict[str, str]:
-    """Every file and folder under ``folder`` (hidden ones too) -> SHA-256 (``dir`` for folders)."""
-    out = {}
-    for p in sorted(folder.rglob("*")):
-        rel = str(p.relative_to(folder))
-        if p.is_symlink():
-            out[rel] = "link:" + os.readlink(p)
-        elif p.is_dir():
-            out[rel] = "dir"
-        else:
-            out[rel] = hashlib.sha256(p.read_bytes()).hexdigest()
-    return out
 
 
 # ---------------------------------------------------------------- the cases
@@ -740,15 +727,6 @@ CASES: dict[str, Case] = {
     "warn-import-repeated-times": Case("import zillen z_repeat.csv -o w.csv", code=0,
                                        outputs=("w.csv", "w.toml"), warnings=("rows-dropped",)),
 }
-
-
-def _run(args: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str, str]:
-    try:
-        code = main(args)
-    except SystemExit as exc:  # argparse
-        code = int(exc.code or 0)
-    out = capsys.readouterr()
-    return code, out.out, out.err
 
 
 @pytest.fixture(scope="module")

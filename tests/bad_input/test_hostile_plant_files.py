@@ -49,19 +49,14 @@ def test_a_bad_plant_file_is_named_with_its_key(lab: Path, stem: str,
                          lines=None), capsys, monkeypatch)
 
 
-@pytest.mark.parametrize(("table", "key"), RUNNER.H_REQUIRED, ids=[k for _, k in RUNNER.H_REQUIRED])
-def test_a_missing_hydraulic_key_is_named(lab: Path, table: str, key: str,
-                                          capsys: pytest.CaptureFixture[str],
-                                          monkeypatch: pytest.MonkeyPatch) -> None:
-    check_case(lab, Case(f"plant check hm_{key}.toml", match=(f"hm_{key}.toml", key),
-                         lines=None), capsys, monkeypatch)
+MISSING = [("hm", k) for _, k in RUNNER.H_REQUIRED] + [("pm", k) for _, k in RUNNER.P_REQUIRED]
 
 
-@pytest.mark.parametrize(("table", "key"), RUNNER.P_REQUIRED, ids=[k for _, k in RUNNER.P_REQUIRED])
-def test_a_missing_pneumatic_key_is_named(lab: Path, table: str, key: str,
-                                          capsys: pytest.CaptureFixture[str],
-                                          monkeypatch: pytest.MonkeyPatch) -> None:
-    check_case(lab, Case(f"plant check pm_{key}.toml", match=(f"pm_{key}.toml", key),
+@pytest.mark.parametrize(("prefix", "key"), MISSING, ids=[f"{p}-{k}" for p, k in MISSING])
+def test_a_missing_key_is_named(lab: Path, prefix: str, key: str,
+                                capsys: pytest.CaptureFixture[str],
+                                monkeypatch: pytest.MonkeyPatch) -> None:
+    check_case(lab, Case(f"plant check {prefix}_{key}.toml", match=(f"{prefix}_{key}.toml", key),
                          lines=None), capsys, monkeypatch)
 
 

@@ -69,27 +69,18 @@ def sigterm_caught(pid: int) -> bool:
 
 
 def children(pid: int) -> list[int]:
-    """The processes ``pid`` has started and not yet reaped."""
-    try:
-        return [int(s) for s in Path(f"/proc/{pid}/task/{pid}/children").read_text().split()]
-    except OSError:
-        return []
+    """The processes ``pid`` has started (and theirs) that have not ended."""
+    from fcomp.parallel import descendants, processes
+
+    table = processes()
+    return [p for p in descendants([pid]) if table.get(p, ("Z",))[0] != "Z"]
 
 
 def group(pgid: int) -> list[int]:
     """The live processes of process group ``pgid`` (ended ones nobody reaps do not count)."""
-    alive = []
-    for entry in os.listdir("/proc"):
-        if not entry.isdigit():
-            continue
-        try:
-            stat = (Path("/proc") / entry / "stat").read_bytes()
-        except OSError:
-            continue
-        fields = stat[stat.rfind(b")") + 2:].split()
-        if int(fields[2]) == pgid and fields[0] != b"Z":
-            alive.append(int(entry))
-    return alive
+    from fcomp.parallel import group_members
+
+    return group_members(pgid)
 
 
 def group_gone(pgid: int, seconds: float = 10.0) -> bool:

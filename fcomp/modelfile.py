@@ -48,7 +48,7 @@ from fcomp.models.document import (
     save_model,
 )
 from fcomp.models.fitted_range import OutOfRangeError, check_range
-from fcomp.parameters import MAX_VALUE, ParamSet
+from fcomp.parameters import MAX_VALUE, ParamSet, finite_number
 
 #: Keys of a model file (``format`` .. ``source``).
 KEYS = ("format", "version", "model", "description", "features", "effects", "params",
@@ -320,13 +320,7 @@ def _number(v: Any) -> float | None:
     or the strings ``"inf"``/``"-inf"``; ``None`` otherwise."""
     if isinstance(v, str):
         return float(v) if v in ("inf", "-inf") else None
-    if isinstance(v, bool) or not isinstance(v, int | float):
-        return None
-    try:
-        number = float(v)
-    except OverflowError:
-        return None
-    return number if math.isfinite(number) else None
+    return finite_number(v)
 
 
 def _values(section: Any, label: str, key: str) -> dict[str, float]:

@@ -34,7 +34,7 @@ from typing import TYPE_CHECKING, Any
 
 from fcomp.errors import FileFormatError
 from fcomp.measurement import ORIENTATIONS
-from fcomp.parameters import ParamSpec
+from fcomp.parameters import ParamSpec, finite_number
 from fcomp.paramsets import ParameterSet
 from plants.base import OdePlant
 from plants.hydraulic import HydraulicPlant
@@ -363,7 +363,7 @@ def parse_plant(doc: Mapping[str, Any], label: str, default_name: str = "plant")
                 problems.append(f"{label}: [rig] orientation must be one of "
                                 f"{', '.join(ORIENTATIONS)}, got {value!r}")
             continue
-        number = _finite(value)
+        number = finite_number(value)
         if number is None:
             shown = f"{value!r}" if len(repr(value)) < 40 else f"{repr(value)[:20]}..."
             problems.append(f"{label}: [{table}] {key} = {shown} is not a finite number "
@@ -393,18 +393,6 @@ def parse_plant(doc: Mapping[str, Any], label: str, default_name: str = "plant")
     if problems:
         raise PlantFileError(problems)
     return pf
-
-
-def _finite(value: Any) -> float | None:
-    """A TOML value as a finite float (``None``: not a number, not finite, or an integer
-    too large for a float)."""
-    if isinstance(value, bool) or not isinstance(value, int | float):
-        return None
-    try:
-        number = float(value)
-    except OverflowError:
-        return None
-    return number if math.isfinite(number) else None
 
 
 #: Highest controller sample rate a plant file may give (Hz).

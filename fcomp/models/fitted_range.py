@@ -35,13 +35,13 @@ run (``simulate``, ``compare``, ``sweep``, ``compensate``, ``export``); it is
 
 from __future__ import annotations
 
-import math
 from collections.abc import Iterable, Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from fcomp.errors import FcompError
+from fcomp.parameters import finite_number
 
 if TYPE_CHECKING:
     from fcomp.models.base import FrictionModel
@@ -87,18 +87,8 @@ def checked_ranges(ranges: Mapping[str, Any], where: str = "fitted_range"
 def _pair(value: Any) -> tuple[float, float] | None:
     if not isinstance(value, list | tuple) or len(value) != 2:
         return None
-    out = []
-    for v in value:
-        if isinstance(v, bool) or not isinstance(v, int | float):
-            return None
-        try:
-            f = float(v)
-        except OverflowError:
-            return None
-        if not math.isfinite(f):
-            return None
-        out.append(f)
-    return out[0], out[1]
+    low, high = finite_number(value[0]), finite_number(value[1])
+    return None if low is None or high is None else (low, high)
 
 
 def span(values: Any) -> tuple[float, float] | None:

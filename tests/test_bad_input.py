@@ -20,6 +20,11 @@ on a real process) check that an interrupted run leaves the old result whole
 or nothing, and a few cases run as real subprocesses to prove that no
 traceback escapes the interpreter. ``test_case_count`` states how many cases
 there are.
+
+The cases of issue 42 -- plant and model files, outputs, signals, fitted ranges,
+messages -- live in ``tests/bad_input/`` (one module per surface), on the inputs of
+the hostile-case runner ``benchmarks/hostile_cases.py``; the helpers shared with this
+file are ``tests/helpers/cli_cases.py`` and ``tests/helpers/processes.py``.
 """
 
 from __future__ import annotations

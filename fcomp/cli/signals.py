@@ -8,11 +8,21 @@ command prints its one line (``fcomp: interrupted``, exit 130; ``fcomp: terminat
 143). Further signals are ignored from then on, while it cleans up and exits: a second
 Ctrl-C would otherwise interrupt that clean-up itself (workers left running, the exit
 waiting for them, a traceback from the interpreter's shutdown).
+
+Python runs a signal handler between any two steps of the main thread -- also inside a
+place that cannot pass an exception on: a fork's ``after_in_parent`` hooks (``logging``
+has one; every compiler or worker start runs them), a ``__del__``, a weak-reference
+callback. There the exception is printed as ``Exception ignored in ...`` and dropped,
+and the command would run on, deaf to further signals. Such a lost stop is caught by
+:func:`sys.unraisablehook` (:func:`_lost`): nothing is printed, and the signal is sent
+again a moment later, to land where it stops the command.
 """
 
 from __future__ import annotations
 
+import os
 import signal
+import sys
 from collections.abc import Callable
 from typing import Any
 
@@ -50,6 +60,27 @@ def _handler(kind: type[KeyboardInterrupt]) -> Callable[[int, Any], None]:
     return handler
 
 
+#: Seconds after which a stop that landed where it could not be raised is sent again.
+RESEND = 0.01
+
+#: The unraisable hook :func:`install` replaced.
+_HOOK: dict[str, Any] = {}
+
+
+def _lost(unraisable: Any) -> None:
+    """``sys.unraisablehook``: a stop raised where exceptions are dropped is sent again (no
+    ``Exception ignored`` printed); anything else goes to the hook there was."""
+    kind = unraisable.exc_type
+    if isinstance(kind, type) and kind in STOPPED:
+        import threading
+
+        sig = signal.SIGTERM if kind is Terminated else signal.SIGINT
+        signal.signal(sig, _handler(kind))  # the first one again: this one was dropped
+        threading.Timer(RESEND, os.kill, (os.getpid(), sig)).start()
+        return
+    (_HOOK.get("old") or sys.__unraisablehook__)(unraisable)
+
+
 def install() -> dict[signal.Signals, Any] | None:
     """Make SIGTERM and SIGINT raise :class:`Terminated` and :class:`Interrupted` (main
     thread only; a process started with SIGINT ignored keeps ignoring it); returns the
@@ -62,6 +93,9 @@ def install() -> dict[signal.Signals, Any] | None:
     STATE.stopped = None
     if old[signal.SIGINT] is signal.default_int_handler:
         signal.signal(signal.SIGINT, _handler(Interrupted))
+    if sys.unraisablehook is not _lost:
+        _HOOK["old"] = sys.unraisablehook
+        sys.unraisablehook = _lost
     return old
 
 
@@ -72,3 +106,5 @@ def restore(old: dict[signal.Signals, Any] | None) -> None:
         return
     for s, h in old.items():
         signal.signal(s, h)
+    if sys.unraisablehook is _lost:
+        sys.unraisablehook = _HOOK.pop("old", sys.__unraisablehook__)

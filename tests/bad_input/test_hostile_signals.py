@@ -14,6 +14,7 @@ import contextlib
 import multiprocessing.context
 import os
 import signal
+import sys
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -92,6 +93,7 @@ def _fcomp_signals() -> Iterator[None]:
     from fcomp.cli import signals
 
     saved = {s: signal.getsignal(s) for s in signals.STOP_SIGNALS}
+    hook = sys.unraisablehook
     signal.signal(signal.SIGINT, signal.default_int_handler)
     signals.install()
     try:
@@ -99,6 +101,7 @@ def _fcomp_signals() -> Iterator[None]:
     finally:
         for s, h in saved.items():
             signal.signal(s, h)
+        sys.unraisablehook = hook
 
 
 def _sleep(seconds: float) -> float:
@@ -162,6 +165,29 @@ def test_the_stop_runs_whole_through_a_second_signal(monkeypatch: pytest.MonkeyP
             f.result()
     assert stops == [1], "the stop did not run to its end"
     assert _ended(procs), "workers left running"
+
+
+def test_a_stop_landing_where_exceptions_are_dropped_is_sent_again(
+        capsys: pytest.CaptureFixture[str]) -> None:
+    """A signal handled inside a ``__del__`` (or a fork's hooks: ``logging`` has one, and
+    every compiler or worker start runs them) raises where Python drops exceptions: it printed
+    ``Exception ignored in ...`` and the command ran on, deaf to further signals (seen:
+    ``compensate`` never ended after SIGTERM). The stop is now sent again and ends it, and
+    nothing is printed."""
+    from fcomp.cli.signals import Terminated
+
+    class Dropper:
+        def __del__(self) -> None:
+            os.kill(os.getpid(), signal.SIGTERM)
+            for _ in range(10000):  # the handler runs here, inside __del__
+                pass
+
+    with _fcomp_signals(), pytest.raises(Terminated):
+        Dropper()  # deleted at once: the signal lands inside __del__
+        end = time.monotonic() + processes.PATIENCE
+        while time.monotonic() < end:
+            time.sleep(0.005)
+    assert "Exception ignored" not in capsys.readouterr().err
 
 
 def test_the_entry_point_imports_nothing_heavy() -> None:

@@ -43,7 +43,7 @@ import sys
 import threading
 import types
 import warnings
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from concurrent.futures import Executor, ProcessPoolExecutor, as_completed
 from contextlib import AbstractContextManager, contextmanager, suppress
 from pathlib import Path
@@ -332,9 +332,11 @@ def stop(pool: Executor) -> None:
 END_GRACE = 1.0
 
 
-def end_children(grace: float = END_GRACE) -> list[int]:
+def end_children(grace: float = END_GRACE, keep: Iterable[int] = ()) -> list[int]:
     """End every process this one started that is still running -- the last act of a
-    command stopped by a signal: nothing of it is left running.
+    command stopped by a signal: nothing of it is left running. ``keep``: processes that
+    were there before the command (a notebook's own, when the command runs in one) and
+    are not ended.
 
     :func:`stop` ends the workers a pool lists; this ends the rest: a worker a pool was
     still starting (in another thread, or with the signals held: it takes SIGTERM only
@@ -348,10 +350,11 @@ def end_children(grace: float = END_GRACE) -> list[int]:
     import time
 
     multiprocessing.active_children()  # reaps the ended ones
-    pids = descendants([os.getpid()])
+    spared = {os.getpid(), *keep}
+    pids = [p for p in descendants([os.getpid()]) if p not in spared]
     if os.getpgrp() == os.getpid():  # a worker's worker whose parent ended first
         pids += [p for p in group_members(os.getpid())
-                 if p not in pids and p != os.getpid() and _ours(p)]
+                 if p not in pids and p not in spared and _ours(p)]
     for pid in pids:
         with suppress(ProcessLookupError, PermissionError):
             os.kill(pid, signal.SIGTERM)

@@ -87,6 +87,9 @@ def plain(message: str) -> str:
 
 def run(argv: Sequence[str] | None = None) -> int:
     """The command line ``argv`` (default ``sys.argv[1:]``) run; its exit status."""
+    from fcomp.parallel import descendants
+
+    before = set(descendants([os.getpid()]))  # a caller's own processes: never ended here
     parser = build_parser()
     args = parser.parse_args(argv)
     common.ARGV[:] = list(sys.argv[1:] if argv is None else argv)
@@ -95,7 +98,7 @@ def run(argv: Sequence[str] | None = None) -> int:
     with warnings.catch_warnings(record=True) as caught:
         emit.PYTHON_WARNINGS = caught
         try:
-            code = _run(args)
+            code = _run(args, before)
         finally:
             emit.PYTHON_WARNINGS = None
         if code == 0:
@@ -145,7 +148,7 @@ def _error(message: str) -> int:
     return 2
 
 
-def _run(args: argparse.Namespace) -> int:
+def _run(args: argparse.Namespace, before: set[int] | None = None) -> int:
     from fcomp.usercode import blame
 
     try:
@@ -162,7 +165,7 @@ def _run(args: argparse.Namespace) -> int:
         if stopped is not None:  # nothing of a stopped command left running
             from fcomp.parallel import end_children
 
-            end_children()
+            end_children(keep=before or ())
         sys.stderr.write(line + "\n")
         return code
     except BrokenPipeError:

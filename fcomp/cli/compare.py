@@ -167,7 +167,7 @@ def run(args: argparse.Namespace) -> int:
     from fcomp.api import compare
     from fcomp.measurement import Measurement
     from fcomp.modelfile import is_model_file
-    from fcomp.models.fitted_range import record_use
+    from fcomp.models.fitted_range import signal_ranges
     from fcomp.outputs import staged_folder
     from fcomp.registry import PLANT_TOOLS, PLANTS
 
@@ -208,13 +208,14 @@ def run(args: argparse.Namespace) -> int:
     data = [Measurement.read(p) for p in args.data]
     for d in data:
         common.warn_sidecar(d)
-    common.warn_fitted_range(model, args.friction if is_model_file(args.friction) else
-                             args.params or model.describe(), "--friction", **record_use(data))
     with common.Activity(f"compare {args.friction}", enabled=not args.no_progress):
         comp = compare(data, model, fit=args.fit,
                        mass=args.mass if args.mass is not None else mass, split=args.split,
                        cutoff_hz=cutoff, plant=args.plant, plant_params=plant_params,
                        jobs=args.jobs, scheduler=scheduler)
+    seen = signal_ranges([e.data.sig for e in comp.data.experiments], comp.data.available)
+    common.warn_fitted_range(model, args.friction if is_model_file(args.friction) else  # as the
+                             args.params or model.describe(), "--friction", **seen)  # fit saw them
     if not given:  # part of the result: the report's conclusion weighs it as the console's
         comp = replace(comp, warnings=[*comp.warnings, FitWarning(
             "default-params", "params", f"the model {model.describe()} is compared with its "

@@ -128,25 +128,6 @@ def signal_ranges(signals: Iterable[Mapping[str, Any]],
     return {k: (min(a for a, _ in v), max(b for _, b in v)) for k, v in found.items() if v}
 
 
-def record_use(records: Iterable[Any]) -> dict[str, np.ndarray]:
-    """The positions, velocities and gauge chamber pressures of measurements (the
-    columns ``x``, ``v`` -- else the derivative of ``x`` --, ``p1``, ``p2``), for
-    :func:`check_range`."""
-    found: dict[str, list[np.ndarray]] = {"x": [], "v": [], "p": []}
-    for r in records:
-        x = r.get("x")
-        v = r.get("v")
-        if x is not None:
-            found["x"].append(np.asarray(x, dtype=float))
-            if v is None and len(x) > 2:
-                v = np.gradient(np.asarray(x, dtype=float), np.asarray(r.t, dtype=float))
-        if v is not None:
-            found["v"].append(np.asarray(v, dtype=float))
-        if r.get("p1") is not None and r.get("p2") is not None:
-            found["p"] += list(r.gauge_pressures())
-    return {k: np.concatenate(v) for k, v in found.items() if v}
-
-
 def _reads(model: FrictionModel) -> set[str]:
     """The signals of :data:`SIGNALS` the model's force depends on."""
     out = {"v"}
@@ -260,4 +241,4 @@ def as_document(ranges: Mapping[str, Sequence[float]]) -> dict[str, list[float]]
 
 
 __all__ = ["BLOW_UP", "MARGIN", "SIGNALS", "OutOfRangeError", "as_document", "check_range",
-           "checked_ranges", "record_use", "signal_ranges", "span"]
+           "checked_ranges", "signal_ranges", "span"]

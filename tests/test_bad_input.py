@@ -29,6 +29,7 @@ file are ``tests/helpers/cli_cases.py`` and ``tests/helpers/processes.py``.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import shlex
@@ -48,7 +49,18 @@ import pytest
 import scipy.io
 from helpers.cli_cases import run_cli as _run
 from helpers.cli_cases import snapshot
-from helpers.processes import PATIENCE, children, group, group_gone, send, wait_for
+from helpers.processes import (
+    PATIENCE,
+    alive,
+    children,
+    cmdline,
+    env,
+    group,
+    group_gone,
+    send,
+    start,
+    wait_for,
+)
 from helpers.terminal import drain
 from test_effects import USER_MODULE
 
@@ -163,6 +175,10 @@ def _write_lab(lab: Path) -> None:
         "exp_key.csv": good, "exp_key.toml": "experiment = 1.5\n[rig]\nmass = 1.0\n",
         "top_mass.csv": good, "top_mass.toml": "mass = 1.0\n",
         "huge_fit.json": '{"model": "coulomb-viscous", "params": {"Fc": 1.0, "B": 1e308}}\n',
+        "lugre_1e308.json": json.dumps({"format": "fcomp-model", "version": 1, "model": "lugre",
+                                        "params": {"Fc": 1e308, "Fs": 1e308, "vs": 0.008,
+                                                   "n": 1.0, "sigma2": 900.0, "sigma0": 2e6,
+                                                   "sigma1": 300.0}}),
         "patm_bar.csv": good, "patm_bar.toml": "p_atm = 1.013\n",
         "typo.csv": good, "typo.toml": "[rig]\nmas = 2.0\n",
         "absneg.csv": "t,x,p1\n0,0,-1000\n1,0.01,200000\n",
@@ -259,6 +275,10 @@ class Case:
     env: dict[str, str] = field(default_factory=dict)
 
 
+#: What ``fcomp export ... -o c --json c.json`` writes (files before their folder).
+EXPORT_FILES = ("c.json", "c/.fcomp-output", "c/fcomp_ctrl.h", "c/fcomp_ctrl.c",
+                "c/fcomp_ctrl_bench.c", "c/example.c", "c/Makefile", "c/fcomp_ctrl_casadi.c",
+                "c/fcomp_ctrl_casadi.h")
 SIM = "simulate motion --friction coulomb --input sine:amplitude=0.01,frequency=1 " \
       "--duration 0.2 --rate 100"
 SIM_NO_INPUT = "simulate motion --friction coulomb --duration 0.2 --rate 100"
@@ -731,6 +751,22 @@ CASES: dict[str, Case] = {
         env={"FCOMP_CACHE": "good.csv"}),
     "warn-import-repeated-times": Case("import zillen z_repeat.csv -o w.csv", code=0,
                                        outputs=("w.csv", "w.toml"), warnings=("rows-dropped",)),
+    # ---- export (issue 42, items 6, 8, 10, 16) ----
+    "export-onto-a-foreign-folder": Case("export pid -o mine", match="holds files fcomp did "
+                                         "not write"),
+    "export-compiler-without-output": Case(
+        "export pid --duration 0.05 -o c --json c.json", code=0, outputs=(*EXPORT_FILES, "c"),
+        warnings=("export",), env={"FCOMP_CC": "true"}),
+    "export-timing-steps-huge": Case("export pid -o c --timing-steps 1000000000000",
+                                     match="--timing-steps 1000000000000: time 100000 to"),
+    "export-friction-1e308": Case("export pid --friction lugre_1e308.json -o c",
+                                  match="gives -1e+308 N at -0.1 m/s, beyond the actuator's"),
+    "export-friction-beyond-the-force-range": Case(
+        "export pid --friction lugre --set Fc=2e4 --set Fs=2e4 -o c",
+        match="beyond the actuator's whole force range"),
+    "export-mpc-rate-said": Case("export mpc --plant pneumatic --option horizon=3 --option "
+                                 "qp_iterations=3 --duration 0.05 -o c --json c.json", code=0,
+                                 outputs=(*EXPORT_FILES, "c"), warnings=("export",)),
 }
 
 
@@ -966,15 +1002,9 @@ SUBPROCESS = ["fit-json-onto-sidecar", "read-empty", "input-csv-empty", "import-
               "effects-extra-force-raises", "read-bom", "simulate-coupling-runaway"]
 
 
-def _env(**extra: str) -> dict[str, str]:
-    env = dict(os.environ, PYTHONPATH=str(ROOT), **extra)
-    env.pop("FCOMP_DEBUG", None)
-    return env
-
-
 def _proc(args: list[str], cwd: Path, **kw: object) -> subprocess.Popen:
     return subprocess.Popen([sys.executable, "-m", "fcomp.cli.main", *args], cwd=cwd,
-                            env=_env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            env=env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                             text=True, **kw)  # type: ignore[call-overload]
 
 
@@ -1012,7 +1042,7 @@ def test_long_run_shows_progress_and_a_signal_leaves_nothing(lab: Path, sig: int
         [sys.executable, "-m", "fcomp.cli.main", "simulate", "hydraulic", "--friction",
          "nmlgm-hysteresis", "--input", "sine:amplitude=4.5e-3,frequency=1", "--duration",
          "200", "--rate", "200", "-o", "long.csv"],
-        cwd=lab, env=_env(), stdout=subprocess.PIPE, stderr=slave,
+        cwd=lab, env=env(), stdout=subprocess.PIPE, stderr=slave,
         # a suite started as a background job of a non-interactive shell inherits SIGINT
         # ignored (POSIX), and Python then keeps ignoring it: Ctrl-C at a terminal is not
         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
@@ -1058,7 +1088,7 @@ def test_ctrl_c_during_parallel_work_is_one_line(tmp_path: Path) -> None:
     proc = subprocess.Popen(
         [sys.executable, "-m", "fcomp.cli.main", "diagnose", "long.csv", "--friction", "lugre",
          "--jobs", "2", "--no-progress", "--json", "d.json"],
-        cwd=tmp_path, env=_env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+        cwd=tmp_path, env=env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
         start_new_session=True,  # a group of its own, as a terminal's foreground job
         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     # the workers started (a condition, not a clock: on a loaded machine 8 s may not be
@@ -1116,7 +1146,7 @@ def test_a_signal_stops_a_long_command_at_once(tmp_path: Path, label: str, args:
     _models_for_compensate(tmp_path)
     before = snapshot(tmp_path)
     proc = subprocess.Popen(
-        [sys.executable, "-m", "fcomp.cli.main", *args], cwd=tmp_path, env=_env(),
+        [sys.executable, "-m", "fcomp.cli.main", *args], cwd=tmp_path, env=env(),
         stdout=subprocess.PIPE, stderr=subprocess.PIPE,
         start_new_session=True,  # a group of its own, as a terminal's foreground job
         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
@@ -1137,6 +1167,49 @@ def test_a_signal_stops_a_long_command_at_once(tmp_path: Path, label: str, args:
         "a straggler wrote after the command ended"
 
 
+@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs /proc (Linux)")
+@pytest.mark.parametrize(("sig", "code", "line", "args", "marker"), [
+    (signal.SIGINT, 130, "fcomp: interrupted",
+     ["export", "mpc", "--option", "horizon=4", "--option", "qp_iterations=5"], "cc1"),
+    (signal.SIGTERM, 143, "fcomp: terminated", ["export", "mpc"], "fcomp_ctrl_casadi.c"),
+], ids=["ctrl-c-kernel-compile", "sigterm-export-compile"])
+@pytest.mark.slow
+def test_interrupting_export_ends_the_whole_compiler(tmp_path: Path, sig: int, code: int,
+                                                     line: str, args: list[str],
+                                                     marker: str) -> None:
+    """Issue 42 item 4: Ctrl-C (to the process group, as a terminal sends it) while the
+    controller's kernels compile, SIGTERM while the export's C compiles: the compiler runs
+    in a process group of its own, ended whole -- no ``cc1`` left running (5 of 9 runs
+    left one before) -- with the command's one line, exit status, and nothing written."""
+    proc = start([*args, "-o", "c", "--no-progress"], tmp_path,
+                 env=env(FCOMP_CACHE=str(tmp_path / "cache")))  # a fresh cache: compiles
+    compilers: list[int] = []
+    try:
+        def compiling() -> bool:
+            found = children(proc.pid)
+            if any("cc1" in c and marker in c for c in map(cmdline, found)):
+                compilers[:] = found
+                return True
+            return False
+
+        assert wait_for(compiling, proc, limit=300), \
+            f"no compiler ({marker}) seen before {args} ended"
+        send(proc, sig)
+        out, err = proc.communicate(timeout=60)
+        # cc1 on the MPC's C alone runs for a minute: ended, it is gone at once
+        wait_for(lambda: not alive(compilers), limit=2)
+        left = alive(compilers)
+    finally:
+        for pid in alive(compilers):
+            with contextlib.suppress(OSError):
+                os.kill(pid, signal.SIGKILL)
+        if proc.poll() is None:
+            proc.kill()
+    assert not left, f"compiler processes left running: {left}"
+    assert proc.returncode == code and err.decode() == line + "\n", err.decode()
+    assert not (tmp_path / "c").exists()
+
+
 def test_messages_show_plain_numbers() -> None:
     from fcomp.cli.main import plain
 
@@ -1145,7 +1218,7 @@ def test_messages_show_plain_numbers() -> None:
 
 def test_case_count() -> None:
     """The closing note of issue 12 gives this count: table cases plus the tests above."""
-    extra = 7 + len(SUBPROCESS) + 2
+    extra = 7 + len(SUBPROCESS) + 2 + 2
     assert len(CASES) + extra >= 150
     print(f"{len(CASES)} table cases + {extra} interrupt/process cases")
 

@@ -18,6 +18,7 @@ import sys
 import time
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -32,12 +33,12 @@ def env(**extra: str) -> dict[str, str]:
     return out
 
 
-def start(args: list[str], cwd: Path, **kw: object) -> subprocess.Popen:
+def start(args: list[str], cwd: Path, **kw: Any) -> subprocess.Popen:
     """``python -m fcomp.cli.main ARGS`` in a process group of its own, as a terminal's
     foreground job, with Ctrl-C at its default (a suite started as a background job of a
     non-interactive shell inherits SIGINT ignored, and Python keeps ignoring it)."""
     return subprocess.Popen(  # type: ignore[call-overload]
-        [sys.executable, "-m", "fcomp.cli.main", *args], cwd=cwd, env=env(),
+        [sys.executable, "-m", "fcomp.cli.main", *args], cwd=cwd, env=kw.pop("env", env()),
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True,
         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL), **kw)
 
@@ -74,6 +75,23 @@ def children(pid: int) -> list[int]:
 
     table = processes()
     return [p for p in descendants([pid]) if table.get(p, ("Z",))[0] != "Z"]
+
+
+def alive(pids: list[int]) -> list[int]:
+    """Those of ``pids`` that have not ended (ended ones nobody reaps do not count)."""
+    from fcomp.parallel import processes
+
+    table = processes()
+    return [p for p in pids if table.get(p, ("Z",))[0] != "Z"]
+
+
+def cmdline(pid: int) -> str:
+    """Process ``pid``'s command line ('' once it has ended)."""
+    try:
+        return Path(f"/proc/{pid}/cmdline").read_bytes().replace(b"\0", b" ").decode(
+            errors="replace")
+    except OSError:
+        return ""
 
 
 def group(pgid: int) -> list[int]:

@@ -601,6 +601,23 @@ def _hold_problem(pf: PlantFile) -> str | None:
             "pressures can give: lower the load or raise the supply pressure")
 
 
+#: The valve keys whose zero stops all flow, as a file gives them: (key, its target).
+_FLOW_KEYS = {"hydraulic": (("kv", "plant:kv"), ("cd", "plant:cd"), ("w", "plant:w")),
+              "pneumatic": (("A_valve", "plant:A_valve"), ("sonic_conductance", "rated:C"))}
+
+
+def _dead_valve(pf: PlantFile, given: dict[str, tuple[str, str, Key, Any]]) -> str | None:
+    """Why the valve passes no flow (``None``: it does), naming the key the file gave: a
+    zero spool gain, discharge coefficient, area gradient, edge area or sonic conductance
+    leaves no command that moves the piston or holds a load (issue 42 item 3; without this,
+    ``plant check`` tuned and reported margins for a dead plant)."""
+    for key, target in _FLOW_KEYS[pf.kind]:
+        if target in given and finite_number(given[target][3]) == 0.0:
+            return (f"{key} = 0: the valve passes no flow, so no command moves the piston or "
+                    f"holds a load (give the valve's real {key})")
+    return None
+
+
 def _cross_checks(pf: PlantFile, given: dict[str, tuple[str, str, Key, Any]]) -> list[str]:
     """Values that are each fine but impossible together, one line each."""
     v, label = pf.values, pf.label
@@ -618,6 +635,9 @@ def _cross_checks(pf: PlantFile, given: dict[str, tuple[str, str, Key, Any]]) ->
         if not v["b_crit"] < v["r_lam"]:
             out.append(f"{label}: [gas] r_lam = {v['r_lam']:g} must exceed b_crit = "
                        f"{v['b_crit']:g}")
+    dead = _dead_valve(pf, given)
+    if dead:
+        out.append(f"{label}: [valve] {dead}")
     load = _hold_problem(pf)
     if load:
         out.append(f"{label}: [mechanics] {load}")

@@ -162,6 +162,12 @@ def with_tunings(jobs: Sequence[Job], *, workers: int | None = None,
             for job, k in zip(jobs, index, strict=True)]
 
 
+#: Most Monte Carlo draws a sweep or a comparison takes: each is one closed-loop run per
+#: controller (and model), seconds each -- 1e8 draws ran unbounded, for years (issue 42
+#: item 10).
+MAX_SAMPLES = 10_000
+
+
 @dataclass(frozen=True)
 class Sweep:
     """A Monte Carlo sweep (see the module docstring).
@@ -200,6 +206,9 @@ class Sweep:
         if not (isinstance(self.samples, int) and self.samples >= 1):
             raise FcompError(f"robustness sweep: {term('samples')} must be a positive integer, "
                              f"got {self.samples!r}")
+        if self.samples > MAX_SAMPLES:
+            raise FcompError(f"robustness sweep: {term('samples')} {self.samples}: at most "
+                             f"{MAX_SAMPLES} draws (each one closed-loop run per controller)")
         if not (math.isfinite(self.spread) and self.spread >= 0):
             raise FcompError(f"robustness sweep: {term('spread')} must be >= 0, got {self.spread}")
         lo, hi = self.noise
@@ -495,6 +504,6 @@ def draw_distribution(ax: Any, dist: Mapping[str, Any], order: Sequence[str],
     return "box" if box else "points"
 
 
-__all__ = ["MIN_BOX_DRAWS", "MISMATCH_PARAMS", "Grid", "Job", "StoppingRule", "Sweep",
+__all__ = ["MAX_SAMPLES", "MIN_BOX_DRAWS", "MISMATCH_PARAMS", "Grid", "Job", "StoppingRule", "Sweep",
            "distributions", "draw_distribution", "median_interval", "paired_ratios", "run_job",
            "run_jobs", "run_sequential"]

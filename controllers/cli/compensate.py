@@ -15,6 +15,7 @@ from controllers.compensate import (
     report,
     resolve_plant,
 )
+from controllers.robustness import MAX_SAMPLES
 from controllers.tasks import TASKS
 from fcomp.cli import common
 from fcomp.cli.common import emit_result, json_target, report_dir, result_text
@@ -80,8 +81,9 @@ def run(args: argparse.Namespace) -> int:
     folder = report_dir(args.report)
     scheduler = check_scheduler(args.scheduler)
     common.check_jobs(args.jobs)
-    if args.samples is not None and args.samples < 0:
-        raise FcompError(f"--samples must be 0 or more, got {args.samples}")
+    if args.samples is not None and not 0 <= args.samples <= MAX_SAMPLES:
+        raise FcompError(f"--samples must be 0 to {MAX_SAMPLES} draws (each one closed-loop "
+                         f"run per controller and model), got {args.samples}")
     if not 0 <= args.spread < 1:
         raise FcompError(f"--spread must lie in [0, 1), got {args.spread:g}")
     if args.seed < 0:

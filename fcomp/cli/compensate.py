@@ -63,7 +63,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     common.add_length_options(p, "full", fast="the short versions of the tasks",
                               full="the tasks' full versions")
     p.add_argument("--samples", type=int, default=None, metavar="N",
-                   help="robustness draws (default 8, 4 with --fast; 0: none)")
+                   help="robustness draws (default 8, 4 with --fast; 0: none; at most 10000)")
     p.add_argument("--spread", type=finite_float, default=0.2,
                    help="half width of the draws' uniform factors on the true friction and "
                    "the mass (default 0.2: +-20 %%)")

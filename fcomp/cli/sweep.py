@@ -54,7 +54,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--controllers", default="pid,pid-ff,lugre-observer,ekf,mpc",
                    metavar="C1,C2,...", help="controllers to run (default: all five)")
     p.add_argument("--samples", type=int, default=20, metavar="N",
-                   help="Monte Carlo draws (default 20)")
+                   help="Monte Carlo draws (default 20, at most 10000)")
     p.add_argument("--spread", type=finite_float, default=0.3,
                    help="log-normal spread of the mismatch factors (default 0.3)")
     p.add_argument("--noise", default="0.5,3", metavar="LO,HI",

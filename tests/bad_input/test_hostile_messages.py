@@ -79,6 +79,7 @@ def test_plant_check_names_the_file_and_the_cause(lab: Path,
 
 @pytest.mark.parametrize(("option", "value", "match"), [
     ("--samples", "0", "--samples must be a positive integer"),
+    ("--samples", "100000000", "at most 10000 draws"),  # item 10: ran unbounded
     ("--spread", "-1", "--spread must be >= 0"),
     ("--noise", "3,0.5", "--noise range"),
     ("--grid", "Fc=", "--grid Fc: factors"),
@@ -88,6 +89,14 @@ def test_sweep_names_its_options(lab: Path, option: str, value: str, match: str,
                                  monkeypatch: pytest.MonkeyPatch) -> None:
     check_case(lab, Case(f"sweep --controllers pid {option} {value}", match=(match,)), capsys,
                monkeypatch)
+
+
+def test_compensate_bounds_its_draws(lab: Path, capsys: pytest.CaptureFixture[str],
+                                     monkeypatch: pytest.MonkeyPatch) -> None:
+    """``compensate --samples 1e8`` ran unbounded (item 10): one line before any run."""
+    check_case(lab, Case("compensate --plant hydraulic --friction lugre --controller-friction "
+                         "lugre,coulomb --controllers pid --samples 100000000 --no-progress",
+                         match=("--samples", "10000")), capsys, monkeypatch)
 
 
 @pytest.mark.parametrize(("name", "stem"), [("O-ring_3bar", "O-ring_3bar"),

@@ -415,13 +415,16 @@ def parse_plant(doc: Mapping[str, Any], label: str, default_name: str = "plant")
 
 #: Highest controller sample rate a plant file may give (Hz).
 RATE_MAX = 1e6
+#: Highest plausible pressure reading a plant file may give (Pa, absolute: 10 000 bar).
+PRESSURE_MAX = 1e9
 
 
 def _setting_problem(target: str, v: float, values: Mapping[str, float]) -> str | None:
     """Why a sensor or controller setting is out of range (``None``: it is not). A sensor's
     quantum and noise are not negative and below the range they measure (the stroke, the
     supply pressure); a limit, a rate or a tuning value is positive, the rate at most
-    :data:`RATE_MAX`."""
+    :data:`RATE_MAX`; the fail-safe layer's position margin at most the stroke, its highest
+    plausible pressure above the supply and at most :data:`PRESSURE_MAX`."""
     if target.startswith("sensors:"):
         if v < 0:
             return "must be >= 0"
@@ -434,6 +437,14 @@ def _setting_problem(target: str, v: float, values: Mapping[str, float]) -> str 
         return "must be > 0"
     if target == "control:control_rate" and v > RATE_MAX:
         return f"must be at most {RATE_MAX:g} Hz"
+    if target == "control:position_margin" and v > values.get("stroke", math.inf):
+        return (f"must be at most the stroke ({values['stroke']:g} m): a reading further "
+                "beyond an end is no reading of this piston")
+    if target == "control:pressure_max":
+        ps = values.get("ps", 0.0)
+        if not ps < v <= PRESSURE_MAX:
+            return (f"must lie above the supply pressure ps ({ps:g} Pa: a reading of it is "
+                    f"plausible) and at most {PRESSURE_MAX:g} Pa")
     return None
 
 

@@ -43,7 +43,10 @@ def test_a_bad_plant_file_is_named_with_its_key(lab: Path, stem: str,
     conductance, ``rated_flow`` with ``cd = 0``, ``p_noise = 1e308``, a 400-digit mass, a
     300-character name, a load beyond the force range, ...: one line each, the file and
     the key named (item 5: several were internal errors -- TypeError, ZeroDivisionError,
-    OverflowError)."""
+    OverflowError). Also the fail-safe layer's keys: a ``safe_output`` that is no name nor
+    command, a ``fault_latch`` of 2.5 or 1e300, a ``position_margin`` of 1e308 or a
+    ``pressure_max`` below the supply (each switched the layer off, or made it latch on
+    every good reading)."""
     match = MINE[stem][3]
     check_case(lab, Case(f"plant check {stem}.toml", match=(f"{stem}.toml", *match),
                          lines=None), capsys, monkeypatch)

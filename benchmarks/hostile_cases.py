@@ -540,6 +540,15 @@ def cases() -> list[Case]:
              ("hyd.toml",)))
     add(Case("plant-check-name300", "plant check h_name300.toml --json c.json", "refuse",
              ("h_name300.toml", "name"), "9", multi=True))
+    add(Case("plant-check-json-disk-full", "plant check hyd.toml --json /dev/full", "refuse",
+             ("/dev/full",), "8"))
+    add(Case("plant-check-json-read-only", "plant check hyd.toml --json ro/c.json", "refuse",
+             ("ro",), "9", user="nobody"))
+    add(Case("plant-check-json-name-too-long", "plant check hyd.toml --json " + "c" * 300
+             + ".json", "refuse", ("bytes long",), "9"))
+    add(Case("plant-check-json-folder", "plant check hyd.toml --json mine", "refuse",
+             ("mine",)))
+    add(Case("plant-check-two-files", "plant check hyd.toml pneu.toml", "refuse", ()))
     for stem in ("h_kind_list", "h_rated_cd_zero", "p_tau_zero", "p_gamma_one_sonic",
                  "h_pnoise_huge", "p_pnoise_huge", "h_load_beyond", "h_ps_below_pt",
                  "h_mass_bigint"):

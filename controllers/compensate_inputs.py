@@ -83,6 +83,11 @@ def model_label(spec: Any) -> str:
     return Path(str(spec)).stem if str(spec).lower().endswith(".json") else str(spec)
 
 
+#: Longest user reference (s): every closed-loop run simulates all of it at the control
+#: rate (an hour is 3.6 million steps at 1 kHz, per controller, model and draw).
+MAX_REFERENCE_S = 3600.0
+
+
 def read_reference(path: str | Path, stroke: float | None = None) -> Task:
     """A user's reference file as a task (:func:`controllers.tasks.reference_task`).
 
@@ -131,6 +136,11 @@ def read_reference(path: str | Path, stroke: float | None = None) -> Task:
     if t[-1] - t[0] < 0.1:
         raise FcompError(f"{label}: the reference lasts {t[-1] - t[0]:g} s; give at least "
                          "0.1 s")
+    if t[-1] - t[0] > MAX_REFERENCE_S:  # every run simulates all of it, at the control rate
+        raise FcompError(f"{label}: the reference lasts {t[-1] - t[0]:.4g} s, longer than the "
+                         f"{MAX_REFERENCE_S:g} s a closed-loop run takes (each run simulates "
+                         "every controller step of it); give a shorter stretch (is column t "
+                         "in seconds?)")
     task = reference_task(t, x, name=p.stem)
     if stroke is not None:
         lo, hi = 0.005, stroke - 0.005
@@ -143,5 +153,5 @@ def read_reference(path: str | Path, stroke: float | None = None) -> Task:
     return task
 
 
-__all__ = ["model_label", "read_reference", "resolve_compared", "resolve_friction",
+__all__ = ["MAX_REFERENCE_S", "model_label", "read_reference", "resolve_compared", "resolve_friction",
            "resolve_plant", "warn_once"]

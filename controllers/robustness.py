@@ -50,7 +50,7 @@ from controllers.harness import LoopConfig, control_model, friction_label, run_c
 from controllers.plant_model import ControlModel
 from controllers.tasks import Task
 from controllers.tuning import Tuning
-from fcomp.errors import FcompError
+from fcomp.errors import FcompError, term
 from fcomp.figstyle import plain_log_ticks
 from fcomp.models import FrictionModel
 from fcomp.parallel import run_tasks
@@ -162,8 +162,10 @@ def with_tunings(jobs: Sequence[Job], *, workers: int | None = None,
             for job, k in zip(jobs, index, strict=True)]
 
 
-#: Most draws a Monte Carlo runs (each runs every controller: 1000 draws of five controllers
-#: on the fast ramp are hours on two cores; the interval of a median needs far fewer).
+#: Most Monte Carlo draws a sweep or a comparison takes: each is one closed-loop run per
+#: controller (and model), seconds each -- 1000 draws of five controllers on the fast ramp
+#: are hours on two cores, and the interval of a median needs far fewer; 1e8 draws ran
+#: unbounded, for years (issue 42 item 10).
 MAX_SAMPLES = 1000
 
 
@@ -203,17 +205,16 @@ class Sweep:
 
     def __post_init__(self) -> None:
         if not (isinstance(self.samples, int) and self.samples >= 1):
-            raise FcompError(f"robustness sweep: samples must be a positive integer, "
+            raise FcompError(f"robustness sweep: {term('samples')} must be a positive integer, "
                              f"got {self.samples!r}")
         if self.samples > MAX_SAMPLES:
-            raise FcompError(f"robustness sweep: samples {self.samples}: at most {MAX_SAMPLES} "
-                             "(each draw runs every controller; the interval of a median "
-                             "needs far fewer)")
+            raise FcompError(f"robustness sweep: {term('samples')} {self.samples}: at most "
+                             f"{MAX_SAMPLES} draws (each one closed-loop run per controller)")
         if not (math.isfinite(self.spread) and self.spread >= 0):
-            raise FcompError(f"robustness sweep: spread must be >= 0, got {self.spread}")
+            raise FcompError(f"robustness sweep: {term('spread')} must be >= 0, got {self.spread}")
         lo, hi = self.noise
         if not (0 <= lo <= hi and math.isfinite(hi)):
-            raise FcompError(f"robustness sweep: noise range must be 0 <= lo <= hi, "
+            raise FcompError(f"robustness sweep: {term('noise')} range must be 0 <= lo <= hi, "
                              f"got {self.noise}")
 
     def draws(self) -> list[tuple[dict[str, float], float]]:
@@ -293,10 +294,11 @@ class Grid:
     def __post_init__(self) -> None:
         for k, vals in self.factors.items():
             if k not in MISMATCH_PARAMS:
-                raise FcompError(f"grid: {k!r} is not a friction parameter the controllers' "
+                raise FcompError(f"{term('grid')}: {k!r} is not a friction parameter the "
+                                 "controllers' "
                                  f"model is perturbed in ({', '.join(MISMATCH_PARAMS)})")
             if not vals or any(not (math.isfinite(v) and v > 0) for v in vals):
-                raise FcompError(f"grid: {k}: factors must be positive numbers, got "
+                raise FcompError(f"{term('grid')} {k}: factors must be positive numbers, got "
                                  f"{list(vals)}")
         if not self.factors and not self.controller_frictions:
             raise FcompError("grid: give mismatch factors or controller friction models")

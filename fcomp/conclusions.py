@@ -28,6 +28,28 @@ from typing import Any
 #: The confidence levels, worst first.
 LEVELS = ("low", "medium", "high")
 
+#: What a result says, worst first: the claim fails or the model leaves structure
+#: (``bad``), holds in part (``mixed``), holds (``good``).
+OUTCOMES = ("bad", "mixed", "good")
+
+#: The colours of a report (its note kinds), worst first: red, amber, green.
+TONES = ("bad", "warn", "ok")
+
+
+def tone(outcome: str | None, confidence: str) -> str:
+    """The one colour rule of every report and page: the colour of a result is the worse
+    of what it says and how sure it is -- green (``ok``) only for a favourable result held
+    with high confidence; amber (``warn``) for one that holds in part or is only medium
+    sure; red (``bad``) for a result that fails, or one held with low confidence. An
+    "explained" verdict whose fit is not to be trusted is therefore not green beside a red
+    "How sure: low", and a study sure that a claim is not reproduced is red, not green.
+
+    ``outcome``: one of :data:`OUTCOMES`, or ``None`` (only the confidence colours)."""
+    by_confidence = TONES[LEVELS.index(confidence)] if confidence in LEVELS else "bad"
+    if outcome is None:
+        return by_confidence
+    return TONES[min(OUTCOMES.index(outcome), TONES.index(by_confidence))]
+
 #: A held-out RMS below this fraction of the noise floor is suspect: a model that is right
 #: leaves the noise (RMS about the floor); well below it, it fits noise, or the floor
 #: estimate is off.
@@ -62,12 +84,22 @@ class Conclusion:
         empty when ``high``.
     next_steps
         What to do next, most useful first.
+    outcome
+        What the finding says (:data:`OUTCOMES`: ``"good"``, ``"mixed"``, ``"bad"``), or
+        ``None``: it only reports numbers. With the confidence it decides the colour
+        (:func:`tone`, :attr:`tone`).
     """
 
     finding: str
     confidence: str
     reasons: tuple[str, ...] = ()
     next_steps: tuple[str, ...] = ()
+    outcome: str | None = None
+
+    @property
+    def tone(self) -> str:
+        """The colour of this conclusion wherever it is shown (:func:`tone`)."""
+        return tone(self.outcome, self.confidence)
 
     def lines(self) -> list[str]:
         """The console form: ``Conclusion:``, ``How sure:`` (with its reasons) and ``Next:``,
@@ -196,6 +228,11 @@ def of_comparison(doc: Mapping[str, Any]) -> Conclusion:
     if "default-params" in codes:
         reasons.append("the model's default values, not fitted to these records")
         level = "low"
+    flagged, flags, experiments = fit_flags([w for w in doc.get("warnings", [])
+                                             if w.get("code") in UNDETERMINED])
+    if flags:  # as the fit or diagnosis that made the model said (the model file's stderr)
+        reasons += flags
+        level = _lowest(level, flagged)
     if below_floor(rms, floor):
         reasons.append(f"RMS below the noise floor {_num(floor)} (the floor estimate is off, "
                        "or the model was fitted to these very samples)")
@@ -203,16 +240,17 @@ def of_comparison(doc: Mapping[str, Any]) -> Conclusion:
     if "heldout-coverage" in codes:
         reasons.append("part of the motion too short to judge")
         level = _lowest(level, "medium")
-    steps: list[str] = []
+    steps: list[str] = list(experiments)
     top = (doc.get("residual_features") or [{}])[0]
-    if not at_noise:
+    if not at_noise:  # from the model as compared (a file keeps its effects): nothing re-added
         steps.append(f"find the missing effect: fcomp diagnose DATA --friction "
-                     f"{doc.get('model')}" + (f" (the residual follows {top['feature']}, "
-                                              f"strength {top['strength']:.2f})"
-                                              if top.get("feature") else ""))
+                     f"{doc.get('friction') or doc.get('model')}"
+                     + (f" (the residual follows {top['feature']}, strength "
+                        f"{top['strength']:.2f})" if top.get("feature") else ""))
     if "default-params" in codes:
         steps.insert(0, "fit it first (fcomp fit ... --json FIT.json, then --params FIT.json)")
-    return Conclusion(finding, level, tuple(reasons), tuple(steps))
+    return Conclusion(finding, level, tuple(reasons), tuple(steps),
+                      outcome="good" if at_noise else "mixed")
 
 
 def of_diagnosis(doc: Mapping[str, Any]) -> Conclusion:
@@ -263,7 +301,8 @@ def of_diagnosis(doc: Mapping[str, Any]) -> Conclusion:
     if not explained:
         steps.append("look at the residual against each feature (--report DIR) and write the "
                      "effect (docs/effects.md)")
-    return Conclusion(finding, level, tuple(reasons), tuple(steps))
+    return Conclusion(finding, level, tuple(reasons), tuple(steps),
+                      outcome="good" if explained else "mixed")
 
 
 #: What a warning code means, said once for a group of several warnings of that code.
@@ -298,7 +337,7 @@ def grouped_warnings(items: Sequence[Mapping[str, Any]],
     met once keeps its message; several of one code become one counted line naming what
     they concern; a last line says where (``place``) each is in full when any were grouped (the
     command line says which file, or that ``--json OUT`` would write them:
-    :func:`fcomp.cli.main.main`)."""
+    :func:`fcomp.cli.app.run`)."""
     groups: dict[str, list[Mapping[str, Any]]] = {}
     for w in items:
         groups.setdefault(str(w.get("code")), []).append(w)

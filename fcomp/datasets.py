@@ -9,7 +9,9 @@ a ``SOURCE.md`` giving the citation and licence (see docs/data.md):
 * ``seed001`` -- the measured friction tables of seed 001 (tables, not time series).
 
 Files are found with :mod:`importlib.resources`, so this works from an
-installed package as well as from the source tree.
+installed package as well as from the source tree -- and from any folder:
+``fcomp import zillen O-ring_3bar -o run.csv`` takes the shipped file by name
+(:func:`shipped`), ``fcomp list data`` lists them.
 """
 
 from __future__ import annotations
@@ -55,6 +57,32 @@ def path(name: str, file: str) -> Path:
     if not p.is_file():
         raise FcompError(f"data set {name!r} has no file {file!r} (files: {', '.join(files(name))})")
     return p
+
+
+def title(name: str) -> str:
+    """The data set's title: the first heading of its ``SOURCE.md``."""
+    for line in (_folder(name) / "SOURCE.md").read_text(encoding="utf-8").splitlines():
+        if line.startswith("# "):
+            return line[2:].strip()
+    return name
+
+
+def shipped(kind: str, name: str) -> Path | None:
+    """The shipped file an importer ``kind`` takes by ``name`` -- its file name, or that
+    name without its suffix (``fcomp import zillen O-ring_3bar``); ``None`` when no data
+    set of that kind ships it."""
+    for ds in names():
+        if IMPORT_KIND[ds] != kind:
+            continue
+        for f in files(ds):
+            if name in (f, Path(f).stem):
+                return _folder(ds) / f
+    return None
+
+
+def shipped_names(kind: str) -> list[str]:
+    """The names (file stems) of the shipped files importer ``kind`` takes."""
+    return [Path(f).stem for ds in names() if IMPORT_KIND[ds] == kind for f in files(ds)]
 
 
 def load(name: str, file: str) -> Measurement:

@@ -388,6 +388,10 @@ def import_csv(src: Path, *, mapping: str | Mapping[str, str],
     meas = from_variables(cols, cmap, meta, source=src, noun="column", units=umap)
     used = {tok.strip().lstrip("-").strip().strip("\"'") for e in cmap.values()
             for tok in split_outside_quotes(e.strip().lstrip("-"), "*")}
+    both = [d for d in dropped if d in used]
+    if both:
+        raise FcompError(f"{src}: {term('drop')} {both[0]}: the column is mapped too "
+                         f"({term('mapping')}); drop only columns the mapping does not use")
     left = [c for c in cols if c not in used and c not in dropped]
     if left and "*" not in dropped:
         names = ",".join(c if c.isidentifier() else f"'{c}'" for c in left)

@@ -21,6 +21,7 @@ import numpy as np
 
 from fcomp.errors import FcompError, FcompWarning, term
 from fcomp.measurement import check_values
+from fcomp.parameters import MAX_VALUE
 from fcomp.textdata import check_path, data_rows, header_names, parse_rows, read_text
 
 KINDS = ("sine", "step", "csv")
@@ -64,7 +65,7 @@ def _kv(body: str, spec: str, allowed: dict[str, float | None]) -> dict[str, flo
                 raise _bad(spec, f"{k} = {val!r} is not a number") from None
             if not math.isfinite(f):
                 raise _bad(spec, f"{k} must be a finite number")
-            if abs(f) > 1e15:
+            if abs(f) > MAX_VALUE:
                 raise _bad(spec, f"{k} = {val} is beyond any plausible value in SI units")
             out[k] = f
     for k, default in allowed.items():

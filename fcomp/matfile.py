@@ -125,7 +125,8 @@ def _factor(variables: Mapping[str, Any], token: str, path: Path, column: str,
         pass
     else:
         if not math.isfinite(number):
-            raise FcompError(f"{path}: column {column!r}: the number {token} in the mapping is "
+            shown = token if len(token) <= 30 else f"{token[:12]}... ({len(token)} characters)"
+            raise FcompError(f"{path}: column {column!r}: the number {shown} in the mapping is "
                              "not a finite number (beyond about 1.8e308, or nan/inf)")
         return np.asarray(number)
     quoted = len(token) >= 2 and token[0] == token[-1] and token[0] in "'\""

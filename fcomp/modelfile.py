@@ -29,7 +29,6 @@ record), :func:`load_model` returns the seal's friction alone and warns
 
 from __future__ import annotations
 
-import json
 import math
 import warnings
 from collections.abc import Mapping
@@ -39,6 +38,7 @@ from typing import Any
 
 from fcomp.effects import EFFECTS, Effect, load_effects_module
 from fcomp.errors import FcompError, FcompWarning, FileFormatError, UnknownNameError, term
+from fcomp.measurement import MAX_MASS
 from fcomp.models import MODELS, FrictionModel, make_model
 from fcomp.models.document import (
     FORMAT,
@@ -47,11 +47,12 @@ from fcomp.models.document import (
     model_document,
     save_model,
 )
-from fcomp.parameters import ParamSet
+from fcomp.models.fitted_range import OutOfRangeError, check_range
+from fcomp.parameters import MAX_VALUE, ParamSet, finite_number
 
 #: Keys of a model file (``format`` .. ``source``).
 KEYS = ("format", "version", "model", "description", "features", "effects", "params",
-        "stderr", "measurement_terms", "source")
+        "stderr", "measurement_terms", "fitted_range", "source")
 #: Keys of one entry of ``effects``.
 EFFECT_KEYS = ("name", "config", "module", "params")
 
@@ -170,7 +171,8 @@ def is_model_file(spec: str | Path) -> bool:
 
 
 def read_model(source: str | Path | Mapping[str, Any],
-               effects_module: str | Path | None = None) -> ModelFile:
+               effects_module: str | Path | None = None, *, label: str | None = None
+               ) -> ModelFile:
     """Read a model file (a path, or its document as a mapping).
 
     Parameters
@@ -181,6 +183,8 @@ def read_model(source: str | Path | Mapping[str, Any],
     effects_module : str or Path, optional
         A Python file registering the user effects the model uses (``--effects``;
         it is executed).
+    label : str, optional
+        How messages name a document given as a mapping (default ``"model document"``).
 
     Returns
     -------
@@ -194,7 +198,7 @@ def read_model(source: str | Path | Mapping[str, Any],
     if effects_module is not None:
         load_effects_module(effects_module)
     if isinstance(source, Mapping):
-        label, doc = "model document", dict(source)
+        label, doc = label or "model document", dict(source)
     else:
         label, doc = str(source), _read_json(source)
     if "format" not in doc and isinstance(doc.get("model_file"), Mapping):
@@ -219,9 +223,15 @@ def read_model(source: str | Path | Mapping[str, Any],
     if bad:
         raise FileFormatError(f"{label}: measurement_terms.params.{bad[0]} is not a measurement "
                               f"term (known: {', '.join(MEASUREMENT_PARAMS)})")
+    _check_measurement(m_params, label)
     stderr = _values({k: v for k, v in _section(doc.get("stderr", {}), label,
                                                  "stderr").items() if v is not None},
                      label, "stderr")
+    if "fitted_range" in doc:
+        try:
+            model = model.with_fitted_range(doc["fitted_range"])
+        except ValueError as exc:
+            raise FileFormatError(f"{label}: {exc}") from None
     return ModelFile(model=model.with_stderr(stderr), label=label,
                      measurement_effects=tuple(m_effects),
                      measurement_params=m_params,
@@ -262,14 +272,9 @@ def load_model(source: str | Path | Mapping[str, Any],
 
 # ----------------------------------------------------------------- reading
 def _read_json(path: str | Path) -> dict[str, Any]:
-    from fcomp.textdata import check_path, read_text
+    from fcomp.textdata import read_json
 
-    p = check_path(path, "model file")
-    try:
-        doc = json.loads(read_text(p, str(path), what="JSON"))
-    except json.JSONDecodeError as exc:
-        raise FileFormatError(f"{path}: not valid JSON ({exc.msg}, line {exc.lineno}); a "
-                              "model file is written by fcomp fit --save-model") from None
+    doc = read_json(path, "model file", "; a model file is written by fcomp fit --save-model")
     if not isinstance(doc, dict):
         raise FileFormatError(f"{path}: not a model file (a JSON object is expected)")
     return doc
@@ -281,11 +286,12 @@ def _check_header(doc: Mapping[str, Any], label: str) -> None:
                               f"\"{FORMAT}\"; fcomp fit --save-model writes one)")
     version = doc.get("version")
     if not isinstance(version, int) or isinstance(version, bool) or version < 1:
-        raise FileFormatError(f"{label}: version must be a positive integer, got {version!r}")
+        raise FileFormatError(f"{label}: version must be a positive integer, got "
+                              f"{_shown(version)}")
     if version > VERSION:
         from fcomp.version import __version__
 
-        raise FileFormatError(f"{label}: model file version {version} is newer than fcomp "
+        raise FileFormatError(f"{label}: model file version {_shown(version)} is newer than fcomp "
                               f"{__version__} reads (version {VERSION}); upgrade fcomp")
     unknown = [k for k in doc if k not in KEYS]
     if unknown:
@@ -306,18 +312,52 @@ def _list(value: Any, label: str, key: str) -> list[Any]:
     return value
 
 
+def _shown(value: Any) -> str:
+    """``repr(value)``, cut short (a 400-digit number is not worth printing whole)."""
+    text = repr(value)
+    return text if len(text) <= 40 else f"{text[:24]}... ({len(text)} characters)"
+
+
+def _number(v: Any) -> float | None:
+    """A JSON value as a float: a finite number (an integer too large for a float is not),
+    or the strings ``"inf"``/``"-inf"``; ``None`` otherwise."""
+    if isinstance(v, str):
+        return float(v) if v in ("inf", "-inf") else None
+    return finite_number(v)
+
+
 def _values(section: Any, label: str, key: str) -> dict[str, float]:
     """A ``{name: number}`` section; ``"inf"``/``"-inf"`` are the infinities."""
     out: dict[str, float] = {}
     for k, v in _section(section, label, key).items():
-        infinite = isinstance(v, str) and v in ("inf", "-inf")
-        finite = isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
-        if infinite or finite:
-            out[k] = float(v)
-        else:
-            raise FileFormatError(f"{label}: {key}.{k} = {v!r} is not a number (SI units; "
-                                  "\"inf\" for infinity)")
+        number = _number(v)
+        if number is None:
+            raise FileFormatError(f"{label}: {key}.{k} = {_shown(v)} is not a finite number in "
+                                  "floating-point range (SI units; \"inf\" for infinity)")
+        if math.isfinite(number) and abs(number) > MAX_VALUE:
+            raise FileFormatError(f"{label}: {key}.{k} = {number:g} is beyond any plausible "
+                                  "value in SI units (\"inf\" for infinity)")
+        out[k] = number
     return out
+
+
+#: Measurement term -> (lowest, highest, what it is): beyond, no record has such a value (a
+#: moving mass as the sidecar's rig.mass allows it; a force channel lags by less than 1 s).
+MEASUREMENT_RANGES: dict[str, tuple[float, float, str]] = {
+    "mass": (0.0, MAX_MASS, "a moving mass"),
+    "offset": (-MAX_VALUE, MAX_VALUE, "a constant force offset"),
+    "lag": (-1.0, 1.0, "the lag of the force channel (negative: it leads)"),
+}
+
+
+def _check_measurement(values: Mapping[str, float], label: str) -> None:
+    """The measurement terms within what a record can have (:data:`MEASUREMENT_RANGES`)."""
+    for k, v in values.items():
+        low, high, what = MEASUREMENT_RANGES[k]
+        if not low <= v <= high:
+            raise FileFormatError(f"{label}: measurement_terms.params.{k} = {v:g} "
+                                  f"{MEASUREMENT_PARAMS[k]} is outside [{low:g}, {high:g}] "
+                                  f"({what}; no fit gives such a value)")
 
 
 def _effect_class(entry: Any, label: str, where: str) -> tuple[type[Effect], dict[str, Any]]:
@@ -382,10 +422,15 @@ def _build(doc: Mapping[str, Any], params: dict[str, float], label: str) -> Fric
             raise FileFormatError(f"{label}: effects[{i}] ({cls.name}): {exc}") from None
     model = _with_values(model, params, consumed, label)
     features = doc.get("features")
+    if features is not None and (not isinstance(features, list)
+                                 or not all(isinstance(f, str) for f in features)):
+        raise FileFormatError(f"{label}: features must be a list of names, got "
+                              f"{_shown(features)}")
     fam = model.feature_family()
-    if features is not None and fam is not None and sorted(fam.features) != features:
+    if features is not None and fam is not None and sorted(fam.features) != sorted(features):
         raise FileFormatError(f"{label}: the model and its effects give the features "
-                              f"{sorted(fam.features)}, the file says {features}")
+                              f"{sorted(fam.features)}, the file says {sorted(features)} (the "
+                              "order does not matter)")
     return model
 
 
@@ -414,5 +459,5 @@ def _with_values(model: FrictionModel, params: Mapping[str, float], consumed: se
     return model._rebuild(new, effects)
 
 
-__all__ = ["FORMAT", "VERSION", "ModelFile", "is_model_file", "load_model", "model_document",
-           "read_model", "save_model", "split_measurement"]
+__all__ = ["FORMAT", "VERSION", "ModelFile", "OutOfRangeError", "check_range", "is_model_file",
+           "load_model", "model_document", "read_model", "save_model", "split_measurement"]

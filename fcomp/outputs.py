@@ -27,6 +27,7 @@ the old one or the new one.
 
 from __future__ import annotations
 
+import errno
 import os
 import shutil
 import signal
@@ -128,6 +129,84 @@ def check_distinct(outputs: Sequence[tuple[str, Path, bool]]) -> None:
                                  "give them separate places")
 
 
+# ------------------------------------------------------ checked before the work
+def name_max(folder: Path) -> int:
+    """The longest file name (bytes) the file system of ``folder`` takes (255 on the
+    usual ones)."""
+    try:
+        return int(os.pathconf(folder, "PC_NAME_MAX"))
+    except (OSError, ValueError, AttributeError):
+        return 255
+
+
+def _exists(path: Path) -> bool:
+    """Whether ``path`` exists; a name the system cannot even look up (too long) does not."""
+    try:
+        os.stat(path)
+    except (OSError, ValueError):
+        return False
+    return True
+
+
+def _existing_folder(path: Path) -> Path:
+    """The nearest folder of ``path``'s parents that exists (where writing starts)."""
+    p = path.parent
+    while not _exists(p) and p != p.parent:
+        p = p.parent
+    return p
+
+
+def check_name_length(option: str, path: Path) -> None:
+    """Refuse an output whose name -- or a folder to create on the way -- is longer than
+    the file system takes (before anything looks the path up: such a name fails every
+    call, "File name too long")."""
+    where = _existing_folder(path)
+    limit = name_max(where)
+    p = path
+    while p != where and p != p.parent:
+        size = len(os.fsencode(p.name))
+        if size > limit:
+            raise FcompError(f"{option} {path}: the name {p.name[:24]}... is {size} bytes "
+                             f"long, more than the {limit} a file name may have here; choose "
+                             "a shorter one")
+        p = p.parent
+
+
+def check_writable(option: str, path: Path) -> None:
+    """Refuse, before any work, an output ``path`` (a file, or a folder fcomp builds) that
+    cannot be written: a name (or a folder to create on the way) longer than the file
+    system takes (:func:`check_name_length`), or a folder where this process may not create
+    files (read-only, no permission, a read-only file system) -- found by creating and
+    removing a hidden file there, as writing will. A device or named pipe (``/dev/null``)
+    is written as it is and not probed."""
+    check_name_length(option, path)
+    if _exists(path) and not path.is_file() and not path.is_dir():
+        return
+    where = _existing_folder(path)
+    if not where.is_dir():
+        return  # a file where a folder should be: said by the callers' own checks
+    try:
+        fd, probe = tempfile.mkstemp(prefix=".fcomp-probe.", suffix=".tmp", dir=where)
+    except OSError as exc:
+        folder = "the current folder" if where == Path(".") else f"the folder {where}"
+        raise FcompError(f"{option} {path}: cannot write into {folder} ({exc.strerror or exc}); "
+                         "choose another place (nothing was done)") from None
+    os.close(fd)
+    os.unlink(probe)
+
+
+def temporary_prefix(name: str, folder: Path, suffix: str = ".tmp") -> str:
+    """The prefix of the hidden temporary sibling of ``name``: ``.NAME.``, the name cut
+    short where the whole temporary name (``.NAME.`` + 8 random characters + ``suffix``)
+    would be longer than the file system takes -- a legal 250-character output name
+    must not fail on its temporary's name."""
+    room = name_max(folder) - len(os.fsencode(suffix)) - 8 - 2
+    raw = os.fsencode(name)
+    if len(raw) > room:
+        name = raw[:max(room, 1)].decode("utf-8", errors="ignore")
+    return f".{name}."
+
+
 # ----------------------------------------------------------------- files
 def _umask() -> int:
     mask = os.umask(0o022)
@@ -195,8 +274,11 @@ def write_files(files: Mapping[Path, str | bytes]) -> None:
             raise FcompError(f"{path}: is a directory, cannot write a file there")
     special = {p: c for p, c in files.items() if p.exists() and not p.is_file()}
     for path, content in special.items():  # /dev/stdout, a named pipe: written as they are
-        with open(path, "wb") as fh:
-            fh.write(content.encode("utf-8") if isinstance(content, str) else content)
+        try:
+            with open(path, "wb") as fh:
+                fh.write(content.encode("utf-8") if isinstance(content, str) else content)
+        except OSError as exc:
+            raise FcompError(f"{path}: cannot write ({exc.strerror or exc})") from None
     # through a symbolic link: replace the file it points to, keep the link
     files = {_real(p) if p.is_symlink() else p: c for p, c in files.items() if p not in special}
     created: list[Path] = []
@@ -207,7 +289,8 @@ def write_files(files: Mapping[Path, str | bytes]) -> None:
         for path in files:
             created += _make_parents(path.parent)
         for path, content in files.items():
-            fd, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+            fd, name = tempfile.mkstemp(prefix=temporary_prefix(path.name, path.parent),
+                                        suffix=".tmp", dir=path.parent)
             tmps[path] = Path(name)
             data = content.encode("utf-8") if isinstance(content, str) else content
             with os.fdopen(fd, "wb") as fh:
@@ -265,6 +348,7 @@ def _fcomp_folder(path: Path, kind: str) -> bool:
 
 def check_folder_target(option: str, path: Path, kind: str) -> None:
     """Refuse an output folder fcomp may not replace (before any work is done)."""
+    check_name_length(option, path)
     if path.exists() and not path.is_dir():
         raise FcompError(f"{option} {path}: exists and is not a directory")
     if _within(Path.cwd(), path):
@@ -287,6 +371,17 @@ def check_folder_target(option: str, path: Path, kind: str) -> None:
         raise FcompError(f"{option} {path}: {parent} is a file, not a folder")
 
 
+#: Errors of the storage itself (a full disk or quota, a read-only or failing device).
+_STORAGE = {errno.ENOSPC, errno.EDQUOT, errno.EROFS, errno.EFBIG, errno.EIO}
+
+
+def _storage_error(exc: BaseException, folder: Path) -> bool:
+    """Whether ``exc`` is the storage failing under ``folder`` (or under no file name)."""
+    if not isinstance(exc, OSError) or exc.errno not in _STORAGE:
+        return False
+    return exc.filename is None or _within(Path(str(exc.filename)), folder)
+
+
 @contextmanager
 def staged_folder(path: str | Path, option: str, kind: str,
                   note: str = "") -> Iterator[Path]:
@@ -302,7 +397,8 @@ def staged_folder(path: str | Path, option: str, kind: str,
     check_folder_target(option, Path(path), kind)
     created = _make_parents(final.parent)
     try:
-        tmp = Path(tempfile.mkdtemp(prefix=f".{final.name}.", suffix=".tmp", dir=final.parent))
+        tmp = Path(tempfile.mkdtemp(prefix=temporary_prefix(final.name, final.parent),
+                                    suffix=".tmp", dir=final.parent))
     except OSError as exc:
         _remove_empty(created)
         raise FcompError(f"{option} {path}: cannot create a folder next to it "
@@ -316,17 +412,22 @@ def staged_folder(path: str | Path, option: str, kind: str,
                                   "again.\n")
         with signals_held():
             if final.exists():
-                old = Path(tempfile.mkdtemp(prefix=f".{final.name}.", suffix=".old",
-                                            dir=final.parent))
+                old = Path(tempfile.mkdtemp(prefix=temporary_prefix(final.name, final.parent,
+                                                                    ".old"),
+                                            suffix=".old", dir=final.parent))
                 os.rename(final, old / final.name)
             os.rename(tmp, final)
-    except BaseException:
+    except BaseException as exc:
         shutil.rmtree(tmp, ignore_errors=True)
         if old is not None and not final.exists():  # put the old result back
             os.rename(old / final.name, final)
         if old is not None:
             shutil.rmtree(old, ignore_errors=True)
         _remove_empty(created)
+        if _storage_error(exc, tmp):  # a full disk while writing: the folder asked for
+            assert isinstance(exc, OSError)
+            raise FcompError(f"{option} {path}: cannot write ({exc.strerror or exc}); nothing "
+                             "was written") from None
         raise
     if old is not None:
         shutil.rmtree(old, ignore_errors=True)

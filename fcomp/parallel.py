@@ -43,9 +43,10 @@ import sys
 import threading
 import types
 import warnings
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from concurrent.futures import Executor, ProcessPoolExecutor, as_completed
 from contextlib import AbstractContextManager, contextmanager, suppress
+from pathlib import Path
 from typing import Any, TypeVar
 
 from fcomp.errors import FcompError, FcompWarning, term
@@ -146,8 +147,22 @@ def process_pool(workers: int, *, spawn: bool = False) -> ProcessPoolExecutor:
     on macOS and Windows) rather than forked. Its workers never run the caller's
     ``__main__`` (:func:`pool_context`) and leave Ctrl-C and SIGTERM to the parent
     (:func:`stopping`)."""
-    return ProcessPoolExecutor(max_workers=workers, mp_context=pool_context(spawn),
-                               initializer=_worker_start, initargs=(user_sources(),))
+    return _Pool(max_workers=workers, mp_context=pool_context(spawn),
+                 initializer=_worker_start, initargs=(user_sources(),))
+
+
+class _Pool(ProcessPoolExecutor):
+    """A process pool that starts each worker with Ctrl-C and SIGTERM held off until the
+    worker is registered in the pool: a signal landing just as a worker started used to
+    leave it out of the pool's list, so :func:`stop` did not end it and the command hung
+    at exit waiting for it. The worker itself starts with the signals held, too, until
+    its first act (:func:`_worker_start`) has set its own handling."""
+
+    def _spawn_process(self) -> None:
+        from fcomp.outputs import signals_held
+
+        with signals_held():
+            super()._spawn_process()  # type: ignore[misc]
 
 
 #: Held while a worker process starts with the caller's ``__main__`` hidden.
@@ -281,6 +296,8 @@ def _worker_start(sources: tuple[tuple[str, str, str], ...]) -> None:
     the user's files are executed (:func:`fcomp.usercode.load_sources`)."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    if hasattr(signal, "pthread_sigmask"):  # held by the parent while it started this one
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT, signal.SIGTERM})
     load_sources(sources)
 
 
@@ -306,19 +323,62 @@ def stop(pool: Executor) -> None:
     procs = list((getattr(pool, "_processes", None) or {}).values())
     pool.shutdown(wait=False, cancel_futures=True)
     pids = [p.pid for p in procs if p.is_alive() and p.pid is not None]
-    for pid in [*_descendants(pids), *pids]:  # the innermost first: no new orphan meanwhile
+    for pid in [*descendants(pids), *pids]:  # the innermost first: no new orphan meanwhile
         with suppress(ProcessLookupError, PermissionError):  # ended meanwhile, or not ours
             os.kill(pid, signal.SIGTERM)
 
 
-def _descendants(pids: Sequence[int]) -> list[int]:
-    """The processes started by ``pids`` and by theirs, innermost first (from ``/proc``;
-    none where there is no ``/proc``)."""
-    parents: dict[int, list[int]] = {}
+#: Seconds :func:`end_children` gives processes to end on SIGTERM before it kills them.
+END_GRACE = 1.0
+
+
+def end_children(grace: float = END_GRACE, keep: Iterable[int] = ()) -> list[int]:
+    """End every process this one started that is still running -- the last act of a
+    command stopped by a signal: nothing of it is left running. ``keep``: processes that
+    were there before the command (a notebook's own, when the command runs in one) and
+    are not ended.
+
+    :func:`stop` ends the workers a pool lists; this ends the rest: a worker a pool was
+    still starting (in another thread, or with the signals held: it takes SIGTERM only
+    once started), the processes workers started, and -- when this process leads its
+    process group, as a command run from a shell does -- any other member of the group
+    that is one of fcomp's processes (a worker's own worker whose parent ended first; not
+    the other programs of a pipeline, ``fcomp ... | tee log``). SIGTERM first; whatever is left
+    after ``grace`` s (a process still starting with its signals held) is killed
+    (SIGKILL). Returns the processes signalled.
+    """
+    import time
+
+    multiprocessing.active_children()  # reaps the ended ones
+    spared = {os.getpid(), *keep}
+    pids = [p for p in descendants([os.getpid()]) if p not in spared]
+    if os.getpgrp() == os.getpid():  # a worker's worker whose parent ended first
+        pids += [p for p in group_members(os.getpid())
+                 if p not in pids and p not in spared and _ours(p)]
+    for pid in pids:
+        with suppress(ProcessLookupError, PermissionError):
+            os.kill(pid, signal.SIGTERM)
+    end = time.monotonic() + grace
+    while time.monotonic() < end and any(_running(p) for p in pids):
+        multiprocessing.active_children()
+        time.sleep(0.02)
+    for pid in pids:
+        if _running(pid):
+            with suppress(ProcessLookupError, PermissionError):
+                os.kill(pid, signal.SIGKILL)
+    multiprocessing.active_children()
+    return pids
+
+
+def processes() -> dict[int, tuple[str, int, int]]:
+    """Every process: pid -> ``(state, parent pid, process group)`` (from ``/proc``; empty
+    where there is none). ``state`` ``"Z"`` is a process that has ended and is not yet
+    reaped."""
+    out: dict[int, tuple[str, int, int]] = {}
     try:
         entries = os.listdir("/proc")
     except OSError:
-        return []
+        return out
     for entry in entries:
         if not entry.isdigit():
             continue
@@ -328,8 +388,48 @@ def _descendants(pids: Sequence[int]) -> list[int]:
         except OSError:  # ended meanwhile
             continue
         fields = stat[stat.rfind(b")") + 2:].split()  # after "pid (name) "
-        if len(fields) > 1 and fields[1].isdigit():
-            parents.setdefault(int(fields[1]), []).append(int(entry))
+        if len(fields) > 2 and fields[1].isdigit() and fields[2].lstrip(b"-").isdigit():
+            out[int(entry)] = (fields[0].decode(), int(fields[1]), int(fields[2]))
+    return out
+
+
+def _running(pid: int) -> bool:
+    """Whether ``pid`` is a process that has not ended (a zombie has)."""
+    found = processes().get(pid)
+    if found is not None:
+        return found[0] != "Z"
+    try:
+        os.kill(pid, 0)
+    except (ProcessLookupError, PermissionError):
+        return False
+    return not Path("/proc").is_dir()  # no /proc: alive as far as can be told
+
+
+def _ours(pid: int) -> bool:
+    """Whether ``pid`` runs what this process runs (a forked worker: the same command line)
+    or a process multiprocessing started (``spawn_main``, ``forkserver``)."""
+    try:
+        with open(f"/proc/{pid}/cmdline", "rb") as f:
+            theirs = f.read()
+        with open(f"/proc/{os.getpid()}/cmdline", "rb") as f:
+            own = f.read()
+    except OSError:
+        return False
+    return theirs == own or b"multiprocessing" in theirs
+
+
+def group_members(pgid: int) -> list[int]:
+    """The processes of process group ``pgid`` that have not ended."""
+    return [pid for pid, (state, _, group) in processes().items()
+            if group == pgid and state != "Z"]
+
+
+def descendants(pids: Sequence[int]) -> list[int]:
+    """The processes started by ``pids`` and by theirs, innermost first (from ``/proc``;
+    none where there is no ``/proc``)."""
+    parents: dict[int, list[int]] = {}
+    for pid, (_, parent, _) in processes().items():
+        parents.setdefault(parent, []).append(pid)
     found: list[int] = []
     todo = list(pids)
     while todo:
@@ -364,5 +464,6 @@ def run_tasks(fn: Callable[[T], R], items: Sequence[T], *, workers: int | None =
     return results
 
 
-__all__ = ["check_scheduler", "dask_client", "executor", "fresh_workers", "main_objects",
+__all__ = ["check_scheduler", "dask_client", "descendants", "end_children", "executor",
+           "fresh_workers", "group_members", "main_objects", "processes",
            "pool_context", "process_pool", "run_tasks", "shippable", "stop", "stopping"]

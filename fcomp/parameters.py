@@ -136,6 +136,22 @@ class ClassRecipe(NamedTuple):
         return self.factory(*self.args)
 
 
+#: Largest magnitude of a number the user gives in SI units (the command line's values,
+#: a model file's): beyond it no rig has a value, whatever the unit.
+MAX_VALUE = 1e15
+
+def finite_number(value: Any) -> float | None:
+    """A value read from a file (JSON, TOML) as a finite float; ``None`` for anything else:
+    text, a bool, a list, infinity or NaN, an integer too large for a float."""
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        return None
+    try:
+        number = float(value)
+    except OverflowError:
+        return None
+    return number if math.isfinite(number) else None
+
+
 #: Class attribute holding a factory-made class's :class:`ClassRecipe`.
 RECIPE = "__recipe__"
 

@@ -326,11 +326,14 @@ class Report:
         """The report's opening: what was found, how sure, what next.
 
         ``found`` is a :class:`fcomp.conclusions.Conclusion` (or any object with its
-        ``finding``, ``confidence``, ``reasons`` and ``next_steps``); shown as a note whose
-        colour is its confidence (high: ok, medium: warn, low: bad), every reason listed;
-        ``first``: before every block added so far (the report opens with it).
+        ``finding``, ``confidence``, ``reasons`` and ``next_steps``); shown as a note in
+        the one colour rule of every report (:func:`fcomp.conclusions.tone`: the worse of
+        what it says and how sure it is), every reason listed; ``first``: before every
+        block added so far (the report opens with it).
         """
-        kind = {"high": "ok", "medium": "warn"}.get(found.confidence, "bad")
+        from fcomp.conclusions import tone
+
+        kind = tone(getattr(found, "outcome", None), found.confidence)
         reasons = "".join(f"<li>{inline(r)}</li>" for r in found.reasons)
         steps = "".join(f"<li>{inline(s)}</li>" for s in found.next_steps)
         self._blocks.insert(

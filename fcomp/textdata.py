@@ -19,14 +19,17 @@ Data files are only ever parsed, never executed (README, "Security").
 
 from __future__ import annotations
 
+import json
 import math
+import re
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
-from fcomp.errors import FcompError
+from fcomp.errors import FcompError, FileFormatError
 
 
 def check_path(path: str | Path, what: str = "file") -> Path:
@@ -66,6 +69,99 @@ def read_text(path: Path, label: str | None = None, what: str = "text") -> str:
         line = raw[: exc.start].count(b"\n") + 1
         raise FcompError(f"{label}: cannot read as {what}: not UTF-8 text (byte "
                          f"0x{raw[exc.start]:02x} on line {line}); save it as UTF-8") from None
+
+
+class _DuplicateKeyError(Exception):
+    def __init__(self, key: str) -> None:
+        super().__init__(key)
+        self.key = key
+
+
+class _ConstantError(Exception):
+    pass
+
+
+def _pairs(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    for k, v in pairs:
+        if k in out:
+            raise _DuplicateKeyError(k)
+        out[k] = v
+    return out
+
+
+def _constant(name: str) -> Any:
+    raise _ConstantError(name)
+
+
+#: Most digits of an integer Python converts from text (``sys.get_int_max_str_digits``).
+INT_DIGITS = 4300
+
+
+class HugeInteger(float):
+    """An integer in a JSON file too long for Python to read (more than :data:`INT_DIGITS`
+    digits): an infinite float -- refused wherever a finite number is due -- that says what
+    it was (``<an integer of 5001 digits>``), so the message names its key."""
+
+    digits: int
+
+    def __new__(cls, text: str) -> HugeInteger:
+        obj = super().__new__(cls, -math.inf if text.startswith("-") else math.inf)
+        obj.digits = len(text.lstrip("-"))
+        return obj
+
+    def __repr__(self) -> str:
+        return f"<an integer of {self.digits} digits>"
+
+    __str__ = __repr__
+
+
+def _int(text: str) -> Any:
+    return int(text) if len(text.lstrip("-")) <= INT_DIGITS else HugeInteger(text)
+
+
+def parse_json(text: str, label: str, hint: str = "") -> Any:
+    """``text`` as strict JSON; one :class:`~fcomp.errors.FileFormatError` line naming
+    ``label`` for anything else: invalid JSON (``hint``, e.g. which command writes such a
+    file, appended), a key given twice in one object (JSON readers keep the last one
+    silently: which was meant?), ``NaN`` or ``Infinity`` (not JSON), nesting too deep. An
+    integer too long for Python (:data:`INT_DIGITS`) is read as a :class:`HugeInteger`, so
+    that the key holding it is named where a finite number is due."""
+    try:
+        return json.loads(text, object_pairs_hook=_pairs, parse_constant=_constant,
+                          parse_int=_int)
+    except _DuplicateKeyError as exc:
+        raise FileFormatError(f"{label}: the key {exc.key!r} is given twice in one object "
+                              "(a JSON reader would keep the last one silently; keep one)"
+                              ) from None
+    except _ConstantError as exc:
+        raise FileFormatError(f"{label}: {exc} is not a JSON number (strict JSON has no NaN "
+                              "or Infinity)") from None
+    except json.JSONDecodeError as exc:
+        raise FileFormatError(f"{label}: not valid JSON ({exc.msg}, line {exc.lineno}){hint}"
+                              ) from None
+    except RecursionError:
+        raise FileFormatError(f"{label}: nested too deep to read (arrays or objects inside "
+                              "each other thousands of levels deep): not a file fcomp "
+                              "writes") from None
+    except ValueError as exc:  # an integer of more digits than Python converts (4300)
+        digits = re.search(r"has (\d+) digits", str(exc))
+        size = f"of {digits.group(1)} digits " if digits else ""
+        raise FileFormatError(f"{label}: holds an integer {size}too long to read: not a value "
+                              "any fcomp file holds") from None
+
+
+def read_json(path: str | Path, what: str = "JSON file", hint: str = "") -> Any:
+    """The strict JSON (:func:`parse_json`) of the file ``path``; every problem, the path's
+    too (missing, a folder, not text), one :class:`~fcomp.errors.FileFormatError` line."""
+    label = str(path)
+    try:
+        text = read_text(check_path(path, what), label, what="JSON")
+    except FileFormatError:
+        raise
+    except FcompError as exc:
+        raise FileFormatError(str(exc)) from None
+    return parse_json(text, label, hint)
 
 
 def _strip(line: str) -> str:

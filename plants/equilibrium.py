@@ -62,13 +62,50 @@ def _solve(plant: Any, x_pos: float, free: list[str], u: float | None,
     return out, (float(sol.x[-1]) if u is None else float(u))
 
 
+def unreachable(plant: Any, load: bool = True) -> str | None:
+    """Why no command can hold (``load``) or move the piston, said before any iteration
+    (``None``: nothing rules it out): a valve that passes no flow, a supply not above the
+    return, or -- ``load`` -- a load beyond the force the pressures can give
+    (:func:`plants.mechanics.force_range`). Without this, each is only "the iteration is
+    not making good progress"."""
+    from plants.mechanics import force_range, hold_force
+
+    p = plant.plant_params.flat()
+    if "kv" in p:  # the hydraulic servo valve: Q = cd*w*(U + kv*u)*sqrt(2*dp/rho)
+        if p["cd"] * p["w"] == 0.0 or p["kv"] == 0.0:
+            return (f"its valve's flow does not follow the command (kv = {p['kv']:g} m/A, cd = "
+                    f"{p['cd']:g}, w = {p['w']:g} m): no command moves the piston or holds a "
+                    "load")
+        low, name = p["pt"], "the return pt"
+    elif "A_valve" in p:  # the pneumatic valve
+        if p["A_valve"] == 0.0:
+            return "its valve passes no flow (A_valve = 0): no command moves the piston"
+        low, name = p["p_atm"], "the atmosphere p_atm"
+    else:
+        return None
+    if not p["ps"] > low:
+        return (f"its supply ps = {p['ps']:g} Pa is not above {name} = {low:g} Pa (absolute): "
+                "the valve cannot drive the piston")
+    if load:
+        f_low, f_high = force_range(p)
+        hold = hold_force(p)
+        if not f_low < hold < f_high:
+            return (f"holding its load takes {hold:.4g} N (F_load {p['F_load']:g} N with the "
+                    f"weight), beyond the {f_low:.4g} to {f_high:.4g} N its pressures can give")
+    return None
+
+
 def equilibrium(plant: Any, x_pos: float) -> tuple[np.ndarray, float]:
     """State at rest at ``x_pos`` holding the load, and the valve command doing it.
 
     Unknowns: the chamber pressures, the valve states and the command ``u``;
     equations: zero derivative of ``v``, ``p1``, ``p2`` and the valve
-    states, with ``x = x_pos``, ``v = 0`` and friction states zero.
+    states, with ``x = x_pos``, ``v = 0`` and friction states zero. A plant that
+    cannot hold its load (:func:`unreachable`) is refused with the cause first.
     """
+    why = unreachable(plant)
+    if why is not None:
+        raise ConvergenceError(f"no equilibrium of plant {plant.name} at x = {x_pos} m: {why}")
     fr = set(plant.friction.state_names)
     free = [n for n in plant.state_names if n not in ("x", "v") and n not in fr]
     return _solve(plant, x_pos, free, None, {}, "equilibrium")
@@ -81,6 +118,10 @@ def steady_motion(plant: Any, x_pos: float, u: float, v_guess: float) -> np.ndar
     ``v_guess`` m/s and the default state); equations: zero derivative of all of
     them. Friction states are held at zero (a frictionless piston, or a static map).
     """
+    why = unreachable(plant, load=False)
+    if why is not None:
+        raise ConvergenceError(f"no steady motion of plant {plant.name} at x = {x_pos} m: "
+                               f"{why}")
     fr = set(plant.friction.state_names)
     free = [n for n in plant.state_names if n != "x" and n not in fr]
     # the valve first (its states follow the command alone), then everything from there
@@ -91,4 +132,4 @@ def steady_motion(plant: Any, x_pos: float, u: float, v_guess: float) -> np.ndar
     return state
 
 
-__all__ = ["equilibrium", "steady_motion"]
+__all__ = ["equilibrium", "steady_motion", "unreachable"]

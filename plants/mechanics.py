@@ -56,6 +56,7 @@ from __future__ import annotations
 
 import math
 from abc import abstractmethod
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
@@ -134,6 +135,26 @@ def areas(be: Backend, P: ParamValues) -> tuple[Any, Any]:
     """Piston areas ``A1``, ``A2`` (m^2) of the plant's ``bore`` and ``rod``
     (:func:`fcomp.piston.piston_areas`)."""
     return piston_areas(P("bore"), P("rod"))
+
+
+def force_range(p: Mapping[str, float]) -> tuple[float, float]:
+    """The piston force ``F_p`` the chamber pressures can give, lowest to highest (N):
+
+    ``(p_low - p_atm)*A1 - (ps - p_atm)*A2`` to ``(ps - p_atm)*A1 - (p_low - p_atm)*A2``,
+
+    each chamber between the supply ``ps`` and the return ``p_low`` -- the tank ``pt`` of
+    a hydraulic valve, the atmosphere where a pneumatic valve exhausts (``p``: a plant's
+    flat parameters; ``pt`` absent means the atmosphere)."""
+    A1, A2 = piston_areas(p["bore"], p["rod"])
+    pa = p["p_atm"]
+    low = p.get("pt", pa)
+    return ((low - pa) * A1 - (p["ps"] - pa) * A2, (p["ps"] - pa) * A1 - (low - pa) * A2)
+
+
+def hold_force(p: Mapping[str, float]) -> float:
+    """The piston force that holds the load at rest (N): ``F_load + m*g*orient``
+    (the equation of motion with ``v = a = 0``, friction and end stops aside)."""
+    return p["F_load"] + p["mass"] * G * p["orient"]
 
 
 def volumes(pos: Any, P: ParamValues, A1: Any, A2: Any) -> tuple[Any, Any]:

@@ -27,14 +27,14 @@ from __future__ import annotations
 import math
 import tomllib
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from importlib import resources
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from fcomp.errors import FileFormatError
 from fcomp.measurement import ORIENTATIONS
-from fcomp.parameters import ParamSpec
+from fcomp.parameters import ParamSpec, finite_number
 from fcomp.paramsets import ParameterSet
 from plants.base import OdePlant
 from plants.hydraulic import HydraulicPlant
@@ -83,7 +83,8 @@ _RIG = {
     "rod": _k("plant:rod", "m", "rod diameter"),
     "stroke": _k("plant:stroke", "m", "stroke"),
     "mass": _k("plant:mass", "kg", "moving mass"),
-    "orientation": _k("rig:orientation", "-", "horizontal, vertical-up or vertical-down"),
+    "orientation": _k("rig:orientation", "-", "horizontal, vertical-up or vertical-down",
+                      False),
 }
 _MECHANICS = {
     "F_load": _k("plant:F_load", "N", "constant load opposing extension", False),
@@ -254,9 +255,22 @@ def builtin_path(kind: str) -> Path:
     return Path(str(resources.files("plants").joinpath("data", f"{kind}.toml")))
 
 
+#: The line of a template that names the plant: a placeholder, commented out, so that a file
+#: made from it is named after itself (its stem), never after the built-in plant.
+NAME_LINE = ('# name = "my-axis"          # the plant\'s name in every output (default: this '
+             "file's name without .toml)")
+
+
 def template(kind: str) -> str:
-    """The commented plant file of ``kind`` to start from (the built-in plant's)."""
-    return builtin_path(kind).read_text(encoding="utf-8")
+    """The commented plant file of ``kind`` to start from: the built-in plant's values,
+    its ``name`` line a commented placeholder (:data:`NAME_LINE`)."""
+    lines = builtin_path(kind).read_text(encoding="utf-8").splitlines(keepends=True)
+    return "".join(NAME_LINE + "\n" if line.startswith("name = ") else line
+                   for line in lines)
+
+
+#: Longest plant name (characters): a name becomes part of file names (figures, reports).
+NAME_MAX = 100
 
 
 def read_plant_file(path: str | Path) -> PlantFile:
@@ -278,26 +292,64 @@ def read_plant_file(path: str | Path) -> PlantFile:
     PlantFileError
         Bad values: one line each, all of them.
     """
+    from fcomp.errors import FcompError
     from fcomp.textdata import check_path, read_text
 
     label = str(path)
-    p = check_path(path, "plant file")
     try:
+        p = check_path(path, "plant file")
         doc = tomllib.loads(read_text(p, label, what="TOML"))
     except tomllib.TOMLDecodeError as exc:
         raise FileFormatError(f"{label}: not valid TOML ({exc})") from None
-    return parse_plant(doc, label, default_name=p.stem)
+    except FileFormatError:
+        raise
+    except FcompError as exc:  # missing, a folder, not text: a file this release cannot read
+        raise FileFormatError(str(exc)) from None
+    pf = parse_plant(doc, label, default_name=p.stem)
+    builtin = {read_builtin_name(k): k for k in KINDS}
+    if pf.name in builtin and not _is_builtin(p):
+        import warnings
+
+        from fcomp.errors import FcompWarning
+
+        warnings.warn(FcompWarning(
+            "plant-name", f"{label}: name = {pf.name!r} is the built-in {builtin[pf.name]} "
+            f"plant's name (left from the template?): this plant is named {p.stem!r} after its "
+            "file; give it a name of its own (name = \"...\")"), stacklevel=2)
+        pf = replace(pf, name=p.stem)
+    return pf
+
+
+def read_builtin_name(kind: str) -> str:
+    """The name the shipped file of ``kind`` gives its plant."""
+    for line in builtin_path(kind).read_text(encoding="utf-8").splitlines():
+        if line.startswith("name = "):
+            return str(tomllib.loads(line)["name"])
+    return kind
+
+
+def _is_builtin(path: Path) -> bool:
+    from fcomp.outputs import same_file
+
+    return any(same_file(path, builtin_path(k)) for k in KINDS)
 
 
 def parse_plant(doc: Mapping[str, Any], label: str, default_name: str = "plant") -> PlantFile:
     """A plant file's document (parsed TOML) as a :class:`PlantFile`; ``label`` names it
     in messages. Raises :class:`PlantFileError` listing every bad value."""
     kind = doc.get("kind")
-    if kind not in SCHEMA:
+    if not isinstance(kind, str) or kind not in SCHEMA:
         raise PlantFileError([f"{label}: kind must be one of {', '.join(SCHEMA)} "
                               f"(got {kind!r})"])
     schema = SCHEMA[kind]
     problems: list[str] = []
+    name = doc.get("name", default_name)
+    if not isinstance(name, str) or not name.strip() or not name.isprintable():
+        problems.append(f"{label}: name = {name!r} must be text on one line (the plant's name "
+                        "in outputs; leave it out to name the plant after the file)")
+    elif len(name) > NAME_MAX:
+        problems.append(f"{label}: name is {len(name)} characters long, at most {NAME_MAX} (it "
+                        "becomes part of file names)")
     given: dict[str, tuple[str, str, Key, Any]] = {}  # target -> (table, key, Key, value)
     for k, v in doc.items():
         if k in TOP:
@@ -322,18 +374,19 @@ def parse_plant(doc: Mapping[str, Any], label: str, default_name: str = "plant")
     numbers: dict[str, float] = {}
     for target, (table, key, spec, value) in given.items():
         if target == "rig:orientation":
-            if value not in ORIENTATIONS:
+            if not isinstance(value, str) or value not in ORIENTATIONS:
                 problems.append(f"{label}: [rig] orientation must be one of "
                                 f"{', '.join(ORIENTATIONS)}, got {value!r}")
             continue
         if target == "control:safe_output" and isinstance(value, str):
             continue  # a name: _fail_safe_keys
-        if isinstance(value, bool) or not isinstance(value, int | float) \
-                or not math.isfinite(value):
-            problems.append(f"{label}: [{table}] {key} = {value!r} is not a finite number "
+        number = finite_number(value)
+        if number is None:
+            shown = f"{value!r}" if len(repr(value)) < 40 else f"{repr(value)[:20]}..."
+            problems.append(f"{label}: [{table}] {key} = {shown} is not a finite number "
                             f"({spec.unit})")
         else:
-            numbers[target] = float(value)
+            numbers[target] = number
     cls = KINDS[kind]
     values = _plant_values(cls, numbers, given, label, problems)
     sensors = {t.split(":", 1)[1]: v for t, v in numbers.items() if t.startswith("sensors:")}
@@ -341,15 +394,15 @@ def parse_plant(doc: Mapping[str, Any], label: str, default_name: str = "plant")
     for target, v in numbers.items():
         if target.startswith(("sensors:", "control:")) and target != "control:safe_output":
             table, key, spec, _ = given[target]
-            low_ok = v >= 0 if target.startswith("sensors:") else v > 0
-            if not low_ok:
-                bound = ">= 0" if target.startswith("sensors:") else "> 0"
-                problems.append(f"{label}: [{table}] {key} = {v:g} {spec.unit} must be {bound} "
+            problem = _setting_problem(target, v, values)
+            if problem:
+                problems.append(f"{label}: [{table}] {key} = {v:g} {spec.unit} {problem} "
                                 f"({spec.doc})")
     _fail_safe_keys(given, control, label, problems)
     orientation = given["rig:orientation"][3] if "rig:orientation" in given else "horizontal"
-    values["orient"] = ORIENTATIONS.get(orientation, 0.0)
-    pf = PlantFile(kind=kind, name=str(doc.get("name", default_name)), label=label,
+    values["orient"] = ORIENTATIONS.get(orientation, 0.0) \
+        if isinstance(orientation, str) else 0.0
+    pf = PlantFile(kind=kind, name=str(name), label=label,
                    values=values, sensors=sensors, control=control,
                    rig={"bore": values["bore"], "rod": values["rod"],
                         "stroke": values["stroke"], "mass": values["mass"],
@@ -358,6 +411,41 @@ def parse_plant(doc: Mapping[str, Any], label: str, default_name: str = "plant")
     if problems:
         raise PlantFileError(problems)
     return pf
+
+
+#: Highest controller sample rate a plant file may give (Hz).
+RATE_MAX = 1e6
+#: Highest plausible pressure reading a plant file may give (Pa, absolute: 10 000 bar).
+PRESSURE_MAX = 1e9
+
+
+def _setting_problem(target: str, v: float, values: Mapping[str, float]) -> str | None:
+    """Why a sensor or controller setting is out of range (``None``: it is not). A sensor's
+    quantum and noise are not negative and below the range they measure (the stroke, the
+    supply pressure); a limit, a rate or a tuning value is positive, the rate at most
+    :data:`RATE_MAX`; the fail-safe layer's position margin at most the stroke, its highest
+    plausible pressure above the supply and at most :data:`PRESSURE_MAX`."""
+    if target.startswith("sensors:"):
+        if v < 0:
+            return "must be >= 0"
+        span, what = ((values.get("stroke", math.inf), "the stroke") if target.startswith(
+            "sensors:x_") else (values.get("ps", math.inf), "the supply pressure ps"))
+        if v >= span:
+            return f"must be below {what} ({span:g})"
+        return None
+    if v <= 0:
+        return "must be > 0"
+    if target == "control:control_rate" and v > RATE_MAX:
+        return f"must be at most {RATE_MAX:g} Hz"
+    if target == "control:position_margin" and v > values.get("stroke", math.inf):
+        return (f"must be at most the stroke ({values['stroke']:g} m): a reading further "
+                "beyond an end is no reading of this piston")
+    if target == "control:pressure_max":
+        ps = values.get("ps", 0.0)
+        if not ps < v <= PRESSURE_MAX:
+            return (f"must lie above the supply pressure ps ({ps:g} Pa: a reading of it is "
+                    f"plausible) and at most {PRESSURE_MAX:g} Pa")
+    return None
 
 
 def _fail_safe_keys(given: dict[str, tuple[str, str, Key, Any]], control: dict[str, Any],
@@ -409,11 +497,43 @@ def _plant_values(cls: type[OdePlant], numbers: dict[str, float],
     where = {t.split(":", 1)[1]: (g[0], g[1]) for t, g in given.items() if t.startswith("plant:")}
     for name, value in values.items():
         problem = _out_of_bounds(specs[name], value)
+        if problem is None and name in where:
+            problem = _implausible(name, value)
         if problem:
             table, key = where.get(name, ("defaults", name))
             problems.append(f"{label}: [{table}] {key} = {value:g} {specs[name].unit} "
                             f"{problem}")
     return values
+
+
+#: Plant parameter -> the range a real servo's value lies in (SI), where it is narrower than
+#: the parameter's own bounds (a file's value outside is a typo or a unit slip: refused).
+PLAUSIBLE: dict[str, tuple[float, float, str]] = {
+    "mass": (1e-3, 1e6, "a moving mass of 1 g to 1000 t"),
+    "bore": (1e-3, 2.0, "1 mm to 2 m"), "stroke": (1e-3, 20.0, "1 mm to 20 m"),
+    "ps": (1e4, 1e9, "0.1 to 10 000 bar"), "pt": (0.0, 1e9, "up to 10 000 bar"),
+    "p_atm": (3e4, 2e5, "an atmosphere, 0.3 to 2 bar"),
+    "beta": (1e6, 1e11, "10 bar to 1e6 bar"), "rho": (100.0, 2e4, "100 to 20 000 kg/m^3"),
+    "p_min": (0.0, 1e6, "up to 10 bar"), "dp_lam": (1.0, 1e7, "1 Pa to 100 bar"),
+    "V10": (0.0, 10.0, "up to 10 m^3"), "V20": (0.0, 10.0, "up to 10 m^3"),
+    "kv": (0.0, 1.0, "up to 1 m of spool per command unit"),
+    "omega_v": (1.0, 1e6, "1 to 1e6 rad/s"), "zeta_v": (0.01, 100.0, "0.01 to 100"),
+    "cd": (0.0, 1.0, "at most 1"), "w": (0.0, 1.0, "up to 1 m"),
+    "underlap": (0.0, 0.01, "up to 10 mm"),
+    "A_valve": (0.0, 1.0, "up to 1 m^2"), "tau_v": (1e-6, 10.0, "1 us to 10 s"),
+    "u_max": (1e-9, 1e6, "a command of full opening"),
+    "R_air": (1.0, 1e5, "1 to 1e5 J/(kg K)"), "T_air": (1.0, 5000.0, "1 to 5000 K"),
+    "F_load": (-1e9, 1e9, "within 1 GN"), "k_stop": (1.0, 1e13, "1 to 1e13 N/m"),
+}
+
+
+def _implausible(name: str, value: float) -> str | None:
+    """Why a file's value of the plant parameter ``name`` is no real servo's (``None``:
+    it is plausible, :data:`PLAUSIBLE`)."""
+    rng = PLAUSIBLE.get(name)
+    if rng is None or rng[0] <= value <= rng[1]:
+        return None
+    return f"is implausible (expected {rng[2]}; SI units)"
 
 
 def _out_of_bounds(spec: ParamSpec, value: float) -> str | None:
@@ -446,19 +566,67 @@ def _rated_valve(cls: type[OdePlant], numbers: dict[str, float], values: dict[st
             return
         u_max = numbers.get("control:u_max", 0.0)
         q, dp = numbers["rated:flow"], numbers["rated:dp"]
-        if not (q > 0 and dp > 0 and u_max > 0 and values["kv"] > 0 and values["rho"] > 0):
-            problems.append(f"{label}: [valve] rated_flow, rated_dp, u_max, kv and rho must be "
-                            "positive to convert the rating")
+        if not (q > 0 and dp > 0 and u_max > 0 and values["kv"] > 0 and values["rho"] > 0
+                and values["cd"] > 0):
+            problems.append(f"{label}: [valve] rated_flow, rated_dp, u_max, kv, cd and rho must "
+                            "be positive to convert the rating")
             return
-        values["w"] = q / (values["kv"] * u_max * math.sqrt(dp / values["rho"])) / values["cd"]
+        w = q / (values["kv"] * u_max * math.sqrt(dp / values["rho"])) / values["cd"]
+        if not math.isfinite(w):
+            problems.append(f"{label}: [valve] the rating rated_flow = {q:g} m^3/s at rated_dp "
+                            f"= {dp:g} Pa gives no finite area gradient w")
+            return
+        values["w"] = w
     else:
         if "plant:A_valve" in numbers:
             problems.append(f"{label}: [valve] give either A_valve or sonic_conductance, "
                             "not both")
             return
         gam = values["gamma_air"]
+        if not 1.0 < gam <= 2.0 or not values["R_air"] > 0:
+            return  # the bounds of gamma and R say why (below)
         psi_c = math.sqrt(gam * (2.0 / (gam + 1.0)) ** ((gam + 1.0) / (gam - 1.0)))
-        values["A_valve"] = numbers["rated:C"] * RHO0 * math.sqrt(values["R_air"] * T0) / psi_c
+        area = numbers["rated:C"] * RHO0 * math.sqrt(values["R_air"] * T0) / psi_c
+        if not math.isfinite(area):
+            problems.append(f"{label}: [valve] sonic_conductance = {numbers['rated:C']:g} "
+                            "m^3/(s Pa) gives no finite edge area")
+            return
+        values["A_valve"] = area
+
+
+def _hold_problem(pf: PlantFile) -> str | None:
+    """Why the piston cannot hold its load at rest (``None``: it can): the load and the
+    weight beyond the force the supply and return pressures can give
+    (:func:`plants.mechanics.force_range`)."""
+    from plants.mechanics import force_range, hold_force
+
+    v = pf.values
+    if not (v["bore"] > v["rod"] >= 0 and math.isfinite(v["ps"]) and math.isfinite(v["F_load"])):
+        return None
+    low, high = force_range(v)
+    hold = hold_force(v)
+    if low < hold < high:
+        return None
+    return (f"F_load = {v['F_load']:g} N with the weight ({hold - v['F_load']:g} "
+            f"N) asks the piston to hold {hold:.4g} N, beyond the {low:.4g} to {high:.4g} N its "
+            "pressures can give: lower the load or raise the supply pressure")
+
+
+#: The valve keys whose zero stops all flow, as a file gives them: (key, its target).
+_FLOW_KEYS = {"hydraulic": (("kv", "plant:kv"), ("cd", "plant:cd"), ("w", "plant:w")),
+              "pneumatic": (("A_valve", "plant:A_valve"), ("sonic_conductance", "rated:C"))}
+
+
+def _dead_valve(pf: PlantFile, given: dict[str, tuple[str, str, Key, Any]]) -> str | None:
+    """Why the valve passes no flow (``None``: it does), naming the key the file gave: a
+    zero spool gain, discharge coefficient, area gradient, edge area or sonic conductance
+    leaves no command that moves the piston or holds a load (issue 42 item 3; without this,
+    ``plant check`` tuned and reported margins for a dead plant)."""
+    for key, target in _FLOW_KEYS[pf.kind]:
+        if target in given and finite_number(given[target][3]) == 0.0:
+            return (f"{key} = 0: the valve passes no flow, so no command moves the piston or "
+                    f"holds a load (give the valve's real {key})")
+    return None
 
 
 def _cross_checks(pf: PlantFile, given: dict[str, tuple[str, str, Key, Any]]) -> list[str]:
@@ -478,8 +646,16 @@ def _cross_checks(pf: PlantFile, given: dict[str, tuple[str, str, Key, Any]]) ->
         if not v["b_crit"] < v["r_lam"]:
             out.append(f"{label}: [gas] r_lam = {v['r_lam']:g} must exceed b_crit = "
                        f"{v['b_crit']:g}")
+    dead = _dead_valve(pf, given)
+    if dead:
+        out.append(f"{label}: [valve] {dead}")
+    load = _hold_problem(pf)
+    if load:
+        out.append(f"{label}: [mechanics] {load}")
+    spool = v["omega_v"] if pf.kind == "hydraulic" else v["tau_v"]
     rate = pf.control.get("control_rate")
-    if rate is not None and rate < pf.valve_bandwidth:
+    if rate is not None and spool > 0 and math.isfinite(pf.valve_bandwidth) \
+            and rate < pf.valve_bandwidth:
         key = "omega_v/(2 pi)" if pf.kind == "hydraulic" else "1/(2 pi tau_v)"
         out.append(f"{label}: [control] rate = {rate:g} Hz is below the valve bandwidth "
                    f"{pf.valve_bandwidth:.3g} Hz ({key}): the controller cannot act on the "
@@ -487,5 +663,5 @@ def _cross_checks(pf: PlantFile, given: dict[str, tuple[str, str, Key, Any]]) ->
     return out
 
 
-__all__ = ["KINDS", "SAFE_OUTPUTS", "PlantFile", "PlantFileError", "builtin_path", "builtin_plant_file",
-           "parse_plant", "read_plant_file", "template"]
+__all__ = ["KINDS", "NAME_MAX", "SAFE_OUTPUTS", "PlantFile", "PlantFileError", "builtin_path",
+           "builtin_plant_file", "parse_plant", "read_plant_file", "template"]

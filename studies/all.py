@@ -219,7 +219,8 @@ class AllStudies(Study):
         said = {"ok": "hold", "warn": "hold in part or carry a number to check",
                 "bad": "fail or did not run"}
         found = "; ".join(f"{said[k]}: {counts[k]}" for k in ("ok", "warn", "bad") if k in counts)
-        level = "bad" if results["failed"] else "ok"
+        level = ("bad" if results["failed"] else
+                 "warn" if any(k != "ok" for k in counts) else "ok")
         return Finding(f"{len(runs) - len(results['failed'])} of {len(runs)} studies ran", level,
                        f"The studies' claims that {found or 'none'} (each study below, in "
                        "its colour).", confidence="low" if results["failed"] else "high")

@@ -72,6 +72,8 @@ class StudyError(RuntimeError):
 #: The colours of a finding (the report's note kinds): the claim holds, holds in part or
 #: carries a number not to trust, fails.
 LEVELS = ("ok", "warn", "bad")
+#: A finding's level as the outcome of :func:`fcomp.conclusions.tone`.
+OUTCOME = {"ok": "good", "warn": "mixed", "bad": "bad"}
 
 
 @dataclass(frozen=True)
@@ -131,12 +133,18 @@ class Finding:
         status = self.status[:1].upper() + self.status[1:]
         return Conclusion(f"{status}. {self.found}", self.confidence,
                           (*self.flags, *([self.sure] if self.sure else [])),
-                          (self.next,) if self.next else ())
+                          (self.next,) if self.next else (),
+                          outcome=OUTCOME[self.level])
 
     @property
     def shown_level(self) -> str:
-        """The colour shown: a claim that holds but carries a flag is amber, not green."""
-        return "warn" if self.level == "ok" and self.flags else self.level
+        """The colour shown, by the one rule of every report (:func:`fcomp.conclusions.tone`:
+        the worse of what the claim does and how sure the study is): a claim that holds but
+        carries a flag is amber, not green; one not reproduced is red however sure."""
+        from fcomp.conclusions import tone
+
+        level = "warn" if self.level == "ok" and self.flags else self.level
+        return tone(OUTCOME[level], self.confidence)
 
     def as_dict(self) -> dict[str, Any]:
         """The finding as ``summary.json`` holds it (``meta.finding``)."""

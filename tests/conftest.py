@@ -14,6 +14,11 @@ Markers (declared in ``pyproject.toml``, ``--strict-markers``):
 
 Helpers shared by several test modules live in the package :mod:`helpers`
 (``tests/helpers/``), importable because pytest puts ``tests/`` on the path.
+
+A failing test is named the moment it fails (:func:`pytest_runtest_logreport`), not only
+in the summary at the end of a 10-minute run: with ``-n auto`` the line comes from the
+controller as each worker reports. Tests that run real processes wait on conditions, not
+clocks (:mod:`helpers.processes`): a loaded machine makes them slower, never wrong.
 """
 
 from __future__ import annotations
@@ -22,6 +27,7 @@ import math
 import os
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import pytest
 from helpers.browser import build_site
@@ -47,6 +53,36 @@ def pytest_xdist_auto_num_workers(config: pytest.Config) -> int | None:
     except (OSError, ValueError):
         pass
     return max(1, n)
+
+
+@pytest.hookimpl(trylast=True)  # after the reporter's own progress letter
+def pytest_runtest_logreport(report: pytest.TestReport) -> None:
+    """Name a failing test at once, on its own line (``FAILED node (phase, seconds)``)."""
+    if not report.failed:
+        return
+    import sys
+
+    phase = "" if report.when == "call" else f"{report.when}, "
+    line = f"FAILED {report.nodeid} ({phase}{report.duration:.1f} s)"
+    if _REPORTER.get("worker"):  # an xdist worker: the controller says it
+        return
+    config = _REPORTER.get("config")
+    reporter: Any = config.pluginmanager.get_plugin("terminalreporter") if config else None
+    if reporter is not None:
+        reporter.write("\n")  # after the progress letter the reporter has just written
+        reporter.write_line(line, red=True, bold=True)
+        reporter.flush()
+    else:
+        sys.stderr.write(line + "\n")
+
+
+#: This run's configuration (``"config"``), and whether this process is an xdist worker.
+_REPORTER: dict[str, Any] = {}
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    _REPORTER["worker"] = hasattr(config, "workerinput")
+    _REPORTER["config"] = config
 
 
 @pytest.fixture(autouse=True)

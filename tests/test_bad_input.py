@@ -20,12 +20,16 @@ on a real process) check that an interrupted run leaves the old result whole
 or nothing, and a few cases run as real subprocesses to prove that no
 traceback escapes the interpreter. ``test_case_count`` states how many cases
 there are.
+
+The cases of issue 42 -- plant and model files, outputs, signals, fitted ranges,
+messages -- live in ``tests/bad_input/`` (one module per surface), on the inputs of
+the hostile-case runner ``benchmarks/hostile_cases.py``; the helpers shared with this
+file are ``tests/helpers/cli_cases.py`` and ``tests/helpers/processes.py``.
 """
 
 from __future__ import annotations
 
 import contextlib
-import hashlib
 import json
 import os
 import shlex
@@ -43,6 +47,20 @@ from pathlib import Path
 import numpy as np
 import pytest
 import scipy.io
+from helpers.cli_cases import run_cli as _run
+from helpers.cli_cases import snapshot
+from helpers.processes import (
+    PATIENCE,
+    alive,
+    children,
+    cmdline,
+    env,
+    group,
+    group_gone,
+    send,
+    start,
+    wait_for,
+)
 from helpers.terminal import drain
 from test_effects import USER_MODULE
 
@@ -237,20 +255,6 @@ def lab(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Path]:
         del EFFECTS._items[name]
     for f in set(USER_FILES) - files:
         del USER_FILES[f]
-
-
-def snapshot(folder: Path) -> dict[str, str]:
-    """Every file and folder under ``folder`` (hidden ones too) -> SHA-256 (``dir`` for folders)."""
-    out = {}
-    for p in sorted(folder.rglob("*")):
-        rel = str(p.relative_to(folder))
-        if p.is_symlink():
-            out[rel] = "link:" + os.readlink(p)
-        elif p.is_dir():
-            out[rel] = "dir"
-        else:
-            out[rel] = hashlib.sha256(p.read_bytes()).hexdigest()
-    return out
 
 
 # ---------------------------------------------------------------- the cases
@@ -755,8 +759,11 @@ CASES: dict[str, Case] = {
         warnings=("export",), env={"FCOMP_CC": "true"}),
     "export-timing-steps-huge": Case("export pid -o c --timing-steps 1000000000000",
                                      match="--timing-steps 1000000000000: time 100000 to"),
+    # the model file itself refuses numbers beyond 1e15 (as the command line does), before
+    # the export's own check of the force range (the next case)
     "export-friction-1e308": Case("export pid --friction lugre_1e308.json -o c",
-                                  match="gives -1e+308 N at -0.1 m/s, beyond the actuator's"),
+                                  match="lugre_1e308.json: params.Fc = 1e+308 is beyond any "
+                                        "plausible value"),
     "export-friction-beyond-the-force-range": Case(
         "export pid --friction lugre --set Fc=2e4 --set Fs=2e4 -o c",
         match="beyond the actuator's whole force range"),
@@ -764,15 +771,6 @@ CASES: dict[str, Case] = {
                                  "qp_iterations=3 --duration 0.05 -o c --json c.json", code=0,
                                  outputs=(*EXPORT_FILES, "c"), warnings=("export",)),
 }
-
-
-def _run(args: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str, str]:
-    try:
-        code = main(args)
-    except SystemExit as exc:  # argparse
-        code = int(exc.code or 0)
-    out = capsys.readouterr()
-    return code, out.out, out.err
 
 
 @pytest.fixture(scope="module")
@@ -983,7 +981,8 @@ def test_measurement_write_interrupted_keeps_the_old_pair(
 def test_unwritable_folder_names_the_output_not_its_temporary(
         lab: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch) -> None:
     """A read-only output folder (simulated: root writes anywhere) is reported with the file
-    asked for, never the hidden temporary name fcomp writes first."""
+    asked for, never the hidden temporary name fcomp writes first -- and before any work
+    (issue 42: it was found only after the whole run)."""
     import fcomp.outputs
 
     def mkstemp(prefix: str = "", suffix: str = "", dir: str | None = None) -> tuple[int, str]:
@@ -995,7 +994,8 @@ def test_unwritable_folder_names_the_output_not_its_temporary(
     before = snapshot(lab)
     code, _, err = _run([*shlex.split(FIT), "--json", "ro.json"], capsys)
     assert code == 2
-    assert err == "fcomp: error: ro.json: cannot write (Permission denied); nothing was written\n"
+    assert err == ("fcomp: error: --json ro.json: cannot write into the current folder "
+                   "(Permission denied); choose another place (nothing was done)\n")
     assert snapshot(lab) == before
 
 
@@ -1005,15 +1005,9 @@ SUBPROCESS = ["fit-json-onto-sidecar", "read-empty", "input-csv-empty", "import-
               "effects-extra-force-raises", "read-bom", "simulate-coupling-runaway"]
 
 
-def _env(**extra: str) -> dict[str, str]:
-    env = dict(os.environ, PYTHONPATH=str(ROOT), **extra)
-    env.pop("FCOMP_DEBUG", None)
-    return env
-
-
 def _proc(args: list[str], cwd: Path, **kw: object) -> subprocess.Popen:
     return subprocess.Popen([sys.executable, "-m", "fcomp.cli.main", *args], cwd=cwd,
-                            env=_env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            env=env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                             text=True, **kw)  # type: ignore[call-overload]
 
 
@@ -1051,19 +1045,19 @@ def test_long_run_shows_progress_and_a_signal_leaves_nothing(lab: Path, sig: int
         [sys.executable, "-m", "fcomp.cli.main", "simulate", "hydraulic", "--friction",
          "nmlgm-hysteresis", "--input", "sine:amplitude=4.5e-3,frequency=1", "--duration",
          "200", "--rate", "200", "-o", "long.csv"],
-        cwd=lab, env=_env(), stdout=subprocess.PIPE, stderr=slave,
+        cwd=lab, env=env(), stdout=subprocess.PIPE, stderr=slave,
         # a suite started as a background job of a non-interactive shell inherits SIGINT
         # ignored (POSIX), and Python then keeps ignoring it: Ctrl-C at a terminal is not
         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     os.close(slave)
     seen = b""
     start = time.monotonic()
-    while b"%" not in seen and time.monotonic() - start < 60 and proc.poll() is None:
+    while b"%" not in seen and time.monotonic() - start < PATIENCE and proc.poll() is None:
         if select.select([master], [], [], 0.5)[0]:
             seen += os.read(master, 4096)
     assert b"simulate hydraulic:" in seen and b"% (t = " in seen, seen
     proc.send_signal(sig)
-    proc.communicate(timeout=60)
+    proc.communicate(timeout=PATIENCE)
     seen += drain(master)
     os.close(master)
     assert proc.returncode == code
@@ -1097,13 +1091,15 @@ def test_ctrl_c_during_parallel_work_is_one_line(tmp_path: Path) -> None:
     proc = subprocess.Popen(
         [sys.executable, "-m", "fcomp.cli.main", "diagnose", "long.csv", "--friction", "lugre",
          "--jobs", "2", "--no-progress", "--json", "d.json"],
-        cwd=tmp_path, env=_env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+        cwd=tmp_path, env=env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
         start_new_session=True,  # a group of its own, as a terminal's foreground job
         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
-    time.sleep(8.0)  # the workers started and refitting (earlier, the answer is the same)
+    # the workers started (a condition, not a clock: on a loaded machine 8 s may not be
+    # enough to have imported numpy)
+    assert wait_for(lambda: len(children(proc.pid)) >= 2, proc), "no workers started"
     sent = time.monotonic()
     os.killpg(proc.pid, signal.SIGINT)
-    out, err = proc.communicate(timeout=120)
+    out, err = proc.communicate(timeout=PATIENCE)
     print(f"stopped {time.monotonic() - sent:.1f} s after Ctrl-C")
     assert proc.returncode == 130, err.decode()
     assert err.decode().strip() == "fcomp: interrupted" and out == b""
@@ -1119,114 +1115,59 @@ def _models_for_compensate(folder: Path) -> None:
     lugre.save(folder / "base.json")
 
 
-#: Long commands, each stopped during its parallel work: (label, arguments, seconds to wait).
-#: ``study all`` runs a pool of studies whose workers run pools of their own.
+#: Long commands, each stopped during its parallel work: (label, arguments, processes of
+#: its group to wait for -- the work is under way once they exist). ``study all`` runs a
+#: pool of studies whose workers run pools of their own.
 LONG_COMMANDS = [
-    ("study-all", ["study", "all", "--fast", "--out", "site"], 10.0),
-    ("study-compensators", ["study", "compensators", "--fast", "--out", "comp"], 5.0),
-    ("sweep", ["sweep", "--samples", "20", "--json", "sweep.json", "--report", "sweep"], 4.0),
+    ("study-all", ["study", "all", "--fast", "--out", "site"], 4),
+    ("study-compensators", ["study", "compensators", "--fast", "--out", "comp"], 2),
+    ("sweep", ["sweep", "--samples", "20", "--json", "sweep.json", "--report", "sweep"], 2),
     ("compensate", ["compensate", "--plant-params", str(ROOT / "docs" / "examples" /
                                                          "axis50.toml"),
                     "--friction", "true.json", "--controller-friction", "base.json,true.json",
-                    "--samples", "10", "--json", "comp.json", "--report", "comp"], 4.0),
+                    "--samples", "10", "--json", "comp.json", "--report", "comp"], 2),
 ]
-
-
-def _processes() -> dict[int, list[bytes]]:
-    """Every living (not zombie) process: pid -> the fields of /proc/PID/stat after the
-    command name (state, ppid, pgrp, ...)."""
-    out = {}
-    for entry in os.listdir("/proc"):
-        if not entry.isdigit():
-            continue
-        try:
-            stat = (Path("/proc") / entry / "stat").read_bytes()
-        except OSError:
-            continue
-        fields = stat[stat.rfind(b")") + 2:].split()
-        if fields[0] != b"Z":
-            out[int(entry)] = fields
-    return out
-
-
-def _group_gone(pgid: int, seconds: float) -> bool:
-    """Whether every process of the group ``pgid`` has ended within ``seconds`` (ended
-    ones that nobody reaps count as ended)."""
-    end = time.monotonic() + seconds
-    while time.monotonic() < end:
-        alive = [pid for pid, fields in _processes().items() if int(fields[2]) == pgid]
-        if not alive:
-            return True
-        time.sleep(0.1)
-    for pid in alive:  # not leave them running after the test
-        with contextlib.suppress(OSError):
-            os.kill(pid, signal.SIGKILL)
-    return False
 
 
 @pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs /proc (Linux)")
 @pytest.mark.parametrize(("sig", "code", "line"), [(signal.SIGINT, 130, "fcomp: interrupted"),
                                                    (signal.SIGTERM, 143, "fcomp: terminated")])
-@pytest.mark.parametrize(("label", "args", "wait"), LONG_COMMANDS,
+@pytest.mark.parametrize(("label", "args", "processes"), LONG_COMMANDS,
                          ids=[c[0] for c in LONG_COMMANDS])
 @pytest.mark.slow
 def test_a_signal_stops_a_long_command_at_once(tmp_path: Path, label: str, args: list[str],
-                                               wait: float, sig: int, code: int,
+                                               processes: int, sig: int, code: int,
                                                line: str) -> None:
     """Ctrl-C (SIGINT to the process group, as a terminal sends it) or SIGTERM (to the main
-    process) during a command's parallel work: it ends within seconds (the rule: 2 s; the
-    bound here leaves room for a loaded machine and still catches what was seen: ``study
-    all`` never ended after Ctrl-C -- its studies' own workers, left running, held its pipes
-    -- and wrote into the removed staging folder), with its one line and exit status,
-    nothing on stdout, nothing written and no process of it left."""
+    process) during a command's parallel work -- sent once its workers exist, a condition
+    rather than a clock, which a loaded machine reaches later: it ends with its one line and
+    exit status, nothing on stdout, nothing written and no process of it left, long before
+    its work could have finished (what was seen: ``study all`` never ended after Ctrl-C --
+    its studies' own workers, left running, held its pipes -- and wrote into the removed
+    staging folder). How fast it stops is printed, not asserted: a time bound tests the
+    machine's load (benchmarks/hostile_cases.py measures it)."""
     _models_for_compensate(tmp_path)
     before = snapshot(tmp_path)
     proc = subprocess.Popen(
-        [sys.executable, "-m", "fcomp.cli.main", *args], cwd=tmp_path, env=_env(),
+        [sys.executable, "-m", "fcomp.cli.main", *args], cwd=tmp_path, env=env(),
         stdout=subprocess.PIPE, stderr=subprocess.PIPE,
         start_new_session=True,  # a group of its own, as a terminal's foreground job
         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
-    time.sleep(wait)  # the workers started and working
-    assert proc.poll() is None, f"{label} ended before the signal"
+    assert wait_for(lambda: len(group(proc.pid)) > processes, proc), \
+        f"{label} ended before its workers started"
     sent = time.monotonic()
-    if sig == signal.SIGINT:
-        os.killpg(proc.pid, sig)
-    else:
-        proc.send_signal(sig)
+    send(proc, sig)
     try:
-        out, err = proc.communicate(timeout=60)
+        out, err = proc.communicate(timeout=PATIENCE)
     finally:
-        gone = _group_gone(proc.pid, 5.0)
-    took = time.monotonic() - sent
-    print(f"{label}: stopped {took:.2f} s after {signal.Signals(sig).name}")
-    assert took < 5.0, f"{label} took {took:.1f} s to stop"
+        gone = group_gone(proc.pid)
+    print(f"{label}: stopped {time.monotonic() - sent:.2f} s after {signal.Signals(sig).name}")
     assert proc.returncode == code, err.decode()
     assert err.decode() == line + "\n" and out == b""
     assert gone, f"{label} left processes running"
-    time.sleep(0.5)  # a straggler would write now
     assert snapshot(tmp_path) == before
-
-
-def _descendants(root: int) -> dict[int, str]:
-    """The living descendants of process ``root``: pid -> command line (from /proc)."""
-    parent = {pid: int(fields[1]) for pid, fields in _processes().items()}
-    out = {}
-    for pid in parent:
-        p, hops = parent.get(pid), 0
-        while p not in (None, 0, 1, root) and hops < 64:
-            p, hops = parent.get(p), hops + 1
-        if p == root:
-            try:
-                out[pid] = (Path("/proc") / str(pid) / "cmdline").read_bytes().replace(
-                    b"\0", b" ").decode(errors="replace")
-            except OSError:
-                continue
-    return out
-
-
-def _alive(pids: list[int]) -> list[int]:
-    living = _processes()
-    return [pid for pid in pids if pid in living]
+    assert not wait_for(lambda: snapshot(tmp_path) != before, limit=0.5), \
+        "a straggler wrote after the command ended"
 
 
 @pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs /proc (Linux)")
@@ -1243,32 +1184,26 @@ def test_interrupting_export_ends_the_whole_compiler(tmp_path: Path, sig: int, c
     controller's kernels compile, SIGTERM while the export's C compiles: the compiler runs
     in a process group of its own, ended whole -- no ``cc1`` left running (5 of 9 runs
     left one before) -- with the command's one line, exit status, and nothing written."""
-    env = _env(FCOMP_CACHE=str(tmp_path / "cache"))  # a fresh cache: the kernels compile
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "fcomp.cli.main", *args, "-o", "c", "--no-progress"],
-        cwd=tmp_path, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-        start_new_session=True, preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    proc = start([*args, "-o", "c", "--no-progress"], tmp_path,
+                 env=env(FCOMP_CACHE=str(tmp_path / "cache")))  # a fresh cache: compiles
     compilers: list[int] = []
-    end = time.monotonic() + 300
     try:
-        while not compilers and time.monotonic() < end and proc.poll() is None:
-            found = _descendants(proc.pid)
-            if any("cc1" in c and marker in c for c in found.values()):
-                compilers = list(found)
-            else:
-                time.sleep(0.02)
-        assert compilers, f"no compiler ({marker}) seen before {args} ended"
-        if sig == signal.SIGINT:
-            os.killpg(proc.pid, sig)
-        else:
-            proc.send_signal(sig)
+        def compiling() -> bool:
+            found = children(proc.pid)
+            if any("cc1" in c and marker in c for c in map(cmdline, found)):
+                compilers[:] = found
+                return True
+            return False
+
+        assert wait_for(compiling, proc, limit=300), \
+            f"no compiler ({marker}) seen before {args} ended"
+        send(proc, sig)
         out, err = proc.communicate(timeout=60)
-        gone_by = time.monotonic() + 2  # cc1 on the MPC's C alone runs for a minute
-        while _alive(compilers) and time.monotonic() < gone_by:
-            time.sleep(0.05)
-        left = _alive(compilers)
+        # cc1 on the MPC's C alone runs for a minute: ended, it is gone at once
+        wait_for(lambda: not alive(compilers), limit=2)
+        left = alive(compilers)
     finally:
-        for pid in _alive(compilers):
+        for pid in alive(compilers):
             with contextlib.suppress(OSError):
                 os.kill(pid, signal.SIGKILL)
         if proc.poll() is None:

@@ -54,9 +54,15 @@ def test_index_says_not_reproduced_in_words_and_red_for_a_failed_claim() -> None
 
 
 def test_index_says_reproduced_in_green_and_a_flag_turns_it_amber() -> None:
+    from fcomp.conclusions import tone
+
     ok = friction_models.finding(_friction_models_summary(claim=True))
-    assert finding_words(_run(ok)) == ("reproduced", "ok")
-    assert study_card("friction-models", _run(ok)).startswith('<div class="note ok">')
+    # the one colour rule (issue 42): green only when the claim holds *and* the study is sure
+    shown = tone("good", ok.confidence)
+    assert finding_words(_run(ok)) == ("reproduced", shown)
+    assert study_card("friction-models", _run(ok)).startswith(f'<div class="note {shown}">')
+    sure = Finding("reproduced", "ok", "It holds.", confidence="high")
+    assert finding_words(_run(sure)) == ("reproduced", "ok")
     flagged = Finding("reproduced", "ok", "It holds.", flags=["a number is 10x off"])
     words, level = finding_words(_run(flagged))
     assert level == "warn" and words == "reproduced (1 number to check)"
@@ -228,7 +234,8 @@ def test_missing_physics_flags_a_held_out_error_below_the_noise_floor() -> None:
     assert (f.status, f.shown_level) == ("confirmed", "warn")  # recovered, but a flag
     assert f.flags == (flag,) and f.confidence == "medium"
     clean = missing_physics.finding({"generated": [gen], "real": []})
-    assert clean.shown_level == "ok" and not clean.flags
+    assert not clean.flags  # no flag: its colour is what it says and how sure (issue 42)
+    assert clean.shown_level == {"high": "ok", "medium": "warn"}[clean.confidence]
 
 
 def test_the_stretch_figure_breaks_its_lines_at_gaps_and_experiment_boundaries() -> None:

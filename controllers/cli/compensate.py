@@ -153,6 +153,8 @@ def run(args: argparse.Namespace) -> int:
                              "controller with every model)")
     if not 0 <= args.spread < 1:
         raise FcompError(f"--spread must lie in [0, 1), got {args.spread:g}")
+    if args.seed < 0:
+        raise FcompError(f"--seed must be a non-negative integer, got {args.seed}")
     controllers = tuple(common.name_list(args.controllers, "--controllers")
                         or DEFAULT_CONTROLLERS)
     for c in controllers:
@@ -176,6 +178,7 @@ def run(args: argparse.Namespace) -> int:
         if not is_model_file(m):
             MODELS.get(m)
     plant = _plant(args)
+    _fitted_ranges(args, plant, models)
     bar = progress_bar("compensate", None, enabled=not args.no_progress)
 
     def tick(done: int, total: int) -> None:
@@ -206,3 +209,18 @@ def run(args: argparse.Namespace) -> int:
         raise FcompError(f"compensate: no run could be ranked -- every one of the "
                          f"{len(doc['runs'])} runs failed, was flagged or skipped{where}")
     return 0
+
+
+def _fitted_ranges(args: argparse.Namespace, plant: Any, models: list[str]) -> None:
+    """Warn for each model file used beyond the ranges it was fitted on, before any run
+    (:func:`controllers.loop_range.range_warnings`)."""
+    from controllers.compensate import read_reference
+    from controllers.loop_range import range_warnings
+
+    tasks = ([read_reference(args.reference, plant.values["stroke"])] if args.reference
+             else [TASKS.get(args.task)] if args.task else [TASKS.get(n) for n in TASKS.names()])
+    for option, line in range_warnings([("--friction", args.friction),
+                                        *(("--controller-friction", m) for m in models)],
+                                       plant, tasks, args.fast, args.effects):
+        common.warn("fitted-range", line, option)
+

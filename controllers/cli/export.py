@@ -32,6 +32,7 @@ def control_model(args: argparse.Namespace) -> Any:
     """
     from fcomp.modelfile import is_model_file
 
+    common.refuse_params_with_model_file(args.friction, args.params)
     plant_set = None if args.params is None or is_model_file(args.params) else args.params
     if args.plant_params is not None:
         plant_file = read_plant_file(args.plant_params)
@@ -51,6 +52,19 @@ def control_model(args: argparse.Namespace) -> Any:
                                      args.params if plant_set is None and args.params else params,
                                      args, use="controller friction")
     return ControlModel(plant, friction, plant_set)
+
+
+def _fitted_range(args: argparse.Namespace, model: Any) -> None:
+    """Warn when the model file is used beyond the ranges it was fitted on (before the
+    export: :func:`controllers.loop_range.range_warnings`)."""
+    from controllers.loop_range import range_warnings
+    from plants.planfile import builtin_plant_file
+
+    plant_file = (read_plant_file(args.plant_params) if args.plant_params is not None
+                  else builtin_plant_file(model.plant_name))
+    for option, line in range_warnings([("--friction", args.friction)], plant_file,
+                                       [TASKS.get(args.task)], False, args.effects):
+        common.warn("fitted-range", line, option)
 
 
 def summary(doc: dict[str, Any]) -> str:
@@ -82,6 +96,10 @@ def summary(doc: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
+#: Longest closed-loop check of an export (s): every controller step of it is simulated.
+MAX_CHECK_S = 3600.0
+
+
 def run(args: argparse.Namespace) -> int:
     """Run ``fcomp export``: the controller's step as C, compiled, checked and timed."""
     CONTROLLERS.get(args.controller)
@@ -89,6 +107,9 @@ def run(args: argparse.Namespace) -> int:
         raise FcompError(f"export: controller {args.controller} is not exported (exported: "
                          f"{', '.join(EXPORTABLE)})")
     TASKS.get(args.task)
+    if not 0 < args.duration <= MAX_CHECK_S:  # the closed-loop check runs all of it
+        raise FcompError(f"--duration {args.duration:g}: the check's closed loop lasts more "
+                         f"than 0 and at most {MAX_CHECK_S:g} s")
     if not 100_000 <= args.timing_steps <= MAX_TIMING_STEPS:
         raise FcompError(f"--timing-steps {args.timing_steps}: time 100000 to "
                          f"{MAX_TIMING_STEPS} steps (two times of each are kept in memory)")
@@ -110,6 +131,7 @@ def run(args: argparse.Namespace) -> int:
         if k in options and float(options[k]).is_integer():
             options[k] = int(options[k])
     model = control_model(args)
+    _fitted_range(args, model)
     command = "fcomp " + shlex.join(common.ARGV) if common.ARGV else "fcomp export"
     with staged_folder(folder, "-o", "export", note=command) as tmp, \
             common.Activity(f"export {args.controller}", enabled=not args.no_progress):

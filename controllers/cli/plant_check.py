@@ -10,6 +10,7 @@ from typing import Any
 from controllers.plant_model import ControlModel
 from fcomp.cli import common
 from fcomp.cli.common import emit_result, json_target, result_text
+from fcomp.errors import FcompError
 from fcomp.models import make_model
 from fcomp.outputs import InputSet
 from plants.check import check_plant
@@ -50,8 +51,11 @@ def run_check(args: argparse.Namespace) -> int:
         for line in exc.problems:  # one line per bad value
             sys.stderr.write(f"fcomp: error: {line}\n")
         return 2
-    doc = check_plant(pf)
-    tuning = plant_tuning(pf)  # FcompError (one line, exit 2): explicit values without margins
+    try:
+        doc = check_plant(pf)
+        tuning = plant_tuning(pf)  # FcompError (one line, exit 2): explicit values without margins
+    except FcompError as exc:  # the figures of a plant that cannot be run: the file named
+        raise FcompError(str(exc) if pf.label in str(exc) else f"{pf.label}: {exc}") from None
     doc["tuning"] = tuning.as_dict()
     doc["tuning_lines"] = tuning.lines()
     doc = common.with_warnings(doc)

@@ -13,6 +13,7 @@ import numpy as np
 from controllers import CONTROLLERS
 from controllers.conclusions import of_sweep
 from controllers.harness import LoopConfig, control_model, friction_label
+from controllers.loop_range import range_warnings
 from controllers.robustness import Grid, Sweep, distributions, draw_distribution, run_jobs
 from controllers.tasks import TASKS
 from fcomp import figstyle as fs
@@ -25,7 +26,7 @@ from fcomp.outputs import staged_folder
 from fcomp.parallel import check_scheduler
 from fcomp.progress import progress_bar
 from fcomp.report import Report
-from plants.planfile import read_plant_file
+from plants.planfile import builtin_plant_file, read_plant_file
 
 #: Metrics of a run that do not depend on the machine (solve times do).
 METRICS = ("rms_error", "max_error", "steady_state_error")
@@ -77,8 +78,13 @@ def _plan(args: argparse.Namespace) -> Any:
                       plant_file=plant_file)
     if plant_file is not None:  # its explicit tuning without margins: refused before any run
         _ = control_model(base).tuning
-    frictions = tuple(_friction(f, "--controller-friction", args.effects) for f in
-                      common.name_list(args.controller_friction, "--controller-friction") or ())
+    names = common.name_list(args.controller_friction, "--controller-friction") or []
+    frictions = tuple(_friction(f, "--controller-friction", args.effects) for f in names)
+    for option, line in range_warnings(  # the models' fitted ranges, before any run
+            [("--friction", args.friction), *(("--controller-friction", f) for f in names)],
+            plant_file or builtin_plant_file(plant), [TASKS.get(args.task)], args.fast,
+            args.effects):
+        common.warn("fitted-range", line, option)
     if args.grid or frictions:
         return Grid(plant=plant, task=args.task, controllers=controllers,
                     factors=_factors(args.grid), controller_frictions=frictions,

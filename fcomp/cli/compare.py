@@ -94,6 +94,7 @@ def summary(doc: dict[str, Any]) -> str:
              f"RMS {doc['rms']:.4g} N {where}over the {doc['judged']} samples "
              f"(scored: a prediction band the motion leaves costs; plain y - F "
              f"{doc['rms_plain']:.4g} N; noise floor {doc['noise_floor']:.3g} N)"]
+    lines.append("  scored RMS per regime:")
     for name, r in doc["regimes"].items():
         rms = "-" if r["rms"] is None else f"{r['rms']:.4g} N"
         lines.append(f"  {name:18s} {rms:>12s}  ({r['n']} samples)")
@@ -104,6 +105,33 @@ def summary(doc: dict[str, Any]) -> str:
                          for k, v in pc["rms"].items())
         lines.append(f"plant {pc['plant']} on {label}: RMS {errs}")
     return "\n".join(lines)
+
+
+def _undetermined(args: argparse.Namespace, document: dict[str, Any] | None
+                  ) -> FitWarning | None:
+    """A ``not-identified`` warning for the parameters the model's own file says were not
+    determined when it was fitted (``stderr`` ``null`` in the model file or the fit's JSON):
+    compare then trusts the model as little as the fit or diagnosis that made it did."""
+    from fcomp.modelfile import is_model_file
+
+    if is_model_file(args.friction):
+        source, doc = args.friction, common.params_document(args.friction)
+    elif document is not None:
+        source, doc = args.params, document
+    else:
+        return None
+    inner = doc.get("model_file")
+    if "format" not in doc and isinstance(inner, dict):
+        doc = inner
+    stderr = doc.get("stderr")
+    names = sorted(k for k, v in (stderr or {}).items() if v is None) \
+        if isinstance(stderr, dict) else []
+    if not names:
+        return None
+    return FitWarning("not-identified", ",".join(names),
+                      f"{source}: {', '.join(names)} not determined by the fit that made this "
+                      "model (no standard error in the file): their values are not to be "
+                      "trusted")
 
 
 def _fit_cutoff(doc: dict[str, Any] | None) -> float | None:
@@ -139,6 +167,7 @@ def run(args: argparse.Namespace) -> int:
     from fcomp.api import compare
     from fcomp.measurement import Measurement
     from fcomp.modelfile import is_model_file
+    from fcomp.models.fitted_range import signal_ranges
     from fcomp.outputs import staged_folder
     from fcomp.registry import PLANT_TOOLS, PLANTS
 
@@ -184,12 +213,18 @@ def run(args: argparse.Namespace) -> int:
                        mass=args.mass if args.mass is not None else mass, split=args.split,
                        cutoff_hz=cutoff, plant=args.plant, plant_params=plant_params,
                        jobs=args.jobs, scheduler=scheduler)
+    seen = signal_ranges([e.data.sig for e in comp.data.experiments], comp.data.available)
+    common.warn_fitted_range(model, args.friction if is_model_file(args.friction) else  # as the
+                             args.params or model.describe(), "--friction", **seen)  # fit saw them
     if not given:  # part of the result: the report's conclusion weighs it as the console's
         comp = replace(comp, warnings=[*comp.warnings, FitWarning(
             "default-params", "params", f"the model {model.describe()} is compared with its "
             f"default values: give {term('params')} (a fit's JSON or a parameter set) or "
             "--fit for a model that belongs to these records")])
-    doc = common.with_warnings(comp.to_dict())
+    undetermined = _undetermined(args, document)
+    if undetermined is not None:  # as the fit that made the model said: not to be trusted
+        comp = replace(comp, warnings=[*comp.warnings, undetermined])
+    doc = common.with_warnings({**comp.to_dict(), "friction": args.friction})
     text = result_text(doc)
     command = "fcomp " + shlex.join(common.ARGV) if common.ARGV else None
     if report is not None:

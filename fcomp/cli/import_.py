@@ -42,7 +42,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("import", help="convert a real data file to the measurement format",
                        description=__doc__)
     p.add_argument("kind", metavar="KIND", help=f"the file's kind: {kinds}")
-    p.add_argument("src", metavar="SRC", help="the file to convert")
+    p.add_argument("src", metavar="SRC", help="the file to convert, or a data set shipped "
+                   "with fcomp by name (fcomp list data: O-ring_3bar, DATA_EMPS, ...)")
     p.add_argument("-o", "--output", required=True, metavar="OUT.csv",
                    help="the measurement written (OUT.csv and its sidecar OUT.toml)")
     p.add_argument("--map", dest="mapping", default=None, metavar="COL=EXPR,...",
@@ -92,6 +93,26 @@ def _decimal(text: str) -> str:
         raise argparse.ArgumentTypeError(f"{text!r} is not point or comma") from None
 
 
+def _source(kind: str, src: str) -> str:
+    """``src``: a file, else the shipped data set file of that name for importer ``kind``
+    (``fcomp import zillen O-ring_3bar``, from any folder; ``fcomp list data``)."""
+    from pathlib import Path
+
+    from fcomp import datasets
+    from fcomp.errors import FcompError
+
+    if not src.strip() or Path(src).exists():
+        return src
+    found = datasets.shipped(kind, src)
+    if found is not None:
+        return str(found)
+    known = datasets.shipped_names(kind)
+    if known and "/" not in src and "\\" not in src:
+        raise FcompError(f"{src}: file not found, and no data set shipped for import {kind} "
+                         f"has that name (shipped: {', '.join(known)}; fcomp list data)")
+    return src
+
+
 def run(args: argparse.Namespace) -> int:
     from fcomp.errors import FcompError
     from fcomp.importers import IMPORTERS, import_file
@@ -112,6 +133,7 @@ def run(args: argparse.Namespace) -> int:
     if args.bore is not None and not 0 < args.bore <= 2.0:
         raise FcompError(f"--bore {args.bore:g}: must be a positive length in metres "
                          "(e.g. 0.025 for 25 mm)")
+    args.src = _source(args.kind, args.src)
     inputs = InputSet()
     inputs.file(check_path(args.src), "SRC")
     if args.sidecar is not None:

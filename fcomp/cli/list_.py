@@ -1,6 +1,8 @@
 """``fcomp list [WHAT]`` -- the registered names, one a line with what each is.
 
-WHAT is models, effects, plants, params, controllers or studies (default: all).
+WHAT is models, effects, plants, params, controllers, studies or data (default:
+all). ``data`` lists the real data sets shipped with fcomp, each file by the name
+``fcomp import KIND NAME -o OUT.csv`` takes from any folder.
 The description of a name is its object's own: a ``description`` attribute, else
 the first paragraph of its docstring (a parameter set: where its numbers come
 from), so that a model, effect, plant, controller or study you register yourself
@@ -13,7 +15,7 @@ import argparse
 from typing import Any
 
 #: What ``fcomp list`` shows, in order.
-GROUPS = ("models", "effects", "plants", "params", "controllers", "studies")
+GROUPS = ("models", "effects", "plants", "params", "controllers", "studies", "data")
 
 #: Longest description kept whole; a longer one is cut after its first clause.
 _SHORT = 90
@@ -67,12 +69,30 @@ def entries(group: str) -> list[tuple[str, str]]:
 
     if group == "params":
         return [(n, paramsets.SOURCES[n]) for n in paramsets.names()]  # no file parsed
+    if group == "data":
+        return _data_entries()
     if group == "effects":
         return [(n, f"{description(e)} [{e.signature}]")
                 for n in EFFECTS.names() for e in [EFFECTS.get(n)]]
     registry: Any = {"models": MODELS, "plants": PLANTS, "controllers": CONTROLLERS,
                      "studies": STUDIES}[group]
     return [(n, description(registry.get(n))) for n in registry.names()]
+
+
+def _data_entries() -> list[tuple[str, str]]:
+    """The shipped data files: ``(name, "fcomp import KIND NAME ...: the set's title")``;
+    a set of tables (not records) names its folder."""
+    from fcomp import datasets
+
+    out = []
+    for ds in datasets.names():
+        kind = datasets.IMPORT_KIND[ds]
+        for f in datasets.files(ds):
+            stem = f.rsplit(".", 1)[0]
+            how = (f"fcomp import {kind} {stem} -o OUT.csv" if kind is not None
+                   else f"a table in {datasets.root() / ds}")
+            out.append((stem, f"{how} ({datasets.title(ds)})"))
+    return out
 
 
 def run(args: argparse.Namespace) -> int:

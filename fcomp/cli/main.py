@@ -1,196 +1,49 @@
-"""``fcomp`` entry point: sub-commands, one-line errors, exit status 2 on bad input.
+"""``fcomp`` entry point (the console script and ``python -m fcomp.cli.main``).
 
-Each sub-command lives in its own module of :mod:`fcomp.cli` with
-``add_parser(subparsers)`` and ``run(args) -> int``; :data:`COMMANDS` lists them.
-
-What every command shares, enforced here:
-
-* a problem with the input is one line ``fcomp: error: ...`` on stderr and
-  exit status 2, never a traceback; an error raised from inside the user's
-  ``--effects`` module names that file and line (:mod:`fcomp.usercode`);
-* warnings (``fcomp: warning: ...``) are printed after a successful run, on
-  stderr, grouped: one line each, or one counted line for several of one kind
-  (:func:`fcomp.conclusions.grouped_warnings`); Python and numpy warnings raised on the way are collected
-  and printed the same way, never as raw multi-line warnings; a failed run
-  prints only its error line;
-* Ctrl-C and SIGTERM interrupt cleanly: outputs are staged, so an
-  interrupted run leaves the old result or nothing (exit 130, or 143 for
-  SIGTERM).
+Kept tiny on purpose: it imports nothing heavy, so that Ctrl-C and SIGTERM are the
+command's from its first moment (:mod:`fcomp.cli.signals`). The handlers are installed
+first; the command line itself -- the parser, every command, numpy and the rest --
+is imported after (:mod:`fcomp.cli.app`). A signal landing while those load ends the
+command like one landing later: its one line (``fcomp: interrupted``, exit status 130;
+``fcomp: terminated``, 143), no traceback, nothing written.
 """
 
 from __future__ import annotations
 
-import argparse
-import importlib
-import os
-import re
-import signal
 import sys
-import threading
-import warnings
-from collections.abc import Iterator, Sequence
-from contextlib import contextmanager
+from collections.abc import Sequence
 from typing import Any
 
-from fcomp.cli import common
-from fcomp.errors import FcompError
-from fcomp.version import __version__
-
-COMMANDS = ("simulate", "fit", "compare", "diagnose", "sweep", "compensate", "study", "plant",
-            "export", "import_", "demo", "list_")
-
-
-class _Parser(argparse.ArgumentParser):
-    """argparse with one-line errors and exit status 2, its help in plain text
-    (:class:`fcomp.cli.common.HelpFormatter`, whatever formatter a command asks for)."""
-
-    def __init__(self, *args: Any, **kwargs: Any) -> None:
-        kwargs["formatter_class"] = common.HelpFormatter
-        super().__init__(*args, **kwargs)
-
-    def error(self, message: str) -> None:  # type: ignore[override]
-        sys.stderr.write(f"{self.prog}: error: {plain(message)} (see --help)\n")
-        raise SystemExit(2)
-
-
-def build_parser() -> argparse.ArgumentParser:
-    parser = _Parser(
-        prog="fcomp",
-        description="Friction models, identification, diagnosis and compensation for "
-        "fluid-power servo actuators.",
-    )
-    parser.add_argument("--version", action="version", version=f"fcomp {__version__}")
-    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
-    sub.required = True
-    for name in COMMANDS:
-        try:
-            mod = importlib.import_module(f"fcomp.cli.{name}")
-        except ModuleNotFoundError as exc:
-            if exc.name == f"fcomp.cli.{name}":
-                continue  # command not part of this build
-            raise
-        mod.add_parser(sub)
-    return parser
-
-
-_NUMPY_SCALAR = re.compile(r"np\.(?:float|int|uint|complex)\d*\(([^()]*)\)|np\.(True|False)_")
-
-
-def plain(message: str) -> str:
-    """``message`` as one line, numpy scalars written as plain numbers."""
-    text = " ".join(str(message).split())
-    return _NUMPY_SCALAR.sub(lambda m: m.group(1) or m.group(2), text)
-
-
-class _Terminated(KeyboardInterrupt):
-    """SIGTERM, raised like Ctrl-C so that staged outputs are cleaned up."""
-
-
-class _Interrupted(KeyboardInterrupt):
-    """SIGINT (Ctrl-C): told apart from a ``KeyboardInterrupt`` a plugin raises itself."""
-
-
-@contextmanager
-def _signals_interrupt() -> Iterator[None]:
-    """SIGTERM and SIGINT raise :class:`_Terminated` and :class:`_Interrupted` inside the block."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-
-    def terminated(signum: int, frame: Any) -> None:
-        raise _Terminated()
-
-    def interrupted(signum: int, frame: Any) -> None:
-        raise _Interrupted()
-
-    old = signal.signal(signal.SIGTERM, terminated)
-    # Ctrl-C as Python takes it by default; a process started with it ignored keeps ignoring
-    old_int = signal.getsignal(signal.SIGINT)
-    if old_int is signal.default_int_handler:
-        signal.signal(signal.SIGINT, interrupted)
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGTERM, old)
-        signal.signal(signal.SIGINT, old_int)
+from fcomp.cli import signals
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = build_parser()
-    args = parser.parse_args(argv)
-    common.ARGV = list(sys.argv[1:] if argv is None else argv)
-    common.WARNINGS.clear()
-    common.WRITTEN.clear()
-    with warnings.catch_warnings(record=True) as caught, _signals_interrupt():
-        common.PYTHON_WARNINGS = caught
+    """Run the command line ``argv`` (default ``sys.argv[1:]``); its exit status."""
+    old = signals.install()
+    try:
         try:
-            code = _run(args)
-        finally:
-            common.PYTHON_WARNINGS = None
-        if code == 0:
-            for w in caught:
-                common.warn(*common.python_warning(w))
-    if code == 0:  # a failed run prints its one error line and nothing else
-        from fcomp.conclusions import grouped_warnings
+            from fcomp.cli.app import run
 
-        common.say_deprecated(args)
-
-        where = "in the JSON (--json OUT)"
-        if hasattr(args, "json"):  # say which file, or that none was written
-            where = ("(give --json OUT to keep them)" if args.json is None else
-                     "(on standard output)" if args.json == "-" else f"({args.json})")
-            where = "in the JSON " + where
-        for line in grouped_warnings(common.WARNINGS, where):
-            sys.stderr.write(f"fcomp: warning: {plain(line)}\n")
-    return code
+            return run(argv)
+        except KeyboardInterrupt as exc:  # a signal while loading, parsing or finishing
+            line, code = signals.STOPPED.get(type(exc), signals.STOPPED[signals.Interrupted])
+            sys.stderr.write(line + "\n")
+            return code
+    finally:
+        signals.restore(old)
 
 
-def _error(message: str) -> int:
-    sys.stderr.write(f"fcomp: error: {plain(message)}\n")
-    return 2
-
-
-def _run(args: argparse.Namespace) -> int:
-    from fcomp.usercode import blame
+def __getattr__(name: str) -> Any:
+    """The command line's other names (``build_parser``, ``plain``, ``COMMANDS``), from
+    :mod:`fcomp.cli.app`, loaded when asked for."""
+    if name.startswith("__"):
+        raise AttributeError(name)
+    from fcomp.cli import app
 
     try:
-        return int(args.func(args) or 0)
-    except FcompError as exc:  # the library's terms, written as this command's options
-        return _error(exc.render(common.OPTIONS))
-    except _Terminated:
-        sys.stderr.write("fcomp: terminated\n")
-        return 143
-    except KeyboardInterrupt as exc:
-        # raised by the user's code itself, not by Ctrl-C: an error of that code
-        culprit = None if isinstance(exc, _Interrupted) else blame(exc)
-        if culprit is not None:
-            return _error(culprit)
-        sys.stderr.write("fcomp: interrupted\n")
-        return 130
-    except SystemExit as exc:  # only the user's code would: it must not end the command
-        return _error(blame(exc) or f"a plugin called sys.exit({exc.code!r})")
-    except RecursionError as exc:
-        return _error(blame(exc) or "the computation recursed too deeply (RecursionError)")
-    except MemoryError:
-        fewer = ("lower --rate or --duration" if hasattr(args, "rate") and hasattr(args, "duration")
-                 else "use fewer or shorter records")
-        return _error(f"out of memory; {fewer}")
-    except Exception as exc:
-        culprit = blame(exc)
-        if culprit is not None:
-            return _error(culprit)
-        if isinstance(exc, ValueError | KeyError | OSError):
-            if isinstance(exc, OSError) and exc.filename:
-                return _error(f"{exc.filename}: {exc.strerror or exc}")
-            text = str(exc).strip()
-            return _error(text.splitlines()[0] if text else type(exc).__name__)
-        if os.environ.get("FCOMP_DEBUG"):
-            raise
-        sys.stderr.write(
-            f"fcomp: internal error: {type(exc).__name__}: {plain(str(exc))} "
-            "(set FCOMP_DEBUG=1 for the traceback and please report it)\n"
-        )
-        return 1
+        return getattr(app, name)
+    except AttributeError:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}") from None
 
 
 if __name__ == "__main__":

@@ -21,7 +21,9 @@ friction and are dropped (a ``measurement-terms`` warning says so).
 ``--plant-params PLANT.toml`` runs the hydraulic or pneumatic plant of a plant
 file (docs/plants.md, "Plant files"; ``fcomp plant template``) instead of the
 built-in one; a friction model *named* then takes the values of ``--params``
-or of the built-in plant of that kind.
+or of the built-in plant of that kind. ``--plant-params SET`` takes the plant's
+values from a parameter set. With ``--friction MODEL.json`` the file gives the
+friction's values and ``--params`` is refused (as on every command).
 """
 
 from __future__ import annotations
@@ -40,9 +42,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     common.add_friction_option(p)
     common.add_params_option(p, "the plant's parameter set; a set gives the plant's values "
                              "too")
-    p.add_argument("--plant-params", default=None, metavar="PLANT.toml",
-                   help="a plant file (hydraulic or pneumatic; fcomp plant template) instead "
-                   "of the built-in plant's parameters")
+    p.add_argument("--plant-params", default=None, metavar="SET|PLANT.toml",
+                   help="the plant's values: a parameter set (fcomp list params) or a plant "
+                   "file (hydraulic or pneumatic; fcomp plant template) instead of the "
+                   "built-in plant's")
     p.add_argument("--input", required=True, metavar="SPEC",
                    help="sine:amplitude=A,frequency=F | step:amplitude=A | csv:PATH")
     p.add_argument("--duration", required=True, type=finite_float, help="simulated time, s")

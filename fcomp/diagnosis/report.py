@@ -135,11 +135,16 @@ def comparison_sections(rep: Report, comp: Comparison) -> Report:
     (residual against every feature, loops, worst windows) and the plant domain."""
     figs = comparison_figures(comp)
     rep.section("1. Errors per regime")
-    rep.figure(figs["regimes"], f"RMS error per regime over the {comp.judged_label} samples "
-               "(pre-sliding, reversal, sliding, dwell/break-away); a regime with too few "
-               "samples has no bar.")
-    rep.table(["regime", "RMS (N)", "samples"],
-              [[k, v["rms"], v["n"]] for k, v in comp.regimes.items()], digits=[None, None, 0])
+    why = ("" if comp.fitted else f" The headline RMS, {comp.rms:.4g} N, is another measure: "
+           "over every sample of the record, as fcomp fit measures it; the scored RMS here "
+           f"({comp.rms_scored:.4g} N over all judged samples) leaves out the warm-ups and "
+           "charges a prediction band the motion leaves rather than its centre.")
+    rep.figure(figs["regimes"], f"Scored RMS error per regime over the {comp.judged_label} "
+               "samples (pre-sliding, reversal, sliding, dwell/break-away); a regime with too "
+               f"few samples has no bar.{why}")
+    rep.table(["regime", "scored RMS (N)", "samples"],
+              [[k, v["rms"], v["n"]] for k, v in comp.regimes.items()], digits=[None, None, 0],
+              caption=f"Scored RMS per regime over the {comp.judged_label} samples.{why}")
     rep.section("2. Where the model fails")
     rep.figure(figs["residuals"], "Residual (measured minus model) against every feature; "
                "lines: binned means. Each title gives how strongly the residual follows the "
@@ -233,7 +238,7 @@ def build_report(diag: Diagnosis, *, command: str | None = None) -> Report:
                       f"Final model: `{d['model']}`.")
     else:
         rep.paragraph("No effect qualified: the baseline is kept.")
-    kind = "ok" if d["verdict"] == "explained" and not d["baseline_dependent"] else "warn"
+    kind = of_diagnosis(d).tone  # the conclusion's colour: never green beside "How sure: low"
     if d["verdict"] == "explained":
         rep.note(f"Verdict `explained` -- {d['reason']}.", kind=kind)
     else:

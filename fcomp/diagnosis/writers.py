@@ -77,8 +77,11 @@ def model_file(result: DiagnosisResult, source: Mapping[str, Any] | None = None
     ``mass``, the channel ``lag``, ...) as such. ``source`` (``command``, ``data``) says
     where it comes from."""
     from fcomp.models.document import model_document
+    from fcomp.models.fitted_range import signal_ranges
 
-    return model_document(result.fit.model, measurement=result.fit.values,
+    data = result.ground.data
+    seen = signal_ranges([e.data.sig for e in data.experiments], data.available)
+    return model_document(result.fit.model.with_fitted_range(seen), measurement=result.fit.values,
                           stderr=result.fit.stderr,
                           source={"diagnosis": {"baseline": result.baseline_name,
                                                 "added": list(result.added),

@@ -182,6 +182,10 @@ class Effect(PlainValue):
     #: the laws the effect can take, chosen by the configuration ``form=``; the first is
     #: the default (empty: one law, no ``form``)
     FORMS: ClassVar[tuple[str, ...]] = ()
+    #: its configuration keys besides ``form`` (``x_min``, ...): any other is refused (a
+    #: typo would be dropped silently) for fcomp's own effects and for an effect that
+    #: declares them; an effect of the user's that declares none is not checked
+    CONFIG: ClassVar[tuple[str, ...]] = ()
 
     def __init_subclass__(cls, **kwargs: Any) -> None:
         super().__init_subclass__(**kwargs)
@@ -199,6 +203,11 @@ class Effect(PlainValue):
             raise ValueError(f"effect {self.name}: expected {self.Params.__name__}")
         self.params: ParamSet = params
         self.config: dict[str, Any] = dict(config)
+        known = ("form", *self.CONFIG)
+        unknown = [k for k in self.config if k not in known]
+        if unknown and _checks_config(type(self)):
+            raise ValueError(f"effect {self.name}: unknown configuration key {unknown[0]!r} "
+                             f"(known: {', '.join(known)})")
         if self.FORMS and self.form not in self.FORMS:
             raise ValueError(f"effect {self.name}: form must be one of "
                              f"{', '.join(self.FORMS)}, got {self.form!r}")
@@ -323,6 +332,13 @@ def register_effect(cls: type[Effect], *, replace: bool = False) -> type[Effect]
             raise ValueError(f"effect {cls.name!r} must define {attr}")
     EFFECTS.register(cls.name, cls, replace=replace)
     return cls
+
+
+def _checks_config(cls: type[Effect]) -> bool:
+    """Whether ``cls`` has its configuration keys checked: fcomp's own effects, and one of
+    the user's that declares :attr:`Effect.CONFIG`."""
+    return cls.__module__.startswith("fcomp.") or any(
+        "CONFIG" in k.__dict__ for k in cls.__mro__ if k is not Effect)
 
 
 def make_effect(name: str, params: Any = None, **config: Any) -> Effect:

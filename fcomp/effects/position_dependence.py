@@ -28,6 +28,9 @@ if TYPE_CHECKING:
 #: the samples at one position -- a rest point, where break-aways happen.
 SEAL_BAND = 1e-3
 
+#: The stroke's ends of the configuration by default (m).
+X_MIN, X_MAX = 0.0, 0.3
+
 PositionDependenceParams = make_params_class("PositionDependenceParams", [
     spec("kx1", "-", 0.0, -1.0, 1.0, "linear Legendre coefficient", directional=False),
     spec("kx2", "-", 0.0, -1.0, 1.0, "quadratic Legendre coefficient", directional=False),
@@ -66,6 +69,7 @@ class PositionDependence(Effect):
 
     name = "position-dependence"
     Params = PositionDependenceParams
+    CONFIG = ("x_min", "x_max")
     needs = ("x",)
     signature = "residual a function of x, repeated stroke after stroke (smooth or local)"
     experiment = "the same slow stroke repeated, break-away measured along the stroke"
@@ -74,10 +78,32 @@ class PositionDependence(Effect):
                                   "break-away measured along it (screw and guides)",
     }
 
+    def __init__(self, params: Any = None, **config: Any) -> None:
+        super().__init__(params, **config)
+        ends = []
+        for key, default in (("x_min", X_MIN), ("x_max", X_MAX)):
+            value = self.config.get(key, default)
+            try:
+                number = float(value)
+            except (TypeError, ValueError, OverflowError):
+                number = math.nan
+            if isinstance(value, bool) or not math.isfinite(number):
+                raise ValueError(f"effect {self.name}: {key} = {value!r} is not a finite "
+                                 "position in m")
+            ends.append(number)
+        if not ends[0] < ends[1]:
+            raise ValueError(f"effect {self.name}: x_min = {ends[0]:g} m must be below x_max "
+                             f"= {ends[1]:g} m (the stroke's ends the law is written over)")
+
+    @property
+    def x_range(self) -> tuple[float, float]:
+        """The stroke's ends ``(x_min, x_max)`` (m) the Legendre polynomials are written
+        over; outside them the polynomials grow without bound."""
+        return (float(self.config.get("x_min", X_MIN)), float(self.config.get("x_max", X_MAX)))
+
     def modify_levels(self, be: Backend, L: dict, w: list[Any], sig: Signals,
                       P: ParamValues) -> dict:
-        x_min = float(self.config.get("x_min", 0.0))
-        x_max = float(self.config.get("x_max", 0.3))
+        x_min, x_max = self.x_range
         xi = 2.0 * (sig.x - x_min) / (x_max - x_min) - 1.0
         p2 = 0.5 * (3.0 * xi * xi - 1.0)
         p3 = 0.5 * (5.0 * xi * xi * xi - 3.0 * xi)

@@ -37,6 +37,7 @@ class Viscous(StructuralEffect):
     """
 
     name = "viscous"
+    CONFIG = ("v_ref",)
     adds = frozenset({"viscous", "viscous-power"})
     marks = frozenset({"viscous"})
     Params = ViscousParams

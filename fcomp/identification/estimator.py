@@ -381,7 +381,10 @@ class FrictionFit:
 
     def _adopt(self, out: FitOutcome, d: FitData) -> None:
         """Set the result attributes from the strategy's outcome."""
-        self.model_ = out.model.with_measurement(self._measurement_terms(out.extras))
+        from fcomp.models.fitted_range import signal_ranges
+
+        self.model_ = out.model.with_measurement(self._measurement_terms(out.extras)) \
+            .with_fitted_range(signal_ranges([d.sig]))  # where the model was seen
         self.params_, self.stderr_, self.ci_ = out.params, out.stderr, out.ci
         self.units_, self.cov_, self.param_names_ = out.units, out.cov, out.param_names
         self.rms_fit_, self.converged_, self.message_ = out.rms, out.converged, out.message

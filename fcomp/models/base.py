@@ -344,6 +344,8 @@ class FrictionModel(PlainValue, ABC):
             model = as_effect(e).attach(model)
         if self.measurement and not model.measurement:  # a structural term builds anew
             model = model.with_measurement(self.measurement)
+        if self.fitted_range and not model.fitted_range:
+            model = model.with_fitted_range(self.fitted_range)
         return model
 
     def with_params(self, **flat: float) -> FrictionModel:
@@ -431,6 +433,33 @@ class FrictionModel(PlainValue, ABC):
         new.__dict__.pop("_stderr", None)
         if clean:
             new.__dict__["_stderr"] = clean
+        return new
+
+    @property
+    def fitted_range(self) -> dict[str, tuple[float, float]]:
+        """The ranges of the record the model was fitted on (a copy): ``x`` (m), ``v``
+        (m/s), ``p`` (Pa, gauge chamber pressures), those known; empty for a model not
+        fitted. A fit and a diagnosis set them, the model file carries them
+        (``"fitted_range"``), and :func:`fcomp.modelfile.check_range` checks a use against
+        them (:mod:`fcomp.models.fitted_range`)."""
+        return dict(self.__dict__.get("_fitted_range") or {})
+
+    def with_fitted_range(self, ranges: Mapping[str, Any] | None = None) -> FrictionModel:
+        """A copy carrying the fitted ranges ``ranges`` (:attr:`fitted_range`), replacing any
+        it had; ``None`` or empty: none.
+
+        Raises
+        ------
+        ValueError
+            For an unknown signal, or a range that is not two finite numbers, low first.
+        """
+        from fcomp.models.fitted_range import checked_ranges
+
+        clean = checked_ranges(ranges or {})
+        new = self._rebuild(self.params, self.effects)
+        new.__dict__.pop("_fitted_range", None)
+        if clean:
+            new.__dict__["_fitted_range"] = clean
         return new
 
     def flat_params(self) -> dict[str, float]:

@@ -169,6 +169,10 @@ def model_document(model: FrictionModel, *, stderr: Mapping[str, float] | None =
     if measured or extras:
         doc["measurement_terms"] = {"effects": measured, "params": extras,
                                     "note": MEASUREMENT_NOTE}
+    if model.fitted_range:
+        from fcomp.models.fitted_range import as_document
+
+        doc["fitted_range"] = as_document(model.fitted_range)
     doc["source"] = {"program": f"fcomp {__version__}", **dict(source or {})}
     return doc
 

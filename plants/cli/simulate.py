@@ -14,12 +14,14 @@ from fcomp.cli.common import (
     friction_model,
     output_path,
     parse_assignments,
+    refuse_params_with_model_file,
     warn,
+    warn_fitted_range,
     write_measurement,
 )
 from fcomp.errors import FcompError
 from fcomp.inputs import parse_input, sampling_warning
-from fcomp.modelfile import is_model_file
+from fcomp.modelfile import check_range, is_model_file
 from fcomp.outputs import InputSet
 from plants import PLANTS
 from plants.base import OdePlant, output_times
@@ -29,17 +31,21 @@ from plants.planfile import read_plant_file
 def run(args: argparse.Namespace) -> int:
     """Run ``fcomp simulate`` (:mod:`fcomp.cli.simulate`): write the run as a measurement."""
     out = output_path(args.output)
+    refuse_params_with_model_file(args.friction, args.params, plant_option=True)
     plant_cls = PLANTS.get(args.plant)
     values_file = args.params is not None and is_model_file(args.params)
     params = args.params if args.params is not None and not values_file \
         else plant_cls.default_params
     plant_set: Any = params
-    if args.plant_params is not None:
+    plant_file = args.plant_params is not None and args.plant_params.lower().endswith(".toml")
+    if plant_file:
         pf = read_plant_file(args.plant_params)
         if pf.kind != args.plant:
             raise FcompError(f"--plant-params {args.plant_params}: a {pf.kind} plant, not "
                              f"{args.plant}; run `fcomp simulate {pf.kind} ...`")
         plant_set = pf.parameter_set()
+    elif args.plant_params is not None:
+        plant_set = args.plant_params  # a parameter set: the plant's values
     u = parse_input(args.input)
     inputs = InputSet()
     if u.kind == "csv":
@@ -49,7 +55,7 @@ def run(args: argparse.Namespace) -> int:
     for option, spec in (("--friction", args.friction), ("--params", args.params)):
         if spec is not None and is_model_file(spec):
             inputs.file(spec, option)
-    if args.plant_params is not None:
+    if plant_file:
         inputs.file(args.plant_params, "--plant-params")
     check_outputs(inputs, [("-o", out)])
     t = output_times(args.duration, args.rate)
@@ -69,6 +75,11 @@ def run(args: argparse.Namespace) -> int:
                   if overrides else plant_cls(model, plant_set))
     x0 = parse_assignments(args.x0, option="--x0") if args.x0 else None
     _check_x0(plant, x0)
+    label = args.friction if is_model_file(args.friction) else (
+        args.params if values_file else model.describe())
+    start = (x0 or {}).get("x", plant.default_state().get("x")) \
+        if isinstance(plant, OdePlant) else None
+    check_range(model, x=None if start is None else [start], label=label)  # meaningless there?
     aliasing = sampling_warning(u, args.rate)
     if aliasing is not None:
         warn(aliasing.code, aliasing.template, "--input")
@@ -77,6 +88,9 @@ def run(args: argparse.Namespace) -> int:
     with Progress(f"simulate {args.plant}", args.duration, enabled=not args.no_progress):
         result = plant.simulate(u, args.duration, args.rate, x0=x0, **engine)
     _cavitation(plant, result)
+    p = [result[n] for n in ("p1", "p2") if n in result]
+    warn_fitted_range(model, label, "--friction", x=result.get("x"), v=result.get("v"),
+                      p=np.concatenate(p) if p else None)
     result.meta.setdefault("simulation", {})["input"] = args.input
     csv, toml = write_measurement(result, out)
     print(f"wrote {csv} and {toml} ({len(result)} samples)")

@@ -3,12 +3,12 @@
 from __future__ import annotations
 
 import argparse
-import sys
 
+from fcomp.cli.emit import write_stdout
 from plants.planfile import template
 
 
 def run_template(args: argparse.Namespace) -> int:
     """Print the commented plant file of the built-in plant of ``args.kind``."""
-    sys.stdout.write(template(args.kind))
+    write_stdout(template(args.kind), "the template")
     return 0

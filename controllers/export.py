@@ -356,9 +356,11 @@ def step_function(ctrl: Any) -> StepExport:
     else:
         F_hat = ca.MX(0.0)
         note = "PID + force-to-valve inversion"
-    demand = m.mass * ddr + m.weight + (g.kp * e + g.ki * integral + g.kd * (dr - v_f)) + F_hat
+    demand = (m.mass * ddr + m.weight + (g.kp * e + g.ki * (integral + dt * e) + g.kd * (dr - v_f))
+              + F_hat)  # the backward-Euler integral of PIDLaw.force
     applied = ca.fmin(ca.fmax(demand, m.force_min), m.force_max)
-    u, sat = _valve_command(ctrl.valve, applied, y, v_inv)
+    lam = ctrl.velocity_compensation  # PIDController.step's velocity mix
+    u, sat = _valve_command(ctrl.valve, applied, y, lam * v_inv + (1.0 - lam) * dr)
     if g.ki == 0:
         integral_next = integral
     else:

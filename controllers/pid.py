@@ -186,12 +186,16 @@ class PIDLaw:
         return self.v_f
 
     def force(self, e: float, dr: float) -> float:
-        """``kp*e + ki*I + kd*(dr - v_f)`` with the integral *before* this sample's update."""
+        """``kp*e + ki*(I + dt*e) + kd*(dr - v_f)``: the backward-Euler integral, this
+        sample's error included (``I[k] = I[k-1] + dt*e[k]``; :func:`pid_transfer`'s
+        ``ki*dt*z/(z - 1)``); :meth:`integrate` then stores it, or keeps ``I[k-1]``."""
         g = self.gains
-        return g.kp * e + g.ki * self.integral + g.kd * (dr - self.v_f)
+        return g.kp * e + g.ki * (self.integral + self.dt * e) + g.kd * (dr - self.v_f)
 
     def integrate(self, e: float, demand: float, applied: float, valve_saturated: int) -> None:
-        """Advance the integral: back-calculation, frozen while the valve saturates with ``e``.
+        """Advance the integral to ``I[k] = I[k-1] + dt*e[k]`` (the value :meth:`force` used)
+        plus the back-calculation ``dt*kt*(applied - demand)/ki`` (zero unless the demand
+        was clipped); frozen at ``I[k-1]`` while the valve saturates with ``e``.
 
         ``valve_saturated`` is +1 / -1 when the valve command hit its upper /
         lower limit, 0 otherwise.
@@ -231,10 +235,12 @@ class PIDController(Controller):
     name: ClassVar[str] = "pid"
     options: ClassVar[tuple[str, ...]] = (
         "rate", "bandwidth", "kp", "ki", "kd", "derivative_cutoff", "kt", "force_bandwidth",
+        "velocity_compensation",
     )
     #: The options that replace the derived tuning (checked for margins when given).
     tuning_options: ClassVar[tuple[str, ...]] = (
         "rate", "bandwidth", "kp", "ki", "kd", "derivative_cutoff", "force_bandwidth",
+        "velocity_compensation",
     )
 
     def __init__(self, model: Any, **options: Any) -> None:
@@ -253,6 +259,13 @@ class PIDController(Controller):
             kt=float(o.get("kt", 20.0)),
         )
         self.valve = ForceToValve(model, float(o.get("force_bandwidth", tu.force_bandwidth)))
+        lam = float(o.get("velocity_compensation", tu.velocity_compensation))
+        if not (math.isfinite(lam) and 0.0 <= lam <= 1.0):
+            raise FcompError(f"{self.name}: velocity_compensation must be a number from 0 to "
+                             f"1, got {lam}")
+        #: ``lambda``: the inversion's velocity is ``lambda*v_hat + (1 - lambda)*dr``
+        #: (:mod:`controllers.force_to_valve`).
+        self.velocity_compensation = lam
         #: Margins of the nominal loop (:class:`controllers.tuning.Margins`); explicit
         #: values are checked (refused without margins), the derived ones are the tuning's
         #: (the same loop: the tuning's gains, force loop and rate).
@@ -298,7 +311,9 @@ class PIDController(Controller):
         m = self.model
         demand = m.mass * ref.ddr + m.weight + self.law.force(e, ref.dr) + F_hat
         applied = min(max(demand, m.force_min), m.force_max)
-        u, sat = self.valve.command(applied, y, self.velocity_estimate(v_f))
+        lam = self.velocity_compensation
+        v_inv = lam * self.velocity_estimate(v_f) + (1.0 - lam) * ref.dr
+        u, sat = self.valve.command(applied, y, v_inv)
         self.law.integrate(e, demand, applied, sat)
         self.F_demand = applied
         self.last_u = u

@@ -95,6 +95,12 @@ class PlantSettings:
     pid_bandwidth: float | None = None
     force_bandwidth: float | None = None
     observer_gain: float | None = None
+    #: Computation delay (control samples): the command computed from the measurement at
+    #: ``t[k]`` acts from ``t[k + delay]`` (:mod:`plants.uncertainty`; the harness applies it,
+    #: the loop analysis and the estimators know it).
+    delay: int = 1
+    #: What the loop analysis varies (:mod:`plants.uncertainty`; None: the kind's defaults).
+    uncertainty: Any = None
 
     def given_tuning(self) -> dict[str, float]:
         """The tuning values given explicitly, by name."""
@@ -116,7 +122,8 @@ def plant_settings(plant: str | PlantFile) -> PlantSettings:
             raise FcompError(f"closed-loop control is set up for plants "
                              f"{', '.join(sorted(KINDS))}, not {plant!r}")
         plant = builtin_plant_file(plant)
-    return PlantSettings(sensors=Sensors(**plant.sensors), **plant.control)
+    return PlantSettings(sensors=Sensors(**plant.sensors), uncertainty=plant.ranges,
+                         **plant.control)
 
 
 #: Derived tunings by plant, friction and settings (a derivation costs about a second).
@@ -204,6 +211,14 @@ class ControlModel:
     control_rate = property(lambda self: self.settings.control_rate, doc="Hz")
     u_max = property(lambda self: self.settings.u_max, doc="valve command limit")
     du_max = property(lambda self: self.settings.du_max, doc="valve rate limit, 1/s")
+    delay = property(lambda self: int(self.settings.delay), doc="computation delay, samples")
+
+    @property
+    def uncertainty(self) -> Any:
+        """What the loop analysis varies (:class:`plants.uncertainty.Uncertainty`)."""
+        from plants.uncertainty import Uncertainty
+
+        return self.settings.uncertainty or Uncertainty.default(self.plant_name)
     sensors = property(lambda self: self.settings.sensors, doc=":class:`Sensors`")
 
     @property

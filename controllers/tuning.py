@@ -346,6 +346,7 @@ class Tuning:
     force_margins: Margins
     given: tuple[str, ...] = field(default=())
     observer_margins: Margins | None = None
+    velocity_compensation: float = 1.0
 
     def mpc_horizon(self, rate: float) -> int:
         """Horizon in steps at an MPC rate (Hz): ``ceil(T_N*rate)``, at least 2."""

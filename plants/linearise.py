@@ -28,6 +28,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
+import casadi as ca
 import numpy as np
 from scipy.linalg import expm
 
@@ -52,6 +53,9 @@ class LinearPlant:
         sensors give them).
     Ad, Bd : numpy.ndarray
         ``exp(A dt)`` and ``int_0^dt exp(A s) ds B`` (``Bd`` of shape ``(n, 1)``).
+    Fd : numpy.ndarray
+        ``(n, 1)``: the same for a force (N) on the piston, extending, held over the
+        period (a load step, the disturbance friction is).
     state_names : tuple of str
         The plant's states (no friction states).
     state : numpy.ndarray
@@ -74,6 +78,7 @@ class LinearPlant:
     command: float
     position: float
     dt: float
+    Fd: np.ndarray | None = None
 
     @property
     def measurement(self) -> np.ndarray:
@@ -121,7 +126,14 @@ class Linearisation:
         self.dt = float(dt)
         self.names = tuple(plant.state_names)
         self.static = bool(fr.static_map)
-        self._jac = plant.casadi_functions(symbolic_params=True)["jacobians"]
+        fns = plant.casadi_functions(symbolic_params=True)
+        self._jac = fns["jacobians"]
+        x = ca.SX.sym("x", len(self.names))
+        u = ca.SX.sym("u", 1)
+        p = ca.SX.sym("p", fns["rhs"].size1_in(2))
+        i_load = list(plant.flat_params()).index("F_load")  # opposes extension
+        self._load = ca.Function("load_jac", [x, u, p],
+                                 [-ca.jacobian(fns["rhs"](x, u, p), p)[:, i_load]])
         self.equilibria = Equilibria(plant)
         self.C = np.zeros((len(MEASURED), len(self.names)))
         for row, n in enumerate(MEASURED):
@@ -148,6 +160,7 @@ class Linearisation:
             x0, u0 = equilibrium
             x0 = np.concatenate([x0, self.plant.initial_state()[len(x0):]])
         A, B, _C, _D = (np.asarray(m, dtype=float) for m in self._jac(x0, [u0], p))
+        load = np.asarray(self._load(x0, [u0], p), dtype=float).ravel()
         iv = self.names.index("v")
         mass = float(p[list(self.plant.flat_params()).index("mass")])
         if self.static:
@@ -159,16 +172,37 @@ class Linearisation:
             A[iv, iv] = -float(damping) / mass
         elif damping:
             raise FcompError("a friction model with a bristle state brings its own damping")
+        names = self.names
+        if "z" in names:
+            # At rest the bristle follows the piston, dz/dt = v (the decay sigma0*|v|*z/g
+            # vanishes): x - z is conserved, an uncontrollable pole at s = 0 that only
+            # moves the bristle's anchor. With the anchor at the equilibrium, z = x - x0:
+            # the z-column joins the x-column and z leaves the state.
+            ix, iz = names.index("x"), names.index("z")
+            A[:, ix] += A[:, iz]
+            keep = [i for i in range(len(names)) if i != iz]
+            A, B = A[np.ix_(keep, keep)], B[keep]
+            x0 = np.asarray(x0, dtype=float)[keep]
+            names = tuple(names[i] for i in keep)
+            load = load[keep]
+            scales = self._scales[[*keep, len(self.names)]]
+        else:
+            scales = self._scales
         n = A.shape[0]
-        M = np.zeros((n + 1, n + 1))
+        M = np.zeros((n + 2, n + 2))  # inputs: the command, a force on the piston
         M[:n, :n], M[:n, n] = A * self.dt, B[:, 0] * self.dt
-        D = self._scales  # exp(D^-1 M D) = D^-1 exp(M) D, computed on the scaled states
+        M[:n, n + 1] = load * self.dt
+        D = np.concatenate([scales, [mass]])  # exp(D^-1 M D) = D^-1 exp(M) D
         Ms = M * (1.0 / D)[:, None] * D[None, :]
         Ms[np.abs(Ms) < 1e-15 * np.abs(Ms).max()] = 0.0  # round-off dust (subnormals are slow)
         E = D[:, None] * expm(Ms) / D[None, :]
-        return LinearPlant(A=A, B=B, Ad=E[:n, :n], Bd=E[:n, n:], C=self.C.copy(),
-                           state_names=self.names, state=np.asarray(x0, dtype=float),
-                           command=float(u0), position=float(x_pos), dt=self.dt)
+        C = np.zeros((len(MEASURED), n))
+        for row, m in enumerate(MEASURED):
+            C[row, names.index(m)] = 1.0
+        return LinearPlant(A=A, B=B, Ad=E[:n, :n], Bd=E[:n, n:n + 1], C=C,
+                           state_names=names, state=np.asarray(x0, dtype=float),
+                           command=float(u0), position=float(x_pos), dt=self.dt,
+                           Fd=E[:n, n + 1:n + 2])
 
 
 def linearise(plant: Any, x_pos: float, dt: float, damping: float = 0.0) -> LinearPlant:

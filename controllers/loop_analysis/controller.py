@@ -38,8 +38,12 @@ from fcomp.errors import ConvergenceError, FcompError
 
 #: State blocks of the exported step that carry no linear dynamics (module docstring).
 LOGICAL_BLOCKS = ("started", "side", "ekf_P")
-#: Samples stepped on the constant measurement, at most, to reach the fixed point.
-MAX_STEPS = 20000
+#: Samples stepped on the constant measurement before Newton's method (the fixed point).
+PLAIN_STEPS = 4
+#: The same for a controller with an estimator's covariance (its Riccati recursion first).
+PLAIN_STEPS_ESTIMATOR = 600
+#: Newton steps, at most, to the fixed point.
+NEWTON_STEPS = 60
 
 
 @dataclass(frozen=True)
@@ -116,37 +120,61 @@ class StepLinearisation:
             ref[3:] = y[0]
         return ref
 
-    def fixed_point(self, y: np.ndarray, u: float, tol: float = 1e-11) -> np.ndarray:
-        """The controller's state at rest on the measurement ``y`` commanding ``u``."""
+    def fixed_point(self, y: np.ndarray, u: float, tol: float = 1e-5) -> np.ndarray:
+        """The controller's state at rest on the measurement ``y`` commanding ``u``.
+
+        From its reset (or the last point's fixed point), :data:`PLAIN_STEPS` steps on the
+        constant measurement with the integral set after each to the value whose command
+        is ``u``; then Newton's method on ``s - f(s) = 0``, ``g(s) = u`` with the exact
+        Jacobians, least squares (the integral and an observer's bristle can both hold the
+        load: any of them is a fixed point, the minimum-norm correction is taken). Slow
+        states (a lubricant film relaxing over seconds) are solved, not waited for. The
+        tolerance ``tol`` is relative to each block's largest entry: an EKF's covariance of
+        a state it cannot observe at rest (the film) grows without bound, its gain drifts
+        by parts per million, and its estimate with it.
+        """
         ref = self.reference(y)
-        if self._last is not None:
+        estimator = any(b == "ekf_P" for b, _k in self.step.layout)
+        if self._last is not None and not estimator:
             s = self._last.copy()
-            s[0] = 1.0
             for i, name in enumerate(self.names):  # the position the state remembers
                 if name == "x_prev":
                     s[i] = y[0]
         else:
             s = np.asarray(self._eval(self.step.state0, y, ref)[1]).ravel()  # the reset
+        n = s.size
         du = 0.0
         if self.integral:
-            i = self.integral[0]
-            du = float(np.asarray(self._jac(s, y, ref)[2])[0, i])
+            du = float(np.asarray(self._jac(s, y, ref)[2])[0, self.integral[0]])
             if du == 0.0:
                 raise FcompError("the controller's command does not depend on its integral")
-        scale = np.abs(s)
-        for k in range(MAX_STEPS):
+        for _ in range(PLAIN_STEPS_ESTIMATOR if estimator else PLAIN_STEPS):
             uu, s_new = (np.asarray(v, dtype=float).ravel() for v in self._eval(s, y, ref))
             if self.integral:  # the integral whose command is u (linear in it)
                 s_new[self.integral[0]] += (u - float(uu[0])) / du
-            change = np.abs(s_new - s)
             s = s_new
-            scale = np.maximum(scale, np.abs(s))
-            if k > 2 and np.all(change <= tol * scale + 1e-15) \
-                    and abs(float(uu[0]) - u) <= tol * max(abs(u), 1e-9):
+        scale = np.empty(n)  # per block of the layout: its largest entry
+        i = 0
+        for _block, size in self.step.layout:
+            scale[i:i + size] = max(float(np.abs(s[i:i + size]).max()), 1e-12)
+            i += size
+        u_scale = max(abs(u), 1e-9)
+        k = self.keep  # the logical blocks held (the covariance: its observable part has
+        sk = scale[k]  # converged in the plain steps; it does not move the estimate)
+        for _ in range(NEWTON_STEPS):
+            uu, s_next, J = self._jac(s, y, ref)
+            J = np.asarray(J)[:, :n]
+            res = np.concatenate([(np.asarray(s_next).ravel()[k] - s[k]) / sk,
+                                  [(float(uu) - u) / u_scale]])
+            if np.all(np.abs(res) <= tol):
                 break
+            M = np.vstack([(J[1:][np.ix_(k, k)] - np.eye(len(k))) / sk[:, None],
+                           J[:1, k] / u_scale])
+            step = np.linalg.lstsq(M * sk[None, :], -res, rcond=1e-12)[0] * sk
+            s[k] = s[k] + step
         else:
             raise ConvergenceError(f"controller {getattr(self.ctrl, 'name', '?')}: no fixed "
-                                   f"point at rest within {MAX_STEPS} samples")
+                                   f"point at rest (residual {np.abs(res).max():.2e})")
         self._last = s
         return s
 
@@ -165,6 +193,70 @@ class StepLinearisation:
         D = J[:1, n:]
         return LinearController(A=A, B=B, C=C, D=D, states=tuple(self.names[i] for i in k),
                                 dt=self.dt, state=s, measurement=y, command=float(uu))
+
+
+    def at_many(self, Y: np.ndarray, U: np.ndarray, tol: float = 1e-5) -> list[LinearController]:
+        """:meth:`at` at many operating points at once (CasADi's ``map``: one call evaluates
+        every point; Newton's method batched). ``Y`` ``(P, 3)``, ``U`` ``(P,)``."""
+        Y = np.asarray(Y, dtype=float)
+        U = np.asarray(U, dtype=float)
+        P = Y.shape[0]
+        ev, jac = self._eval.map(P), self._jac.map(P)
+        R = np.stack([self.reference(y) for y in Y], axis=1)
+        Yt = Y.T
+        if any(b == "ekf_P" for b, _k in self.step.layout):
+            # an estimator: its Riccati recursion and its kinked bristle equation want the
+            # plain steps of each point's own reset (:meth:`at`)
+            return [self.at(y, float(u)) for y, u in zip(Y, U, strict=True)]
+        S = np.asarray(ev(np.repeat(self.step.state0[:, None], P, axis=1), Yt, R)[1])
+        plain = PLAIN_STEPS
+        n = S.shape[0]
+        if self.integral:
+            i = self.integral[0]
+            J = np.asarray(jac(S, Yt, R)[2])  # (1 + n, (n + 3) * P)
+            du = J[0].reshape(P, n + 3)[:, i] if J.shape[1] == (n + 3) * P else None
+            du = np.asarray(J[0, [p * (n + 3) + i for p in range(P)]]) if du is None else du
+            if np.any(du == 0.0):
+                raise FcompError("the controller's command does not depend on its integral")
+        for _ in range(plain):
+            uu, S_new = (np.asarray(v, dtype=float) for v in ev(S, Yt, R))
+            if self.integral:
+                S_new[self.integral[0]] += (U - uu[0]) / du
+            S = S_new
+        scale = np.empty((n, P))
+        i0 = 0
+        for _block, size in self.step.layout:
+            scale[i0:i0 + size] = np.maximum(np.abs(S[i0:i0 + size]).max(axis=0), 1e-12)
+            i0 += size
+        u_scale = np.maximum(np.abs(U), 1e-9)
+        k = self.keep
+        eye = np.eye(len(k))
+        for _ in range(NEWTON_STEPS):
+            uu, S_next, J = (np.asarray(v, dtype=float) for v in jac(S, Yt, R))
+            Jb = J.reshape(1 + n, P, n + 3).transpose(1, 0, 2)[:, :, :n]  # (P, 1+n, n)
+            sk = scale[k].T  # (P, nk)
+            res = np.concatenate([((S_next - S)[k].T / sk), ((uu[0] - U) / u_scale)[:, None]],
+                                 axis=1)
+            if np.all(np.abs(res) <= tol):
+                break
+            Ak = Jb[:, 1:, :][:, k][:, :, k]
+            M = np.concatenate([(Ak - eye) / sk[:, :, None], Jb[:, :1, k] / u_scale[:, None, None]],
+                               axis=1) * sk[:, None, :]
+            step = np.einsum("pij,pj->pi", np.linalg.pinv(M, rcond=1e-12), -res) * sk
+            S[k] = S[k] + step.T
+        else:
+            raise ConvergenceError(f"controller {getattr(self.ctrl, 'name', '?')}: no fixed "
+                                   f"point at rest (residual {np.abs(res).max():.2e})")
+        uu, _S, J = (np.asarray(v, dtype=float) for v in jac(S, Yt, R))
+        Jb = J.reshape(1 + n, P, n + 3).transpose(1, 0, 2)
+        out = []
+        for p in range(P):
+            Jp = Jb[p]
+            out.append(LinearController(
+                A=Jp[1:, :n][np.ix_(k, k)], B=Jp[1:, n:][k, :], C=Jp[:1, :n][:, k],
+                D=Jp[:1, n:], states=tuple(self.names[i] for i in k), dt=self.dt,
+                state=S[:, p].copy(), measurement=Y[p], command=float(uu[0, p])))
+        return out
 
 
 def linearise_controller(ctrl: Any, y: np.ndarray, u: float) -> LinearController:

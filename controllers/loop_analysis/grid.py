@@ -138,15 +138,17 @@ class PlantGrid:
                                                                     repr=False)
 
     def __post_init__(self) -> None:
+        # one block: plants with fewer states padded by decoupled states at z = 0 (no
+        # effect on P(z) or on the closed loop's other poles)
         z = unit_z(self.w, self.dt)
-        sizes = sorted({lp.Ad.shape[0] for lp in self.plants})
-        for n in sizes:
-            idx = np.array([i for i, lp in enumerate(self.plants) if lp.Ad.shape[0] == n])
-            Ad = np.stack([self.plants[i].Ad for i in idx])
-            Bd = np.stack([self.plants[i].Bd for i in idx])
-            C = self.plants[idx[0]].C
-            self._blocks.append((idx, {"Ad": Ad, "Bd": Bd, "C": C,
-                                       "P": plant_response(Ad, Bd, C, z)}))
+        n = max(lp.Ad.shape[0] for lp in self.plants)
+        P = len(self.plants)
+        Ad, Bd, C = np.zeros((P, n, n)), np.zeros((P, n, 1)), np.zeros((P, 3, n))
+        for i, lp in enumerate(self.plants):
+            k = lp.Ad.shape[0]
+            Ad[i, :k, :k], Bd[i, :k], C[i, :, :k] = lp.Ad, lp.Bd, lp.C
+        self._blocks.append((np.arange(P), {"Ad": Ad, "Bd": Bd, "C": C,
+                                            "P": plant_response(Ad, Bd, C, z)}))
 
     def __len__(self) -> int:
         return len(self.points)
@@ -186,12 +188,30 @@ class PlantGrid:
                     dst[k][idx] = v
         return out
 
-    def subset(self, keep: list[int]) -> PlantGrid:
-        """The grid at the points ``keep`` only."""
+    def requirement(self, controller: Callable[[np.ndarray], tuple[np.ndarray, ...]]
+                    ) -> np.ndarray:
+        """Per point, the smaller over both breaks of
+        :func:`~controllers.loop_analysis.margins.requirement_ratio` (a search's figure)."""
+        from controllers.loop_analysis.margins import requirement_ratio
+
+        z = unit_z(self.w, self.dt)
+        out = np.empty(len(self.points))
+        for idx, blk in self._blocks:
+            Ac, Bc, Cc, Dc, K = controller(idx)
+            L = loop_responses(blk["P"], K, z, self.delay)
+            pole = dominant_pole(closed_loop_matrix(blk["Ad"], blk["Bd"], blk["C"], Ac, Bc, Cc,
+                                                    Dc, self.delay))
+            out[idx] = np.minimum(requirement_ratio(L["valve"], pole, self.dt),
+                                  requirement_ratio(L["position"], pole, self.dt))
+        return out
+
+    def subset(self, keep: list[int], w: np.ndarray | None = None) -> PlantGrid:
+        """The grid at the points ``keep`` only (on the frequencies ``w``, default the
+        same)."""
         s, Jy, Jv = self.slopes
         return PlantGrid([self.points[i] for i in keep], [self.plants[i] for i in keep],
-                         (s[keep], Jy[keep], Jv[keep]), self.delay, self.dt, self.w,
-                         self.areas)
+                         (s[keep], Jy[keep], Jv[keep]), self.delay, self.dt,
+                         self.w if w is None else w, self.areas)
 
 
 def plant_grid(model: Any, uncertainty: Uncertainty | None = None,

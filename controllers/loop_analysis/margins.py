@@ -221,6 +221,35 @@ def margins_of_responses(L: np.ndarray, w: np.ndarray, pole: np.ndarray, dt: flo
             "radius": radius, "growth": growth, "mode_hz": mode_hz}
 
 
+def requirement_ratio(L: np.ndarray, pole: np.ndarray, dt: float) -> np.ndarray:
+    """``min(gain/2, phase/30, 2/Ms)`` of many loops (:func:`margins_of_responses`' figures,
+    fewer of them, for a search); an unstable closed loop: minus its growth rate (1/s)."""
+    re, im = L.real, L.imag
+    a, b = im[..., :-1], im[..., 1:]
+    cross = (a * b <= 0) & ((a != 0) | (b != 0))
+    t = a / np.where(cross, a - b, 1.0)
+    rc = np.where(cross, re[..., :-1] + t * (re[..., 1:] - re[..., :-1]), 0.0)
+    k = np.where(rc < 0, -1.0 / np.where(rc < 0, rc, -1.0), np.nan)
+    last = re[..., -1]
+    k_end = np.where(last < 0, -1.0 / np.where(last < 0, last, -1.0), np.nan)
+    k = np.concatenate([k, k_end[..., None]], axis=-1)
+    with np.errstate(invalid="ignore"):
+        up = np.nanmin(np.where(k > 1, k, np.inf), axis=-1)
+        down = np.nanmax(np.where(k < 1, k, 0.0), axis=-1)
+    gain = np.minimum(up, np.where(down > 0, 1.0 / np.where(down > 0, down, 1.0), np.inf))
+    mag = np.abs(L)
+    ma, mb = mag[..., :-1], mag[..., 1:]
+    gc = (ma - 1.0) * (mb - 1.0) < 0
+    tg = (1.0 - ma) / np.where(gc, mb - ma, 1.0)
+    Lg = L[..., :-1] + tg * (L[..., 1:] - L[..., :-1])
+    phase = np.min(np.where(gc, 180.0 - np.degrees(np.abs(np.angle(Lg))), np.inf), axis=-1)
+    ms = 1.0 / np.min(np.abs(1.0 + L), axis=-1)
+    ratio = np.minimum(np.minimum(gain / MIN_GAIN_MARGIN, phase / MIN_PHASE_MARGIN),
+                       MAX_SENSITIVITY / ms)
+    radius = np.abs(pole)
+    return np.where(radius < 1.0, ratio, -np.log(np.maximum(radius, 1e-300)) / dt)
+
+
 def refined_margins(response: Callable[[np.ndarray], np.ndarray], w: np.ndarray,
                     pole: complex, dt: float, iterations: int = 40) -> LoopMargins:
     """The margins of one loop, its crossings refined by bisection on the exact response.
@@ -305,4 +334,4 @@ def loop_margins_from(arrays: dict[str, np.ndarray], index: tuple[int, ...]) -> 
 
 __all__ = ["MAX_SENSITIVITY", "MIN_GAIN_MARGIN", "MIN_PHASE_MARGIN", "N_FREQUENCIES",
            "LoopMargins", "frequency_grid", "loop_margins_from", "margins_of_responses",
-           "refined_margins"]
+           "refined_margins", "requirement_ratio"]

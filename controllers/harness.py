@@ -59,6 +59,7 @@ from controllers.plant_model import (
     ControlModel,
     equilibrium,
     friction_with_mismatch,
+    presliding_bristle,
     sliding_damping,
 )
 from controllers.tasks import Task, check_fits_stroke, get_task
@@ -223,14 +224,18 @@ def build_loop(controller: str, config: LoopConfig, options: Mapping[str, Any] |
 
 def control_model(config: LoopConfig) -> ControlModel:
     """The controller's own plant model of a configuration (its friction times the mismatch;
-    the tuning's loop damping the simulated plant's friction, :func:`sliding_damping`: the
-    same PID whatever friction model the controller is built with)."""
+    the tuning's sliding slope and pre-sliding bristle the simulated plant's friction's,
+    :func:`sliding_damping`, :func:`presliding_bristle`: the same PID whatever friction
+    model the controller is built with)."""
     ctrl_friction = friction_with_mismatch(_friction(config.controller_friction, config),
                                            config.mismatch)
-    damping = sliding_damping(_friction(config.friction, config))
-    model = (ControlModel(config.plant_file, ctrl_friction, damping=damping)
+    true = _friction(config.friction, config)
+    damping = sliding_damping(true)
+    bristle = presliding_bristle(true) or presliding_bristle(ctrl_friction)
+    model = (ControlModel(config.plant_file, ctrl_friction, damping=damping, bristle=bristle)
              if config.plant_file is not None
-             else ControlModel(config.plant, ctrl_friction, config.params, damping=damping))
+             else ControlModel(config.plant, ctrl_friction, config.params, damping=damping,
+                               bristle=bristle))
     if config.tuning is not None:
         model.use_tuning(config.tuning(model))
     return model

@@ -106,11 +106,10 @@ class LuGreObserverController(PIDController):
         #: Margins of the loop with the observer's path at rest (rule 4 of
         #: :mod:`controllers.tuning`): explicit values are checked, the derived ones are the
         #: tuning's.
-        self.observer_margins = (check_observer(self.gains, model, self.k, self.valve.bandwidth,
-                                                self.dt, f"{self.name} tuning "
+        self._step = observer_step(model.friction)
+        self.observer_margins = (check_observer(self, f"{self.name} tuning "
                                                 f"({', '.join(explicit)} given)")
                                  if explicit else model.tuning.observer_margins)
-        self._step = observer_step(model.friction)
         self._side = 1.0
         self.x_hat = model.friction.initial_state()
 

@@ -165,6 +165,11 @@ def unstable(gains: PIDGains, rho: float, dt: float) -> FcompError:
     )
 
 
+#: The velocity compensation's range: 1 the measured velocity alone, 0 the reference's,
+#: below 0 the measured velocity fed back to the valve (:mod:`controllers.force_to_valve`).
+VELOCITY_COMPENSATION = (-3.0, 1.0)
+
+
 class PIDLaw:
     """The discrete PID of the module docstring (state: integral, filtered velocity)."""
 
@@ -260,16 +265,18 @@ class PIDController(Controller):
         )
         self.valve = ForceToValve(model, float(o.get("force_bandwidth", tu.force_bandwidth)))
         lam = float(o.get("velocity_compensation", tu.velocity_compensation))
-        if not (math.isfinite(lam) and 0.0 <= lam <= 1.0):
-            raise FcompError(f"{self.name}: velocity_compensation must be a number from 0 to "
-                             f"1, got {lam}")
+        if not (math.isfinite(lam) and VELOCITY_COMPENSATION[0] <= lam
+                <= VELOCITY_COMPENSATION[1]):
+            raise FcompError(f"{self.name}: velocity_compensation must be a number from "
+                             f"{VELOCITY_COMPENSATION[0]:g} to {VELOCITY_COMPENSATION[1]:g}, "
+                             f"got {lam}")
         #: ``lambda``: the inversion's velocity is ``lambda*v_hat + (1 - lambda)*dr``
         #: (:mod:`controllers.force_to_valve`).
         self.velocity_compensation = lam
-        #: Margins of the nominal loop (:class:`controllers.tuning.Margins`); explicit
-        #: values are checked (refused without margins), the derived ones are the tuning's
-        #: (the same loop: the tuning's gains, force loop and rate).
-        self.margins = (model.checked_margins(self.gains, self.valve.bandwidth, self.dt,
+        #: Margins of the loop as it runs at its worst point over the grid
+        #: (:class:`controllers.loop_analysis.margins.LoopMargins`); explicit values are
+        #: checked (refused without margins), the derived ones are the tuning's.
+        self.margins = (model.checked_margins(self.family(), self.dt,
                                               f"{self.name} tuning ({', '.join(explicit)} given)")
                         if explicit else tu.margins)
         #: Largest closed-loop pole magnitude of the nominal loop (the margins' own): a
@@ -280,6 +287,14 @@ class PIDController(Controller):
             raise unstable(self.gains, self.stability_radius, self.dt)
         self.law = PIDLaw(self.gains, self.dt)
         self.F_demand = 0.0
+
+    def family(self) -> Any:
+        """The five numbers of the loop at rest (:class:`controllers.loop_analysis.pid_family.PIDFamilyGains`)."""
+        from controllers.loop_analysis.pid_family import PIDFamilyGains
+
+        g = self.gains
+        return PIDFamilyGains(g.kp, g.ki, g.kd, g.derivative_cutoff, self.valve.bandwidth,
+                              self.velocity_compensation)
 
     # hooks for the compensators ------------------------------------------------
     def reset_compensation(self, y0: np.ndarray, ref: Reference) -> None:

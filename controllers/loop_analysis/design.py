@@ -55,6 +55,7 @@ from controllers.loop_analysis.margins import (
     frequency_grid,
     margins_of_responses,
 )
+from controllers.pid import VELOCITY_COMPENSATION
 from controllers.loop_analysis.pid_family import (
     PIDFamilyGains,
     pid_family_response,
@@ -71,7 +72,7 @@ ADDED = 12
 #: Nelder-Mead iterations per search.
 ITERATIONS = 500
 #: The velocity compensation's range (below 0: velocity fed back to the valve).
-LAMBDA_RANGE = (-3.0, 1.0)
+LAMBDA_RANGE = VELOCITY_COMPENSATION
 #: Frequencies of the search's responses (the final check uses the grid's own).
 SEARCH_FREQUENCIES = 300
 

@@ -215,21 +215,22 @@ class PlantGrid:
 
 
 def plant_grid(model: Any, uncertainty: Uncertainty | None = None,
-               delay: int | None = None, n_frequencies: int | None = None) -> PlantGrid:
+               delay: int | None = None, n_frequencies: int | None = None,
+               dt: float | None = None) -> PlantGrid:
     """The grid of a controller model (:class:`controllers.plant_model.ControlModel`): its
     plant's parameters, friction (sliding slope :meth:`~controllers.plant_model.ControlModel.viscous_damping`,
-    bristle of its friction model), control rate, delay and uncertainty (module docstring)."""
+    pre-sliding bristle :attr:`~controllers.plant_model.ControlModel.bristle`), control rate
+    (or ``dt``), delay and uncertainty (module docstring)."""
     from controllers.force_to_valve import ForceToValve
     from fcomp.parallel import one_blas_thread
 
     unc = uncertainty or model.uncertainty
-    dt = 1.0 / model.control_rate
+    dt = 1.0 / model.control_rate if dt is None else float(dt)
     d = model.delay if delay is None else int(delay)
     bare = model._bare()
     flat = bare.plant_params.flat()
     stroke = float(flat["stroke"])
     damping = model.viscous_damping()
-    fr = model.friction
     kinds = PARAMETERS[model.plant_name]
     points: list[GridPoint] = []
     plants: list[LinearPlant] = []
@@ -238,11 +239,12 @@ def plant_grid(model: Any, uncertainty: Uncertainty | None = None,
         sliding = Linearisation(bare, dt)
         resting = None
         factors: list[float] = []
-        if "z" in fr.state_names and "sigma0" in fr.flat_params():
-            resting = Linearisation(model.plant, dt)
+        seal = model.presliding_plant()
+        if seal is not None:
+            resting = Linearisation(seal, dt)
             lo, hi = unc.presliding
             factors = sorted({1.0 + lo, 1.0, 1.0 + hi})
-        sigma0 = float(fr.flat_params().get("sigma0", 0.0))
+            sigma0 = float(seal.friction.flat_params()["sigma0"])
         for combo in parameter_combinations(unc):
             values = unc.scaled(flat, dict(combo))
             changed = {kinds[k][0]: values[kinds[k][0]] for k, _v in combo}
@@ -256,7 +258,7 @@ def plant_grid(model: Any, uncertainty: Uncertainty | None = None,
                 if resting is not None:
                     n = len(lp.state)
                     for f in factors:
-                        p_rest = model.plant.param_vector(**changed, sigma0=sigma0 * f)
+                        p_rest = seal.param_vector(**changed, sigma0=sigma0 * f)
                         plants.append(resting.at(pos, p_rest,
                                                  equilibrium=(lp.state[:n], lp.command)))
                         points.append(GridPoint(frac, pos, combo, f))

@@ -75,7 +75,7 @@ Rules (SI units; ``dt = 1/f_s`` the control period)
    prediction must see (``N = ceil(T_N*f_mpc)`` steps); its velocity weight
    makes a position error ``e_x`` and a velocity error ``e_v`` equally costly
    an octave below the force bandwidth the valve allows (rule 1),
-   ``e_v = e_x*w_F/2`` (faster errors weigh as velocity errors, slower ones as
+   ``e_v = e_x*w_V/2`` (faster errors weigh as velocity errors, slower ones as
    position errors; ``e_x`` only sets the scale of the cost).
 
 Values given explicitly -- in a plant file's ``[control]`` table or as
@@ -235,7 +235,7 @@ class Tuning:
     mpc_horizon_time : float
         ``T_N = pi/w_h`` (s), rule 6.
     mpc_velocity_ratio : float
-        ``e_v/e_x = w_F/2`` (1/s), rule 6.
+        ``e_v/e_x = w_V/2`` (1/s), rule 6 (``w_V``: rule 1).
     margins : LoopMargins
         The PID loop's at its worst point over the grid (both breaks).
     worst : str
@@ -367,21 +367,10 @@ def model_grid(model: ControlModel, dt: float | None = None) -> PlantGrid:
 
 
 def dead_valve(model: ControlModel) -> str | None:
-    """Why the plant's valve passes no flow (one line), or None: a hydraulic valve with
-    ``kv``, ``cd`` or ``w`` zero, a pneumatic one with ``A_valve`` zero (the sonic
-    conductance ``0``) -- no command moves the piston, so there is no loop to tune."""
-    p = model.params
-    if model.plant_name == "hydraulic":
-        bad = [k for k in ("kv", "cd", "w") if not p.get(k, 1.0) > 0]
-        what = {"kv": "its spool gain kv", "cd": "its discharge coefficient cd",
-                "w": "its area gradient w"}
-    else:
-        bad = [k for k in ("A_valve",) if not p.get(k, 1.0) > 0]
-        what = {"A_valve": "its edge area A_valve (sonic conductance)"}
-    if not bad:
-        return None
-    return (f"the valve passes no flow: {', '.join(what[k] for k in bad)} is 0, so no "
-            "command moves the piston; give the valve's flow gain in [valve]")
+    """Why the model's valve passes no flow (:func:`plants.check.dead_valve`), or None."""
+    from plants.check import dead_valve as why
+
+    return why(model.plant_name, model.params)
 
 
 # -------------------------------------------------------------------- rules
@@ -523,13 +512,18 @@ def observer_gain_rule(model: ControlModel, grid: PlantGrid, w_P: float, sigma_F
     hi = k
     if not ok(hi, nominal):
         if not ok(low, nominal):
-            return low, observer_margins(model, grid, low)
+            # no gain meets it: what fails is the observer's path at rest itself (its
+            # bristle integrates the velocity, sigma0*x fed forward: a seal softer than the
+            # model by more than the loop's stiffness is over-cancelled), not k
+            cm = observer_margins(model, grid, hi)
+            cm.structural = True
+            return hi, cm
         for _ in range(OBSERVER_STEPS):
             mid = math.sqrt(low * hi)
             low, hi = (mid, hi) if ok(mid, nominal) else (low, mid)
         k = low
     cm = observer_margins(model, grid, k)
-    while _ratio(cm) < 1.0 and k > 1e-3 * hi:  # the whole grid: shrink until it holds
+    while _ratio(cm) < 1.0 and k > 1e-2 * hi:  # the whole grid: shrink until it holds
         k *= 0.7
         cm = observer_margins(model, grid, k)
     return k, cm
@@ -560,6 +554,9 @@ def derive_tuning(model: ControlModel, dt: float | None = None,
     bad = sorted(set(given) - set(GIVEN))
     if bad:
         raise FcompError(f"unknown tuning value(s) {', '.join(bad)}")
+    dead = dead_valve(model)
+    if dead is not None:
+        raise FcompError(f"no tuning: {dead}")
     dt = 1.0 / model.control_rate if dt is None else dt
     sigma_F = force_noise(model)
     key = (model.plant_key(), dt, tuple(sorted((k, v) for k, v in given.items()
@@ -584,8 +581,16 @@ def derive_tuning(model: ControlModel, dt: float | None = None,
     finally:
         model.use_tuning(None)
     i, brk = cm.worst()
-    return replace(provisional, observer_gain=float(k), observer_margins=cm.at(i, brk),
-                   observer_worst=describe_worst(grid, cm))
+    m = cm.at(i, brk)
+    text = describe_worst(grid, cm)
+    if getattr(cm, "structural", False):
+        text += (" -- for every observer gain: at rest the observer's bristle integrates the "
+                 "velocity and feeds its model's pre-sliding stiffness sigma0 forward, and "
+                 "where the seal is softer than that model it over-cancels the seal's spring "
+                 "(a negative stiffness the loop must hold); build the observer on the lower "
+                 "end of the seal's stiffness")
+    return replace(provisional, observer_gain=float(k), observer_margins=m,
+                   observer_worst=text)
 
 
 #: Rules 1-3 by plant (their results do not depend on the friction model's levels).
@@ -626,7 +631,7 @@ def _pid_part(model: ControlModel, dt: float, given: dict[str, float], sigma_F: 
         control_rate=1.0 / dt, force_bandwidth=g.force_bandwidth, pid_bandwidth=w_P,
         pid_gains=gains, derivative_cutoff=g.derivative_cutoff, observer_gain=0.5 * w_P,
         ekf_measurement_std=tuple(float(s) for s in model.sensors.std()),  # type: ignore[arg-type]
-        mpc_horizon_time=math.pi / w_h, mpc_velocity_ratio=0.5 * g.force_bandwidth,
+        mpc_horizon_time=math.pi / w_h, mpc_velocity_ratio=0.5 * w_V,
         margins=worst, worst=f"{worst.describe()}, broken at {where}, at "
         f"{grid.points[i].describe()}", mid=mid, given=tuple(sorted(given)),
         velocity_compensation=g.velocity_compensation, valve_allows=w_V, delay=grid.delay,

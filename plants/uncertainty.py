@@ -10,14 +10,20 @@ feed the loop analysis of :mod:`controllers.loop_analysis`:
     ============== ======================================== ==================== =========
     key            parameter scaled                         hydraulic            pneumatic
     ============== ======================================== ==================== =========
-    ``valve_gain`` flow gain: ``w`` (``cd*w``) / ``A_valve`` +-20 %                +-20 %
-    ``beta``       bulk modulus ``beta`` (hydraulic)        +-30 %                --
-    ``kappa``      polytropic exponent (pneumatic; the gas  --                   +-15 %
+    ``valve_gain`` flow gain: ``w`` (``cd*w``) / ``A_valve`` +-10 %                +-10 %
+    ``beta``       bulk modulus ``beta`` (hydraulic)        +-20 %                --
+    ``kappa``      polytropic exponent (pneumatic; the gas  --                   +-10 %
                    stiffness ``kappa*p*A^2/V``), within 1-2
-    ``mass``       moving mass                              +-20 %                +-20 %
-    ``ps``         supply pressure above return (``ps -      +-10 %                +-10 %
+    ``mass``       moving mass                              +-10 %                +-10 %
+    ``ps``         supply pressure above return (``ps -      +-5 %                 +-5 %
                    pt``, pneumatic ``ps - p_atm``)
     ============== ======================================== ==================== =========
+
+    The defaults are the tolerances of an axis characterised as the plant file
+    describes it: a servo valve's rated flow to +-10 %, the effective bulk modulus
+    (oil, hoses, entrained air) or the polytropic exponent to +-20 % / +-10 %, the
+    moving mass to +-10 %, a regulated supply to +-5 %. Wider ranges cost
+    bandwidth: the tuning must then meet the requirement on a larger box.
 
     and ``presliding``, the range of the seal's pre-sliding stiffness ``sigma0`` relative
     to the controller's friction model (default ``[-0.5, 1.0]``: half to twice; the
@@ -44,16 +50,16 @@ from typing import Any
 #: The uncertain parameters by plant kind: key -> (plant parameter, meaning, default range).
 PARAMETERS: dict[str, dict[str, tuple[str, str, tuple[float, float]]]] = {
     "hydraulic": {
-        "valve_gain": ("w", "valve flow gain cd*w", (-0.2, 0.2)),
-        "beta": ("beta", "bulk modulus", (-0.3, 0.3)),
-        "mass": ("mass", "moving mass", (-0.2, 0.2)),
-        "ps": ("ps", "supply pressure above return", (-0.1, 0.1)),
+        "valve_gain": ("w", "valve flow gain cd*w", (-0.1, 0.1)),
+        "beta": ("beta", "bulk modulus", (-0.2, 0.2)),
+        "mass": ("mass", "moving mass", (-0.1, 0.1)),
+        "ps": ("ps", "supply pressure above return", (-0.05, 0.05)),
     },
     "pneumatic": {
-        "valve_gain": ("A_valve", "valve edge area (flow gain)", (-0.2, 0.2)),
-        "kappa": ("k_poly", "polytropic exponent", (-0.15, 0.15)),
-        "mass": ("mass", "moving mass", (-0.2, 0.2)),
-        "ps": ("ps", "supply pressure above exhaust", (-0.1, 0.1)),
+        "valve_gain": ("A_valve", "valve edge area (flow gain)", (-0.1, 0.1)),
+        "kappa": ("k_poly", "polytropic exponent", (-0.1, 0.1)),
+        "mass": ("mass", "moving mass", (-0.1, 0.1)),
+        "ps": ("ps", "supply pressure above exhaust", (-0.05, 0.05)),
     },
 }
 #: Default range of the pre-sliding stiffness (relative to the controller's friction model).

@@ -57,6 +57,8 @@ class ControllerMargins:
     points: list[int]
     arrays: dict[str, dict[str, np.ndarray]]
     linear: list[LinearController] = field(repr=False)
+    #: Set by a rule that found no value of its gain meeting the requirement.
+    structural: bool = False
 
     def worst(self) -> tuple[int, str]:
         """``(grid point, break)`` with the least margin."""

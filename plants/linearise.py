@@ -139,6 +139,7 @@ class Linearisation:
         for row, n in enumerate(MEASURED):
             self.C[row, self.names.index(n)] = 1.0
         self.stroke = float(plant.plant_params.flat()["stroke"])
+        self._v_eps = float(fr.flat_params().get("v_eps", 1e-5))
         self._scales = np.concatenate([np.asarray(plant.ode_model().scales, dtype=float),
                                        [1.0]])
 
@@ -166,9 +167,16 @@ class Linearisation:
         if self.static:
             # At rest a static map's Karnopp stick band (plants.mechanics) clips the stuck
             # force between its break-away levels; for a frictionless piston both are 0 and
-            # the Jacobian of that clip at the tie is a subgradient (a damping of about
-            # m/(4*tau_stick)), not physics. The v-row's v-entry of a piston without
-            # friction states clear of its stops is the friction's slope alone.
+            # the Jacobian of that clip at the tie is a subgradient (a quarter of the applied
+            # force's derivatives and a damping m/(4*tau_stick) taken off the piston's
+            # row), not physics. The piston's row is taken just outside the band
+            # (v = 2*v_eps, where the map of a frictionless piston is 0 and smooth), its
+            # velocity entry the friction's sliding slope.
+            slide = np.asarray(x0, dtype=float).copy()
+            slide[iv] = 2.0 * self._v_eps
+            A_s, B_s, _c, _d = (np.asarray(m, dtype=float) for m in self._jac(slide, [u0], p))
+            A[iv], B[iv] = A_s[iv], B_s[iv]
+            load[iv] = float(np.asarray(self._load(slide, [u0], p)).ravel()[iv])
             A[iv, iv] = -float(damping) / mass
         elif damping:
             raise FcompError("a friction model with a bristle state brings its own damping")

@@ -32,8 +32,10 @@ physically placed starts, over an *active set* of grid points: it starts with th
 nominal parameters at every position and friction regime, the full grid is
 checked at the end of a search, the points that fail are added and the search
 resumes from its best, until the full grid passes (at most :data:`ROUNDS` rounds).
-A design that still fails anywhere is returned with ``feasible = False`` and its
-worst point: :mod:`controllers.tuning` refuses it in one line naming that point.
+A design that still fails somewhere has its PID gains scaled down together until
+the whole grid passes (bisection on the factor); one that fails even at a hundredth
+of them is returned with ``feasible = False`` and its worst point:
+:mod:`controllers.tuning` refuses it in one line naming that point.
 """
 
 from __future__ import annotations
@@ -287,9 +289,37 @@ def design_pid_family(grid: PlantGrid, mass: float, force_bandwidth: float, sigm
     assert best is not None
     gains = _gains(best[1], sigma_x, sigma_F, dt)
     r_full, m = ratios(grid, gains)
+    if r_full.min() < 1.0:  # restore feasibility: the PID's gains scaled down together
+        gains, r_full, m = _back_off(grid, best[1], sigma_x, sigma_F, dt)
     i, brk = worst_index(m)
     return Design(gains=gains, feasible=bool(r_full.min() >= 1.0), worst=i, worst_break=brk,
                   ratio=float(r_full.min()), evaluations=evaluations)
+
+
+def _back_off(grid: PlantGrid, q: np.ndarray, sigma_x: float, sigma_F: float, dt: float,
+              steps: int = 12) -> tuple[PIDFamilyGains, np.ndarray, Any]:
+    """The search's best with ``kp``, ``ki``, ``kd`` scaled by the largest factor ``a <= 1``
+    (bisected on ``log a``, down to 1/100) for which the whole grid passes; the smallest
+    factor tried if none does."""
+    def at(a: float) -> tuple[PIDFamilyGains, np.ndarray, Any]:
+        qa = q.copy()
+        qa[:3] += math.log(a)
+        g = _gains(qa, sigma_x, sigma_F, dt)
+        r, m = ratios(grid, g)
+        return g, r, m
+
+    lo, hi = 0.01, 1.0
+    low = at(lo)
+    if low[1].min() < 1.0:
+        return low
+    for _ in range(steps):
+        mid = math.sqrt(lo * hi)
+        res = at(mid)
+        if res[1].min() >= 1.0:
+            lo, low = mid, res
+        else:
+            hi = mid
+    return low
 
 
 def _simplex(q0: np.ndarray) -> np.ndarray:

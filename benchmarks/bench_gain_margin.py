@@ -121,7 +121,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--regimes", default="sliding,presliding")
     ap.add_argument("--positions", default="0.5,ends",
                     help="fractions of the stroke; 'ends' adds the nominal sliding point of "
-                    "least gain margin among 2, 5, 95, 98 %%")
+                    "least gain margin among 5, 10, 90, 95 %%")
     ap.add_argument("--steps", type=int, default=8)
     ap.add_argument("--kick", type=float, default=2e-6,
                     help="the reference step that starts the ringing (m)")
@@ -137,7 +137,7 @@ def main(argv: list[str] | None = None) -> int:
         fractions = []
         for f in args.positions.split(","):
             if f == "ends":
-                gms = {q: predicted(pf, tu, q, "sliding")[0] for q in (0.02, 0.05, 0.95, 0.98)}
+                gms = {q: predicted(pf, tu, q, "sliding")[0] for q in (0.05, 0.1, 0.9, 0.95)}
                 fractions.append(min(gms, key=lambda q: gms[q]))
             else:
                 fractions.append(float(f))

@@ -44,7 +44,6 @@ import numpy as np
 
 from controllers.base import Reference
 from controllers.pid import PIDController
-from controllers.tuning import check_observer
 from fcomp.backend import CASADI
 from fcomp.errors import FcompError
 from fcomp.models.base import FrictionModel, Signals
@@ -107,8 +106,8 @@ class LuGreObserverController(PIDController):
         #: :mod:`controllers.tuning`): explicit values are checked, the derived ones are the
         #: tuning's.
         self._step = observer_step(model.friction)
-        self.observer_margins = (check_observer(self, f"{self.name} tuning "
-                                                f"({', '.join(explicit)} given)")
+        self.observer_margins = (model.checked_observer(self, f"{self.name} tuning "
+                                                         f"({', '.join(explicit)} given)")
                                  if explicit else model.tuning.observer_margins)
         self._side = 1.0
         self.x_hat = model.friction.initial_state()

@@ -39,7 +39,15 @@ import numpy as np
 
 from controllers.pid import PIDGains
 from controllers.prediction import ContinuousModel
-from controllers.tuning import Margins, Tuning, check_gains, derive_tuning, force_noise, pid_gains
+from controllers.tuning import (
+    Margins,
+    Tuning,
+    check_gains,
+    check_observer,
+    derive_tuning,
+    force_noise,
+    pid_gains,
+)
 from fcomp.errors import FcompError
 from fcomp.measurement import G
 from fcomp.models.base import FrictionModel
@@ -263,6 +271,11 @@ class ControlModel:
         on the loop as it runs, refused (one line, naming ``what`` and the worst point)
         without them (:func:`controllers.tuning.check_gains`)."""
         return check_gains(self, family, dt, what)
+
+    def checked_observer(self, ctrl: Any, what: str) -> Margins:
+        """Margins of an explicitly tuned LuGre observer's loop at rest on the loop as it runs,
+        refused (one line) without them (:func:`controllers.tuning.check_observer`)."""
+        return check_observer(ctrl, what)
 
     def use_tuning(self, tuning: Tuning | None) -> None:
         """Replace the derived tuning by ``tuning`` (e.g. :func:`controllers.tuning.fixed_tuning`,

@@ -94,19 +94,21 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from controllers.loop_analysis.analysis import (
-    controller_margins,
-    describe_worst,
-    mid_point,
-    nominal_points,
-)
 from controllers.loop_analysis.design import (
     Design,
     derivative_cutoff,
     design_pid_family,
     ratios,
 )
-from controllers.loop_analysis.grid import PlantGrid, plant_grid, worst_index
+from controllers.loop_analysis.grid import (
+    PlantGrid,
+    describe_at,
+    mid_point,
+    nominal_points,
+    plant_grid,
+    resting_points,
+    worst_index,
+)
 from controllers.loop_analysis.margins import (
     MAX_SENSITIVITY,
     MIN_GAIN_MARGIN,
@@ -458,26 +460,57 @@ def bristles(model: ControlModel) -> tuple[float, float] | None:
     return float(p["sigma0"]), float(p.get("sigma1", 0.0))
 
 
-def resting_points(grid: PlantGrid, points: list[int] | None = None) -> list[int]:
-    """The grid's points with the piston at rest in pre-sliding (of ``points``, default all):
-    where an observer of the bristle is linear at rest too. (With the plant sliding the
-    observer slides as well, its bristle saturated, and its estimate follows the
-    steady-state map; its linearisation at rest -- ``dz/dt = v``, a stiffness ``sigma0``
-    fed forward -- would meet a piston the seal does not hold.)"""
-    pts = range(len(grid)) if points is None else points
-    return [i for i in pts if grid.points[i].presliding is not None]
+#: The observer's linearised path per grid (:class:`~controllers.loop_analysis.observer.ObserverPath`).
+_OBSERVER_JACOBIANS: dict[tuple[Any, ...], tuple[np.ndarray, np.ndarray]] = {}
 
 
-def observer_margins(model: ControlModel, grid: PlantGrid, k: float,
+def observer_margins(model: ControlModel, grid: PlantGrid, k: float, family: PIDFamilyGains,
                      points: list[int] | None = None) -> Any:
-    """The ``lugre-observer`` loop's margins with the current tuning and the gain ``k``
-    (1/s) at the grid's resting ``points`` (:func:`resting_points`,
-    :func:`controllers.loop_analysis.analysis.controller_margins`)."""
-    from controllers.lugre_observer import LuGreObserverController
+    """The ``lugre-observer`` loop's margins with the PID family's ``family`` and the observer
+    gain ``k`` (1/s) at the grid's resting ``points`` (:func:`~controllers.loop_analysis.grid.resting_points`;
+    the observer's path in closed form, :mod:`controllers.loop_analysis.observer`)."""
+    from controllers.loop_analysis.loop import controller_response, unit_z
+    from controllers.loop_analysis.observer import ObserverPath, observer_ss
 
-    model.use_tuning(replace(model.tuning, observer_gain=float(k)))  # derived: not checked
-    ctrl = LuGreObserverController(model)
-    return controller_margins(grid, ctrl, resting_points(grid, points), name="lugre-observer")
+    pts = resting_points(grid, points)
+    key = (id(grid), model._tuning_key())
+    if key not in _OBSERVER_JACOBIANS:
+        path = ObserverPath(model, grid.dt)
+        jac = [path.at(lp.measurement) for lp in grid.plants]
+        _OBSERVER_JACOBIANS[key] = (np.array([j[0] for j in jac]), np.array([j[1] for j in jac]))
+    phi, fh = _OBSERVER_JACOBIANS[key]
+    s, Jy, Jv = grid.slopes
+    sub = grid.subset(pts)
+    z = unit_z(sub.w, sub.dt)
+    sel = np.array(pts)
+
+    def controller(idx: np.ndarray) -> tuple[np.ndarray, ...]:
+        j = sel[idx]
+        A, B, C, D = observer_ss(family, k, s[j], Jy[j], Jv[j], phi[j], fh[j], *grid.areas,
+                                 grid.dt)
+        return A, B, C, D, controller_response(A, B, C, D, z)
+
+    return _Margins(pts, sub.margins(controller))
+
+
+class _Margins:
+    """Margins at some grid points: ``points`` and per-break ``arrays``."""
+
+    def __init__(self, points: list[int], arrays: dict[str, dict[str, np.ndarray]]) -> None:
+        self.points = points
+        self.arrays = arrays
+        self.structural = False
+
+    def worst(self) -> tuple[int, str]:
+        i, brk = worst_index(self.arrays)
+        return self.points[i], brk
+
+    def at(self, point: int, brk: str) -> LoopMargins:
+        return loop_margins_from(self.arrays[brk], (self.points.index(point),))
+
+    def describe(self, grid: PlantGrid) -> str:
+        i, brk = worst_index(self.arrays)
+        return describe_at(grid.subset(self.points), self.arrays, i, brk)
 
 
 def _ratio(cm: Any) -> float:
@@ -490,8 +523,8 @@ def _ratio(cm: Any) -> float:
     return r
 
 
-def observer_gain_rule(model: ControlModel, grid: PlantGrid, w_P: float, sigma_F: float
-                       ) -> tuple[float, Any]:
+def observer_gain_rule(model: ControlModel, grid: PlantGrid, family: PIDFamilyGains,
+                       w_P: float, sigma_F: float) -> tuple[float, Any]:
     """Rule 4: the largest ``k <= min(w_P/2, sigma_F/(sigma1*sigma_x))`` (1/s) whose
     ``lugre-observer`` loop meets the requirement on the grid, with its margins (the
     nominal points searched, the whole grid checked; None without a bristle state)."""
@@ -506,7 +539,8 @@ def observer_gain_rule(model: ControlModel, grid: PlantGrid, w_P: float, sigma_F
     nominal = nominal_points(grid)
 
     def ok(kk: float, points: list[int] | None) -> bool:
-        return _ratio(observer_margins(model, grid, kk, points)) >= 1.0 + OBSERVER_PAD
+        return _ratio(observer_margins(model, grid, kk, family, points)) \
+            >= 1.0 + OBSERVER_PAD
 
     low = 1e-3 * k
     hi = k
@@ -515,17 +549,17 @@ def observer_gain_rule(model: ControlModel, grid: PlantGrid, w_P: float, sigma_F
             # no gain meets it: what fails is the observer's path at rest itself (its
             # bristle integrates the velocity, sigma0*x fed forward: a seal softer than the
             # model by more than the loop's stiffness is over-cancelled), not k
-            cm = observer_margins(model, grid, hi)
+            cm = observer_margins(model, grid, hi, family)
             cm.structural = True
             return hi, cm
         for _ in range(OBSERVER_STEPS):
             mid = math.sqrt(low * hi)
             low, hi = (mid, hi) if ok(mid, nominal) else (low, mid)
         k = low
-    cm = observer_margins(model, grid, k)
+    cm = observer_margins(model, grid, k, family)
     while _ratio(cm) < 1.0 and k > 1e-2 * hi:  # the whole grid: shrink until it holds
         k *= 0.7
-        cm = observer_margins(model, grid, k)
+        cm = observer_margins(model, grid, k, family)
     return k, cm
 
 
@@ -568,22 +602,19 @@ def derive_tuning(model: ControlModel, dt: float | None = None,
     provisional = replace(base, observer_margins=None, given=tuple(sorted(given)))
     if bristles(model) is None:
         return replace(provisional, observer_gain=0.5 * provisional.pid_bandwidth)
-    model.use_tuning(provisional)  # the observer's controller takes the PID from here
-    try:
-        if "observer_gain" in given:
-            k = float(given["observer_gain"])
-            cm = observer_margins(model, grid, k)
-            if _ratio(cm) < 1.0:
-                raise refuse(f"observer_gain {k:.4g} 1/s", "the loop with the LuGre observer: "
-                             + describe_worst(grid, cm), "lower observer_gain")
-        else:
-            k, cm = observer_gain_rule(model, grid, provisional.pid_bandwidth, sigma_F)
-    finally:
-        model.use_tuning(None)
+    fam = provisional.family()
+    if "observer_gain" in given:
+        k = float(given["observer_gain"])
+        cm = observer_margins(model, grid, k, fam)
+        if _ratio(cm) < 1.0:
+            raise refuse(f"observer_gain {k:.4g} 1/s", "the loop with the LuGre observer: "
+                         + cm.describe(grid), "lower observer_gain")
+    else:
+        k, cm = observer_gain_rule(model, grid, fam, provisional.pid_bandwidth, sigma_F)
     i, brk = cm.worst()
     m = cm.at(i, brk)
-    text = describe_worst(grid, cm)
-    if getattr(cm, "structural", False):
+    text = cm.describe(grid)
+    if cm.structural:
         text += (" -- for every observer gain: at rest the observer's bristle integrates the "
                  "velocity and feeds its model's pre-sliding stiffness sigma0 forward, and "
                  "where the seal is softer than that model it over-cancels the seal's spring "
@@ -689,16 +720,15 @@ def check_gains(model: ControlModel, family: PIDFamilyGains, dt: float, what: st
 
 
 def check_observer(ctrl: Any, what: str) -> LoopMargins:
-    """Margins of an explicitly tuned ``lugre-observer`` on the grid; refused (one line) if
-    insufficient."""
+    """Margins of an explicitly tuned ``lugre-observer`` on the grid's resting points; refused
+    (one line) if insufficient."""
     grid = model_grid(ctrl.model, ctrl.dt)
-    cm = controller_margins(grid, ctrl, resting_points(grid), name="lugre-observer")
+    cm = observer_margins(ctrl.model, grid, ctrl.k, ctrl.family())
+    if _ratio(cm) < 1.0:
+        raise refuse(what, f"the loop with the LuGre observer at rest: {cm.describe(grid)}",
+                     "lower observer_gain (or the PID's gains)")
     i, brk = cm.worst()
-    m = cm.at(i, brk)
-    if m.shortfall() is not None:
-        raise refuse(what, f"the loop with the LuGre observer at rest: "
-                     f"{describe_worst(grid, cm)}", "lower observer_gain (or the PID's gains)")
-    return m
+    return cm.at(i, brk)
 
 
 __all__ = ["FORCE_PHASE_MARGIN", "GIVEN", "MAX_SENSITIVITY", "MIN_GAIN_MARGIN",

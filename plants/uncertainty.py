@@ -29,8 +29,10 @@ feed the loop analysis of :mod:`controllers.loop_analysis`:
     to the controller's friction model (default ``[-0.5, 1.0]``: half to twice; the
     piston at rest is held by that spring, :mod:`controllers.loop_analysis.grid`), and
     ``positions``, the fractions of the stroke the margins are checked at (default
-    :data:`POSITIONS`: 2 % and 5 % from each end, the quarters). A key left out takes the
-    default; ``0`` removes that parameter from the grid.
+    :data:`POSITIONS`: 5 % and 10 % from each end, the quarters: the last 5 % of a stroke
+    is, on most axes, the end cushion's, with its own damping; give ``[0.02, ...]`` to
+    check closer). A key left out takes the default; ``0`` removes that parameter from the
+    grid.
 ``[control] delay``
     the computation delay in whole control samples (default 1: the command computed
     from the measurement at ``t[k]`` acts from ``t[k+1]``; 0 for a controller whose
@@ -65,7 +67,7 @@ PARAMETERS: dict[str, dict[str, tuple[str, str, tuple[float, float]]]] = {
 #: Default range of the pre-sliding stiffness (relative to the controller's friction model).
 PRESLIDING = (-0.5, 1.0)
 #: Default positions of the margin grid, fractions of the stroke.
-POSITIONS = (0.02, 0.05, 0.25, 0.5, 0.75, 0.95, 0.98)
+POSITIONS = (0.05, 0.1, 0.25, 0.5, 0.75, 0.9, 0.95)
 #: Default computation delay (control samples).
 DELAY = 1
 #: Largest computation delay accepted (samples).

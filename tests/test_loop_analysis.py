@@ -489,3 +489,28 @@ def test_a_zero_delay_and_a_wider_box_change_the_grid(tmp_path: Path) -> None:
     # the column: w_h^2 = beta*(A1^2/V1 + A2^2/V2)/m, so +20 % beta, -10 % mass: x1.2/0.9
     wi, wj = grid.plants[i].column_mode()[0], grid.plants[j].column_mode()[0]
     assert (wi / wj) ** 2 == pytest.approx(1.2 / 0.9, rel=0.02)
+
+
+def test_the_observer_closed_form_is_the_exported_step_differentiated() -> None:
+    """lugre-observer at rest: controllers.loop_analysis.observer (the tuning's route) equals
+    the Jacobian of the exported step (the plant check's route)."""
+    from controllers.loop_analysis.observer import ObserverPath, observer_ss
+
+    model = _model("hydraulic")
+    lin = Linearisation(_seal("hydraulic"), 1e-3)
+    ctrl = make_controller("lugre-observer", model)
+    sl = StepLinearisation(ctrl)
+    path = ObserverPath(model, 1e-3)
+    for frac in (0.05, 0.5, 0.95):
+        lp = lin.at(frac * 0.3)
+        lc = sl.at(lp.measurement, lp.command)
+        s, Jy, Jv = ctrl.valve.slopes(lp.measurement, lp.command)
+        phi, fh = path.at(lp.measurement)
+        A, B, C, D = observer_ss(ctrl.family(), ctrl.k, np.array([s]), Jy[None],
+                                 np.array([Jv]), phi[None], fh[None], model.A1, model.A2, 1e-3)
+        # the exported step's states: integral, v_f, x_prev, observer (z, h); the same order
+        assert lc.states[:3] == ("integral", "v_f", "x_prev")
+        assert np.allclose(A[0], lc.A, rtol=1e-8, atol=1e-10)
+        assert np.allclose(B[0], lc.B, rtol=1e-8, atol=1e-10 * np.abs(lc.B).max())
+        assert np.allclose(C[0], lc.C, rtol=1e-7, atol=1e-9 * np.abs(lc.C).max())
+        assert np.allclose(D[0], lc.D, rtol=1e-7, atol=1e-9 * np.abs(lc.D).max())

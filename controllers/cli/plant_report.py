@@ -89,11 +89,11 @@ def _margin_map(doc: dict[str, Any]) -> Any:
     regimes), the nominal sliding loop drawn as a line, the requirement as a band."""
     m = doc["margins"]
     fig, axes = fs.new_figure(height=6.4, nrows=3, sharex=True)
-    keys = (("gain", "gain margin", 2.0, True), ("phase_deg", "phase margin (deg)", 30.0, True),
-            ("ms", "peak sensitivity Ms", 2.0, False))
+    keys = (("gain", "gain margin", 2.0), ("phase_deg", "phase margin (deg)", 30.0),
+            ("ms", "peak sensitivity Ms", 2.0))
     marks = {"valve": "o", "position": "s"}
     colours = {"valve": "C0", "position": "C3"}
-    for ax, (k, lab, req, low_bad) in zip(axes, keys, strict=True):
+    for ax, (k, lab, req) in zip(axes, keys, strict=True):
         for brk in m["breaks"]:
             xs, ys, xn, yn = [], [], [], []
             for p in m["grid"]:

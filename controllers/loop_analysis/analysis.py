@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from controllers.loop_analysis.controller import LinearController, StepLinearisation
-from controllers.loop_analysis.grid import PlantGrid, worst_index
+from controllers.loop_analysis.grid import PlantGrid, mid_point, nominal_points, worst_index
 from controllers.loop_analysis.loop import (
     closed_loop_matrix,
     controller_response,
@@ -71,18 +71,6 @@ class ControllerMargins:
 
     def linear_at(self, point: int) -> LinearController:
         return self.linear[self.points.index(point)]
-
-
-def nominal_points(grid: PlantGrid) -> list[int]:
-    """The grid points with every uncertain parameter nominal (all positions, all friction
-    regimes)."""
-    return [i for i, p in enumerate(grid.points) if all(v == 0 for _k, v in p.changes)]
-
-
-def mid_point(grid: PlantGrid) -> int:
-    """The nominal sliding point nearest mid stroke."""
-    cand = [i for i in nominal_points(grid) if grid.points[i].presliding is None]
-    return min(cand, key=lambda i: abs(grid.points[i].fraction - 0.5))
 
 
 def controller_margins(grid: PlantGrid, ctrl: Any, points: list[int] | None = None,
@@ -151,10 +139,8 @@ def describe_worst(grid: PlantGrid, cm: ControllerMargins) -> str:
     """One phrase: the worst point, its break and what fails (or its margins)."""
     i, brk = cm.worst()
     m = cm.at(i, brk)
-    why = m.shortfall()
     where = "the valve command" if brk == "valve" else "the position sensor"
-    what = why if why is not None else m.describe()
-    return f"{what}, broken at {where}, at {grid.points[i].describe()}"
+    return f"{m.shortfall() or m.describe()}, broken at {where}, at {grid.points[i].describe()}"
 
 
 def growth_text(m: LoopMargins) -> str:

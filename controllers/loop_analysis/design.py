@@ -32,10 +32,13 @@ physically placed starts, over an *active set* of grid points: it starts with th
 nominal parameters at every position and friction regime, the full grid is
 checked at the end of a search, the points that fail are added and the search
 resumes from its best, until the full grid passes (at most :data:`ROUNDS` rounds).
-A design that still fails somewhere has its PID gains scaled down together until
-the whole grid passes (bisection on the factor); one that fails even at a hundredth
-of them is returned with ``feasible = False`` and its worst point:
-:mod:`controllers.tuning` refuses it in one line naming that point.
+Each search has two phases: first the nearest design that meets the active set
+(maximise the least margin ratio ``min(GM/2, PM/30, 2/Ms)`` up to a little above
+1), then the best performance among such designs. A design that still fails
+somewhere after the rounds has the least ratio over the whole grid maximised; one
+that cannot be brought to the requirement is returned with ``feasible = False``
+and its worst point: :mod:`controllers.tuning` refuses it in one line naming that
+point.
 """
 
 from __future__ import annotations
@@ -55,20 +58,19 @@ from controllers.loop_analysis.margins import (
     MIN_GAIN_MARGIN,
     MIN_PHASE_MARGIN,
     frequency_grid,
-    margins_of_responses,
 )
-from controllers.pid import VELOCITY_COMPENSATION
 from controllers.loop_analysis.pid_family import (
     PIDFamilyGains,
     pid_family_response,
     pid_family_ss,
 )
+from controllers.pid import VELOCITY_COMPENSATION
 
 #: The design's margins above the requirement (relative): the search's interpolated
 #: margins against the refined ones.
 PAD = 0.02
 #: Rounds of the active-set search (module docstring).
-ROUNDS = 6
+ROUNDS = 8
 #: Points added to the active set per round (the worst failing ones).
 ADDED = 12
 #: Nelder-Mead iterations per search.
@@ -263,63 +265,63 @@ def design_pid_family(grid: PlantGrid, mass: float, force_bandwidth: float, sigm
             w = max(0.05 * wF, 1.0)  # a slow loop: feasible where anything is
             starts.append(np.array([math.log(3 * mass * w * w), math.log(mass * w ** 3),
                                     math.log(3 * mass * w), math.log(wF), lam]))
-    best: tuple[float, np.ndarray] | None = None
+    def robustness(q: np.ndarray, sub: PlantGrid, target: float) -> float:
+        if not np.all(np.abs(q[:4]) < 40.0):
+            return 1e6
+        with np.errstate(all="ignore"):
+            sc = score(q, sub)
+        return -min(sc, target) if math.isfinite(sc) else 1e6
+
+    def feasible_from(q0: np.ndarray, sub: PlantGrid) -> np.ndarray | None:
+        """Phase 1: the nearest design with the active set's margins (maximise the least
+        ratio up to a target a little above the requirement)."""
+        target = 1.0 + 2 * PAD
+        if -robustness(q0, sub, target) >= 1.0 + PAD:
+            return q0
+        res = minimize(robustness, q0, args=(sub, target), method="Nelder-Mead",
+                       options={"maxiter": ITERATIONS, "xatol": 1e-4, "fatol": 1e-6,
+                                "initial_simplex": _simplex(q0)})
+        return res.x if -robustness(res.x, sub, target) >= 1.0 + PAD else None
+
+    best: np.ndarray | None = None
+    r_full = np.zeros(1)
     for round_ in range(ROUNDS):
         sub = grid.subset(active, w_search)
-        if best is not None:  # the incumbent, judged on the larger active set
-            best = (objective(best[1], sub), best[1])
-        seeds = starts if best is None else [best[1]]
-        for q0 in seeds:
-            res = minimize(objective, q0, args=(sub,), method="Nelder-Mead",
-                           options={"maxiter": ITERATIONS, "xatol": 1e-3, "fatol": 1e-4,
-                                    "initial_simplex": _simplex(q0)})
-            val = objective(res.x, sub)
-            if best is None or val < best[0]:
-                best = (val, res.x)
-        assert best is not None
-        r_full, _ = ratios(grid, _gains(best[1], sigma_x, sigma_F, dt))
+        q = None
+        for q0 in ([best] if best is not None else []) + starts:
+            q = feasible_from(q0, sub)
+            if q is not None:
+                break
+        if q is None:
+            break  # nothing the search can reach meets the active set: refused below
+        res = minimize(objective, q, args=(sub,), method="Nelder-Mead",  # phase 2
+                       options={"maxiter": ITERATIONS, "xatol": 1e-3, "fatol": 1e-4,
+                                "initial_simplex": _simplex(q)})
+        best = res.x if objective(res.x, sub) <= objective(q, sub) else q
+        r_full, _ = ratios(grid, _gains(best, sigma_x, sigma_F, dt))
         evaluations += 1
         if progress is not None:
-            progress(f"round {round_ + 1}: ki {math.exp(best[1][1]):.4g}, worst ratio "
+            progress(f"round {round_ + 1}: ki {math.exp(best[1]):.4g}, worst ratio "
                      f"{r_full.min():.3f} on the full grid")
         if r_full.min() >= 1.0:
             break
         failing = [int(i) for i in np.argsort(r_full) if r_full[i] < 1.0 and i not in active]
-        active += failing[:ADDED]
-    assert best is not None
-    gains = _gains(best[1], sigma_x, sigma_F, dt)
+        if not failing:  # the active set's optimum fails only where it already looked
+            failing = [int(i) for i in np.argsort(r_full) if r_full[i] < 1.0]
+        active = sorted(set(active) | set(failing[:ADDED]))
+    if best is None:
+        best = starts[0]
+    gains = _gains(best, sigma_x, sigma_F, dt)
     r_full, m = ratios(grid, gains)
-    if r_full.min() < 1.0:  # restore feasibility: the PID's gains scaled down together
-        gains, r_full, m = _back_off(grid, best[1], sigma_x, sigma_F, dt)
+    if r_full.min() < 1.0:  # the whole grid: maximise the least ratio there
+        full = grid.subset(list(range(len(grid))), w_search)
+        q = feasible_from(best, full)
+        if q is not None:
+            gains = _gains(q, sigma_x, sigma_F, dt)
+            r_full, m = ratios(grid, gains)
     i, brk = worst_index(m)
     return Design(gains=gains, feasible=bool(r_full.min() >= 1.0), worst=i, worst_break=brk,
                   ratio=float(r_full.min()), evaluations=evaluations)
-
-
-def _back_off(grid: PlantGrid, q: np.ndarray, sigma_x: float, sigma_F: float, dt: float,
-              steps: int = 12) -> tuple[PIDFamilyGains, np.ndarray, Any]:
-    """The search's best with ``kp``, ``ki``, ``kd`` scaled by the largest factor ``a <= 1``
-    (bisected on ``log a``, down to 1/100) for which the whole grid passes; the smallest
-    factor tried if none does."""
-    def at(a: float) -> tuple[PIDFamilyGains, np.ndarray, Any]:
-        qa = q.copy()
-        qa[:3] += math.log(a)
-        g = _gains(qa, sigma_x, sigma_F, dt)
-        r, m = ratios(grid, g)
-        return g, r, m
-
-    lo, hi = 0.01, 1.0
-    low = at(lo)
-    if low[1].min() < 1.0:
-        return low
-    for _ in range(steps):
-        mid = math.sqrt(lo * hi)
-        res = at(mid)
-        if res[1].min() >= 1.0:
-            lo, low = mid, res
-        else:
-            hi = mid
-    return low
 
 
 def _simplex(q0: np.ndarray) -> np.ndarray:

@@ -43,7 +43,7 @@ from controllers.loop_analysis.loop import (
     unit_z,
 )
 from controllers.loop_analysis.margins import frequency_grid, margins_of_responses
-from plants.linearise import LinearPlant, Linearisation
+from plants.linearise import Linearisation, LinearPlant
 from plants.uncertainty import PARAMETERS, Uncertainty
 
 
@@ -272,6 +272,38 @@ def plant_grid(model: Any, uncertainty: Uncertainty | None = None,
         return PlantGrid(points, plants, slopes, d, dt, w, (model.A1, model.A2))
 
 
+def nominal_points(grid: PlantGrid) -> list[int]:
+    """The grid points with every uncertain parameter nominal (all positions, all friction
+    regimes)."""
+    return [i for i, p in enumerate(grid.points) if all(v == 0 for _k, v in p.changes)]
+
+
+def resting_points(grid: PlantGrid, points: list[int] | None = None) -> list[int]:
+    """The points (of ``points``, default all) with the piston at rest in pre-sliding:
+    where a friction model with a bristle is linear at rest as the plant's seal is (with the
+    plant sliding, such a model slides as well, its bristle saturated, its estimate the
+    steady-state map; linearised at rest -- ``dz/dt = v``, its stiffness ``sigma0`` fed
+    forward -- it would meet a piston the seal does not hold)."""
+    pts = range(len(grid)) if points is None else points
+    return [i for i in pts if grid.points[i].presliding is not None]
+
+
+def mid_point(grid: PlantGrid) -> int:
+    """The nominal sliding point nearest mid stroke."""
+    cand = [i for i in nominal_points(grid) if grid.points[i].presliding is None]
+    return min(cand, key=lambda i: abs(grid.points[i].fraction - 0.5))
+
+
+def describe_at(grid: PlantGrid, arrays: dict[str, dict[str, np.ndarray]], i: int, brk: str
+                ) -> str:
+    """One phrase: what is short at a point and break (or its margins), and where."""
+    from controllers.loop_analysis.margins import loop_margins_from
+
+    m = loop_margins_from(arrays[brk], (i,))
+    where = "the valve command" if brk == "valve" else "the position sensor"
+    return f"{m.shortfall() or m.describe()}, broken at {where}, at {grid.points[i].describe()}"
+
+
 def worst_index(arrays: dict[str, dict[str, np.ndarray]]) -> tuple[int, str]:
     """The point and break with the smallest ``min(gain/2, phase/30, 2/Ms)`` (an unstable
     point first, the fastest-growing)."""
@@ -293,4 +325,5 @@ def worst_index(arrays: dict[str, dict[str, np.ndarray]]) -> tuple[int, str]:
     return best[1], best[2]
 
 
-__all__ = ["GridPoint", "PlantGrid", "parameter_combinations", "plant_grid", "worst_index"]
+__all__ = ["GridPoint", "PlantGrid", "describe_at", "mid_point", "nominal_points",
+           "parameter_combinations", "plant_grid", "resting_points", "worst_index"]

@@ -152,10 +152,18 @@ def closed_loop_matrix(Ad: np.ndarray, Bd: np.ndarray, C: np.ndarray, Ac: np.nda
     return M
 
 
+#: Closed-loop poles this close to z = 1 are conserved quantities, not modes (two integral
+#: actions on the same error -- the PID's and a LuGre observer's bristle correction -- share
+#: a load in any proportion: their weighted difference never changes).
+INVARIANT = 1e-8
+
+
 def dominant_pole(M: np.ndarray) -> np.ndarray:
-    """The largest-magnitude eigenvalue of each matrix (batched)."""
+    """The largest-magnitude eigenvalue of each matrix (batched), conserved quantities
+    (:data:`INVARIANT`) left out."""
     ev = np.linalg.eigvals(M)
-    i = np.argmax(np.abs(ev), axis=-1)
+    mag = np.where(np.abs(ev - 1.0) < INVARIANT, 0.0, np.abs(ev))
+    i = np.argmax(mag, axis=-1)
     return np.take_along_axis(ev, i[..., None], -1)[..., 0]
 
 

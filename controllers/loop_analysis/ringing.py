@@ -84,7 +84,10 @@ def growth(plant: Any, ctrl: Any, position: float, gain: float, *, delay: int = 
         if not np.all(np.isfinite(state)):
             err[k + 1:] = math.inf
             break
-    return Ringing(gain, ringing_rate(err, dt), err)
+    rate = ringing_rate(err, dt)
+    if np.isfinite(err).all() and np.sqrt(np.mean(err[-err.size // 6:] ** 2)) > 10 * kick:
+        rate = math.inf  # grown far beyond the kick: a limit cycle the valve's range bounds
+    return Ringing(gain, rate, err)
 
 
 def ringing_rate(err: np.ndarray, dt: float) -> float:

@@ -23,19 +23,20 @@ the force demand exceeds what the actuator can produce
 integral is bled by ``kt*(F_sat - F_d)/ki`` per second, and it is frozen
 while the valve command itself saturates in the direction of the error.
 
-Default gains place the three closed-loop poles of the nominal
-mass-plus-force-loop at ``-w`` (``w = bandwidth`` rad/s):
-``kp = 3*m*w^2``, ``ki = m*w^3``, ``kd = 3*m*w``; ``w``, the force-loop
-bandwidth and the derivative cut-off are derived from the plant by
-:mod:`controllers.tuning` (margins of :func:`position_loop`).
+The gains (``kp``, ``ki``, ``kd``), the force-loop bandwidth, the velocity
+compensation and the derivative cut-off are derived from the plant by
+:mod:`controllers.tuning` on the loop as it runs (:mod:`controllers.loop_analysis`);
+:meth:`PIDGains.placed` is the triple pole at ``-w`` of the ideal
+mass-plus-force-loop, ``kp = 3*m*w^2``, ``ki = m*w^3``, ``kd = 3*m*w``, the
+pattern a ``bandwidth`` option places.
 
-**Unstable gains are refused**: :func:`check_stability` builds the sampled
-loop of the nominal model (mass ``m`` with the viscous friction slope, the
-force loop of :mod:`controllers.force_to_valve` through the valve's linear
-dynamics, zero-order hold at the controller rate) with python-control and
-raises :class:`FcompError` when a closed-loop pole lies on or outside the
-unit circle. The controller takes that pole magnitude from its loop's margins
-(:attr:`PIDController.margins`, the same loop), not from a second evaluation.
+**Gains without margins are refused**: explicit options are checked on the loop as
+it runs (:meth:`~controllers.plant_model.ControlModel.checked_margins`: the sampled
+plant over the stroke and the plant file's parameter box, the delay, this law as
+coded) and refused in one line naming the worst point where it misses GM >= 2, PM
+>= 30 deg or Ms <= 2 -- an unstable loop first. :func:`pid_transfer` is this PID's
+discrete transfer function (its integral the backward-Euler sum ``PIDLaw.force``
+runs).
 """
 
 from __future__ import annotations
@@ -83,26 +84,12 @@ class PIDGains:
                    kd=kd_factor * 3 * mass * w, **extra)
 
 
-def nominal_plant(mass: float, damping: float, force_bandwidth: float, valve: Any,
-                  dt: float) -> Any:
-    """The nominal plant of the position loop, force demand -> position, sampled (zero-order
-    hold at ``dt``): the piston ``1/(m s^2 + c s)`` (``c`` the loop's viscous damping,
-    :meth:`controllers.plant_model.ControlModel.viscous_damping`) driven by the force loop of
-    :mod:`controllers.force_to_valve`, ``F_a/F_d = w_F*G_v/(s + w_F*G_v)`` with ``G_v`` the
-    valve's linear dynamics (unit DC gain)."""
-    import control as ct
-
-    s = ct.tf("s")
-    inner = ct.feedback(force_bandwidth * valve / s, 1)
-    return ct.tf(ct.c2d(ct.ss(inner / (mass * s**2 + damping * s)), dt, "zoh"))
-
-
 def pid_transfer(gains: PIDGains, dt: float, extra_p: float = 0.0,
                  extra_i: float = 0.0) -> Any:
     """The discrete PID of this module, error -> force (backward-Euler integral, derivative
     through the first-order filter), with an optional parallel path ``extra_p +
     extra_i*dt/(z - 1)`` (a forward-Euler integrator: the LuGre observer at rest,
-    :func:`controllers.tuning.observer_loop`) over the same denominator::
+    at rest) over the same denominator::
 
         C(z) = kp + extra_p + (ki*dt*z + extra_i*dt)/(z - 1) + kd*(z - 1)/((Tf + dt)*z - Tf)
     """
@@ -112,48 +99,6 @@ def pid_transfer(gains: PIDGains, dt: float, extra_p: float = 0.0,
     Tf = 1.0 / (2 * math.pi * gains.derivative_cutoff)
     return ct.tf(gains.kp + extra_p + (gains.ki * dt * z + extra_i * dt) / (z - 1)
                  + gains.kd * (z - 1) / ((Tf + dt) * z - Tf))
-
-
-def position_loop(gains: PIDGains, mass: float, damping: float, force_bandwidth: float,
-                  valve: Any, dt: float) -> Any:
-    """The nominal sampled loop transfer function ``L(z) = C(z)*P(z)`` (python-control):
-    :func:`pid_transfer` times :func:`nominal_plant`."""
-    return pid_transfer(gains, dt) * nominal_plant(mass, damping, force_bandwidth, valve, dt)
-
-
-def disturbance_response(gains: PIDGains, mass: float, damping: float, force_bandwidth: float,
-                         valve: Any, dt: float, duration: float) -> np.ndarray:
-    """Position error (m) of the nominal loop after a unit step force (1 N) on the piston,
-    at the samples ``0, dt, ..., duration``: ``e = -P_d/(1 + C P)`` with ``P_d`` the piston
-    ``1/(m s^2 + c s)`` sampled (the disturbance enters beside the force loop)."""
-    import control as ct
-
-    s = ct.tf("s")
-    Pd = ct.tf(ct.c2d(ct.ss(1 / (mass * s**2 + damping * s)), dt, "zoh"))
-    loop = position_loop(gains, mass, damping, force_bandwidth, valve, dt)
-    t = np.arange(0.0, duration + 0.5 * dt, dt)
-    resp = ct.step_response(ct.ss(Pd) * ct.ss(ct.feedback(1, loop)), t)
-    return -np.asarray(resp.outputs, dtype=float).ravel()
-
-
-def spectral_radius(loop: Any) -> float:
-    """Largest closed-loop pole magnitude ``max |z|`` of the unity feedback of ``loop``."""
-    import control as ct
-
-    return float(np.max(np.abs(ct.feedback(loop, 1).poles())))
-
-
-def check_stability(gains: PIDGains, mass: float, damping: float, force_bandwidth: float,
-                    valve: Any, dt: float) -> float:
-    """Largest closed-loop pole magnitude of the nominal sampled loop; raise if >= 1.
-
-    The loop is :func:`position_loop`'s (the margins of the same loop:
-    :func:`controllers.tuning.loop_margins`).
-    """
-    rho = spectral_radius(position_loop(gains, mass, damping, force_bandwidth, valve, dt))
-    if not rho < 1.0:
-        raise unstable(gains, rho, dt)
-    return rho
 
 
 def unstable(gains: PIDGains, rho: float, dt: float) -> FcompError:

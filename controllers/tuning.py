@@ -378,77 +378,16 @@ def dead_valve(model: ControlModel) -> str | None:
 # -------------------------------------------------------------------- rules
 def _design(model: ControlModel, grid: PlantGrid, given: dict[str, float], sigma_F: float,
             w_V: float, dt: float) -> Design:
-    """Rule 2 with the given values held."""
+    """Rule 2 with the given values held (a ``pid_bandwidth`` given holds the triple pole
+    ``kp = 3 m w^2``, ``ki = m w^3``, ``kd = 3 m w``)."""
     sigma_x = float(model.sensors.std()[0])
     m = model.mass
-    if "pid_bandwidth" in given or "force_bandwidth" in given \
-            or "velocity_compensation" in given or "derivative_cutoff" in given:
-        return _design_given(model, grid, given, sigma_x, sigma_F, w_V, dt)
-    return design_pid_family(grid, m, w_V, sigma_x, sigma_F)
-
-
-def _design_given(model: ControlModel, grid: PlantGrid, given: dict[str, float],
-                  sigma_x: float, sigma_F: float, w_V: float, dt: float) -> Design:
-    """Rule 2 with some values given: the given ones held, the rest searched (the PID's
-    gains the triple pole of a given ``pid_bandwidth``, else searched)."""
-    from controllers.loop_analysis import design as dsg
-
-    m = model.mass
-    w_F = float(given.get("force_bandwidth", w_V))
-    lam = float(given.get("velocity_compensation", 1.0 if "pid_bandwidth" in given else 0.0))
-
-    def gains(q: np.ndarray) -> PIDFamilyGains:
-        if "pid_bandwidth" in given:
-            w = float(given["pid_bandwidth"])
-            kp, ki, kd = 3 * m * w * w, m * w ** 3, 3 * m * w
-        else:
-            kp, ki, kd = (float(math.exp(v)) for v in q[:3])
-        fd = float(given.get("derivative_cutoff", derivative_cutoff(kd, sigma_x, sigma_F, dt)))
-        wF = w_F if "force_bandwidth" in given else float(math.exp(q[3]))
-        la = lam if "velocity_compensation" in given else min(max(float(q[4]), -3.0), 1.0)
-        return PIDFamilyGains(kp, ki, kd, fd, wF, la)
-
-    free = [i for i, name in enumerate(("kp", "ki", "kd", "force_bandwidth",
-                                        "velocity_compensation"))
-            if not ((i < 3 and "pid_bandwidth" in given)
-                    or (i == 3 and "force_bandwidth" in given)
-                    or (i == 4 and "velocity_compensation" in given))]
-    w0 = max(0.05 * w_F, 1.0)
-    q0 = np.array([math.log(3 * m * w0 * w0), math.log(m * w0 ** 3), math.log(3 * m * w0),
-                   math.log(w_F), lam])
-    if free:
-        from scipy.optimize import minimize
-
-        from controllers.loop_analysis.margins import frequency_grid
-
-        sub = grid.subset(nominal_points(grid), frequency_grid(dt, dsg.SEARCH_FREQUENCIES))
-        perf = grid.subset([i for i in nominal_points(grid)
-                            if grid.points[i].presliding is None])
-
-        def objective(x: np.ndarray) -> float:
-            q = q0.copy()
-            q[free] = x
-            if not np.all(np.abs(q[:4]) < 40.0):
-                return 1e6
-            with np.errstate(all="ignore"):
-                g = gains(q)
-                r, _ = ratios(sub, g)
-                short = (1.0 + dsg.PAD) - float(r.min())
-                if not math.isfinite(short):
-                    return 1e6
-                if short > 0:
-                    return 1e3 + 100.0 * short
-                J = dsg.performance(perf, g)
-            return math.log(J) if 0 < J < math.inf else 1e3
-
-        res = minimize(objective, q0[free], method="Nelder-Mead",
-                       options={"maxiter": dsg.ITERATIONS, "xatol": 1e-3, "fatol": 1e-4})
-        q0[free] = res.x
-    g = gains(q0)
-    r, mm = ratios(grid, g)
-    i, brk = worst_index(mm)
-    return Design(gains=g, feasible=bool(r.min() >= 1.0), worst=i, worst_break=brk,
-                  ratio=float(r.min()), evaluations=0)
+    hold = {k: float(v) for k, v in given.items()
+            if k in ("force_bandwidth", "velocity_compensation", "derivative_cutoff")}
+    if "pid_bandwidth" in given:
+        w = float(given["pid_bandwidth"])
+        hold.update(kp=3 * m * w * w, ki=m * w ** 3, kd=3 * m * w)
+    return design_pid_family(grid, m, w_V, sigma_x, sigma_F, hold=hold)
 
 
 def bristles(model: ControlModel) -> tuple[float, float] | None:

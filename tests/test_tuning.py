@@ -117,10 +117,10 @@ def test_a_stiffer_lighter_axis_gets_its_own_tuning() -> None:
 
 def test_explicit_values_win_and_are_checked(tmp_path: Path, capsys) -> None:
     path = _with(builtin_path("hydraulic"), tmp_path, "given.toml",
-                 **{"# pid_bandwidth": "pid_bandwidth = 12.0"})
+                 **{"# force_bandwidth": "force_bandwidth = 40.0"})
     tu = _model(read_plant_file(path)).tuning
-    assert tu.pid_bandwidth == pytest.approx(12.0)
-    assert "pid_bandwidth" in tu.given
+    assert tu.force_bandwidth == pytest.approx(40.0)  # held; the PID is derived around it
+    assert tu.given == ("force_bandwidth",)
     assert tu.margins.shortfall() is None
     bad = _with(builtin_path("hydraulic"), tmp_path, "bad.toml",
                 **{"# pid_bandwidth": "pid_bandwidth = 60.0"})
@@ -135,7 +135,8 @@ def test_explicit_values_win_and_are_checked(tmp_path: Path, capsys) -> None:
     # in one line naming the worst point
     model = _model(builtin_plant_file("hydraulic"))
     with pytest.raises(FcompError, match=r"pid tuning \(bandwidth, derivative_cutoff, "
-                       r"force_bandwidth given\) refused: .*broken at .*stroke"):
+                       r"force_bandwidth, velocity_compensation given\) refused: .*broken at "
+                       r".*stroke"):
         make_controller("pid", model, bandwidth=40.0, force_bandwidth=150.0,
                         derivative_cutoff=60.0, velocity_compensation=1.0)
 

@@ -207,15 +207,22 @@ def _lyapunov(M: np.ndarray, c: np.ndarray, sweeps: int = 60) -> np.ndarray:
     return Q
 
 
-def _gains(q: np.ndarray, sigma_x: float, sigma_F: float, dt: float) -> PIDFamilyGains:
+#: The search's coordinates, in order (``q``: the logarithms of the first four, ``lambda``).
+COORDINATES = ("kp", "ki", "kd", "force_bandwidth", "velocity_compensation")
+
+
+def _gains(q: np.ndarray, sigma_x: float, sigma_F: float, dt: float,
+           f_d: float | None = None) -> PIDFamilyGains:
     kp, ki, kd, wF = (float(math.exp(v)) for v in q[:4])
     lam = min(max(float(q[4]), LAMBDA_RANGE[0]), LAMBDA_RANGE[1])
-    return PIDFamilyGains(kp, ki, kd, derivative_cutoff(kd, sigma_x, sigma_F, dt), wF, lam)
+    fd = derivative_cutoff(kd, sigma_x, sigma_F, dt) if f_d is None else f_d
+    return PIDFamilyGains(kp, ki, kd, fd, wF, lam)
 
 
 def design_pid_family(grid: PlantGrid, mass: float, force_bandwidth: float, sigma_x: float,
                       sigma_F: float, starts: list[np.ndarray] | None = None,
-                      progress: Callable[[str], Any] | None = None) -> Design:
+                      progress: Callable[[str], Any] | None = None,
+                      hold: dict[str, float] | None = None) -> Design:
     """The design of the module docstring on ``grid``.
 
     Parameters
@@ -232,30 +239,48 @@ def design_pid_family(grid: PlantGrid, mass: float, force_bandwidth: float, sigm
         filter (rule 3).
     starts : list of numpy.ndarray, optional
         Starting points ``[log kp, log ki, log kd, log w_F, lambda]`` (default: placed).
+    hold : dict, optional
+        Values held (not searched): any of :data:`COORDINATES` and ``derivative_cutoff``
+        (the values a plant file gives).
     """
     dt = grid.dt
+    hold = dict(hold or {})
+    f_d = hold.pop("derivative_cutoff", None)
+    free = [i for i, c in enumerate(COORDINATES) if c not in hold]
+    held = np.array([math.log(hold[c]) if i < 4 else hold[c]
+                     for i, c in enumerate(COORDINATES) if c in hold])
+    fixed = [i for i, c in enumerate(COORDINATES) if c in hold]
+
+    def full(x: np.ndarray) -> np.ndarray:
+        q = np.empty(len(COORDINATES))
+        q[free], q[fixed] = x, held
+        return q
+
+    def gains_of(x: np.ndarray) -> PIDFamilyGains:
+        return _gains(full(x), sigma_x, sigma_F, dt, f_d)
+
     w_search = frequency_grid(dt, SEARCH_FREQUENCIES)
     nominal = [i for i, p in enumerate(grid.points) if all(v == 0 for _k, v in p.changes)]
     active = list(nominal) or list(range(len(grid)))
     perf = grid.subset([i for i in nominal if grid.points[i].presliding is None])
     evaluations = 0
 
-    def score(q: np.ndarray, sub: PlantGrid) -> float:
+    def score(x: np.ndarray, sub: PlantGrid) -> float:
         nonlocal evaluations
         evaluations += 1
-        return float(sub.requirement(_controller(sub, _gains(q, sigma_x, sigma_F, dt))).min())
+        return float(sub.requirement(_controller(sub, gains_of(x))).min())
 
-    def objective(q: np.ndarray, sub: PlantGrid) -> float:
-        if not np.all(np.abs(q[:4]) < 40.0):  # gains beyond e^40: no loop
+    def objective(x: np.ndarray, sub: PlantGrid) -> float:
+        if not np.all(np.abs(full(x)[:4]) < 40.0):  # gains beyond e^40: no loop
             return 1e6
         with np.errstate(all="ignore"):
-            sc = score(q, sub)
+            sc = score(x, sub)
             if not math.isfinite(sc):
                 return 1e6
             short = (1.0 + PAD) - sc
             if short > 0:
                 return 1e3 + 100.0 * short
-            J = performance(perf, _gains(q, sigma_x, sigma_F, dt))
+            J = performance(perf, gains_of(x))
         return math.log(J) if 0 < J < math.inf else 1e3
 
     if starts is None:
@@ -265,11 +290,12 @@ def design_pid_family(grid: PlantGrid, mass: float, force_bandwidth: float, sigm
             w = max(0.05 * wF, 1.0)  # a slow loop: feasible where anything is
             starts.append(np.array([math.log(3 * mass * w * w), math.log(mass * w ** 3),
                                     math.log(3 * mass * w), math.log(wF), lam]))
-    def robustness(q: np.ndarray, sub: PlantGrid, target: float) -> float:
-        if not np.all(np.abs(q[:4]) < 40.0):
+    starts = [q[free] for q in starts]
+    def robustness(x: np.ndarray, sub: PlantGrid, target: float) -> float:
+        if not np.all(np.abs(full(x)[:4]) < 40.0):
             return 1e6
         with np.errstate(all="ignore"):
-            sc = score(q, sub)
+            sc = score(x, sub)
         return -min(sc, target) if math.isfinite(sc) else 1e6
 
     def feasible_from(q0: np.ndarray, sub: PlantGrid) -> np.ndarray | None:
@@ -280,12 +306,12 @@ def design_pid_family(grid: PlantGrid, mass: float, force_bandwidth: float, sigm
             return q0
         res = minimize(robustness, q0, args=(sub, target), method="Nelder-Mead",
                        options={"maxiter": ITERATIONS, "xatol": 1e-4, "fatol": 1e-6,
-                                "initial_simplex": _simplex(q0)})
+                                "initial_simplex": _simplex(q0, free)})
         return res.x if -robustness(res.x, sub, target) >= 1.0 + PAD else None
 
     best: np.ndarray | None = None
     r_full = np.zeros(1)
-    for round_ in range(ROUNDS):
+    for round_ in range(ROUNDS if free else 0):
         sub = grid.subset(active, w_search)
         q = None
         for q0 in ([best] if best is not None else []) + starts:
@@ -296,12 +322,12 @@ def design_pid_family(grid: PlantGrid, mass: float, force_bandwidth: float, sigm
             break  # nothing the search can reach meets the active set: refused below
         res = minimize(objective, q, args=(sub,), method="Nelder-Mead",  # phase 2
                        options={"maxiter": ITERATIONS, "xatol": 1e-3, "fatol": 1e-4,
-                                "initial_simplex": _simplex(q)})
+                                "initial_simplex": _simplex(q, free)})
         best = res.x if objective(res.x, sub) <= objective(q, sub) else q
-        r_full, _ = ratios(grid, _gains(best, sigma_x, sigma_F, dt))
+        r_full, _ = ratios(grid, gains_of(best))
         evaluations += 1
         if progress is not None:
-            progress(f"round {round_ + 1}: ki {math.exp(best[1]):.4g}, worst ratio "
+            progress(f"round {round_ + 1}: ki {gains_of(best).ki:.4g}, worst ratio "
                      f"{r_full.min():.3f} on the full grid")
         if r_full.min() >= 1.0:
             break
@@ -311,28 +337,30 @@ def design_pid_family(grid: PlantGrid, mass: float, force_bandwidth: float, sigm
         active = sorted(set(active) | set(failing[:ADDED]))
     if best is None:
         best = starts[0]
-    gains = _gains(best, sigma_x, sigma_F, dt)
+    gains = gains_of(best)
     r_full, m = ratios(grid, gains)
-    if r_full.min() < 1.0:  # the whole grid: maximise the least ratio there
-        full = grid.subset(list(range(len(grid))), w_search)
-        q = feasible_from(best, full)
+    if r_full.min() < 1.0 and free:  # the whole grid, its own frequencies: restore there
+        q = feasible_from(best, grid)
         if q is not None:
-            gains = _gains(q, sigma_x, sigma_F, dt)
+            gains = gains_of(q)
             r_full, m = ratios(grid, gains)
     i, brk = worst_index(m)
     return Design(gains=gains, feasible=bool(r_full.min() >= 1.0), worst=i, worst_break=brk,
                   ratio=float(r_full.min()), evaluations=evaluations)
 
 
-def _simplex(q0: np.ndarray) -> np.ndarray:
+def _simplex(q0: np.ndarray, free: list[int] | None = None) -> np.ndarray:
     """The initial simplex: a factor e^0.7 (about 2) on each gain, 0.2 on lambda."""
-    steps = np.array([0.7, 0.7, 0.7, 0.7, 0.2])
+    free = list(range(q0.size)) if free is None else free
     out = [q0.copy()]
-    for k in range(q0.size):
+    for k, c in enumerate(free):
         q = q0.copy()
-        q[k] += steps[k] if (k < 4 or q0[k] + steps[k] <= LAMBDA_RANGE[1]) else -steps[k]
+        if c < 4:
+            q[k] += 0.7
+        else:
+            q[k] += 0.2 if q0[k] + 0.2 <= LAMBDA_RANGE[1] else -0.2
         out.append(q)
     return np.array(out)
 
 
-__all__ = ["PAD", "Design", "derivative_cutoff", "design_pid_family", "ratios"]
+__all__ = ["COORDINATES", "PAD", "Design", "derivative_cutoff", "design_pid_family", "ratios"]

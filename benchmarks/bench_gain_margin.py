@@ -11,7 +11,7 @@ parameters (the stroke's ends), and in both friction regimes of the analysis:
   ``sigma0``, ``sigma1``);
 * **harness**: the same plant, nonlinear, integrated between samples by the simulation
   engine, with the controller's Python step and the computation delay, the command's
-  deviation scaled by ``k`` until a small disturbance (a 2 um reference step) rings
+  deviation scaled by ``k`` until a small disturbance (a 10 nm reference step) rings
   instead of decaying (:func:`controllers.loop_analysis.ringing.critical_gain`, bisection
   on the growth rate of the ringing).
 
@@ -89,7 +89,7 @@ def simulated_plant(pf: Any, regime: str, model: Any) -> Any:
 
 
 def run_case(spec: str, fraction: float, regime: str, steps: int, model: Any = None,
-             tuning: Any = None, kick: float = 2e-6) -> dict[str, Any]:
+             tuning: Any = None, kick: float = 1e-8) -> dict[str, Any]:
     """One plant, position and regime: predicted and harness gain margins."""
     from controllers import make_controller
     from controllers.cli.plant_check import plant_model
@@ -123,7 +123,7 @@ def main(argv: list[str] | None = None) -> int:
                     help="fractions of the stroke; 'ends' adds the nominal sliding point of "
                     "least gain margin among 5, 10, 90, 95 %%")
     ap.add_argument("--steps", type=int, default=8)
-    ap.add_argument("--kick", type=float, default=2e-6,
+    ap.add_argument("--kick", type=float, default=1e-8,
                     help="the reference step that starts the ringing (m)")
     ap.add_argument("--json", default=None, metavar="OUT")
     args = ap.parse_args(argv)

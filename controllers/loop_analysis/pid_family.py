@@ -47,6 +47,10 @@ class PIDFamilyGains:
         ``w_F`` (rad/s).
     velocity_compensation : float
         ``lambda`` (0..1).
+    forward_euler : bool
+        The integral before this sample's error (``I[k-1]``, forward Euler): the law as
+        it ran before the backward-Euler integral (``benchmarks/bench_margins.py`` analyses
+        the former tunings with it).
     """
 
     kp: float
@@ -55,6 +59,7 @@ class PIDFamilyGains:
     derivative_cutoff: float
     force_bandwidth: float
     velocity_compensation: float
+    forward_euler: bool = False
 
 
 def pid_family_ss(g: PIDFamilyGains, s: np.ndarray, J_y: np.ndarray, J_v: np.ndarray,
@@ -73,7 +78,7 @@ def pid_family_ss(g: PIDFamilyGains, s: np.ndarray, J_y: np.ndarray, J_v: np.nda
     B = np.broadcast_to(np.array([[-dt, 0, 0], [b, 0, 0], [1.0, 0, 0]]), (*P, 3, 3)).copy()
     C = np.stack([s * wF * g.ki, gv * a, -gv * b], axis=-1)[..., None, :]
     D = (s[..., None] * wF * np.array([0.0, -A1, A2]) + J_y)
-    D[..., 0] += -s * wF * (g.kp + dt * g.ki) + gv * b
+    D[..., 0] += -s * wF * (g.kp + (0.0 if g.forward_euler else dt) * g.ki) + gv * b
     return A, B, C, D[..., None, :]
 
 
@@ -90,8 +95,8 @@ def pid_family_response(g: PIDFamilyGains, s: np.ndarray, J_y: np.ndarray, J_v: 
     J_y = np.asarray(J_y, dtype=float)
     wF = g.force_bandwidth
     gv = g.velocity_compensation * J_v - s * wF * g.kd
-    Kx = (s * wF * (-g.kp - g.ki * dt * z / (z - 1.0)) + J_y[..., 0:1]
-          + gv * b * (z - 1.0) / (z - a))
+    integ = dt / (z - 1.0) if g.forward_euler else dt * z / (z - 1.0)
+    Kx = (s * wF * (-g.kp - g.ki * integ) + J_y[..., 0:1] + gv * b * (z - 1.0) / (z - a))
     Kp1 = np.broadcast_to(-s * wF * A1 + J_y[..., 1:2], Kx.shape)
     Kp2 = np.broadcast_to(s * wF * A2 + J_y[..., 2:3], Kx.shape)
     return np.stack([Kx, Kp1, Kp2], axis=-1)

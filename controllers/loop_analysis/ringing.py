@@ -37,7 +37,7 @@ class Ringing:
 
 
 def growth(plant: Any, ctrl: Any, position: float, gain: float, *, delay: int = 1,
-           duration: float = 1.2, kick: float = 2e-6, rtol: float = 1e-9) -> Ringing:
+           duration: float = 1.2, kick: float = 1e-8, rtol: float = 1e-10) -> Ringing:
     """The growth rate (1/s) of the ringing of the nonlinear loop with its valve command's
     deviation scaled by ``gain`` (module docstring).
 
@@ -113,7 +113,7 @@ def ringing_rate(err: np.ndarray, dt: float) -> float:
 
 def critical_gain(plant: Any, make: Any, position: float, low: float, high: float, *,
                   delay: int = 1, steps: int = 8, duration: float = 1.2,
-                  kick: float = 2e-6) -> tuple[float, list]:
+                  kick: float = 1e-8) -> tuple[float, list]:
     """The factor on the valve command at which the ringing turns from decaying to growing,
     bisected between ``low`` (decays) and ``high`` (grows) in ``steps`` halvings (of the
     logarithm); ``make()`` builds a fresh controller. Returns the factor and the runs."""

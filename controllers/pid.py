@@ -224,10 +224,11 @@ class PIDController(Controller):
         self.margins = (model.checked_margins(self.family(), self.dt,
                                               f"{self.name} tuning ({', '.join(explicit)} given)")
                         if explicit else tu.margins)
-        #: Largest closed-loop pole magnitude of the nominal loop (the margins' own): a
-        #: tuning set unchecked (:meth:`~controllers.plant_model.ControlModel.use_tuning`)
-        #: is still refused when unstable.
-        self.stability_radius = self.margins.radius
+        #: Largest closed-loop pole magnitude of the nominal loop at mid stroke (sliding):
+        #: a tuning set unchecked (:meth:`~controllers.plant_model.ControlModel.use_tuning`,
+        #: a comparison's former numbers) is still refused when that loop is unstable.
+        mid = tu.mid.get("valve") if not explicit and tu.mid else None
+        self.stability_radius = (mid or self.margins).radius
         if not self.stability_radius < 1.0:
             raise unstable(self.gains, self.stability_radius, self.dt)
         self.law = PIDLaw(self.gains, self.dt)

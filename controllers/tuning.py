@@ -59,7 +59,11 @@ Rules (SI units; ``dt = 1/f_s`` the control period)
    noise (``k <= sigma_F/(sigma1*sigma_x)``), for which the ``lugre-observer``'s own
    loop -- linearised as coded, the observer's path included -- meets the requirement
    at the grid's points at rest in pre-sliding (:func:`resting_points`: where the
-   observer is at rest too; sliding, its estimate follows the steady-state map). The passivity argument of Canudas de Wit et al. (1995), stability for
+   observer is at rest too; sliding, its estimate follows the steady-state map). At
+   rest the observer feeds its bristle stiffness forward against the seal's spring; it is
+   built on the low end of the seal's stiffness range
+   (:func:`controllers.lugre_observer.observer_friction`), so that it never
+   over-cancels a softer seal into a negative stiffness. The passivity argument of Canudas de Wit et al. (1995), stability for
    every ``k > 0``, assumes a strictly positive real error dynamics that a sampled
    loop through a valve does not have.
 5. **EKF** (:mod:`controllers.ekf`). The measurement noise is the sensors':
@@ -249,6 +253,8 @@ class Tuning:
     observer_margins : LoopMargins or None
         The ``lugre-observer`` loop's at its worst point (None for a friction model
         without a bristle state).
+    observer_stiffness : float
+        The observer's bristle stiffness ``sigma0`` (N/m), rule 4 (NaN: the model's own).
     velocity_compensation : float
         ``lambda``, rule 2.
     valve_allows : float
@@ -277,6 +283,7 @@ class Tuning:
     valve_allows: float = math.nan
     delay: int = 1
     observer_worst: str = ""
+    observer_stiffness: float = math.nan
 
     def mpc_horizon(self, rate: float) -> int:
         """Horizon in steps at an MPC rate (Hz): ``ceil(T_N*rate)``, at least 2."""
@@ -303,7 +310,9 @@ class Tuning:
             f"{self.valve_allows:.4g}, valve bandwidth {self.valve_bandwidth:.4g} rad/s, column "
             f"{self.column_frequency:.4g} rad/s), velocity compensation "
             f"{self.velocity_compensation:.3g} ({src('velocity_compensation')}), observer gain "
-            f"{self.observer_gain:.4g} 1/s ({src('observer_gain')})",
+            f"{self.observer_gain:.4g} 1/s ({src('observer_gain')})"
+            + (f", observer stiffness {self.observer_stiffness:.4g} N/m (derived)"
+               if math.isfinite(self.observer_stiffness) else ""),
             *([f"  PID loop at mid stroke (nominal, sliding): at the valve "
                f"{mid['valve'].describe()}; at the position sensor {mid['position'].describe()}"]
               if mid else []),
@@ -334,6 +343,8 @@ class Tuning:
                           "kd": self.pid_gains.kd},
             "velocity_compensation": self.velocity_compensation,
             "observer_gain": self.observer_gain,
+            "observer_stiffness": (self.observer_stiffness
+                                   if math.isfinite(self.observer_stiffness) else None),
             "ekf_measurement_std": list(self.ekf_measurement_std),
             "mpc_horizon_time": self.mpc_horizon_time,
             "mpc_velocity_ratio": self.mpc_velocity_ratio,
@@ -404,17 +415,21 @@ _OBSERVER_JACOBIANS: dict[tuple[Any, ...], tuple[np.ndarray, np.ndarray]] = {}
 
 
 def observer_margins(model: ControlModel, grid: PlantGrid, k: float, family: PIDFamilyGains,
-                     points: list[int] | None = None) -> Any:
-    """The ``lugre-observer`` loop's margins with the PID family's ``family`` and the observer
-    gain ``k`` (1/s) at the grid's resting ``points`` (:func:`~controllers.loop_analysis.grid.resting_points`;
+                     points: list[int] | None = None, stiffness: float | None = None) -> Any:
+    """The ``lugre-observer`` loop's margins with the PID family's ``family``, the observer
+    gain ``k`` (1/s) and bristle stiffness ``stiffness`` (N/m, default the highest allowed,
+    :func:`controllers.lugre_observer.stiffness_ceiling`) at the grid's resting ``points`` (:func:`~controllers.loop_analysis.grid.resting_points`;
     the observer's path in closed form, :mod:`controllers.loop_analysis.observer`)."""
     from controllers.loop_analysis.loop import controller_response, unit_z
     from controllers.loop_analysis.observer import ObserverPath, observer_ss
 
+    from controllers.lugre_observer import stiffness_ceiling
+
     pts = resting_points(grid, points)
-    key = (id(grid), model._tuning_key())
+    stiffness = stiffness_ceiling(model) if stiffness is None else float(stiffness)
+    key = (id(grid), model._tuning_key(), stiffness)
     if key not in _OBSERVER_JACOBIANS:
-        path = ObserverPath(model, grid.dt)
+        path = ObserverPath(model, grid.dt, stiffness)
         jac = [path.at(lp.measurement) for lp in grid.plants]
         _OBSERVER_JACOBIANS[key] = (np.array([j[0] for j in jac]), np.array([j[1] for j in jac]))
     phi, fh = _OBSERVER_JACOBIANS[key]
@@ -462,44 +477,59 @@ def _ratio(cm: Any) -> float:
     return r
 
 
+#: Fractions of the observer's stiffness ceiling tried by rule 4, in order.
+STIFFNESS_FRACTIONS = (1.0, 0.7, 0.5, 0.35, 0.25, 0.18, 0.125, 0.09, 0.0625)
+
+
 def observer_gain_rule(model: ControlModel, grid: PlantGrid, family: PIDFamilyGains,
-                       w_P: float, sigma_F: float) -> tuple[float, Any]:
-    """Rule 4: the largest ``k <= min(w_P/2, sigma_F/(sigma1*sigma_x))`` (1/s) whose
-    ``lugre-observer`` loop meets the requirement on the grid, with its margins (the
-    nominal points searched, the whole grid checked; None without a bristle state)."""
+                       w_P: float, sigma_F: float) -> tuple[float, Any, float]:
+    """Rule 4: the observer's bristle stiffness, the largest of :data:`STIFFNESS_FRACTIONS`
+    of its ceiling (:func:`controllers.lugre_observer.stiffness_ceiling`) whose loop at rest
+    meets the requirement on the whole grid with a correction a decade below its cap; then the largest ``k <= min(w_P/2, sigma_F/(sigma1*sigma_x))`` (1/s) whose
+    ``lugre-observer`` loop meets the requirement on the grid. Returns ``k``, its margins
+    and the stiffness (N/m) (the nominal points searched, the whole grid checked; margins
+    None without a bristle state)."""
+    from controllers.lugre_observer import stiffness_ceiling
+
     k = 0.5 * w_P
     b = bristles(model)
     if b is None:
-        return k, None
+        return k, None, math.nan
     sigma1 = b[1]
     sigma_x = float(model.sensors.std()[0])
     if sigma1 > 0 and math.isfinite(sigma1):
         k = min(k, sigma_F / (sigma1 * sigma_x))
     nominal = nominal_points(grid)
+    ceiling = stiffness_ceiling(model)
+    stiff = ceiling
 
     def ok(kk: float, points: list[int] | None) -> bool:
-        return _ratio(observer_margins(model, grid, kk, family, points)) \
+        return _ratio(observer_margins(model, grid, kk, family, points, stiff)) \
             >= 1.0 + OBSERVER_PAD
 
     low = 1e-3 * k
     hi = k
+    for frac in STIFFNESS_FRACTIONS:  # room for a correction a decade below its cap
+        stiff = frac * ceiling
+        if ok(0.1 * k, None):
+            break
     if not ok(hi, nominal):
         if not ok(low, nominal):
             # no gain meets it: what fails is the observer's path at rest itself (its
             # bristle integrates the velocity, sigma0*x fed forward: a seal softer than the
             # model by more than the loop's stiffness is over-cancelled), not k
-            cm = observer_margins(model, grid, hi, family)
+            cm = observer_margins(model, grid, hi, family, None, stiff)
             cm.structural = True
-            return hi, cm
+            return hi, cm, stiff
         for _ in range(OBSERVER_STEPS):
             mid = math.sqrt(low * hi)
             low, hi = (mid, hi) if ok(mid, nominal) else (low, mid)
         k = low
-    cm = observer_margins(model, grid, k, family)
+    cm = observer_margins(model, grid, k, family, None, stiff)
     while _ratio(cm) < 1.0 and k > 1e-2 * hi:  # the whole grid: shrink until it holds
         k *= 0.7
-        cm = observer_margins(model, grid, k, family)
-    return k, cm
+        cm = observer_margins(model, grid, k, family, None, stiff)
+    return k, cm, stiff
 
 
 # -------------------------------------------------------------- derivation
@@ -542,25 +572,27 @@ def derive_tuning(model: ControlModel, dt: float | None = None,
     if bristles(model) is None:
         return replace(provisional, observer_gain=0.5 * provisional.pid_bandwidth)
     fam = provisional.family()
+    # the stiffness is derived with the rule's own search; a gain given is checked with it
+    k_rule, cm, stiff = observer_gain_rule(model, grid, fam, provisional.pid_bandwidth,
+                                           sigma_F)
+    k = k_rule
     if "observer_gain" in given:
         k = float(given["observer_gain"])
-        cm = observer_margins(model, grid, k, fam)
+        cm = observer_margins(model, grid, k, fam, None, stiff)
         if _ratio(cm) < 1.0:
             raise refuse(f"observer_gain {k:.4g} 1/s", "the loop with the LuGre observer: "
                          + cm.describe(grid), "lower observer_gain")
-    else:
-        k, cm = observer_gain_rule(model, grid, fam, provisional.pid_bandwidth, sigma_F)
     i, brk = cm.worst()
     m = cm.at(i, brk)
     text = cm.describe(grid)
     if cm.structural:
         text += (" -- for every observer gain: at rest the observer's bristle integrates the "
-                 "velocity and feeds its model's pre-sliding stiffness sigma0 forward, and "
-                 "where the seal is softer than that model it over-cancels the seal's spring "
-                 "(a negative stiffness the loop must hold); build the observer on the lower "
-                 "end of the seal's stiffness")
+                 "velocity and feeds its pre-sliding stiffness forward (the low end of the "
+                 "seal's range, controllers.lugre_observer.observer_friction), and the loop "
+                 "with that path does not meet the requirement; check the plant file's "
+                 "[uncertainty] presliding range and the friction model's sigma0, sigma1")
     return replace(provisional, observer_gain=float(k), observer_margins=m,
-                   observer_worst=text)
+                   observer_worst=text, observer_stiffness=float(stiff))
 
 
 #: Rules 1-3 by plant (their results do not depend on the friction model's levels).
@@ -662,7 +694,8 @@ def check_observer(ctrl: Any, what: str) -> LoopMargins:
     """Margins of an explicitly tuned ``lugre-observer`` on the grid's resting points; refused
     (one line) if insufficient."""
     grid = model_grid(ctrl.model, ctrl.dt)
-    cm = observer_margins(ctrl.model, grid, ctrl.k, ctrl.family())
+    cm = observer_margins(ctrl.model, grid, ctrl.k, ctrl.family(), None,
+                          ctrl.observer_stiffness)
     if _ratio(cm) < 1.0:
         raise refuse(what, f"the loop with the LuGre observer at rest: {cm.describe(grid)}",
                      "lower observer_gain (or the PID's gains)")

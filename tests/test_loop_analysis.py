@@ -71,7 +71,8 @@ def _model(kind: str) -> ControlModel:
         derivative_cutoff=g.derivative_cutoff, observer_gain=5.0,
         ekf_measurement_std=tuple(float(s) for s in model.sensors.std()),  # type: ignore[arg-type]
         mpc_horizon_time=0.04, mpc_velocity_ratio=100.0, margins=ok,
-        velocity_compensation=g.velocity_compensation))
+        velocity_compensation=g.velocity_compensation,
+        observer_stiffness=0.4 * model.friction.flat_params()["sigma0"]))
     return model
 
 
@@ -134,7 +135,11 @@ def test_the_sampled_plant_is_the_nonlinear_step_differentiated(kind: str, regim
 def _controller_state(ctrl) -> tuple[callable, callable]:
     """Get/set of a Python controller's own state (what its step reads and writes): the
     PID law's, the observer's estimate and side, the EKF's estimate and last command with its
-    covariance held at the value it has when this is called."""
+    covariance held at the value it has when this is called; behind the fail-safe layer, the
+    inner controller's)."""
+    from controllers.safety import unwrap
+
+    ctrl = unwrap(ctrl)
     law = ctrl.law
     parts: list[tuple[int, callable, callable]] = [
         (3, lambda: [law.integral, law.v_f, law.x_prev],
@@ -500,7 +505,9 @@ def test_the_observer_closed_form_is_the_exported_step_differentiated() -> None:
     lin = Linearisation(_seal("hydraulic"), 1e-3)
     ctrl = make_controller("lugre-observer", model)
     sl = StepLinearisation(ctrl)
-    path = ObserverPath(model, 1e-3)
+    assert ctrl.observer_stiffness == pytest.approx(
+        0.4 * model.friction.flat_params()["sigma0"])  # the tuning's, not the model's
+    path = ObserverPath(model, 1e-3, ctrl.observer_stiffness)
     for frac in (0.05, 0.5, 0.95):
         lp = lin.at(frac * 0.3)
         lc = sl.at(lp.measurement, lp.command)

@@ -44,12 +44,15 @@ class ObserverPath:
         The controller's model (its friction model is the observer's).
     dt : float
         Sample period (s).
+    stiffness : float
+        The observer's bristle stiffness (N/m,
+        :func:`controllers.lugre_observer.observer_friction`).
     """
 
-    def __init__(self, model: Any, dt: float) -> None:
-        from controllers.lugre_observer import observer_step
+    def __init__(self, model: Any, dt: float, stiffness: float) -> None:
+        from controllers.lugre_observer import observer_friction, observer_step
 
-        step = observer_step(model.friction)
+        step = observer_step(observer_friction(model, stiffness))
         nx = model.friction.n_states
         xh = ca.SX.sym("xh", nx)
         sig = ca.SX.sym("sig", 6)

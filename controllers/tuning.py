@@ -422,7 +422,6 @@ def observer_margins(model: ControlModel, grid: PlantGrid, k: float, family: PID
     the observer's path in closed form, :mod:`controllers.loop_analysis.observer`)."""
     from controllers.loop_analysis.loop import controller_response, unit_z
     from controllers.loop_analysis.observer import ObserverPath, observer_ss
-
     from controllers.lugre_observer import stiffness_ceiling
 
     pts = resting_points(grid, points)

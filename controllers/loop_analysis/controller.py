@@ -46,6 +46,9 @@ PLAIN_STEPS_ESTIMATOR = 600
 NEWTON_STEPS = 60
 #: Step of the symmetric differences at a kink, relative to each state's (measurement's) scale.
 KINK_STEP = 1e-6
+#: The smallest scale of a state or measurement (SI units: a state at rest at zero, such as a
+#: filtered velocity, is stepped by KINK_STEP*KINK_FLOOR).
+KINK_FLOOR = 1e-6
 #: A column of the exact Jacobian is replaced where it differs from the symmetric difference
 #: by more than this, relative (scaled by the state's and the output's scales).
 KINK_TOL = 1e-4
@@ -224,9 +227,9 @@ class StepLinearisation:
         scale = np.empty(n)
         i = 0
         for _block, size in self.step.layout:
-            scale[i:i + size] = max(float(np.abs(s[i:i + size]).max()), 1e-9)
+            scale[i:i + size] = max(float(np.abs(s[i:i + size]).max()), KINK_FLOOR)
             i += size
-        y_scale = np.maximum(np.abs(y), 1e-6)
+        y_scale = np.maximum(np.abs(y), KINK_FLOOR)
         rows = [0, *(1 + np.asarray(self.keep))]
         u0 = float(np.asarray(self._eval(s, y, ref)[0]).ravel()[0])
         row_scale = np.concatenate([[max(abs(u0), 1e-9)], scale])  # u, each state's scale

@@ -188,13 +188,18 @@ class StepLinearisation:
 
     def at(self, y: np.ndarray, u: float) -> LinearController:
         """The controller linearised at rest on the measurement ``y`` commanding ``u``
-        (the exact Jacobian, or where the step has a kink at rest, the symmetric difference
-        over a millionth of each state's scale: :meth:`kinks_repaired`)."""
+        (the exact Jacobian; an estimator's where its model has a kink at rest, the symmetric
+        difference over a millionth of each state's scale: :meth:`kinks_repaired`. The PID
+        family's one kink at rest, the valve inversion's flow reversal, keeps the exact
+        one-sided slope of its closed form, :mod:`~controllers.loop_analysis.pid_family`,
+        which the nonlinear sampled loop's poles confirm)."""
         y = np.asarray(y, dtype=float)
         s = self.fixed_point(y, u)
         ref = self.reference(y)
         uu, _sn, J = self._jac(s, y, ref)
-        J = self.kinks_repaired(np.asarray(J), s, y, ref)
+        J = np.asarray(J)
+        if any(b == "ekf_P" for b, _k in self.step.layout):  # an estimator's model at rest
+            J = self.kinks_repaired(J, s, y, ref)
         n = len(self.names)
         k = self.keep
         A = J[1:, :n][np.ix_(k, k)]

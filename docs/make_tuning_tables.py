@@ -78,8 +78,12 @@ def tables() -> dict[str, str]:
 
 
 def _where(text: str) -> str:
-    """The point of a worst-point phrase (after its last ', at ')."""
-    return text.rsplit(", at ", 1)[-1] if ", at " in text else text
+    """The point and break of a worst-point phrase ('..., broken at the valve command, at
+    POINT')."""
+    if ", broken at " not in text:
+        return text
+    brk, point = text.split(", broken at ", 1)[1].split(", at ", 1)
+    return f"{point} ({'valve' if 'valve' in brk else 'sensor'})"
 
 
 def render(page: str, blocks: dict[str, str]) -> str:

@@ -527,7 +527,9 @@ def test_the_ekf_at_rest_near_the_end_is_linearised_as_it_runs() -> None:
     """Near the cap end the EKF's film state answers the pressures through a smoothed sign
     (``tanh(v/v_eps)``) at rest: its exact derivative there is that of the smoothing (an
     eigenvalue of 3.8, a 'mode growing 1e3/s' no nonlinear loop has); the analysis takes the
-    symmetric difference there, and its poles are the nonlinear sampled loop's."""
+    symmetric difference there, and its poles are the nonlinear sampled loop's (the slow ones,
+    |z| > 0.9, that set the margins: at a kink the fast ones depend on the amplitude, i.e. on
+    the differences' step)."""
     model = _model("hydraulic")
     plant = _seal("hydraulic")
     for pos in (0.03, 0.285):
@@ -537,7 +539,7 @@ def test_the_ekf_at_rest_near_the_end_is_linearised_as_it_runs() -> None:
         lc = StepLinearisation(make_controller("ekf", model)).at(y, u)
         ev = np.linalg.eigvals(closed_loop_matrix(lp.Ad, lp.Bd, lp.C, lc.A, lc.B, lc.C, lc.D, 1))
         assert np.max(np.abs(ev)) < 1.0 + 1e-6
-        _compare(ev_nl, ev, floor=0.6, slow_tol=1e-3)
+        _compare(ev_nl, ev, floor=0.9, slow_tol=1e-3)
 
 
 @pytest.mark.slow

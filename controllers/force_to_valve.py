@@ -37,9 +37,21 @@ servos):
 
 The term ``A1^2/V1 + A2^2/V2`` of the velocity (the flow the moving piston
 displaces) is part of the chamber equations, so the inversion also
-compensates the velocity-induced force drop. A friction estimate added
-to ``F_d`` thus becomes, within one force-loop time constant
-(``1/w_F``, about 5 ms), the extra pressure difference that cancels it.
+compensates the velocity-induced force drop at the velocity it is given. With
+the measured velocity the ideal force loop is the first-order ``w_F/(s + w_F)``
+and the oil (air) column disappears from it -- but only as well as that
+velocity (a filtered derivative of the sampled position, a sample late) is
+right at the column's frequency, which it is not near the stroke's ends where
+the column is stiff and fast. The PID family therefore gives it a mix
+(:class:`controllers.pid.PIDController`, the *velocity compensation*
+``lambda``): ``lambda`` of the measured velocity and ``1 - lambda`` of the
+reference's, so the rest of the column's stiffness stays in the feedback loop,
+damped by the pressure feedback ``w_F*(F_d - F_a)`` from the measured
+pressures (load-pressure feedback: Merritt, *Hydraulic Control Systems*, 1967,
+sec. 8.4; Jelali & Kroll, *Hydraulic Servo-systems*, 2003, sec. 7.3), while
+the flow a tracked motion needs is still fed forward. A friction estimate added
+to ``F_d`` becomes the extra pressure difference that cancels it within the
+force loop's time constants.
 """
 
 from __future__ import annotations
@@ -93,6 +105,7 @@ class ForceToValve:
         self._rates = native(ca.Function("force_rate_grid", [meas, grid, p], [rates]))
         self.p = np.asarray(model.prediction.p, dtype=float)
         self._meas = np.zeros(4)
+        self._jacobian: ca.Function | None = None
 
     def reset(self) -> None:
         """No state (the inversion is static)."""
@@ -102,6 +115,48 @@ class ForceToValve:
         m = self._meas
         m[0], m[1], m[2], m[3] = y[0], v, y[1], y[2]
         return self._rates(m, self.grid, self.p)[0]
+
+    def slopes(self, y: np.ndarray, u: float, v: float = 0.0) -> tuple[float, np.ndarray, float]:
+        """The inversion's partial derivatives where its command is ``u`` (the loop analysis,
+        :mod:`controllers.loop_analysis.pid_family`).
+
+        Where ``u`` lies in the grid segment ``j`` (``grid[j] <= u <= grid[j+1]``, a
+        fraction ``theta`` along it), :meth:`command` returns ``u = grid[j] + (target -
+        R[j])*s``, ``s = (grid[j+1] - grid[j])/(R[j+1] - R[j])``, ``R`` the running maximum
+        of the force rates; so ``du/dtarget = s`` and ``du/dm = -s*((1 - theta)*dR[j]/dm +
+        theta*dR[j+1]/dm)`` for each measured quantity ``m``.
+
+        Returns
+        -------
+        tuple
+            ``du/dtarget`` (1/(N/s)), ``du/dy`` (``[x, p1, p2]``, the force ``F_a`` of the
+            target excluded) and ``du/dv`` (per m/s of the velocity given).
+        """
+        if self._jacobian is None:
+            f = self._rates.fn
+            meas = ca.SX.sym("meas", 4)
+            grid = ca.SX.sym("grid", self.grid.size)
+            p = ca.SX.sym("p", self.p.size)
+            r = f(meas, grid, p)
+            self._jacobian = ca.Function("force_rate_jac", [meas, grid, p],
+                                         [r, ca.jacobian(r, meas)])
+        meas = np.array([y[0], v, y[1], y[2]], dtype=float)
+        R, J = (np.asarray(m, dtype=float) for m in self._jacobian(meas, self.grid, self.p))
+        R = R.ravel()
+        best = np.zeros(R.size, dtype=int)  # which rate the running maximum is
+        for k in range(1, R.size):
+            best[k] = k if R[k] >= R[best[k - 1]] else best[k - 1]
+        Rm, Jm = R[best], J[best]
+        g = self.grid
+        j = int(np.clip(np.searchsorted(g, u, side="right") - 1, 0, g.size - 2))
+        dR = Rm[j + 1] - Rm[j]
+        if not dR > 0:
+            raise FcompError(f"the force-to-valve inversion is flat at the command {u:g}: "
+                             "no force rate to linearise")
+        s = (g[j + 1] - g[j]) / dR
+        theta = (u - g[j]) / (g[j + 1] - g[j])
+        dm = -s * ((1.0 - theta) * Jm[j] + theta * Jm[j + 1])  # x, v, p1, p2
+        return float(s), np.array([dm[0], dm[2], dm[3]]), float(dm[1])
 
     def command(self, F_d: float, y: np.ndarray, v: float) -> tuple[float, int]:
         """Valve command for force demand ``F_d`` (N); and +1/-1 if saturated high/low, else 0."""

@@ -17,7 +17,10 @@ A run (:func:`run_closed_loop`) wires
   :data:`DEFAULT_MISMATCH`;
 
 samples at the controller's rate, applies the command (clipped to the valve
-range), advances the plant one sample and records everything.
+range) after the plant's computation delay (``delay`` control samples, the plant
+file's ``[control] delay``, default 1: the command computed from the measurement at
+``t[k]`` acts from ``t[k+1]``; before the first command acts the valve holds the
+equilibrium command), advances the plant one sample and records everything.
 
 Every ``step`` call is timed twice: wall clock (:func:`time.perf_counter`)
 and the CPU time of the calling thread (:func:`time.thread_time`). The
@@ -49,6 +52,7 @@ from __future__ import annotations
 import gc
 import math
 import time
+from collections import deque
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
@@ -61,6 +65,7 @@ from controllers.plant_model import (
     ControlModel,
     equilibrium,
     friction_with_mismatch,
+    presliding_bristle,
     sliding_damping,
 )
 from controllers.safety import FailSafe
@@ -184,7 +189,8 @@ class LoopResult:
     y
         Measurements ``(n, 3)``: position (m), chamber pressures (Pa abs).
     u
-        Valve command applied from each sample on.
+        Valve command applied from each sample on (the controller's, ``delay`` samples
+        earlier: :attr:`controllers.plant_model.ControlModel.delay`).
     F_true, F_hat
         The plant's friction force and the controller's estimate (N).
     solve_times
@@ -261,14 +267,18 @@ def build_loop(controller: str, config: LoopConfig, options: Mapping[str, Any] |
 
 def control_model(config: LoopConfig) -> ControlModel:
     """The controller's own plant model of a configuration (its friction times the mismatch;
-    the tuning's loop damping the simulated plant's friction, :func:`sliding_damping`: the
-    same PID whatever friction model the controller is built with)."""
+    the tuning's sliding slope and pre-sliding bristle the simulated plant's friction's,
+    :func:`sliding_damping`, :func:`presliding_bristle`: the same PID whatever friction
+    model the controller is built with)."""
     ctrl_friction = friction_with_mismatch(_friction(config.controller_friction, config),
                                            config.mismatch)
-    damping = sliding_damping(_friction(config.friction, config))
-    model = (ControlModel(config.plant_file, ctrl_friction, damping=damping)
+    true = _friction(config.friction, config)
+    damping = sliding_damping(true)
+    bristle = presliding_bristle(true) or presliding_bristle(ctrl_friction)
+    model = (ControlModel(config.plant_file, ctrl_friction, damping=damping, bristle=bristle)
              if config.plant_file is not None
-             else ControlModel(config.plant, ctrl_friction, config.params, damping=damping))
+             else ControlModel(config.plant, ctrl_friction, config.params, damping=damping,
+                               bristle=bristle))
     if config.tuning is not None:
         model.use_tuning(config.tuning(model))
     return model
@@ -332,7 +342,7 @@ def run_closed_loop(controller: str, task: str | Task, config: LoopConfig | None
     t = np.arange(n + 1) * dt
     r, dr, ddr = tk.sample(t)
     r = r + x_start
-    x0, _u0 = equilibrium(plant, x_start)
+    x0, u_hold = equilibrium(plant, x_start)
     stepper = plant.stepper(dt, x0=x0, rtol=config.rtol, atol=config.rtol)
     sensors = SensorModel(model.sensors, config.noise, config.seed)
     names = plant.state_names
@@ -354,6 +364,7 @@ def run_closed_loop(controller: str, task: str | Task, config: LoopConfig | None
     y0 = _measure(sensors, state[meas_idx], 0.0, config.sensor_faults)
     ctrl.reset(0.0, y0, Reference(float(r[0]), float(dr[0]), float(ddr[0])))
     u_max = model.u_max
+    pending = deque([min(max(u_hold, -u_max), u_max)] * model.delay)  # computation delay
     collecting = gc.isenabled()
     gc.disable()  # no collection inside a timed step (module docstring)
     try:
@@ -372,7 +383,8 @@ def run_closed_loop(controller: str, task: str | Task, config: LoopConfig | None
             if not math.isfinite(u):
                 raise FcompError(f"controller {controller} returned a non-finite command at "
                                  f"t = {t[k]:.4f} s")
-            u = min(max(u, -u_max), u_max)
+            pending.append(min(max(u, -u_max), u_max))
+            u = pending.popleft()
             U[k] = u
             F_hat[k] = ctrl.friction_estimate
             fb[k] = ctrl.fallback_active

@@ -37,6 +37,7 @@ The velocity is the PID's filtered derivative of the measured position
 
 from __future__ import annotations
 
+import math
 from typing import Any, ClassVar
 
 import casadi as ca
@@ -45,9 +46,51 @@ import numpy as np
 from controllers.base import Reference
 from controllers.friction_states import friction_step
 from controllers.pid import PIDController
-from controllers.tuning import check_observer
 from fcomp.errors import FcompError
 from fcomp.models.base import FrictionModel
+
+
+def observer_friction(model: Any, stiffness: float | None = None) -> FrictionModel:
+    """The observer's friction model: the controller model's with the bristle stiffness
+    ``stiffness`` (N/m; default the tuning's, rule 4 of :mod:`controllers.tuning`).
+
+    At rest the observer's bristle integrates the measured velocity, ``z_hat - z0 = x - x0``
+    (filtered, one sample late), and ``sigma0_obs*(x - x0)`` is fed forward against the
+    seal's own pre-sliding spring ``sigma0_seal*(x - x0)``. Where the seal is softer than
+    the observer's model the difference is a negative stiffness the PID must hold (with
+    ``sigma0`` = 2e6 N/m, ``kp`` = 3e5 N/m and a seal half as stiff, the resting loop rings
+    at 4.5 Hz and grows to a 0.25 mm limit cycle, on the nonlinear loop as in its
+    linearisation); and even an exact cancellation leaves ``sigma0 (1 - e^{-sT})``, the
+    spring against its own late copy, a path of up to twice the seal's stiffness at high
+    frequency. So the observer's stiffness is at most the low end of the seal's range
+    (:attr:`plants.uncertainty.Uncertainty.presliding` times the seal's ``sigma0``,
+    :attr:`~controllers.plant_model.ControlModel.bristle`) and is lowered from there until
+    the loop at rest meets the requirement (rule 4). Every ``sigma0`` parameter of a
+    direction-dependent model is scaled alike. Sliding, the estimate is unchanged -- the
+    bristle's steady state ``z = g(v)/sigma0`` gives the force ``g(v)`` whatever
+    ``sigma0``; only the pre-sliding displacement the observer assumes grows.
+    """
+    fr = model.friction
+    p = fr.flat_params()
+    if "sigma0" not in p or "z" not in fr.state_names:
+        return fr
+    s0 = float(model.tuning.observer_stiffness if stiffness is None else stiffness)
+    if not (math.isfinite(s0) and s0 > 0) or s0 == float(p["sigma0"]):
+        return fr
+    factor = s0 / float(p["sigma0"])
+    return fr.with_params(**{k: v * factor for k, v in p.items()
+                             if k == "sigma0" or k.startswith("sigma0_")})
+
+
+def stiffness_ceiling(model: Any) -> float:
+    """The highest bristle stiffness the observer may have (N/m): the low end of the seal's
+    range, ``(1 + lo) sigma0_seal``, and no more than its model's ``sigma0``
+    (:func:`observer_friction`)."""
+    s0 = float(model.friction.flat_params()["sigma0"])
+    seal = model.bristle
+    if seal is None:
+        return s0
+    return min(s0, (1.0 + float(model.uncertainty.presliding[0])) * float(seal[0]))
 
 
 def observer_step(model: FrictionModel) -> ca.Function:
@@ -102,11 +145,15 @@ class LuGreObserverController(PIDController):
         #: Margins of the loop with the observer's path at rest (rule 4 of
         #: :mod:`controllers.tuning`): explicit values are checked, the derived ones are the
         #: tuning's.
-        self.observer_margins = (check_observer(self.gains, model, self.k, self.valve.bandwidth,
-                                                self.dt, f"{self.name} tuning "
-                                                f"({', '.join(explicit)} given)")
+        #: The observer's friction model (:func:`observer_friction`).
+        self.observer_model = observer_friction(model)
+        #: Its bristle stiffness (N/m).
+        self.observer_stiffness = float(self.observer_model.flat_params()["sigma0"]) \
+            if "sigma0" in self.observer_model.flat_params() else math.nan
+        self._step = observer_step(self.observer_model)
+        self.observer_margins = (model.checked_observer(self, f"{self.name} tuning "
+                                                         f"({', '.join(explicit)} given)")
                                  if explicit else model.tuning.observer_margins)
-        self._step = observer_step(model.friction)
         self._side = 1.0
         self.x_hat = model.friction.initial_state()
 

@@ -36,19 +36,20 @@ bounded besides: its force ``ki*I`` stays within ``[F_min, F_max]``
 actuator can push, and after the fail-safe layer held the valve it restarts bumplessly
 (:meth:`PIDController.reenter`).
 
-Default gains place the three closed-loop poles of the nominal
-mass-plus-force-loop at ``-w`` (``w = bandwidth`` rad/s):
-``kp = 3*m*w^2``, ``ki = m*w^3``, ``kd = 3*m*w``; ``w``, the force-loop
-bandwidth and the derivative cut-off are derived from the plant by
-:mod:`controllers.tuning` (margins of :func:`position_loop`).
+The gains (``kp``, ``ki``, ``kd``), the force-loop bandwidth, the velocity
+compensation and the derivative cut-off are derived from the plant by
+:mod:`controllers.tuning` on the loop as it runs (:mod:`controllers.loop_analysis`);
+:meth:`PIDGains.placed` is the triple pole at ``-w`` of the ideal
+mass-plus-force-loop, ``kp = 3*m*w^2``, ``ki = m*w^3``, ``kd = 3*m*w``, the
+pattern a ``bandwidth`` option places.
 
-**Unstable gains are refused**: :func:`check_stability` builds the sampled
-loop of the nominal model (mass ``m`` with the viscous friction slope, the
-force loop of :mod:`controllers.force_to_valve` through the valve's linear
-dynamics, zero-order hold at the controller rate) with python-control and
-raises :class:`FcompError` when a closed-loop pole lies on or outside the
-unit circle. The controller takes that pole magnitude from its loop's margins
-(:attr:`PIDController.margins`, the same loop), not from a second evaluation.
+**Gains without margins are refused**: explicit options are checked on the loop as
+it runs (:meth:`~controllers.plant_model.ControlModel.checked_margins`: the sampled
+plant over the stroke and the plant file's parameter box, the delay, this law as
+coded) and refused in one line naming the worst point where it misses GM >= 2, PM
+>= 30 deg or Ms <= 2 -- an unstable loop first. :func:`pid_transfer` is this PID's
+discrete transfer function (its integral the backward-Euler sum ``PIDLaw.force``
+runs).
 """
 
 from __future__ import annotations
@@ -97,26 +98,12 @@ class PIDGains:
                    kd=kd_factor * 3 * mass * w, **extra)
 
 
-def nominal_plant(mass: float, damping: float, force_bandwidth: float, valve: Any,
-                  dt: float) -> Any:
-    """The nominal plant of the position loop, force demand -> position, sampled (zero-order
-    hold at ``dt``): the piston ``1/(m s^2 + c s)`` (``c`` the loop's viscous damping,
-    :meth:`controllers.plant_model.ControlModel.viscous_damping`) driven by the force loop of
-    :mod:`controllers.force_to_valve`, ``F_a/F_d = w_F*G_v/(s + w_F*G_v)`` with ``G_v`` the
-    valve's linear dynamics (unit DC gain)."""
-    import control as ct
-
-    s = ct.tf("s")
-    inner = ct.feedback(force_bandwidth * valve / s, 1)
-    return ct.tf(ct.c2d(ct.ss(inner / (mass * s**2 + damping * s)), dt, "zoh"))
-
-
 def pid_transfer(gains: PIDGains, dt: float, extra_p: float = 0.0,
                  extra_i: float = 0.0) -> Any:
     """The discrete PID of this module, error -> force (backward-Euler integral, derivative
     through the first-order filter), with an optional parallel path ``extra_p +
     extra_i*dt/(z - 1)`` (a forward-Euler integrator: the LuGre observer at rest,
-    :func:`controllers.tuning.observer_loop`) over the same denominator::
+    at rest) over the same denominator::
 
         C(z) = kp + extra_p + (ki*dt*z + extra_i*dt)/(z - 1) + kd*(z - 1)/((Tf + dt)*z - Tf)
     """
@@ -128,48 +115,6 @@ def pid_transfer(gains: PIDGains, dt: float, extra_p: float = 0.0,
                  + gains.kd * (z - 1) / ((Tf + dt) * z - Tf))
 
 
-def position_loop(gains: PIDGains, mass: float, damping: float, force_bandwidth: float,
-                  valve: Any, dt: float) -> Any:
-    """The nominal sampled loop transfer function ``L(z) = C(z)*P(z)`` (python-control):
-    :func:`pid_transfer` times :func:`nominal_plant`."""
-    return pid_transfer(gains, dt) * nominal_plant(mass, damping, force_bandwidth, valve, dt)
-
-
-def disturbance_response(gains: PIDGains, mass: float, damping: float, force_bandwidth: float,
-                         valve: Any, dt: float, duration: float) -> np.ndarray:
-    """Position error (m) of the nominal loop after a unit step force (1 N) on the piston,
-    at the samples ``0, dt, ..., duration``: ``e = -P_d/(1 + C P)`` with ``P_d`` the piston
-    ``1/(m s^2 + c s)`` sampled (the disturbance enters beside the force loop)."""
-    import control as ct
-
-    s = ct.tf("s")
-    Pd = ct.tf(ct.c2d(ct.ss(1 / (mass * s**2 + damping * s)), dt, "zoh"))
-    loop = position_loop(gains, mass, damping, force_bandwidth, valve, dt)
-    t = np.arange(0.0, duration + 0.5 * dt, dt)
-    resp = ct.step_response(ct.ss(Pd) * ct.ss(ct.feedback(1, loop)), t)
-    return -np.asarray(resp.outputs, dtype=float).ravel()
-
-
-def spectral_radius(loop: Any) -> float:
-    """Largest closed-loop pole magnitude ``max |z|`` of the unity feedback of ``loop``."""
-    import control as ct
-
-    return float(np.max(np.abs(ct.feedback(loop, 1).poles())))
-
-
-def check_stability(gains: PIDGains, mass: float, damping: float, force_bandwidth: float,
-                    valve: Any, dt: float) -> float:
-    """Largest closed-loop pole magnitude of the nominal sampled loop; raise if >= 1.
-
-    The loop is :func:`position_loop`'s (the margins of the same loop:
-    :func:`controllers.tuning.loop_margins`).
-    """
-    rho = spectral_radius(position_loop(gains, mass, damping, force_bandwidth, valve, dt))
-    if not rho < 1.0:
-        raise unstable(gains, rho, dt)
-    return rho
-
-
 def unstable(gains: PIDGains, rho: float, dt: float) -> FcompError:
     """The refusal of gains whose nominal closed loop has a pole ``|z| = rho >= 1``."""
     return FcompError(
@@ -177,6 +122,11 @@ def unstable(gains: PIDGains, rho: float, dt: float) -> FcompError:
         f"closed loop on the nominal model (largest pole |z| = {rho:.4f} >= 1 at "
         f"{1 / dt:.0f} Hz); lower the gains or the bandwidth"
     )
+
+
+#: The velocity compensation's range: 1 the measured velocity alone, 0 the reference's,
+#: below 0 the measured velocity fed back to the valve (:mod:`controllers.force_to_valve`).
+VELOCITY_COMPENSATION = (-3.0, 1.0)
 
 
 class PIDLaw:
@@ -200,12 +150,16 @@ class PIDLaw:
         return self.v_f
 
     def force(self, e: float, dr: float) -> float:
-        """``kp*e + ki*I + kd*(dr - v_f)`` with the integral *before* this sample's update."""
+        """``kp*e + ki*(I + dt*e) + kd*(dr - v_f)``: the backward-Euler integral, this
+        sample's error included (``I[k] = I[k-1] + dt*e[k]``; :func:`pid_transfer`'s
+        ``ki*dt*z/(z - 1)``); :meth:`integrate` then stores it, or keeps ``I[k-1]``."""
         g = self.gains
-        return g.kp * e + g.ki * self.integral + g.kd * (dr - self.v_f)
+        return g.kp * e + g.ki * (self.integral + self.dt * e) + g.kd * (dr - self.v_f)
 
     def integrate(self, e: float, demand: float, applied: float, valve_saturated: int) -> None:
-        """Advance the integral: back-calculation, frozen while the valve saturates with ``e``.
+        """Advance the integral to ``I[k] = I[k-1] + dt*e[k]`` (the value :meth:`force` used)
+        plus the back-calculation ``dt*kt*(applied - demand)/ki`` (zero unless the demand
+        was clipped); frozen at ``I[k-1]`` while the valve saturates with ``e``.
 
         ``valve_saturated`` is +1 / -1 when the valve command hit its upper /
         lower limit, 0 otherwise.
@@ -246,10 +200,12 @@ class PIDController(Controller):
     uses_friction: ClassVar[bool] = False
     options: ClassVar[tuple[str, ...]] = (
         "rate", "bandwidth", "kp", "ki", "kd", "derivative_cutoff", "kt", "force_bandwidth",
+        "velocity_compensation",
     )
     #: The options that replace the derived tuning (checked for margins when given).
     tuning_options: ClassVar[tuple[str, ...]] = (
         "rate", "bandwidth", "kp", "ki", "kd", "derivative_cutoff", "force_bandwidth",
+        "velocity_compensation",
     )
 
     def __init__(self, model: Any, **options: Any) -> None:
@@ -268,16 +224,26 @@ class PIDController(Controller):
             kt=float(o.get("kt", 20.0)),
         )
         self.valve = ForceToValve(model, float(o.get("force_bandwidth", tu.force_bandwidth)))
-        #: Margins of the nominal loop (:class:`controllers.tuning.Margins`); explicit
-        #: values are checked (refused without margins), the derived ones are the tuning's
-        #: (the same loop: the tuning's gains, force loop and rate).
-        self.margins = (model.checked_margins(self.gains, self.valve.bandwidth, self.dt,
+        lam = float(o.get("velocity_compensation", tu.velocity_compensation))
+        if not (math.isfinite(lam) and VELOCITY_COMPENSATION[0] <= lam
+                <= VELOCITY_COMPENSATION[1]):
+            raise FcompError(f"{self.name}: velocity_compensation must be a number from "
+                             f"{VELOCITY_COMPENSATION[0]:g} to {VELOCITY_COMPENSATION[1]:g}, "
+                             f"got {lam}")
+        #: ``lambda``: the inversion's velocity is ``lambda*v_hat + (1 - lambda)*dr``
+        #: (:mod:`controllers.force_to_valve`).
+        self.velocity_compensation = lam
+        #: Margins of the loop as it runs at its worst point over the grid
+        #: (:class:`controllers.loop_analysis.margins.LoopMargins`); explicit values are
+        #: checked (refused without margins), the derived ones are the tuning's.
+        self.margins = (model.checked_margins(self.family(), self.dt,
                                               f"{self.name} tuning ({', '.join(explicit)} given)")
                         if explicit else tu.margins)
-        #: Largest closed-loop pole magnitude of the nominal loop (the margins' own): a
-        #: tuning set unchecked (:meth:`~controllers.plant_model.ControlModel.use_tuning`)
-        #: is still refused when unstable.
-        self.stability_radius = self.margins.radius
+        #: Largest closed-loop pole magnitude of the nominal loop at mid stroke (sliding):
+        #: a tuning set unchecked (:meth:`~controllers.plant_model.ControlModel.use_tuning`,
+        #: a comparison's former numbers) is still refused when that loop is unstable.
+        mid = tu.mid.get("valve") if not explicit and tu.mid else None
+        self.stability_radius = (mid or self.margins).radius
         if not self.stability_radius < 1.0:
             raise unstable(self.gains, self.stability_radius, self.dt)
         self.law = PIDLaw(self.gains, self.dt)
@@ -286,6 +252,14 @@ class PIDController(Controller):
         self._bumpless = False
         self.F_demand = 0.0
         self._F_prev: float | None = None
+
+    def family(self) -> Any:
+        """The five numbers of the loop at rest (:class:`controllers.loop_analysis.pid_family.PIDFamilyGains`)."""
+        from controllers.loop_analysis.pid_family import PIDFamilyGains
+
+        g = self.gains
+        return PIDFamilyGains(g.kp, g.ki, g.kd, g.derivative_cutoff, self.valve.bandwidth,
+                              self.velocity_compensation)
 
     # hooks for the compensators ------------------------------------------------
     def reset_compensation(self, y0: np.ndarray, ref: Reference) -> None:
@@ -338,13 +312,16 @@ class PIDController(Controller):
         g = self.gains
         F_dem = self.friction_demand(F_hat)
         if self._bumpless:
-            other = m.mass * ref.ddr + m.weight + (g.kp * e + g.kd * (ref.dr - v_f)) + F_dem
+            other = (m.mass * ref.ddr + m.weight
+                     + (g.kp * e + g.ki * self.law.dt * e + g.kd * (ref.dr - v_f)) + F_dem)
             self.law.integral = bumpless_integral(SCALAR, m.actuator_force(y), other, g.ki,
                                                   self.integral_bounds)
             self._bumpless = False
         demand = m.mass * ref.ddr + m.weight + self.law.force(e, ref.dr) + F_dem
         applied = min(max(demand, m.force_min), m.force_max)
-        u, sat = self.valve.command(applied, y, self.velocity_estimate(v_f))
+        lam = self.velocity_compensation
+        v_inv = lam * self.velocity_estimate(v_f) + (1.0 - lam) * ref.dr
+        u, sat = self.valve.command(applied, y, v_inv)
         self.law.integrate(e, demand, applied, sat)
         self.law.integral = clamp_integral(SCALAR, self.law.integral, self.integral_bounds)
         self.F_demand = applied

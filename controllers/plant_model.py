@@ -40,7 +40,15 @@ import numpy as np
 from controllers.pid import PIDGains
 from controllers.prediction import ContinuousModel
 from controllers.safety import FAULT_LATCH, FAULT_RECOVER, safe_command
-from controllers.tuning import Margins, Tuning, check_gains, derive_tuning, force_noise, pid_gains
+from controllers.tuning import (
+    Margins,
+    Tuning,
+    check_gains,
+    check_observer,
+    derive_tuning,
+    force_noise,
+    pid_gains,
+)
 from fcomp.errors import FcompError
 from fcomp.measurement import G
 from fcomp.models.base import FrictionModel
@@ -99,6 +107,12 @@ class PlantSettings:
     pid_bandwidth: float | None = None
     force_bandwidth: float | None = None
     observer_gain: float | None = None
+    #: Computation delay (control samples): the command computed from the measurement at
+    #: ``t[k]`` acts from ``t[k + delay]`` (:mod:`plants.uncertainty`; the harness applies it,
+    #: the loop analysis and the estimators know it).
+    delay: int = 1
+    #: What the loop analysis varies (:mod:`plants.uncertainty`; None: the kind's defaults).
+    uncertainty: Any = None
     safe_output: str | float = "centre"
     fault_latch: int = FAULT_LATCH
     fault_recover: int = FAULT_RECOVER
@@ -137,7 +151,8 @@ def plant_settings(plant: str | PlantFile) -> PlantSettings:
             raise FcompError(f"closed-loop control is set up for plants "
                              f"{', '.join(sorted(KINDS))}, not {plant!r}")
         plant = builtin_plant_file(plant)
-    return PlantSettings(sensors=Sensors(**plant.sensors), **plant.control)
+    return PlantSettings(sensors=Sensors(**plant.sensors), uncertainty=plant.ranges,
+                         **plant.control)
 
 
 #: Derived tunings by plant, friction and settings (a derivation costs about a second).
@@ -148,6 +163,15 @@ def sliding_damping(friction: FrictionModel) -> float:
     damping the seal adds to a sliding piston."""
     F = friction.steady_state(np.array([0.1, 0.2]))
     return max(float(F[1] - F[0]) / 0.1, 0.0)
+
+
+def presliding_bristle(friction: FrictionModel) -> tuple[float, float] | None:
+    """``(sigma0, sigma1)`` (N/m, N s/m) of a friction model with a bristle state ``z``: the
+    spring and damper that hold a piston at rest in pre-sliding; None without one."""
+    p = friction.flat_params()
+    if "z" not in friction.state_names or "sigma0" not in p:
+        return None
+    return float(p["sigma0"]), float(p.get("sigma1", 0.0))
 
 
 #: Plant states the controller measures, in the order of ``y``.
@@ -167,19 +191,23 @@ class ControlModel:
     params : str, optional
         Parameter-set name (default: the plant's; not with a plant file).
     damping : float, optional
-        The viscous damping (N s/m) the tuning's nominal loop assumes
-        (:meth:`loop_damping`); default the sliding slope of ``friction``
+        The viscous damping (N s/m) of the sliding piston in the tuning's loop analysis
+        (:meth:`viscous_damping`); default the sliding slope of ``friction``
         (:func:`sliding_damping`). A closed loop on a simulated plant gives the plant's
         own (:func:`controllers.harness.control_model`): every friction model the
         controllers are built with then gets the same PID, so that comparing models
         compares their compensation, not their tuning.
+    bristle : tuple of float, optional
+        ``(sigma0, sigma1)`` of the seal at rest (pre-sliding) in the loop analysis
+        (:func:`presliding_bristle`; default ``friction``'s, if it has a bristle state);
+        the harness gives the plant's own, for the same reason.
     settings
         Overrides of the plant's settings (:func:`plant_settings`) by field name.
     """
 
     def __init__(self, plant: str | PlantFile, friction: FrictionModel,
                  params: str | None = None, damping: float | None = None,
-                 **settings: Any) -> None:
+                 bristle: tuple[float, float] | None = None, **settings: Any) -> None:
         from plants import OdePlant, make_plant
         from plants.check import frictionless
         from plants.planfile import PlantFile
@@ -193,17 +221,20 @@ class ControlModel:
         self._damping = sliding_damping(friction) if damping is None else float(damping)
         if not (math.isfinite(self._damping) and self._damping >= 0):
             raise FcompError(f"loop damping must be a finite number >= 0 (N s/m), got {damping}")
+        self._bristle = presliding_bristle(friction) if bristle is None else (
+            float(bristle[0]), float(bristle[1]))
         if isinstance(plant, PlantFile):
             if params is not None:
                 raise FcompError(f"plant file {plant.label} gives the plant's parameters: "
                                  f"no parameter set {params!r} with it")
             self.plant_name = plant.kind
             own: Any = plant.make_plant(friction)
-            self._bare: Any = lambda: plant.make_plant(frictionless())
+            self._with: Any = plant.make_plant
         else:
             self.plant_name = plant
             own = make_plant(plant, friction, params)
-            self._bare = lambda: make_plant(plant, frictionless(), params)
+            self._with = lambda fr: make_plant(plant, fr, params)
+        self._bare: Any = lambda: self._with(frictionless())
         if not isinstance(own, OdePlant):
             raise FcompError(f"plant {plant} is not given by differential equations")
         self.plant: OdePlant = own
@@ -225,6 +256,14 @@ class ControlModel:
     control_rate = property(lambda self: self.settings.control_rate, doc="Hz")
     u_max = property(lambda self: self.settings.u_max, doc="valve command limit")
     du_max = property(lambda self: self.settings.du_max, doc="valve rate limit, 1/s")
+    delay = property(lambda self: int(self.settings.delay), doc="computation delay, samples")
+
+    @property
+    def uncertainty(self) -> Any:
+        """What the loop analysis varies (:class:`plants.uncertainty.Uncertainty`)."""
+        from plants.uncertainty import Uncertainty
+
+        return self.settings.uncertainty or Uncertainty.default(self.plant_name)
     sensors = property(lambda self: self.settings.sensors, doc=":class:`Sensors`")
 
     @property
@@ -248,16 +287,41 @@ class ControlModel:
         :mod:`controllers.tuning` (:func:`controllers.tuning.pid_gains`)."""
         return pid_gains(self.mass, bandwidth, self.sensors, force_noise(self), dt)
 
-    def checked_margins(self, gains: PIDGains, force_bandwidth: float, dt: float,
-                        what: str) -> Margins:
-        """Margins of explicit PID gains on the nominal loop, refused (one line, naming
-        ``what``) without them (:func:`controllers.tuning.check_gains`)."""
-        return check_gains(gains, self, force_bandwidth, dt, what)
+    def checked_margins(self, family: Any, dt: float, what: str) -> Margins:
+        """Margins of explicit PID-family values (:class:`controllers.loop_analysis.pid_family.PIDFamilyGains`)
+        on the loop as it runs, refused (one line, naming ``what`` and the worst point)
+        without them (:func:`controllers.tuning.check_gains`)."""
+        return check_gains(self, family, dt, what)
 
-    def use_tuning(self, tuning: Tuning) -> None:
+    def checked_observer(self, ctrl: Any, what: str) -> Margins:
+        """Margins of an explicitly tuned LuGre observer's loop at rest on the loop as it runs,
+        refused (one line) without them (:func:`controllers.tuning.check_observer`)."""
+        return check_observer(ctrl, what)
+
+    def use_tuning(self, tuning: Tuning | None) -> None:
         """Replace the derived tuning by ``tuning`` (e.g. :func:`controllers.tuning.fixed_tuning`,
-        for comparisons); controllers built afterwards take it as their default."""
+        for comparisons; None: derive it again); controllers built afterwards take it as
+        their default."""
         self._tuning = tuning
+
+    def presliding_plant(self, stiffness: float = 1.0) -> Any:
+        """The plant with the seal at rest in pre-sliding: a LuGre bristle of
+        :attr:`bristle` (``sigma0`` times ``stiffness``) and the sliding slope
+        (:meth:`viscous_damping`) as its viscous term; None without a bristle."""
+        if self._bristle is None:
+            return None
+        from fcomp.models import make_model
+
+        s0, s1 = self._bristle
+        fr = make_model("lugre", {"sigma0": s0 * stiffness, "sigma1": s1,
+                                  "sigma2": self._damping, "Fc": 1.0, "Fs": 1.0})
+        return self._with(fr)
+
+    @property
+    def bristle(self) -> tuple[float, float] | None:
+        """``(sigma0, sigma1)`` of the seal at rest in the loop analysis (the ``bristle``
+        given, or the friction model's)."""
+        return self._bristle
 
     def plant_key(self) -> tuple[Any, ...]:
         """What the tuning's feedback part depends on (rules 1-3 of
@@ -266,7 +330,7 @@ class ControlModel:
         levels = self.friction.flat_params()  # the controller's friction: not in rules 1-3
         return (self.plant_name, tuple(sorted((k, v) for k, v in self.params.items()
                                               if k not in levels)), self.settings,
-                self._damping)
+                self._damping, self._bristle)
 
     def _tuning_key(self) -> tuple[Any, ...]:
         fp = self.friction.flat_params()

@@ -41,6 +41,24 @@ if TYPE_CHECKING:
     from plants.planfile import PlantFile
 
 
+def dead_valve(kind: str, values: dict[str, float], label: str = "") -> str | None:
+    """Why a plant's valve passes no flow (one line), or None: a hydraulic valve whose spool
+    gain ``kv``, discharge coefficient ``cd`` or area gradient ``w`` (a rated flow of 0) is
+    0, a pneumatic one whose edge area ``A_valve`` (sonic conductance) is 0 -- no command
+    moves the piston, so there is nothing to check or to tune."""
+    if kind == "hydraulic":
+        names = {"kv": "kv (spool displacement per command)", "cd": "cd (discharge "
+                 "coefficient)", "w": "w (area gradient; or its rated_flow)"}
+    else:
+        names = {"A_valve": "A_valve (edge area; or its sonic_conductance)"}
+    bad = [k for k in names if not values.get(k, 1.0) > 0]
+    if not bad:
+        return None
+    where = f"{label}: " if label else ""
+    return (f"{where}[valve] {', '.join(names[k] for k in bad)} is 0: the valve passes no "
+            "flow, no command moves the piston; give the valve's flow gain")
+
+
 def frictionless() -> FrictionModel:
     """A friction model that adds no force: Coulomb with ``Fc = 0``."""
     from fcomp.models import make_model
@@ -158,4 +176,4 @@ def _speed(plant: Any, x_pos: float, u: float, pf: PlantFile, A1: float) -> floa
     return float(state[list(plant.state_names).index("v")])
 
 
-__all__ = ["ColumnMode", "check_plant", "column_mode", "frictionless"]
+__all__ = ["ColumnMode", "check_plant", "column_mode", "dead_valve", "frictionless"]

@@ -132,4 +132,66 @@ def steady_motion(plant: Any, x_pos: float, u: float, v_guess: float) -> np.ndar
     return state
 
 
-__all__ = ["equilibrium", "steady_motion", "unreachable"]
+class Equilibria:
+    """Equilibria at rest of one plant at many positions and parameter values.
+
+    :func:`equilibrium`'s equations (at rest, ``v = 0``, friction states zero: the
+    chamber pressures, the valve states and the command ``u`` holding the load), with the
+    CasADi residual and its Jacobian built *once*, the position and the parameter vector
+    ``p`` (:meth:`plants.base.OdePlant.param_vector`) its inputs -- the loop analysis
+    solves hundreds (:mod:`controllers.loop_analysis`).
+    """
+
+    def __init__(self, plant: Any) -> None:
+        names = list(plant.state_names)
+        fr = set(plant.friction.state_names)
+        self.plant = plant
+        self.free = [n for n in names if n not in ("x", "v") and n not in fr]
+        zero = [n for n in names if n != "x" and n not in fr]
+        rhs = plant.casadi_functions(symbolic_params=True)["rhs"]
+        scale = np.asarray(plant.ode_model().scales, dtype=float)
+        idx = [names.index(n) for n in self.free]
+        self.idx, self.scale = idx, scale
+        zs = ca.SX.sym("z", len(idx) + 1)
+        pos = ca.SX.sym("pos")
+        p = ca.SX.sym("p", rhs.size1_in(2))
+        rest = plant.initial_state()  # v = 0 and the friction states at rest
+        rest[names.index("v")] = 0.0
+        state = []
+        for i, n in enumerate(names):
+            if i in idx:
+                state.append(zs[idx.index(i)] * scale[i])
+            elif n == "x":
+                state.append(pos)
+            else:
+                state.append(float(rest[i]))
+        self._rest = rest
+        f = rhs(ca.vertcat(*state), zs[-1], p)
+        res = ca.vertcat(*[f[names.index(n)] / scale[names.index(n)] for n in zero])
+        self._F = ca.Function("equilibria", [zs, pos, p], [res, ca.jacobian(res, zs)])
+        self._names = names
+        self._last: np.ndarray | None = None
+
+    def solve(self, x_pos: float, p: np.ndarray) -> tuple[np.ndarray, float]:
+        """The state at rest at ``x_pos`` holding the load, and its command, for the
+        parameters ``p``; started from the last solution (or the default state)."""
+        F = self._F
+        if self._last is None:
+            x0 = self.plant.initial_state({"x": x_pos})
+            z0 = np.concatenate([x0[self.idx] / self.scale[self.idx], [0.0]])
+        else:
+            z0 = self._last
+        sol = root(lambda q: np.asarray(F(q, x_pos, p)[0]).ravel(), z0,
+                   jac=lambda q: np.asarray(F(q, x_pos, p)[1]), method="hybr", tol=1e-13)
+        resid = np.abs(np.asarray(F(sol.x, x_pos, p)[0])).max()
+        if not sol.success and resid > 1e-9:
+            raise ConvergenceError(f"no equilibrium of plant {self.plant.name} at x = {x_pos} m "
+                                   f"({sol.message})")
+        self._last = sol.x
+        out = self._rest.copy()
+        out[self._names.index("x")] = x_pos
+        out[self.idx] = sol.x[:-1] * self.scale[self.idx]
+        return out, float(sol.x[-1])
+
+
+__all__ = ["Equilibria", "equilibrium", "steady_motion", "unreachable"]

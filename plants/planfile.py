@@ -39,6 +39,7 @@ from fcomp.paramsets import ParameterSet
 from plants.base import OdePlant
 from plants.hydraulic import HydraulicPlant
 from plants.pneumatic import PneumaticPlant
+from plants.uncertainty import Uncertainty, split_loop_keys
 
 if TYPE_CHECKING:
     from fcomp.models.base import FrictionModel
@@ -197,12 +198,16 @@ class PlantFile:
     sensors : dict of str to float
         ``x_noise``, ``x_quantum`` (m), ``p_noise``, ``p_quantum`` (Pa).
     control : dict of str to float
-        ``control_rate`` (Hz), ``u_max``, ``du_max``, the tuning given
-        (``pid_bandwidth``, ``force_bandwidth``, ``observer_gain``) and the fail-safe
-        layer's settings given (``safe_output``, a name or a number; ``fault_latch``,
-        ``fault_recover``, whole numbers; ``position_margin``, ``pressure_max``).
+        ``control_rate`` (Hz), ``u_max``, ``du_max``, ``delay`` (samples,
+        :mod:`plants.uncertainty`), the tuning given (``pid_bandwidth``,
+        ``force_bandwidth``, ``observer_gain``) and the fail-safe layer's settings given
+        (``safe_output``, a name or a number; ``fault_latch``, ``fault_recover``, whole
+        numbers; ``position_margin``, ``pressure_max``).
     rig : dict
         The ``[rig]`` table as a sidecar writes it.
+    uncertainty : Uncertainty, optional
+        The ``[uncertainty]`` table (:mod:`plants.uncertainty`; None: the defaults,
+        :attr:`ranges`).
     """
 
     kind: str
@@ -212,6 +217,13 @@ class PlantFile:
     sensors: dict[str, float] = field(default_factory=dict)
     control: dict[str, float] = field(default_factory=dict)
     rig: dict[str, Any] = field(default_factory=dict)
+    uncertainty: Uncertainty | None = None
+
+    @property
+    def ranges(self) -> Uncertainty:
+        """What the loop analysis varies (:mod:`plants.uncertainty`): the file's
+        ``[uncertainty]``, the defaults for what it leaves out."""
+        return self.uncertainty or Uncertainty.default(self.kind)
 
     @property
     def plant_class(self) -> type[OdePlant]:
@@ -342,7 +354,7 @@ def parse_plant(doc: Mapping[str, Any], label: str, default_name: str = "plant")
         raise PlantFileError([f"{label}: kind must be one of {', '.join(SCHEMA)} "
                               f"(got {kind!r})"])
     schema = SCHEMA[kind]
-    problems: list[str] = []
+    doc, uncertainty, delay, problems = split_loop_keys(doc, kind, label)
     name = doc.get("name", default_name)
     if not isinstance(name, str) or not name.strip() or not name.isprintable():
         problems.append(f"{label}: name = {name!r} must be text on one line (the plant's name "
@@ -391,6 +403,7 @@ def parse_plant(doc: Mapping[str, Any], label: str, default_name: str = "plant")
     values = _plant_values(cls, numbers, given, label, problems)
     sensors = {t.split(":", 1)[1]: v for t, v in numbers.items() if t.startswith("sensors:")}
     control = {t.split(":", 1)[1]: v for t, v in numbers.items() if t.startswith("control:")}
+    control["delay"] = delay
     for target, v in numbers.items():
         if target.startswith(("sensors:", "control:")) and target != "control:safe_output":
             table, key, spec, _ = given[target]
@@ -406,7 +419,7 @@ def parse_plant(doc: Mapping[str, Any], label: str, default_name: str = "plant")
                    values=values, sensors=sensors, control=control,
                    rig={"bore": values["bore"], "rod": values["rod"],
                         "stroke": values["stroke"], "mass": values["mass"],
-                        "orientation": orientation})
+                        "orientation": orientation}, uncertainty=uncertainty)
     problems += _cross_checks(pf, given)
     if problems:
         raise PlantFileError(problems)

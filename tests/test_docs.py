@@ -87,3 +87,15 @@ def test_page_examples_run(page: Path, tmp_path: Path, monkeypatch: pytest.Monke
         for cmd in commands(code):
             code_ = main(shlex.split(cmd)[1:])
             assert code_ == 0, f"{where}: `{cmd}` exited {code_}"
+
+
+@pytest.mark.slow
+def test_the_compensators_tuning_tables_are_the_codes() -> None:
+    """docs/compensators.md's tuning tables are what docs/make_tuning_tables.py derives now."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("make_tuning_tables",
+                                                  ROOT / "docs" / "make_tuning_tables.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    assert mod.main(["--check"]) == 0

@@ -310,15 +310,18 @@ def _pid_law(ctrl: Any) -> _Law:
         if reenter is None:
             integral0: Any = 0.0
         else:  # bumpless: the demand equals the measured actuator force
-            other = m.mass * ddr + m.weight + (g.kp * e + g.kd * (dr - v_f)) + F_dem
+            other = (m.mass * ddr + m.weight
+                     + (g.kp * e + g.ki * dt * e + g.kd * (dr - v_f)) + F_dem)
             F_a = p1g * m.A1 - p2g * m.A2
             integral0 = ca.if_else(reenter, bumpless_integral(SYMBOLIC, F_a, other, g.ki, bounds),
                                    0.0)
         integral = ca.if_else(started, s[1], integral0)
-        demand = (m.mass * ddr + m.weight + (g.kp * e + g.ki * integral + g.kd * (dr - v_f))
-                  + F_dem)
+        demand = (m.mass * ddr + m.weight
+                  + (g.kp * e + g.ki * (integral + dt * e) + g.kd * (dr - v_f))
+                  + F_dem)  # the backward-Euler integral of PIDLaw.force
         applied = ca.fmin(ca.fmax(demand, m.force_min), m.force_max)
-        u, sat = _valve_command(ctrl.valve, applied, y, v_inv)
+        lam = ctrl.velocity_compensation  # PIDController.step's velocity mix
+        u, sat = _valve_command(ctrl.valve, applied, y, lam * v_inv + (1.0 - lam) * dr)
         if g.ki == 0:
             integral_next = integral
         else:

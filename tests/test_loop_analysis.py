@@ -463,17 +463,23 @@ def test_bad_delay_is_refused(value: str, tmp_path: Path) -> None:
     ("pneumatic", "A_valve = 6.0e-6 ", "A_valve = 0.0 ", "A_valve (edge area"),
     ("pneumatic", "A_valve = 6.0e-6 ", "# A_valve\nsonic_conductance = 0.0 #",
      "A_valve (edge area"),
-])
+])  # the file names the key it was given; the tuning (values without a file) the model's
 def test_a_dead_valve_is_refused_in_one_line(kind: str, old: str, new: str, needle: str,
                                               tmp_path: Path, capsys) -> None:
     path = _edit(kind, tmp_path, (old, new))
     assert main(["plant", "check", str(path)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "passes no flow" in err[0] and needle in err[0], err
-    model = ControlModel(read_plant_file(path), make_model("nmlgm", params=(
+    given = new.split("\n")[-1].split()[0]
+    assert len(err) == 1 and "passes no flow" in err[0] and f"[valve] {given} = 0" in err[0], err
+    with pytest.raises(FcompError, match="passes no flow"):  # the file refuses it itself
+        read_plant_file(path)
+    pf = builtin_plant_file(kind)  # the same dead valve given as values: tuning refuses it
+    pf = replace(pf, values={**pf.values, needle.split()[0]: 0.0})
+    model = ControlModel(pf, make_model("nmlgm", params=(
         "seed002-type1" if kind == "hydraulic" else "seed000-servo")))
-    with pytest.raises(FcompError, match="passes no flow"):
+    with pytest.raises(FcompError, match="passes no flow") as exc:
         _ = model.tuning
+    assert needle in str(exc.value)
 
 
 def test_a_zero_delay_and_a_wider_box_change_the_grid(tmp_path: Path) -> None:

@@ -135,8 +135,8 @@ def test_the_sampled_plant_is_the_nonlinear_step_differentiated(kind: str, regim
 def _controller_state(ctrl) -> tuple[callable, callable]:
     """Get/set of a Python controller's own state (what its step reads and writes): the
     PID law's, the observer's estimate and side, the EKF's estimate and last command with its
-    covariance held at the value it has when this is called; behind the fail-safe layer, the
-    inner controller's)."""
+    covariance held at the value it has when this is called, the friction estimate's last
+    value (its lead); behind the fail-safe layer, the inner controller's)."""
     from controllers.safety import unwrap
 
     ctrl = unwrap(ctrl)
@@ -164,6 +164,9 @@ def _controller_state(ctrl) -> tuple[callable, callable]:
             ctrl._u_prev = float(v[n])
 
         parts.append((n + 1, lambda: list(kf.x[:, 0]) + [ctrl._u_prev], set_ekf))
+    if ctrl.uses_friction:  # the friction estimate's lead: the previous estimate, last
+        parts.append((1, lambda: [0.0 if ctrl._F_prev is None else ctrl._F_prev],
+                      lambda v: setattr(ctrl, "_F_prev", float(v[0]))))
 
     def getter():
         return np.concatenate([np.asarray(g(), dtype=float) for _k, g, _s in parts])
@@ -207,6 +210,8 @@ def _nonlinear_poles(plant, make, pos: float, delay: int) -> tuple[np.ndarray, n
         i0 = lin.names.index("ekf_P[0]")
         ctrl.ekf.kf.P = np.asarray(s[i0:i0 + n * n]).reshape(n, n, order="F")
         get, put = _controller_state(ctrl)
+    if "F_prev" in fixed:
+        c0[-1] = fixed["F_prev"]
     ncs = len(c0)
     step = plant.discrete_step(dt, substeps=40)
     p = plant.param_vector()

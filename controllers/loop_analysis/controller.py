@@ -163,8 +163,8 @@ class StepLinearisation:
             s = s_new
         scale = np.empty(n)  # per block of the layout: its largest entry
         i = 0
-        for _block, size in self.step.layout:
-            scale[i:i + size] = max(float(np.abs(s[i:i + size]).max()), 1e-12)
+        for block, size in self.step.layout:
+            scale[i:i + size] = max(float(np.abs(s[i:i + size]).max()), self._floor(block))
             i += size
         u_scale = max(abs(u), 1e-9)
         k = self.keep  # the logical blocks held (the covariance: its observable part has
@@ -185,6 +185,16 @@ class StepLinearisation:
                                    f"point at rest (residual {np.abs(res).max():.2e})")
         self._last = s
         return s
+
+    def _floor(self, block: str) -> float:
+        """The smallest scale of a block for the fixed point's tolerance: a force carried
+        from the last sample (the friction estimate's lead, ``F_prev``) is nil at rest, and
+        its rounding (1e-12 N) must not count as a relative change; its floor is a
+        billionth of the actuator's force range (N). Other blocks: 1e-12 in their units."""
+        if block == "F_prev":
+            m = self.ctrl.model
+            return 1e-9 * float(m.force_max - m.force_min)
+        return 1e-12
 
     def at(self, y: np.ndarray, u: float) -> LinearController:
         """The controller linearised at rest on the measurement ``y`` commanding ``u``
@@ -289,8 +299,9 @@ class StepLinearisation:
             S = S_new
         scale = np.empty((n, P))
         i0 = 0
-        for _block, size in self.step.layout:
-            scale[i0:i0 + size] = np.maximum(np.abs(S[i0:i0 + size]).max(axis=0), 1e-12)
+        for block, size in self.step.layout:
+            scale[i0:i0 + size] = np.maximum(np.abs(S[i0:i0 + size]).max(axis=0),
+                                             self._floor(block))
             i0 += size
         u_scale = np.maximum(np.abs(U), 1e-9)
         k = self.keep

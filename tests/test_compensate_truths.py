@@ -305,7 +305,7 @@ def test_every_run_flagged_exits_2_with_the_result_written(tmp_path: Path,
 
 
 @pytest.mark.parametrize("case, words", [
-    ("tuning", "pid_bandwidth 400 rad/s"),
+    ("tuning", "the tuning given (pid_bandwidth 400) refused"),
     ("load", "beyond the"),
     ("no-pair", "no controller can be built on two of the models"),
     ("blind", "none uses a friction model"),

@@ -206,6 +206,9 @@ class Refit:
         self.windows = timing_windows(data.signal("v"), data.scales.dt, data.scales.resolution)
         #: :data:`RIG_EXTRAS` estimated once and held from then on (:meth:`hold`)
         self.held: dict[str, float] = {}
+        #: model parameters the record cannot determine, kept at their model values in every
+        #: fit from now on (:meth:`keep`)
+        self.kept: set[str] = set()
         #: the data boxes, widened when a fit was pinned at their edge (:mod:`.boxes`)
         self.boxes = DataBoxes(data.scales, d_pre)
         #: the weight of every sample (:meth:`set_weights`; None: unweighted)
@@ -266,6 +269,18 @@ class Refit:
             raise KeyError(f"no rig extra {name!r}")
         self.held[name] = float(value)
         self._build_records()
+
+    def keep(self, names: Sequence[str]) -> None:
+        """Keep the model parameters ``names`` at their model values in every fit from now on.
+
+        An accepted effect holds what the record cannot determine at its no-op value
+        (:meth:`fcomp.effects.Effect.held`: the vented chamber's ``dA2`` of an area
+        error, the chamber weight ``kd`` of a pressure law with one chamber at a
+        constant pressure, a form's held term): the refits of every later step free
+        the whole model, and a parameter held only in the step that added it was
+        fitted again there (``kd`` of a pressure law came back at 1.7e-7 /Pa after a
+        direction asymmetry's step on a single-acting cylinder)."""
+        self.kept |= set(names)
 
     def refit_held(self, name: str, fit: FitResult) -> float:
         """Estimate the held extra ``name`` again for ``fit``'s model, and hold the new value.
@@ -399,7 +414,7 @@ class Refit:
 
     # ---------------------------------------------------------------- fit
     def free_names(self, model: FrictionModel) -> list[str]:
-        fixed = fixed_names(model)
+        fixed = fixed_names(model) | self.kept
         names = [n for n in default_free(model) if n not in fixed]
         if self.data.fits_mass:
             names.append("mass")
@@ -457,8 +472,8 @@ class Refit:
         :class:`FitResult`, scored on the full record.
         """
         max_nfev = max_nfev or self.max_nfev
-        names = [n for n in free if n not in self.held] if free is not None else \
-            self.free_names(model)
+        names = [n for n in free if n not in self.held and n not in self.kept] \
+            if free is not None else self.free_names(model)
         if not names:
             return self.result(model, {}, 0)
         # a model parameter named like an identification extra ("offset" of the

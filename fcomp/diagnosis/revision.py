@@ -69,6 +69,7 @@ def _known_fits(search: Search, model: FrictionModel) -> list[FitResult]:
 def _mark_removed(search: Search, effect: str, why: str, *, forced_too: bool) -> None:
     """Take ``effect`` out of the lists and mark the step that added it not accepted."""
     search.added = [n for n in search.added if n != effect]
+    search.keep_held()
     search.removed.append(effect)
     search.ties = [t for t in search.ties if t[0] != effect]  # its tie went with it
     for i, st in enumerate(search.steps):

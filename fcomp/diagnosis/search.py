@@ -229,11 +229,12 @@ class Search:
         self.noise_floor = noise_floor(data, g.segmentation)
         self.ground = Ground.of(data, g.segmentation, g.split, self.noise_floor.value)
         self.disturbances = [*self.disturbances, *(d for _, d in keep)]
-        held = dict(self.refit.held)
+        held, kept = dict(self.refit.held), set(self.refit.kept)
         self.refit = Refit(data, g.split, g.segmentation.d_pre, max_nfev=self.max_nfev,
                            max_samples=self.max_samples, noise=self.noise_floor.value)
         for name, value in held.items():
             self.refit.hold(name, value)
+        self.refit.kept = set(kept)
         return True
 
     # ------------------------------------------------------------------ steps
@@ -292,6 +293,24 @@ class Search:
                 self.ties.append(tie)
             self.fit = fit
             self.added.append(best.effect)
+            self.keep_held()
+
+    def keep_held(self) -> None:
+        """Keep what the effects in the model hold (their :meth:`~fcomp.effects.Effect.held`
+        parameters and their form's) at their no-op values in every later fit
+        (:meth:`.Refit.keep`): the candidates of later steps refit the whole model."""
+        ctx = self.context()
+        names: set[str] = set()
+        for name in self.added:
+            shape = catalogue.form_of(name, self.forms.get(name))
+            effect = self.instances.get(name)
+            try:
+                if effect is None:
+                    effect = catalogue.configured(name, ctx.data, None, **shape.config)
+                names |= set(effect.held(ctx.view)) | set(shape.held)
+            except (FcompError, ValueError, KeyError):
+                names |= set(shape.held)
+        self.refit.kept = names
 
     def evaluate(self, names: Sequence[str], fit: FitResult | None = None) -> list[Candidate]:
         """Refit ``fit + effect`` (default the current fit) for every name and judge it."""
@@ -362,6 +381,7 @@ class Search:
                                candidates=(cand,), fit=fit))
         self.fit = fit
         self.added.append(name)
+        self.keep_held()
 
     def _control(self, best: Candidate) -> bool:
         """Refit the current model from the best candidate's values; True if that alone helps.

@@ -200,13 +200,12 @@ def read_model(source: str | Path | Mapping[str, Any],
         doc = dict(doc["model_file"])  # the JSON of fcomp fit / diagnose
     _check_header(doc, label)
     params = _values(doc.get("params", {}), label, "params")
-    model = _build(doc, params, label)
+    model, m_effects = _build(doc, params, label)
     terms = _section(doc.get("measurement_terms", {}), label, "measurement_terms")
     unknown = sorted(set(terms) - {"effects", "params", "note"})
     if unknown:
         raise FileFormatError(f"{label}: measurement_terms has an unknown key {unknown[0]!r} "
                               "(known: effects, params, note)")
-    m_effects = []
     for i, entry in enumerate(_list(terms.get("effects", []), label,
                                     "measurement_terms.effects")):
         where = f"measurement_terms.effects[{i}]"
@@ -358,21 +357,30 @@ def _effect(cls: type[Effect], values: Mapping[str, float], config: Mapping[str,
         raise FileFormatError(f"{label}: {where} ({cls.name}): {exc}") from None
 
 
-def _build(doc: Mapping[str, Any], params: dict[str, float], label: str) -> FrictionModel:
-    """The model of ``doc``: the named model, its effects attached in order, its values."""
+def _build(doc: Mapping[str, Any], params: dict[str, float], label: str
+           ) -> tuple[FrictionModel, list[Effect]]:
+    """The model of ``doc`` (the named model, its effects attached in order, its values) and
+    the measurement effects listed among its ``effects``.
+
+    An effect of the measurement belongs in ``measurement_terms.effects``; a file written
+    when it was still counted a friction effect (``area-error`` before it was known as an
+    error of the force reconstruction) lists it among ``effects`` with its values in
+    ``params``: it is read as the measurement term it is.
+    """
     try:
         MODELS.get(doc["model"])
     except UnknownNameError as exc:
         raise FileFormatError(f"{label}: {exc}") from None
     model = make_model(doc["model"])
     consumed: set[str] = set()
+    measured: list[Effect] = []
     for i, entry in enumerate(_list(doc.get("effects", []), label, "effects")):
         cls, config = _effect_class(entry, label, f"effects[{i}]")
-        if cls.of_measurement:
-            raise FileFormatError(f"{label}: effect {cls.name!r} describes the measurement: "
-                                  "it belongs in measurement_terms.effects")
         effect = _effect(cls, params, config, label, f"effects[{i}]")
         consumed |= {k for k in params if k in _accepts(effect.params)}
+        if cls.of_measurement:
+            measured.append(effect)
+            continue
         try:
             model = effect.attach(model)
         except (ValueError, FcompError) as exc:
@@ -383,7 +391,7 @@ def _build(doc: Mapping[str, Any], params: dict[str, float], label: str) -> Fric
     if features is not None and fam is not None and sorted(fam.features) != features:
         raise FileFormatError(f"{label}: the model and its effects give the features "
                               f"{sorted(fam.features)}, the file says {features}")
-    return model
+    return model, measured
 
 
 def _with_values(model: FrictionModel, params: Mapping[str, float], consumed: set[str],

@@ -29,9 +29,11 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
+import json
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -73,6 +75,14 @@ class Experiment:
     @property
     def n(self) -> int:
         return self.stop - self.start
+
+    @cached_property
+    def digest(self) -> str:
+        """A digest of the experiment's stamps, motion and force (:func:`content_digest`):
+        what choices that must not depend on names or order (the held-out blocks, the
+        sessions) are keyed on."""
+        s = self.data.sig
+        return content_digest(s["t"], s["x"], s["v"], self.data.y)
 
 
 @dataclass
@@ -228,14 +238,37 @@ def _force_channels(meas: Measurement) -> set[str]:
     return {k for k in ("p1", "p2", "F_ext") if k in meas}
 
 
-def _canonical_key(meas: Measurement) -> tuple[str, str]:
-    """A key that orders records by name, and records of one name by their content."""
+def content_digest(*arrays: np.ndarray, text: str = "") -> str:
+    """A digest of numbers (and ``text``): what a record holds, never what it is called."""
     digest = hashlib.sha1(usedforsecurity=False)
-    digest.update(np.ascontiguousarray(meas.t, dtype=float).tobytes())
-    for name in sorted(meas.columns):
-        digest.update(name.encode())
-        digest.update(np.ascontiguousarray(meas[name], dtype=float).tobytes())
-    return meas.label, digest.hexdigest()
+    digest.update(text.encode())
+    for a in arrays:
+        digest.update(np.ascontiguousarray(a, dtype=float).tobytes())
+    return digest.hexdigest()
+
+
+#: Sidecar keys that name a record or its file rather than describe the rig or the motion.
+_NAMING_KEYS = ("name", "source")
+
+
+def _canonical_key(meas: Measurement) -> tuple[float, str, str]:
+    """A key that orders records by what they hold, never by their names.
+
+    The mean gauge pressure sum first (records of one seal at several pressure
+    levels come in pressure order, as a person reads them), then a digest of the
+    columns and of the sidecar's description of the rig (its name and source file
+    left out); the name decides only between records identical in every number and
+    every rig value, whose order changes no result. File names and the order files
+    are given in are no information: renamed or reordered, the same records give
+    the same answer to the bit.
+    """
+    psum = sum((meas[k] for k in ("p1", "p2") if k in meas), np.zeros(len(meas)))
+    meta = {k: v for k, v in meas.meta.items() if k not in _NAMING_KEYS}
+    names = sorted(meas.columns)
+    return (float(np.mean(psum)) if len(meas) else 0.0,
+            content_digest(meas.t, *(meas[n] for n in names),
+                           text=json.dumps([names, meta], sort_keys=True, default=str)),
+            meas.label)
 
 
 def sessions(data: DiagnosisData) -> list[list[int]]:
@@ -245,13 +278,13 @@ def sessions(data: DiagnosisData) -> list[list[int]]:
     experiment continues a session when its first stamp comes after the
     session's last one (the pieces of one file cut at logger pauses, or files
     of one logger whose clock runs on). Of several sessions it could continue,
-    the one that ended last (ties by label); experiments whose stamps overlap
+    the one that ended last (ties by content); experiments whose stamps overlap
     (files that each start at zero) are sessions of their own. The grouping
-    depends on the stamps and labels alone, never on the order the files were
-    given. Returns lists of experiment indices, each in time order.
+    depends on the stamps and contents alone, never on names or on the order the
+    files were given. Returns lists of experiment indices, each in time order.
     """
     t = data.signal("t")
-    spans = sorted(((float(t[e.start]), float(t[e.stop - 1]), e.label, i)
+    spans = sorted(((float(t[e.start]), float(t[e.stop - 1]), e.digest, i)
                     for i, e in enumerate(data.experiments)))
     groups: list[list[int]] = []
     ends: list[tuple[float, str]] = []

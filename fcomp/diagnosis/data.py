@@ -196,7 +196,11 @@ def _condition(subs: list[Measurement], cutoff_hz: float | None
         raise FcompError(f"{subs[0].label}: a diagnosis needs a position 'x' or velocity 'v' "
                          "column")
     pieces = [(m.t, m.get("x"), m.get("v")) for m in subs]
-    motions, cond = condition_motion(pieces, cutoff_hz=cutoff_hz)
+    # the raw force whose transitions at the reversals the band must keep
+    forces = None
+    if all("F" in m or any(k in m for k in ("p1", "p2", "F_ext")) for m in subs):
+        forces = [m["F"] if "F" in m else driving_force(m) for m in subs]
+    motions, cond = condition_motion(pieces, cutoff_hz=cutoff_hz, forces=forces)
     out = []
     for m, mo in zip(subs, motions, strict=True):
         a = np.where(mo.rest, 0.0, m["a"]) if "a" in m else mo.a

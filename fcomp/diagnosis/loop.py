@@ -44,7 +44,9 @@ from typing import Any
 import numpy as np
 
 import fcomp.diagnosis.revision as revision
+from fcomp.diagnosis.confounding import design_ties
 from fcomp.diagnosis.data import DiagnosisData, prepare
+from fcomp.diagnosis.design import record_design
 from fcomp.diagnosis.features import FeatureStrength, trimmed_rms
 from fcomp.diagnosis.noise import NoiseFloor, noise_floor
 from fcomp.diagnosis.refit import Refit
@@ -141,7 +143,8 @@ def diagnose(config: DiagnosisConfig, data: Measurement | Sequence[Measurement] 
     refit = Refit(data, split, seg.d_pre, max_nfev=config.max_nfev,
                   max_samples=config.max_samples, noise=floor.value)
     search = Search(refit, Ground.of(data, seg, split, floor.value), floor, config.rule, pool,
-                    tick, config.max_nfev, config.max_samples)
+                    tick, config.max_nfev, config.max_samples,
+                    design=record_design(data, seg))
     search.fit_baseline(model)
     for effect in config.add:
         search.force(effect if isinstance(effect, str) else effect.name,
@@ -151,6 +154,8 @@ def diagnose(config: DiagnosisConfig, data: Measurement | Sequence[Measurement] 
         revision.backward(search)
         revision.swaps(search, names)
         revision.partners_in_model(search)
+        assert search.design is not None
+        design_ties(search, search.design)
     search.late_disturbances()
     return DiagnosisResult.of(search, name, config.verdict_rule), search
 

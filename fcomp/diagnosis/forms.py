@@ -1,0 +1,108 @@
+"""Richer forms of an accepted effect, chosen by the held-out data.
+
+An effect is found in its plainest form (a pressure law linear in ``p1 + p2``);
+an expert then tries the forms the physics allows (a contact force that
+saturates with the pressure, a power of the pressure, the viscous part changing
+with it too: :meth:`fcomp.effects.Effect.refined_forms`). :func:`refine` refits
+the model with each such form in place of the accepted one, from the accepted
+values, and keeps the best form the acceptance rule accepts against the accepted
+one on the held-out data (:meth:`.rule.AcceptanceRule.judge`: a clear,
+significant fall, half the excess where it acts, the information criterion); a
+form that only bends to the training samples is refused as any candidate is.
+Every form tried is listed in the JSON (``forms``) with its held-out RMS and the
+rule's reason.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import TYPE_CHECKING, Any
+
+import fcomp.diagnosis.catalogue as catalogue
+from fcomp.diagnosis.refit import RIG_EXTRAS, fixed_names
+from fcomp.diagnosis.wording import QUALIFIES, judgement_text
+from fcomp.diagnosis.workers import refit_all
+from fcomp.effects import EFFECTS, Effect
+from fcomp.errors import FcompError
+from fcomp.identification.engine import default_free
+from fcomp.models.base import FrictionModel
+
+if TYPE_CHECKING:
+    from fcomp.diagnosis.search import Search
+
+
+def replaced(model: FrictionModel, effect: Effect) -> FrictionModel:
+    """``model`` with its add-on effect of ``effect``'s name replaced by ``effect``."""
+    effects = tuple(effect if e.name == effect.name else e for e in model.effects)
+    return model._rebuild(model.params, effects)
+
+
+def refine(search: Search, name: str) -> None:
+    """Try the refined forms of the accepted effect ``name`` (module docstring); the
+    current fit, the step that added it and ``search.forms`` take the form kept."""
+    forms = EFFECTS.get(name).refined_forms()
+    current = search.current
+    own = next((e for e in current.model.effects if e.name == name), None)
+    if not forms or own is None:
+        return
+    ctx = search.context()
+    data = search.ground.data
+    start = {k: v for k, v in current.values.items()
+             if k in current.model.flat_params() or k in RIG_EXTRAS}
+    proposals = []
+    for f in forms:
+        try:
+            effect = catalogue.configured(name, data, dict(own.params.flat()), **f.config)
+            model = replaced(current.model, effect)
+            guesses = effect.guess(ctx.view, f.name)
+        except (FcompError, ValueError, ArithmeticError):
+            continue
+        if not guesses:
+            continue
+        held = set(catalogue.held_of(name, f.name, ctx)) | search.refit.kept
+        free = [n for n in default_free(model) if n not in fixed_names(model) and n not in held]
+        free += [k for k in RIG_EXTRAS if k in current.values]
+        proposals.append(catalogue.Proposal(name, model, [{**start, **g} for g in guesses],
+                                            free, form=f.name))
+    if not proposals:
+        return
+    search.tick(f"forms of {name}")
+    results, search.pool = refit_all(search.refit, proposals, current, search.pool,
+                                     search.tick, search.seconds)
+    acts = EFFECTS.get(name).acts_in
+    judged = []
+    for prop, res in zip(proposals, results, strict=True):
+        if isinstance(res, str):
+            search.refined.append({"effect": name, "form": prop.form, "rms_heldout": None,
+                                   "qualifies": False, "reason": res, "kept": False})
+            continue
+        j = search.rule.judge(current, res, search.ground, acts)
+        judged.append((prop.form, res, j))
+    good = sorted((x for x in judged if x[2].qualifies), key=lambda x: x[1].rms_test)
+    kept = good[0][0] if good else None
+    for form, res, j in judged:
+        search.refined.append(_entry(name, form, res.rms_test, j.z, j.qualifies,
+                                     judgement_text(j) or QUALIFIES, form == kept,
+                                     current.rms_test))
+    if kept is None:
+        return
+    fit = search.reweighted(search.polish(good[0][1]))
+    search.forms[name] = kept
+    for i in range(len(search.steps) - 1, -1, -1):  # the step that added it, now in this form
+        st = search.steps[i]
+        if st.effect == name and st.accepted:
+            search.steps[i] = dataclasses.replace(st, fit=fit, rms_after=fit.rms_test,
+                                                  form=kept)
+            break
+    search.fit = fit
+    search.keep_held()
+
+
+def _entry(name: str, form: str | None, rms: float, z: float, qualifies: bool, reason: str,
+           kept: bool, before: float) -> dict[str, Any]:
+    return {"effect": name, "form": form, "rms_before": before, "rms_heldout": rms,
+            "z": z if z == z else None, "qualifies": qualifies, "reason": reason,
+            "kept": kept}
+
+
+__all__ = ["refine", "replaced"]

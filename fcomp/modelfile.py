@@ -51,7 +51,8 @@ from fcomp.parameters import ParamSet
 
 #: Keys of a model file (``format`` .. ``source``).
 KEYS = ("format", "version", "model", "description", "features", "effects", "params",
-        "stderr", "measurement_terms", "source")
+        "stderr", "measurement_terms", "source",
+        "undetermined")
 #: Keys of one entry of ``effects``.
 EFFECT_KEYS = ("name", "config", "module", "params")
 
@@ -73,6 +74,9 @@ class ModelFile:
         ``mass`` (kg), ``offset`` (N), ``lag`` (s) of ``measurement_terms``.
     stderr : dict of str to float
         Standard errors by flat name (those given).
+    undetermined : dict of str to str
+        Parameters the record did not determine -> why (the file's ``undetermined``):
+        :func:`load_model` warns about them (``undetermined``).
     source : dict
         Where the model comes from.
     document : dict
@@ -86,6 +90,16 @@ class ModelFile:
     stderr: dict[str, float] = field(default_factory=dict)
     source: dict[str, Any] = field(default_factory=dict)
     document: dict[str, Any] = field(default_factory=dict)
+    undetermined: dict[str, str] = field(default_factory=dict)
+
+    def undetermined_note(self) -> str:
+        """One line naming the values the record did not determine (empty: none)."""
+        if not self.undetermined:
+            return ""
+        return (f"{self.label}: {', '.join(self.undetermined)} not determined by the record "
+                "the model was fitted to (at a bound, not identified, or an interval through "
+                "zero): their values shape the friction only where that record did; the "
+                "file's \"undetermined\" says why for each")
 
     @property
     def measurement_terms(self) -> list[str]:
@@ -219,11 +233,16 @@ def read_model(source: str | Path | Mapping[str, Any],
                               f"term (known: {', '.join(MEASUREMENT_PARAMS)})")
     stderr = {k: v for k, v in _section(doc.get("stderr", {}), label, "stderr").items()
               if v is not None}
+    undetermined = _section(doc.get("undetermined", {}), label, "undetermined")
+    bad_u = [k for k, v in undetermined.items() if not isinstance(v, str)]
+    if bad_u:
+        raise FileFormatError(f"{label}: undetermined.{bad_u[0]} must be text (why the value "
+                              "is not determined)")
     return ModelFile(model=model, label=label, measurement_effects=tuple(m_effects),
                      measurement_params=m_params,
                      stderr=_values(stderr, label, "stderr"),
                      source=dict(_section(doc.get("source", {}), label, "source")),
-                     document=doc)
+                     document=doc, undetermined=dict(undetermined))
 
 
 def load_model(source: str | Path | Mapping[str, Any],
@@ -248,6 +267,8 @@ def load_model(source: str | Path | Mapping[str, Any],
     FrictionModel
     """
     mf = read_model(source, effects_module)
+    if mf.undetermined:
+        warnings.warn(FcompWarning("undetermined", mf.undetermined_note()), stacklevel=2)
     if measurement_terms:
         return mf.measured_model()
     if mf.measurement_terms:

@@ -72,7 +72,7 @@ from fcomp.trajectory import friction_along_motion
 #: Names other modules import from here: the weights and the noise share of the scores
 #: (:mod:`.scoring`) and the data boxes (:mod:`.boxes`).
 __all__ = ["CANDIDATE_SAMPLES", "MIN_GAIN", "PROBE_NFEV", "PROBE_SAMPLES", "RIG_EXTRAS",
-           "STAGED", "FitResult", "Refit", "fixed_names"]
+           "STAGED", "FitResult", "FitUncertainty", "Refit", "fixed_names"]
 
 #: Evaluations of each short probe fit when there are several starts.
 PROBE_NFEV = 20
@@ -510,17 +510,43 @@ class Refit:
             nfev += out.nfev
         return self.result(model, out.values, len(names), out.converged, nfev)
 
+    def uncertainty(self, fit: FitResult) -> FitUncertainty:
+        """Standard errors, intervals and correlations of ``fit``'s fitted parameters.
+
+        From the Jacobian at the estimate over the training samples, weighed as the
+        fit weighed them (batch-means HAC,
+        :func:`fcomp.identification.uncertainty.estimate`); the extras held from an
+        earlier fit (:meth:`hold`, the channel ``lag``) and the parameters kept
+        (:meth:`keep`) are not among them.
+        """
+        names = [n for n in fit.values if n not in self.held]
+        if not names:
+            return FitUncertainty({}, {}, {}, {})
+        base = fit.model
+        specs = fit_specs(base, names, self.boxes.bounds(base, names))
+        pv = ParameterVector.build(names, fit.values, specs,
+                                   self.boxes.magnitudes(base, names, fit.values))
+        theta = np.array([fit.values[n] for n in names])
+        r, G = RecordsProblem(base, self._records(self.q), pv)(theta, True)
+        assert G is not None
+        unc = estimate(G, r, theta)
+        return FitUncertainty(
+            dict(zip(names, map(float, unc.stderr), strict=True)),
+            {n: (float(lo), float(hi))
+             for n, lo, hi in zip(names, unc.ci_low, unc.ci_high, strict=True)},
+            correlations(names, unc.cov),
+            {n: (specs[n].lower, specs[n].upper) for n in names},
+            {n: specs[n].unit for n in names})
+
     def plausibility(self, fit: FitResult, context: RigContext | None = None
                      ) -> list[FitWarning]:
         """The plausibility warnings of ``fit`` (:func:`fcomp.identification.plausibility.check_fit`).
 
-        Standard errors, intervals and correlations from the Jacobian at the
-        estimate over the training samples (batch-means HAC,
-        :func:`fcomp.identification.uncertainty.estimate`); bounds are the
-        data boxes the fit searched (:func:`data_bounds`). The extras held from an
-        earlier fit (:meth:`hold`, the channel ``lag``) are checked against their
-        boxes too (:func:`fcomp.identification.plausibility.check_held`: at a bound,
-        a negative lag), after the fitted parameters.
+        Standard errors, intervals and correlations from :meth:`uncertainty`; bounds
+        are the data boxes the fit searched (:func:`data_bounds`). The extras held
+        from an earlier fit (:meth:`hold`, the channel ``lag``) are checked against
+        their boxes too (:func:`fcomp.identification.plausibility.check_held`: at a
+        bound, a negative lag), after the fitted parameters.
         """
         held_names = [n for n in self.held if n in fit.values]
         held: list[FitWarning] = []
@@ -530,25 +556,23 @@ class Refit:
                               {n: (hs[n].lower, hs[n].upper) for n in held_names},
                               units={n: hs[n].unit for n in held_names},
                               dt=self.q * self.data.scales.dt, context=context)
-        names = [n for n in fit.values if n not in self.held]
-        if not names:
+        unc = self.uncertainty(fit)
+        if not unc.stderr:
             return held
-        base = fit.model
-        specs = fit_specs(base, names, self.boxes.bounds(base, names))
-        pv = ParameterVector.build(names, fit.values, specs,
-                                   self.boxes.magnitudes(base, names, fit.values))
-        theta = np.array([fit.values[n] for n in names])
-        # residuals and Jacobian weighed as the fit weighed them
-        r, G = RecordsProblem(base, self._records(self.q), pv)(theta, True)
-        assert G is not None
-        unc = estimate(G, r, theta)
-        stderr = dict(zip(names, map(float, unc.stderr), strict=True))
-        ci = {n: (float(lo), float(hi))
-              for n, lo, hi in zip(names, unc.ci_low, unc.ci_high, strict=True)}
-        bounds = {n: (specs[n].lower, specs[n].upper) for n in names}
-        units = {n: specs[n].unit for n in names}
-        return check_fit(fit.values, stderr, ci, bounds, correlations(names, unc.cov),
-                         fit.converged, context, units=units) + held
+        return check_fit(fit.values, unc.stderr, unc.ci, unc.bounds, unc.correlations,
+                         fit.converged, context, units=unc.units) + held
+
+
+@dataclass(frozen=True)
+class FitUncertainty:
+    """Standard errors (same units as the values), 95 % intervals, correlations, the boxes
+    searched and the units of a fit's parameters (:meth:`Refit.uncertainty`)."""
+
+    stderr: dict[str, float]
+    ci: dict[str, tuple[float, float]]
+    correlations: dict[tuple[str, str], float]
+    bounds: dict[str, tuple[float, float]]
+    units: dict[str, str] = dataclasses.field(default_factory=dict)
 
 
 def _rms(r: np.ndarray) -> float:

@@ -15,7 +15,9 @@ from typing import Any
 
 import numpy as np
 
+from fcomp.diagnosis.advice import reword
 from fcomp.diagnosis.data import DiagnosisData
+from fcomp.diagnosis.design import Design
 from fcomp.diagnosis.disturbance import Disturbance
 from fcomp.diagnosis.features import EventRing, EventStructure, FeatureStrength
 from fcomp.diagnosis.noise import NoiseFloor
@@ -25,6 +27,7 @@ from fcomp.diagnosis.residuals import regime_errors
 from fcomp.diagnosis.rule import Ground
 from fcomp.diagnosis.search import Candidate, Search, Step
 from fcomp.diagnosis.split import Split
+from fcomp.diagnosis.structures import SealStructure, seal_structures
 from fcomp.diagnosis.verdict import Verdict, VerdictRule, conclude
 from fcomp.diagnosis.wording import dependence_text, verdict_text
 from fcomp.effects import EFFECTS
@@ -38,7 +41,11 @@ class DiagnosisResult:
     """One diagnosis's findings (attributes as :class:`.loop.Diagnosis`'s ``*_`` ones).
 
     ``check`` is ``{"ran": bool, "why": str}`` (the baseline check) and ``other``
-    the other baseline's result when it ran.
+    the other baseline's result when it ran; ``design`` the record's design
+    (:mod:`.design`) and ``confounding`` the ties it makes (:mod:`.confounding`);
+    ``pairs`` the pairs judged (:mod:`.pairs`), ``refined`` the refined forms tried
+    (:mod:`.forms`); ``stderr`` the final fit's standard errors; ``structures`` the seal
+    structures named in its residual (:mod:`.structures`).
     """
 
     baseline_name: str
@@ -59,6 +66,12 @@ class DiagnosisResult:
     final_warnings: tuple[FitWarning, ...]
     check: Mapping[str, Any] | None = None
     other: DiagnosisResult | None = None
+    design: Design | None = None
+    confounding: tuple[Mapping[str, Any], ...] = ()
+    pairs: tuple[Mapping[str, Any], ...] = ()
+    refined: tuple[Mapping[str, Any], ...] = ()
+    stderr: Mapping[str, float] = dataclasses.field(default_factory=dict)
+    structures: tuple[SealStructure, ...] = ()
 
     @classmethod
     def of(cls, search: Search, baseline_name: str, rule: VerdictRule) -> DiagnosisResult:
@@ -66,15 +79,20 @@ class DiagnosisResult:
         assert search.baseline_fit is not None
         g, fit, base = search.ground, search.current, search.baseline_fit
         refit = search.refit
-        first = _fit_warnings(refit, g, base, f"baseline {baseline_name}")
+        # nothing added: the baseline is the final model, and its flags are the final fit's
+        first = _fit_warnings(refit, g, base, f"baseline {baseline_name}" if fit is not base
+                              else f"final model {baseline_name} (the baseline, nothing "
+                              "added)", search.design)
         final = first
         steps = list(search.steps)
         for i, st in enumerate(steps):
             if st.accepted and st.fit is not None and st.fit is not fit:
                 steps[i] = dataclasses.replace(
-                    st, warnings=tuple(_fit_warnings(refit, g, st.fit, f"after + {st.effect}")))
+                    st, warnings=tuple(_fit_warnings(refit, g, st.fit, f"after + {st.effect}",
+                                                     search.design)))
         if fit is not base:
-            final = _fit_warnings(refit, g, fit, f"final model {fit.model.describe()}")
+            final = _fit_warnings(refit, g, fit, f"final model {fit.model.describe()}",
+                                  search.design)
             steps = [dataclasses.replace(st, warnings=tuple(final)) if st.fit is fit else st
                      for st in steps]
         warnings = (first + final if fit is not base else first) + list(g.split.warnings)
@@ -86,7 +104,13 @@ class DiagnosisResult:
                    tuple(search.disturbances), verdict,
                    {"baseline": regime_errors(base.residual, g.segmentation, test),
                     "final": regime_errors(fit.residual, g.segmentation, test)},
-                   tuple(warnings), tuple(final))
+                   tuple(warnings), tuple(final), design=search.design,
+                   confounding=tuple(dict(c) for c in search.confounding),
+                   pairs=tuple(dict(p) for p in search.pairs),
+                   refined=tuple(dict(f) for f in search.refined),
+                   stderr=_stderr(refit, fit),
+                   structures=tuple(seal_structures(fit.plain_residual, fit.F_hat, g.data,
+                                                    g.segmentation, verdict.least)))
 
     @property
     def doubts(self) -> list[str]:
@@ -133,12 +157,24 @@ class DiagnosisResult:
         return verdict_text(self.verdict) + dependence_text(self.dependence)
 
 
-def _fit_warnings(refit: Refit, ground: Ground, fit: FitResult, what: str) -> list[FitWarning]:
-    """The plausibility warnings of one fit of the diagnosis, each naming the fit."""
+def _stderr(refit: Refit, fit: FitResult) -> dict[str, float]:
+    """The standard errors of ``fit``'s fitted parameters (:meth:`.Refit.uncertainty`; NaN
+    where the record does not determine one; empty when they cannot be computed)."""
+    try:
+        return refit.uncertainty(fit).stderr
+    except (FcompError, ValueError, ArithmeticError, np.linalg.LinAlgError):
+        return {}
+
+
+def _fit_warnings(refit: Refit, ground: Ground, fit: FitResult, what: str,
+                  design: Design | None = None) -> list[FitWarning]:
+    """The plausibility warnings of one fit of the diagnosis, each naming the fit, their
+    advice matched to the record's design and the diagnosis's options (:mod:`.advice`)."""
     try:
         found = refit.plausibility(fit, ground.data.rig)
     except (FcompError, ValueError, ArithmeticError, np.linalg.LinAlgError):
         return []
+    found = reword(found, design, ground.data.kind)
     return [FitWarning(w.code, w.parameter, f"{what}: {w.message}") for w in found]
 
 

@@ -20,14 +20,19 @@ search (backward, swaps, partners) are in :mod:`.revision`.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import math
 from collections.abc import Sequence
 from concurrent.futures import Executor
 from dataclasses import dataclass, field
+from typing import Any
 
 import fcomp.diagnosis.catalogue as catalogue
 import fcomp.diagnosis.disturbance as disturbance
+import fcomp.diagnosis.forms as forms
+import fcomp.diagnosis.pairs as pairs
+from fcomp.diagnosis.design import Design
 from fcomp.diagnosis.noise import NoiseFloor, effective_sample_size, noise_floor
 from fcomp.diagnosis.refit import RIG_EXTRAS, FitResult, Refit
 from fcomp.diagnosis.rule import AcceptanceRule, Ground, Judgement, delta_bic
@@ -110,6 +115,10 @@ class Step:
     fit: FitResult | None = None
     removed: str = ""
     warnings: tuple[FitWarning, ...] = ()
+    #: the two effects of a pair found together (:mod:`.pairs`), empty for a single
+    pair: tuple[str, ...] = ()
+    #: the form of the effect kept (a refined form, :mod:`.forms`; None: its first)
+    form: str | None = None
 
 
 @dataclass
@@ -154,6 +163,13 @@ class Search:
     forms: dict[str, str | None] = field(default_factory=dict)
     instances: dict[str, Effect] = field(default_factory=dict)
     seconds: dict[tuple[str, str | None], float] = field(default_factory=dict)
+    #: the record's design (:mod:`.design`) and the ties it makes (:mod:`.confounding`)
+    design: Design | None = None
+    confounding: list[dict[str, Any]] = field(default_factory=list)
+    #: the pairs judged where no single candidate qualified (:mod:`.pairs`)
+    pairs: list[dict[str, Any]] = field(default_factory=list)
+    #: the refined forms of accepted effects tried (:mod:`.forms`)
+    refined: list[dict[str, Any]] = field(default_factory=list)
 
     # --------------------------------------------------------------- baseline
     @property
@@ -276,6 +292,8 @@ class Search:
             if step_no == 0 and not self.added:
                 self.candidates = ranked
             if not good:
+                if self._pair(ranked):  # two effects missing at once (:mod:`.pairs`)
+                    continue
                 best = ranked[0]
                 self.steps.append(Step(best.effect, self.current.rms_test, best.rms_heldout,
                                        False, candidates=tuple(ranked)))
@@ -288,12 +306,42 @@ class Search:
             fit = self.reweighted(self.polish(best.fit))
             self.forms[best.effect] = best.form
             self.steps.append(Step(best.effect, self.current.rms_test, fit.rms_test, True,
-                                   candidates=tuple(ranked), tie=tuple(tie), fit=fit))
+                                   candidates=tuple(ranked), tie=tuple(tie), fit=fit,
+                                   form=best.form))
             if len(tie) > 1:
                 self.ties.append(tie)
             self.fit = fit
             self.added.append(best.effect)
             self.keep_held()
+            forms.refine(self, best.effect)
+
+    def _pair(self, ranked: list[Candidate]) -> bool:
+        """Add the best qualifying pair of the step's promising candidates (:mod:`.pairs`),
+        as two steps; whether one was added."""
+        found, judged, self.pool = pairs.find_pair(
+            ranked, refit=self.refit, ground=self.ground, rule=self.rule,
+            current=self.current, context=self.context, pool=self.pool, tick=self.tick,
+            seconds=self.seconds)
+        self.pairs += [{**p.to_dict(), "accepted": p is found} for p in judged]
+        if found is None:
+            return False
+        first = next(c for c in ranked if c.effect == found.effects[0])
+        fit = self.reweighted(self.polish(found.fit))
+        before = self.current.rms_test
+        for name, form in zip(found.effects, found.forms, strict=True):
+            self.forms[name] = form
+        self.steps.append(Step(found.effects[0], before, first.rms_heldout, True,
+                               candidates=tuple(ranked), fit=None, pair=found.effects,
+                               form=found.forms[0]))
+        self.steps.append(Step(found.effects[1], first.rms_heldout, fit.rms_test, True,
+                               candidates=(), fit=fit, pair=found.effects,
+                               form=found.forms[1]))
+        self.fit = fit
+        self.added += list(found.effects)
+        self.keep_held()
+        for name in found.effects:
+            forms.refine(self, name)
+        return True
 
     def keep_held(self) -> None:
         """Keep what the effects in the model hold (their :meth:`~fcomp.effects.Effect.held`
@@ -302,14 +350,13 @@ class Search:
         ctx = self.context()
         names: set[str] = set()
         for name in self.added:
-            shape = catalogue.form_of(name, self.forms.get(name))
             effect = self.instances.get(name)
-            try:
-                if effect is None:
-                    effect = catalogue.configured(name, ctx.data, None, **shape.config)
-                names |= set(effect.held(ctx.view)) | set(shape.held)
-            except (FcompError, ValueError, KeyError):
-                names |= set(shape.held)
+            if effect is None:
+                names |= set(catalogue.held_of(name, self.forms.get(name), ctx))
+                continue
+            names |= set(catalogue.form_of(name, self.forms.get(name)).held)
+            with contextlib.suppress(FcompError, ValueError, KeyError):
+                names |= set(effect.held(ctx.view))
         self.refit.kept = names
 
     def evaluate(self, names: Sequence[str], fit: FitResult | None = None) -> list[Candidate]:
@@ -382,6 +429,7 @@ class Search:
         self.fit = fit
         self.added.append(name)
         self.keep_held()
+        forms.refine(self, name)
 
     def _control(self, best: Candidate) -> bool:
         """Refit the current model from the best candidate's values; True if that alone helps.

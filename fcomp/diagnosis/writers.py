@@ -79,10 +79,29 @@ def model_file(result: DiagnosisResult, source: Mapping[str, Any] | None = None
     from fcomp.models.document import model_document
 
     return model_document(result.fit.model, measurement=result.fit.values,
+                          stderr=dict(result.stderr), undetermined=undetermined(result),
                           source={"diagnosis": {"baseline": result.baseline_name,
                                                 "added": list(result.added),
                                                 "verdict": result.verdict.verdict},
                                   **dict(source or {})})
+
+
+#: Plausibility codes of a value the record does not determine.
+UNDETERMINED = ("at-bound", "not-identified", "interval-crosses-zero")
+
+
+def undetermined(result: DiagnosisResult) -> dict[str, str]:
+    """The final model's parameters the record did not determine -> why (the final fit's
+    ``at-bound``, ``not-identified`` and ``interval-crosses-zero`` warnings), for the model
+    file's ``undetermined``."""
+    out: dict[str, str] = {}
+    for w in result.final_warnings:
+        if w.code not in UNDETERMINED or not w.parameter:
+            continue
+        why = w.message.split(": ", 1)[-1]
+        for name in w.parameter.split(","):
+            out.setdefault(name.strip(), f"{w.code}: {why}")
+    return out
 
 
 def to_dict(result: DiagnosisResult) -> dict[str, Any]:
@@ -102,6 +121,8 @@ def to_dict(result: DiagnosisResult) -> dict[str, Any]:
                    _num(s.rms_after), "accepted": bool(s.accepted), "forced": s.forced,
                    "removed": bool(s.removed),
                    "removed_because": s.removed or None,
+                   "pair": list(s.pair) or None,
+                   "form": s.form,
                    "candidates": [_candidate(c) for c in s.candidates],
                    "warnings": [w.to_dict() for w in s.warnings]}
                   for s in result.steps],
@@ -122,10 +143,16 @@ def to_dict(result: DiagnosisResult) -> dict[str, Any]:
                               for f in result.verdict.features],
         "model": result.fit.model.describe(),
         "params": {k: _num(v) for k, v in result.fit.values.items()},
+        "stderr": {k: _num(v) for k, v in result.stderr.items()},
         "model_params": {k: _num(float(v)) for k, v in result.fit.model.flat_params().items()},
         "regimes": dict(result.regimes),
         "tie_experiments": {t[0]: {e: EFFECTS.get(e).experiment_for(data.kind) for e in t}
                             for t in result.ties},
+        "design": None if result.design is None else result.design.to_dict(),
+        "confounding": [dict(c) for c in result.confounding],
+        "pairs": [dict(p) for p in result.pairs],
+        "forms": [dict(f) for f in result.refined],
+        "structures": [st.to_dict() for st in result.structures],
         "skipped": dict(result.skipped),
         "split": result.ground.split.description,
         "noise_method": result.noise_floor.method,

@@ -127,8 +127,11 @@ def _experiments(items: Iterable[Mapping[str, Any]]) -> list[str]:
             for exp, ps in found.items()]
 
 
-def fit_flags(warnings: Sequence[Mapping[str, Any]]) -> tuple[str, list[str], list[str]]:
-    """``(confidence, reasons, next steps)`` of a fit from its warnings."""
+def fit_flags(warnings: Sequence[Mapping[str, Any]], mass_option: str | None = "--mass"
+              ) -> tuple[str, list[str], list[str]]:
+    """``(confidence, reasons, next steps)`` of a fit from its warnings; ``mass_option`` is
+    the command's option that gives the moving mass (None: it has none, the sidecar's
+    ``rig.mass`` alone)."""
     by = {c: [w for w in warnings if w.get("code") == c] for c in
           ("not-converged", *UNDETERMINED, "mass-implausible")}
     reasons: list[str] = []
@@ -153,7 +156,8 @@ def fit_flags(warnings: Sequence[Mapping[str, Any]]) -> tuple[str, list[str], li
         level = _lowest(level, "medium")
     steps = _experiments(w for c in UNDETERMINED for w in by[c])
     if by["mass-implausible"]:
-        steps.append("give the moving mass (rig.mass in the sidecar, or --mass)")
+        steps.append("give the moving mass (rig.mass in the sidecar"
+                     + (f", or {mass_option})" if mass_option else ")"))
     return level, reasons, steps
 
 
@@ -234,7 +238,7 @@ def of_diagnosis(doc: Mapping[str, Any]) -> Conclusion:
                    + (f"; the residual follows {top['feature']}" if top.get("feature") else ""))
     final_warnings = [w for w in doc.get("warnings", []) if context(w.get("message", ""))
                       == "final model"]
-    level, flags, steps = fit_flags(final_warnings)
+    level, flags, steps = fit_flags(final_warnings, mass_option=None)  # diagnose: no --mass
     reasons: list[str] = []
     if doc.get("baseline_dependent"):
         other = doc.get("other_baseline") or {}
@@ -276,7 +280,7 @@ MEANING: dict[str, str] = {
     "not-identified": "not determined by the record (standard errors far above the values, or "
                       "parameters that trade off)",
     "mass-implausible": "fitted masses implausible for the rig: give rig.mass in the sidecar "
-                        "or --mass",
+                        "(fcomp fit and fcomp compare also take --mass)",
     "not-converged": "fits that did not converge: the values are where the solver stopped",
     "heldout-coverage": "parts of the motion with too few held-out samples to be judged",
     "unknown-key": "sidecar keys the format does not read: they are kept but not used",

@@ -216,6 +216,30 @@ def record_design(data: DiagnosisData, seg: Segmentation) -> Design:
                   design.one_speed, design.stroke, design.fixed_stroke, tuple(conf))
 
 
+#: The shape of the Stribeck curve: what a record sliding at one speed per direction cannot
+#: determine (its exponent and form; the level and the speed stay free).
+STRIBECK_SHAPE = ("n", "kappa_s")
+
+
+def held_by_design(design: Design) -> dict[str, str]:
+    """Parameters the design cannot determine -> why: held at their model values in every
+    fit of the diagnosis (:meth:`.refit.Refit.keep`).
+
+    A record that slides at one speed in each direction samples the Stribeck curve at
+    two speeds and in the turns; the curve's exponent and form then shape only the
+    turns, where the bristle and the pressure channel act too, and a free exponent runs
+    to the edge of its box (``n`` = 6 on the TU Delft seals) to make the curve a step
+    between the two speeds -- a direction asymmetry in disguise. They are held
+    (``n`` at its model value, 2 for an exponential curve; ``kappa_s`` at 0).
+    """
+    if not design.one_speed:
+        return {}
+    return {name: ("held: the record slides at one speed in each direction, so the "
+                   "Stribeck curve's shape between the speeds it never slides at is not "
+                   "the record's to tell (constant-speed runs at several speeds would "
+                   "determine it)") for name in STRIBECK_SHAPE}
+
+
 def _fixed_stroke(data: DiagnosisData, seg: Segmentation) -> bool:
     """Whether every long run reverses near the stroke's two ends (:data:`FIXED_STROKE`)."""
     sc = data.scales
@@ -316,4 +340,5 @@ def _range(s: np.ndarray) -> str:
     return _mm_s(lo) if hi <= DISTINCT * lo else f"{_mm_s(lo)} to {_mm_s(hi)}"
 
 
-__all__ = ["FACTORS", "Confounding", "Design", "record_design"]
+__all__ = ["FACTORS", "STRIBECK_SHAPE", "Confounding", "Design", "held_by_design",
+           "record_design"]

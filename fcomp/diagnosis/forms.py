@@ -47,18 +47,24 @@ def refine(search: Search, name: str) -> None:
         return
     ctx = search.context()
     data = search.ground.data
-    start = {k: v for k, v in current.values.items()
-             if k in current.model.flat_params() or k in RIG_EXTRAS}
+    own_flat = dict(own.params.flat())
     proposals = []
     for f in forms:
         try:
-            effect = catalogue.configured(name, data, dict(own.params.flat()), **f.config)
+            guesses = catalogue.configured(name, data, own_flat, **f.config).guess(ctx.view,
+                                                                                  f.name)
+            if not guesses:
+                continue
+            # a guess may make a parameter direction-dependent (kp -> kp_pos, kp_neg)
+            split = {k[:-4] for k in guesses[0] if k.endswith(("_pos", "_neg"))}
+            effect = catalogue.configured(
+                name, data, {**{k: v for k, v in own_flat.items() if k not in split},
+                             **guesses[0]}, **f.config)
             model = replaced(current.model, effect)
-            guesses = effect.guess(ctx.view, f.name)
         except (FcompError, ValueError, ArithmeticError):
             continue
-        if not guesses:
-            continue
+        flat = model.flat_params()
+        start = {k: v for k, v in current.values.items() if k in flat or k in RIG_EXTRAS}
         held = set(catalogue.held_of(name, f.name, ctx)) | search.refit.kept
         free = [n for n in default_free(model) if n not in fixed_names(model) and n not in held]
         free += [k for k in RIG_EXTRAS if k in current.values]

@@ -46,8 +46,9 @@ import numpy as np
 import fcomp.diagnosis.revision as revision
 from fcomp.diagnosis.confounding import design_ties
 from fcomp.diagnosis.data import DiagnosisData, prepare
-from fcomp.diagnosis.design import record_design
+from fcomp.diagnosis.design import held_by_design, record_design
 from fcomp.diagnosis.features import FeatureStrength, trimmed_rms
+from fcomp.diagnosis.forms import refine
 from fcomp.diagnosis.noise import NoiseFloor, noise_floor
 from fcomp.diagnosis.refit import Refit
 from fcomp.diagnosis.regimes import Segmentation, segment
@@ -142,15 +143,20 @@ def diagnose(config: DiagnosisConfig, data: Measurement | Sequence[Measurement] 
     floor = noise_floor(data, seg)
     refit = Refit(data, split, seg.d_pre, max_nfev=config.max_nfev,
                   max_samples=config.max_samples, noise=floor.value)
+    design = record_design(data, seg)
     search = Search(refit, Ground.of(data, seg, split, floor.value), floor, config.rule, pool,
-                    tick, config.max_nfev, config.max_samples,
-                    design=record_design(data, seg))
+                    tick, config.max_nfev, config.max_samples, design=design,
+                    design_held=held_by_design(design))
+    refit.keep(list(search.design_held))  # what the design cannot determine, from the start
     search.fit_baseline(model)
     for effect in config.add:
         search.force(effect if isinstance(effect, str) else effect.name,
                      effect if isinstance(effect, Effect) else None)
     if config.search:
         search.run(names, config.max_steps)
+    for name in list(search.added):  # each effect's richer forms, in the model as it ended
+        refine(search, name)
+    if config.search:
         revision.backward(search)
         revision.swaps(search, names)
         revision.partners_in_model(search)

@@ -72,6 +72,7 @@ class DiagnosisResult:
     refined: tuple[Mapping[str, Any], ...] = ()
     stderr: Mapping[str, float] = dataclasses.field(default_factory=dict)
     structures: tuple[SealStructure, ...] = ()
+    design_held: Mapping[str, str] = dataclasses.field(default_factory=dict)
 
     @classmethod
     def of(cls, search: Search, baseline_name: str, rule: VerdictRule) -> DiagnosisResult:
@@ -110,7 +111,8 @@ class DiagnosisResult:
                    refined=tuple(dict(f) for f in search.refined),
                    stderr=_stderr(refit, fit),
                    structures=tuple(seal_structures(fit.plain_residual, fit.F_hat, g.data,
-                                                    g.segmentation, verdict.least)))
+                                                    g.segmentation, verdict.least)),
+                   design_held=dict(search.design_held))
 
     @property
     def doubts(self) -> list[str]:

@@ -30,7 +30,6 @@ from typing import Any
 
 import fcomp.diagnosis.catalogue as catalogue
 import fcomp.diagnosis.disturbance as disturbance
-import fcomp.diagnosis.forms as forms
 import fcomp.diagnosis.pairs as pairs
 from fcomp.diagnosis.design import Design
 from fcomp.diagnosis.noise import NoiseFloor, effective_sample_size, noise_floor
@@ -170,6 +169,9 @@ class Search:
     pairs: list[dict[str, Any]] = field(default_factory=list)
     #: the refined forms of accepted effects tried (:mod:`.forms`)
     refined: list[dict[str, Any]] = field(default_factory=list)
+    #: parameters the record's design cannot determine, held in every fit -> why
+    #: (:func:`.design.held_by_design`)
+    design_held: dict[str, str] = field(default_factory=dict)
 
     # --------------------------------------------------------------- baseline
     @property
@@ -313,7 +315,6 @@ class Search:
             self.fit = fit
             self.added.append(best.effect)
             self.keep_held()
-            forms.refine(self, best.effect)
 
     def _pair(self, ranked: list[Candidate]) -> bool:
         """Add the best qualifying pair of the step's promising candidates (:mod:`.pairs`),
@@ -339,8 +340,6 @@ class Search:
         self.fit = fit
         self.added += list(found.effects)
         self.keep_held()
-        for name in found.effects:
-            forms.refine(self, name)
         return True
 
     def keep_held(self) -> None:
@@ -348,7 +347,7 @@ class Search:
         parameters and their form's) at their no-op values in every later fit
         (:meth:`.Refit.keep`): the candidates of later steps refit the whole model."""
         ctx = self.context()
-        names: set[str] = set()
+        names: set[str] = set(self.design_held)
         for name in self.added:
             effect = self.instances.get(name)
             if effect is None:
@@ -429,7 +428,6 @@ class Search:
         self.fit = fit
         self.added.append(name)
         self.keep_held()
-        forms.refine(self, name)
 
     def _control(self, best: Candidate) -> bool:
         """Refit the current model from the best candidate's values; True if that alone helps.

@@ -18,6 +18,11 @@ large, because each points at a cause and an experiment:
     the last 3 mm of the extended end at 7 bar): the mean of ``s*r`` over the
     last 2.5-12.5 % of the stroke, approached while sliding, against the middle
     of the stroke in the same direction, per experiment;
+``experiment-level`` (:func:`experiment_levels`)
+    the levels of the experiments departing from the model by different amounts --
+    a session effect, a re-mounted seal, or a law in what the experiments differ by
+    (the pressure) of another form than the model's: each experiment's mean ``s*r``
+    in the middle of the stroke, per direction, and their spread;
 ``ripple`` (:func:`stroke_ripple`)
     a periodic force along the stroke -- the layers of a 3D-printed bore, a
     machining pattern (0.5 N peak to peak, 3 mm period): the residual in the
@@ -64,7 +69,7 @@ class SealStructure:
     Attributes
     ----------
     name : str
-        ``creep``, ``end-zone`` or ``ripple``.
+        ``experiment-level``, ``creep``, ``end-zone`` or ``ripple``.
     size : N
         Its size: the change over the strokes (creep), the mean excess in the zone
         (end zone), the amplitude (ripple).
@@ -245,6 +250,47 @@ def stroke_ripple(r: np.ndarray, data: DiagnosisData, seg: Segmentation, least: 
         {"amplitude": amp, "period": period, "prominence": prominence})]
 
 
+def experiment_levels(r: np.ndarray, data: DiagnosisData, seg: Segmentation, least: float
+                      ) -> list[SealStructure]:
+    """Levels that differ between experiments beyond what the model gives them (module
+    docstring): each experiment's mean sign-corrected residual ``s*r`` over its steady
+    sliding in the middle of the stroke, per direction; named when the experiments' means
+    spread by at least ``least`` newtons (RMS about their mean)."""
+    if len(data.experiments) < 2:
+        return []
+    v, x = data.signal("v"), data.signal("x")
+    sr = np.sign(v) * r
+    psum = data.signal("p1") + data.signal("p2")
+    sc = data.scales
+    use = seg.valid & (seg.regime == SLIDING) & (v != 0)
+    mid = (x > sc.x_min + MIDDLE * sc.stroke) & (x < sc.x_max - MIDDLE * sc.stroke)
+    best: tuple[float, list[tuple[int, float]], str] | None = None
+    for sign, name in ((1, "extending"), (-1, "retracting")):
+        means = []
+        for i, e in enumerate(data.experiments):
+            sel = (use & mid & (np.sign(v) == sign))[e.start:e.stop]
+            if sel.sum() >= MIN_SAMPLES:
+                means.append((i, float(np.mean(sr[e.start:e.stop][sel]))))
+        if len(means) < 2:
+            continue
+        m = np.array([b for _, b in means])
+        spread = float(np.sqrt(np.mean((m - m.mean()) ** 2)))
+        if best is None or spread > best[0]:
+            best = (spread, means, name)
+    if best is None or best[0] < least:
+        return []
+    spread, means, direction = best
+    low, high = min(means, key=lambda q: q[1]), max(means, key=lambda q: q[1])
+    return [SealStructure("experiment-level", spread, (
+        f"the experiments' levels depart from the model by {spread:.2g} N RMS while "
+        f"{direction} ({_where(data, high[0], psum)} {high[1]:+.2g} N, "
+        f"{_where(data, low[0], psum)} {low[1]:+.2g} N): what changed between the experiments "
+        "beyond what the model gives them -- another session, a re-mounted seal, a law of "
+        "another form in what they differ by"),
+        {"direction": direction, "spread": spread,
+         "levels": {data.experiments[i].label: lv for i, lv in means}})]
+
+
 def _sinusoid(x: np.ndarray, y: np.ndarray, period: float) -> tuple[float, float]:
     """``(amplitude, period)`` of the least-squares sinusoid of ``period`` in ``x`` through ``y``."""
     A = np.column_stack([np.sin(2 * np.pi * x / period), np.cos(2 * np.pi * x / period)])
@@ -258,8 +304,9 @@ def seal_structures(r: np.ndarray, F_hat: np.ndarray, data: DiagnosisData,
     (module docstring); ``least`` is the size that counts as structure (N)."""
     if data.steady_state or not data.available.get("x", False) or not least > 0:
         return []
-    return [*stroke_creep(r, F_hat, data, seg, least), *end_zones(r, data, seg, least),
-            *stroke_ripple(r, data, seg, least)]
+    return [*experiment_levels(r, data, seg, least), *stroke_creep(r, F_hat, data, seg, least),
+            *end_zones(r, data, seg, least), *stroke_ripple(r, data, seg, least)]
 
 
-__all__ = ["SealStructure", "end_zones", "seal_structures", "stroke_creep", "stroke_ripple"]
+__all__ = ["SealStructure", "end_zones", "experiment_levels", "seal_structures",
+           "stroke_creep", "stroke_ripple"]

@@ -94,7 +94,9 @@ def undetermined(result: DiagnosisResult) -> dict[str, str]:
     """The final model's parameters the record did not determine -> why (the final fit's
     ``at-bound``, ``not-identified`` and ``interval-crosses-zero`` warnings), for the model
     file's ``undetermined``."""
-    out: dict[str, str] = {}
+    flat = result.fit.model.flat_params()
+    out: dict[str, str] = {k: f"{why} (value {flat[k]:.4g})"
+                           for k, why in result.design_held.items() if k in flat}
     for w in result.final_warnings:
         if w.code not in UNDETERMINED or not w.parameter:
             continue
@@ -144,6 +146,7 @@ def to_dict(result: DiagnosisResult) -> dict[str, Any]:
         "model": result.fit.model.describe(),
         "params": {k: _num(v) for k, v in result.fit.values.items()},
         "stderr": {k: _num(v) for k, v in result.stderr.items()},
+        "held_by_design": dict(result.design_held),
         "model_params": {k: _num(float(v)) for k, v in result.fit.model.flat_params().items()},
         "regimes": dict(result.regimes),
         "tie_experiments": {t[0]: {e: EFFECTS.get(e).experiment_for(data.kind) for e in t}

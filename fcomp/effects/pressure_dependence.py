@@ -87,9 +87,11 @@ class PressureDependence(Effect):
 
     A diagnosis fits the linear law, the level and the chamber weight alone
     (``kq``, ``kv`` held), and once the effect is accepted tries the other laws
-    (:meth:`refined_forms`: saturating, power, the viscous part scaled too), each
-    kept only when the acceptance rule accepts it against the law it would replace
-    on the held-out data.
+    (:meth:`refined_forms`: saturating, power, the viscous part scaled too, the
+    slope ``kp`` of each direction its own -- a lip energised from one side changes
+    the friction of one stroke more than the other's), each kept only when the
+    acceptance rule accepts it against the law it would replace on the held-out
+    data.
     """
 
     name = "pressure-dependence"
@@ -153,7 +155,8 @@ class PressureDependence(Effect):
         return (DiagnosisForm("saturating", {"form": "saturating"}, held=("kq", "kv")),
                 DiagnosisForm("power", {"form": "power"}, held=("kq", "kv")),
                 DiagnosisForm("linear-viscous", {"form": "linear"}, held=("kq",)),
-                DiagnosisForm("saturating-viscous", {"form": "saturating"}, held=("kq",)))
+                DiagnosisForm("saturating-viscous", {"form": "saturating"}, held=("kq",)),
+                DiagnosisForm("directional", {"form": "linear"}, held=("kq", "kv")))
 
     def guess(self, view: RecordView, form: str | None = None) -> list[dict[str, float]]:
         """The level change per pascal of ``p1 + p2`` by least squares; then with the
@@ -188,6 +191,9 @@ class PressureDependence(Effect):
     def _refined_guess(self, view: RecordView, form: str) -> list[dict[str, float]]:
         sc = view.scales
         span = max(sc.p_span, 1e3)
+        if form == "directional":  # each direction its own slope, from the one accepted
+            kp = view.params.get("kp", 0.0)
+            return [{"kp_pos": kp, "kp_neg": kp}]
         if form.startswith("saturating"):
             starts = [{"p_sat": k * span} for k in (0.5, 1.0, 2.0)]
         elif form == "power":

@@ -221,7 +221,7 @@ def test_pressure_forms_scale_the_levels_as_their_equations(form: str) -> None:
 def test_pressure_forms_round_trip_through_the_model_file(tmp_path: Path) -> None:
     model = make_model("lugre", params="canudas1995").with_effects(
         make_effect("pressure-dependence", {"kp": 9e-7, "p_ref": 4e5, "p_sat": 2.5e5,
-                                            "kv": 4e-7}, form="saturating"))
+                                            "kpv": 4e-7}, form="saturating"))
     path = tmp_path / "m.json"
     model.save(path)
     same = load_model(path)

@@ -40,7 +40,7 @@ PressureDependenceParams = make_params_class("PressureDependenceParams", [
     spec("p_sat", "Pa", 5e5, 1e3, 1e8, "saturation pressure of the saturating form",
          directional=False),
     spec("p_exp", "-", 1.0, 0.1, 3.0, "exponent of the power form", directional=False),
-    spec("kv", "1/Pa", 0.0, -1e-3, 1e-3, "relative change of the viscous coefficient per "
+    spec("kpv", "1/Pa", 0.0, -1e-3, 1e-3, "relative change of the viscous coefficient per "
          "pascal of p1 + p2", directional=False),
 ], owner="effect pressure-dependence")
 
@@ -70,7 +70,7 @@ class PressureDependence(Effect):
         saturating  g = 1 + kp*p_sat*(1 - exp(-dS/p_sat)) + kd*(D - d_ref)
         power       g = 1 + kp*(p_ref/p_exp)*((S/p_ref)^p_exp - 1) + kd*(D - d_ref)
 
-    and the viscous coefficient by ``1 + kv*dS`` (``sigma2``, ``B``: the film's
+    and the viscous coefficient by ``1 + kpv*dS`` (``sigma2``, ``B``: the film's
     shear grows with the contact width). ``kp`` is the relative change per
     pascal at ``p_ref`` in every form. The *saturating* form is a contact force
     that tends to a limit as the pressure grows (``p_sat`` the pressure over
@@ -86,7 +86,7 @@ class PressureDependence(Effect):
     levels must not make the level negative at a pressure the fit never weighed.
 
     A diagnosis fits the linear law, the level and the chamber weight alone
-    (``kq``, ``kv`` held), and once the effect is accepted tries the other laws
+    (``kq``, ``kpv`` held), and once the effect is accepted tries the other laws
     (:meth:`refined_forms`: saturating, power, the viscous part scaled too, the
     slope ``kp`` of each direction its own -- a lip energised from one side changes
     the friction of one stroke more than the other's), each kept only when the
@@ -137,33 +137,33 @@ class PressureDependence(Effect):
         return scale_levels(L, self.factor(be, sig, P), be=be)
 
     def extra_force(self, be: Backend, sig: Signals, P: ParamValues) -> tuple[Any, Any]:
-        """The viscous term's change with the pressure, ``kv*dS*visc*v``."""
+        """The viscous term's change with the pressure, ``kpv*dS*visc*v``."""
         visc = next((P(n) for n in ("sigma2", "B") if P.has(n)), None)
         if visc is None:
             return 0.0, 0.0
-        return P("kv") * (sig.p1 + sig.p2 - P("p_ref")) * visc * sig.v, 0.0
+        return P("kpv") * (sig.p1 + sig.p2 - P("p_ref")) * visc * sig.v, 0.0
 
     @classmethod
     def diagnosis_forms(cls) -> tuple[DiagnosisForm, ...]:
         """The linear law of the level and the chamber weight (curvature and viscous part
         held): the candidate the search judges."""
-        return (DiagnosisForm("linear", {"form": "linear"}, held=("kq", "kv")),)
+        return (DiagnosisForm("linear", {"form": "linear"}, held=("kq", "kpv")),)
 
     @classmethod
     def refined_forms(cls) -> tuple[DiagnosisForm, ...]:
         """The laws tried once the effect is accepted (class docstring)."""
-        return (DiagnosisForm("saturating", {"form": "saturating"}, held=("kq", "kv")),
-                DiagnosisForm("power", {"form": "power"}, held=("kq", "kv")),
+        return (DiagnosisForm("saturating", {"form": "saturating"}, held=("kq", "kpv")),
+                DiagnosisForm("power", {"form": "power"}, held=("kq", "kpv")),
                 DiagnosisForm("linear-viscous", {"form": "linear"}, held=("kq",)),
                 DiagnosisForm("saturating-viscous", {"form": "saturating"}, held=("kq",)),
-                DiagnosisForm("directional", {"form": "linear"}, held=("kq", "kv")))
+                DiagnosisForm("directional", {"form": "linear"}, held=("kq", "kpv")))
 
     def guess(self, view: RecordView, form: str | None = None) -> list[dict[str, float]]:
         """The level change per pascal of ``p1 + p2`` by least squares; then with the
         chambers weighed apart and a curvature too (the sign-corrected residual regressed
         on ``|F_hat|*(dS, dD, dS^2)``). For a refined form (:meth:`refined_forms`) only its
         own parameters: the law accepted starts it (``p_sat`` a half, one and two pressure
-        spans; ``p_exp`` 0.5 and 0.75; ``kv`` the residual regressed on ``dS*visc*v``)."""
+        spans; ``p_exp`` 0.5 and 0.75; ``kpv`` the residual regressed on ``dS*visc*v``)."""
         if form not in (None, "linear"):
             return self._refined_guess(view, form)
         m = view.moving
@@ -208,9 +208,9 @@ class PressureDependence(Effect):
             m = view.moving
             col = ((view.signal("p1") + view.signal("p2") - flat.get("p_ref", sc.p_mid))
                    * visc * view.signal("v"))[m]
-            kv = ls_slope(view.residual[m], col) if visc > 0 else 0.0
+            kpv = ls_slope(view.residual[m], col) if visc > 0 else 0.0
             bound = 0.9 / span
-            starts = [{**st, "kv": float(np.clip(kv, -bound, bound))} for st in starts]
+            starts = [{**st, "kpv": float(np.clip(kpv, -bound, bound))} for st in starts]
         return starts
 
     def held(self, view: RecordView) -> list[str]:

@@ -232,10 +232,15 @@ def of_diagnosis(doc: Mapping[str, Any]) -> Conclusion:
                    f"noise (floor {_num(floor)}); no missing effect found")
     else:
         top = (doc.get("residual_features") or [{}])[0]
+        same = (f" (one with {', '.join(top['same_as'])} on this record's fixed stroke)"
+                if top.get("same_as") else "")
+        named = [st["name"] for st in doc.get("structures") or []]
         finding = (f"{final} leaves structure no catalogue effect explains: held-out RMS "
                    f"{_num(rf)} against a noise floor of {_num(floor)}"
                    + (f" (after adding {', '.join(added)})" if added else "")
-                   + (f"; the residual follows {top['feature']}" if top.get("feature") else ""))
+                   + (f"; the residual follows {top['feature']}{same}" if top.get("feature")
+                      else "")
+                   + (f"; named: {', '.join(dict.fromkeys(named))}" if named else ""))
     final_warnings = [w for w in doc.get("warnings", []) if context(w.get("message", ""))
                       == "final model"]
     level, flags, steps = fit_flags(final_warnings, mass_option=None)  # diagnose: no --mass
@@ -257,8 +262,14 @@ def of_diagnosis(doc: Mapping[str, Any]) -> Conclusion:
     for tie in doc.get("ties") or []:
         reasons.append(f"{' / '.join(tie)} fit equally well (confounded)")
         level = _lowest(level, "medium")
+        # where the record's design confounds them, the experiment that separates the factors
+        design = [c for c in doc.get("confounding") or [] if set(c["effects"]) <= set(tie)]
         exps = (doc.get("tie_experiments") or {}).get(tie[0], {})
-        if exps:
+        for c in design:
+            steps.append(f"to tell {' from '.join(c['effects'])} (the record varies "
+                         f"{' and '.join(c['factors'])} together): record {c['separates']}")
+        covered = {e for c in design for e in c["effects"]}
+        if exps and not set(tie) <= covered:
             steps.append(f"to tell {' from '.join(tie)}: record "
                          + "; ".join(f"{e}: {x}" for e, x in exps.items()))
     if level != "low" and explained:

@@ -318,3 +318,28 @@ def test_pairs_are_drawn_from_significant_falls_short_only_of_their_size() -> No
              _Cand("position-dependence", _judged(0.05, 1e-4, "small-share"), 1.3)]
     got = [c.effect for c in promising(cands, rule)]
     assert got == ["area-error", "direction-asymmetry", "pressure-dependence"]
+
+
+# ----------------------------------------------------------------- the conclusion
+def test_the_conclusion_names_the_design_tie_the_structures_and_one_feature() -> None:
+    from fcomp.conclusions import of_diagnosis
+
+    doc = {"baseline": "coulomb-viscous", "model": "coulomb-viscous + area-error",
+           "added": ["area-error"], "rms_baseline": 3.0, "rms_final": 0.66,
+           "noise_floor": 0.21, "verdict": "unexplained-structure",
+           "residual_features": [{"feature": "x", "strength": 0.4,
+                                  "same_as": ["displacement_since_reversal"]}],
+           "structures": [{"name": "end-zone", "text": "..."}, {"name": "creep", "text": ""}],
+           "ties": [["area-error", "stribeck"]],
+           "tie_experiments": {"area-error": {"area-error": "a", "stribeck": "b"}},
+           "confounding": [{"effects": ["area-error", "stribeck"],
+                            "factors": ["speed", "pressure"],
+                            "separates": "the same retracting speed at every pressure level"}],
+           "warnings": []}
+    c = of_diagnosis(doc)
+    assert "follows x (one with displacement_since_reversal on this record's fixed stroke)" \
+        in c.finding
+    assert c.finding.endswith("named: end-zone, creep")
+    assert any("varies speed and pressure together): record the same retracting speed"
+               in s for s in c.next_steps)
+    assert not any("area-error: a" in s for s in c.next_steps)  # the design's experiment

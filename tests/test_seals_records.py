@@ -99,3 +99,22 @@ def test_the_oring_model_is_a_seal_model_with_its_uncertainty(tmp_path: Path) ->
     text = " ".join(w["message"] for w in doc["warnings"])
     assert "two or more chamber pressure levels" not in text
     assert "--mass" not in text
+
+
+def test_two_effects_missing_at_once_are_found_as_a_pair() -> None:
+    """O-ring and Circle at 1-7 bar from LuGre: no single candidate takes half the excess
+    where it acts (each acts where the other's excess is too), but the pressure law with its
+    partner qualifies as a pair, each member against the other alone -- the search says so
+    (JSON ``pairs``, both steps marked ``pair``)."""
+    names = ["O-ring_1bar.csv", "Circle_2bar.csv", "O-ring_3bar.csv", "Circle_4bar.csv",
+             "O-ring_5bar.csv", "Circle_6bar.csv", "O-ring_7bar.csv"]
+    recs = [datasets.load("zillen", n) for n in names]
+    doc = Diagnosis("lugre", candidates=SEAL_CANDIDATES, n_jobs=1, check_baseline=False,
+                    max_steps=3).fit(recs).to_dict()
+    first = doc["steps"][0]
+    assert not any(c["qualifies"] for c in first["candidates"]), first["candidates"]
+    accepted = [p for p in doc["pairs"] if p["accepted"]]
+    assert accepted and "pressure-dependence" in accepted[0]["effects"], doc["pairs"]
+    assert first["pair"] == accepted[0]["effects"] and doc["steps"][1]["pair"]
+    assert set(accepted[0]["effects"]) <= set(doc["added"])
+    assert doc["rms_final"] < 0.7 * doc["rms_baseline"]

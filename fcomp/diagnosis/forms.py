@@ -16,6 +16,7 @@ rule's reason.
 from __future__ import annotations
 
 import dataclasses
+import time
 from typing import TYPE_CHECKING, Any
 
 import fcomp.diagnosis.catalogue as catalogue
@@ -73,23 +74,26 @@ def refine(search: Search, name: str) -> None:
     if not proposals:
         return
     search.tick(f"forms of {name}")
+    t0 = time.perf_counter()
     results, search.pool = refit_all(search.refit, proposals, current, search.pool,
                                      search.tick, search.seconds)
+    took = time.perf_counter() - t0
     acts = EFFECTS.get(name).acts_in
     judged = []
     for prop, res in zip(proposals, results, strict=True):
         if isinstance(res, str):
             search.refined.append({"effect": name, "form": prop.form, "rms_heldout": None,
-                                   "qualifies": False, "reason": res, "kept": False})
+                                   "qualifies": False, "reason": res, "kept": False,
+                                   "seconds": took})
             continue
         j = search.rule.judge(current, res, search.ground, acts)
         judged.append((prop.form, res, j))
     good = sorted((x for x in judged if x[2].qualifies), key=lambda x: x[1].rms_test)
     kept = good[0][0] if good else None
     for form, res, j in judged:
-        search.refined.append(_entry(name, form, res.rms_test, j.z, j.qualifies,
-                                     judgement_text(j) or QUALIFIES, form == kept,
-                                     current.rms_test))
+        search.refined.append({**_entry(name, form, res.rms_test, j.z, j.qualifies,
+                                        judgement_text(j) or QUALIFIES, form == kept,
+                                        current.rms_test), "seconds": took})
     if kept is None:
         return
     fit = search.reweighted(search.polish(good[0][1]))

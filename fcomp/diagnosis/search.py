@@ -23,6 +23,7 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import math
+import time
 from collections.abc import Sequence
 from concurrent.futures import Executor
 from dataclasses import dataclass, field
@@ -319,11 +320,14 @@ class Search:
     def _pair(self, ranked: list[Candidate]) -> bool:
         """Add the best qualifying pair of the step's promising candidates (:mod:`.pairs`),
         as two steps; whether one was added."""
+        t0 = time.perf_counter()
         found, judged, self.pool = pairs.find_pair(
             ranked, refit=self.refit, ground=self.ground, rule=self.rule,
             current=self.current, context=self.context, pool=self.pool, tick=self.tick,
             seconds=self.seconds)
-        self.pairs += [{**p.to_dict(), "accepted": p is found} for p in judged]
+        took = time.perf_counter() - t0  # the pair search's cost, reported with each pair
+        self.pairs += [{**p.to_dict(), "accepted": p is found, "seconds": took}
+                       for p in judged]
         if found is None:
             return False
         first = next(c for c in ranked if c.effect == found.effects[0])

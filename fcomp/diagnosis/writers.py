@@ -86,6 +86,27 @@ def model_file(result: DiagnosisResult, source: Mapping[str, Any] | None = None
                                   **dict(source or {})})
 
 
+#: Features that are one on a fixed stroke (every run reverses at the stroke's ends): the
+#: position and the displacement since the reversal follow each other in each direction.
+ONE_ON_A_FIXED_STROKE = ("x", "displacement_since_reversal")
+
+
+def merged_features(result: DiagnosisResult) -> list[dict[str, Any]]:
+    """The JSON's ``residual_features``: each feature with its strength, strongest first; on
+    a fixed stroke (:attr:`.design.Design.fixed_stroke`) the position and the displacement
+    since the reversal are one finding, listed once under the stronger with ``same_as``."""
+    feats = [{"feature": f.feature, "strength": round(f.strength, 4)}
+             for f in result.verdict.features]
+    if result.design is None or not result.design.fixed_stroke:
+        return feats
+    pair = [f for f in feats if f["feature"] in ONE_ON_A_FIXED_STROKE]
+    if len(pair) < 2:
+        return feats
+    keep, drop = pair[0], pair[1]  # strongest first
+    keep["same_as"] = [drop["feature"]]
+    return [f for f in feats if f is not drop]
+
+
 #: Plausibility codes of a value the record does not determine.
 UNDETERMINED = ("at-bound", "not-identified", "interval-crosses-zero")
 
@@ -141,8 +162,7 @@ def to_dict(result: DiagnosisResult) -> dict[str, Any]:
         "baseline_dependent": bool(result.dependence and result.dependence["dependent"]),
         "baseline_check": dict(result.check or {}),
         "other_baseline": result.dependence,
-        "residual_features": [{"feature": f.feature, "strength": round(f.strength, 4)}
-                              for f in result.verdict.features],
+        "residual_features": merged_features(result),
         "model": result.fit.model.describe(),
         "params": {k: _num(v) for k, v in result.fit.values.items()},
         "stderr": {k: _num(v) for k, v in result.stderr.items()},

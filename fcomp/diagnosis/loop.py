@@ -154,8 +154,8 @@ def diagnose(config: DiagnosisConfig, data: Measurement | Sequence[Measurement] 
                      effect if isinstance(effect, Effect) else None)
     if config.search:
         search.run(names, config.max_steps)
-    for name in list(search.added):  # each effect's richer forms, in the model as it ended
-        refine(search, name)
+    for effect in list(search.added):  # each effect's richer forms, in the model as it ended
+        refine(search, effect)
     if config.search:
         revision.backward(search)
         revision.swaps(search, names)

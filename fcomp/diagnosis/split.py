@@ -7,11 +7,10 @@ out whole pieces of the record:
 
 ``segment`` (the default, ``auto``)
     each experiment is cut into contiguous blocks of about
-    ``max(1 s, its duration/10)`` (at least three blocks per experiment, at least
-    20 samples each); every third block is held out, the pattern's phase read off
-    the experiment's content (:func:`experiment_phase`), so that an experiment's
-    split depends on it alone: not on its name, its place among the records, or
-    the other records diagnosed with it. Every experiment -- every pressure level, every
+    ``max(1 s, its duration/30)`` (at least three blocks per experiment, at least
+    20 samples each); every third block is held out, so that an experiment's split
+    depends on it alone: not on its name, its place among the records, or the
+    other records diagnosed with it. Every experiment -- every pressure level, every
     file -- is in both sets (a split *stratified* by experiment): an effect that
     shows between operating points can be judged. Of the pattern's three phases
     (from the experiment's own) the one that holds out nearest a third of the
@@ -43,7 +42,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from fcomp.diagnosis.data import DiagnosisData, Experiment
+from fcomp.diagnosis.data import DiagnosisData
 from fcomp.errors import FcompError
 from fcomp.identification.plausibility import FitWarning
 
@@ -121,30 +120,24 @@ def make_split(data: DiagnosisData, valid: np.ndarray, strategy: str = "auto") -
     return dataclasses.replace(split, coverage=cov, warnings=warns)
 
 
-#: Blocks of the ``segment`` split per experiment (at least :data:`BLOCK_SECONDS` long each).
-BLOCKS = 10
+#: Blocks of the ``segment`` split per experiment (at least :data:`BLOCK_SECONDS` long each):
+#: the former rule's thirty over the whole record, for one experiment the same split.
+BLOCKS = 30
 #: Shortest block of the ``segment`` split (s).
 BLOCK_SECONDS = 1.0
-
-
-def experiment_phase(e: Experiment) -> int:
-    """The phase (0, 1, 2) of an experiment's held-out pattern, read off its content
-    (:attr:`.data.Experiment.digest`): the same experiment holds out the same blocks
-    whatever it is called, wherever it comes among the records and whatever other
-    records it is diagnosed with."""
-    return int(e.digest[:8], 16) % 3
 
 
 def _segment_split(data: DiagnosisData, valid: np.ndarray) -> Split:
     """Every experiment cut into its own blocks, every third held out (module docstring).
 
     Each experiment's blocks and pattern depend on that experiment alone: its own
-    duration (:data:`BLOCKS` blocks of at least :data:`BLOCK_SECONDS`) and its content
-    (:func:`experiment_phase`). Before, the block length came from the whole record's
-    duration and the pattern's phase from the experiment's place in the list, so a
-    renamed file (its place in the name order) or one more file changed which samples
-    every other experiment held out (the same records renamed: a baseline error of
-    2.80 N against 2.94 N).
+    duration (:data:`BLOCKS` blocks of at least :data:`BLOCK_SECONDS`) and its own usable
+    samples (of the pattern's three phases, the one holding out nearest a third of them,
+    the first on a tie). Before, the block length came from the whole record's duration
+    and the pattern's phase from the experiment's place in the list, so a renamed file
+    (its place in the name order) or one more file changed which samples every other
+    experiment held out (the same records renamed: a baseline error of 2.80 N against
+    2.94 N). One experiment alone is split as before.
     """
     test = np.zeros(data.n, dtype=bool)
     n_blocks_all, lengths = 0, []
@@ -156,12 +149,11 @@ def _segment_split(data: DiagnosisData, valid: np.ndarray) -> Split:
         nb = max(1, min(nb, e.n // MIN_BLOCK))
         edges = np.linspace(0, e.n, nb + 1).round().astype(int)
         ok = valid[e.start:e.stop]
-        k = experiment_phase(e)
         usable = max(int(ok.sum()), 1)
-        # of the three phases, from the experiment's own, the one holding out nearest a
-        # third of its usable samples (a pattern whose blocks fall in the warm-up holds
-        # out too few, one that misses it too many)
-        patterns = [[b for b in range(nb) if (b + k + shift) % 3 == 1] for shift in range(3)]
+        # of the three phases the one holding out nearest a third of the usable samples (a
+        # pattern whose blocks fall in the warm-up holds out too few, one that misses it
+        # too many); the first on a tie
+        patterns = [[b for b in range(nb) if (b + shift) % 3 == 1] for shift in range(3)]
         held = min(patterns, key=lambda bs: abs(sum(int(ok[edges[b]:edges[b + 1]].sum())
                                                     for b in bs) / usable - 1.0 / 3.0))
         for b in held:

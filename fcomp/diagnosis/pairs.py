@@ -15,8 +15,13 @@ So when no single candidate qualifies, the most promising ones -- those whose
 fall is significant and which fail only for its size (``small-share``,
 ``small-fall``), at most :data:`PAIR_CANDIDATES` of them, best first -- are
 refitted in pairs (the better one's fit extended by the other, each of the
-other's forms; the information criterion picks the form as for a single). A
-pair is accepted when
+other's forms; the information criterion picks the form as for a single): the
+pairs of the best singles first, at most :data:`MAX_PAIRS`, never two effects
+declared confounded with each other (``Effect.confounded``: an offset and a
+direction asymmetry take the same excess twice -- on the O-ring and Circle
+files the three best singles were ``area-error``, ``force-offset`` and
+``direction-asymmetry``, and pairing them among themselves left the pressure law
+out). A pair is accepted when
 
 * the pair qualifies by the rule against the current model (where either acts),
   and
@@ -47,8 +52,10 @@ from fcomp.effects import EFFECTS
 from fcomp.errors import FcompError
 from fcomp.progress import Tick
 
-#: Most single candidates paired (the best by held-out RMS): 3 pairs at most.
-PAIR_CANDIDATES = 3
+#: Most single candidates considered for pairs (the best by held-out RMS) ...
+PAIR_CANDIDATES = 5
+#: ... and most pairs refitted (the pairs of the best singles first).
+MAX_PAIRS = 3
 #: The tests a promising candidate may fail: the size of its fall, nothing else.
 SIZE_ONLY = ("small-share", "small-fall")
 
@@ -132,6 +139,23 @@ def promising(ranked: Sequence[Judged], rule: AcceptanceRule) -> list[Judged]:
     return out[:PAIR_CANDIDATES]
 
 
+def confounded(a: str, b: str) -> bool:
+    """Whether effects ``a`` and ``b`` are declared to give the same force over the motions a
+    record holds (:attr:`fcomp.effects.Effect.confounded`, either way): such a pair takes the
+    same excess twice and cannot pass its members' tests against each other."""
+    return b in EFFECTS.get(a).confounded or a in EFFECTS.get(b).confounded
+
+
+def pairs_of(cands: Sequence[Judged]) -> list[tuple[int, int]]:
+    """The pairs of ``cands`` (indices, the better first) worth refitting: not confounded with
+    each other, best singles first (the sum of their held-out RMS), at most
+    :data:`MAX_PAIRS`."""
+    out = [(i, j) for i in range(len(cands)) for j in range(i + 1, len(cands))
+           if not confounded(cands[i].effect, cands[j].effect)]
+    out.sort(key=lambda ij: cands[ij[0]].rms_heldout + cands[ij[1]].rms_heldout)
+    return out[:MAX_PAIRS]
+
+
 def _acts_in(*names: str) -> tuple[str, ...]:
     """Where a pair acts: the union of its members' regimes (anywhere if either is)."""
     parts = [EFFECTS.get(n).acts_in for n in names]
@@ -151,19 +175,21 @@ def find_pair(ranked: Sequence[Judged], *, refit: Refit, ground: Ground, rule: A
     from now on (:func:`.workers.refit_all`).
     """
     cands = promising(ranked, rule)
-    if len(cands) < 2:
+    chosen = pairs_of(cands)
+    if not chosen:
         return None, [], pool
     train = ground.split.train
     n_eff = effective_sample_size(current.residual[train])
     best: dict[tuple[int, int], tuple[FitResult, str | None]] = {}
     kept = set(refit.kept)
-    tick("pairs: " + ", ".join(c.effect for c in cands))
-    for i, a in enumerate(cands[:-1]):  # the better single's fit extended by each other
+    tick("pairs: " + ", ".join(f"{cands[i].effect} + {cands[j].effect}" for i, j in chosen))
+    for i in sorted({i for i, _ in chosen}):  # the better single's fit extended by the other
+        a = cands[i]
         assert a.fit is not None
         ctx = context(a.fit)
         proposals: list[catalogue.Proposal] = []
         index: list[int] = []
-        for j in range(i + 1, len(cands)):
+        for j in (j for i_, j in chosen if i_ == i):
             b = cands[j]
             if catalogue.applicability(b.effect, ctx) is not None:
                 continue
@@ -201,4 +227,5 @@ def find_pair(ranked: Sequence[Judged], *, refit: Refit, ground: Ground, rule: A
     return (good[0] if good else None), judged, pool
 
 
-__all__ = ["PAIR_CANDIDATES", "Pair", "find_pair", "promising"]
+__all__ = ["MAX_PAIRS", "PAIR_CANDIDATES", "Pair", "confounded", "find_pair", "pairs_of",
+           "promising"]

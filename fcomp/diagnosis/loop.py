@@ -157,6 +157,7 @@ def diagnose(config: DiagnosisConfig, data: Measurement | Sequence[Measurement] 
     for effect in list(search.added):  # each effect's richer forms, in the model as it ended
         refine(search, effect)
     if config.search:
+        revision.drop_no_ops(search)
         revision.backward(search)
         revision.swaps(search, names)
         revision.partners_in_model(search)

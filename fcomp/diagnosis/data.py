@@ -251,8 +251,9 @@ def content_digest(*arrays: np.ndarray, text: str = "") -> str:
     return digest.hexdigest()
 
 
-#: Sidecar keys that name a record or its file rather than describe the rig or the motion.
-_NAMING_KEYS = ("name", "source")
+#: Sidecar keys that describe the rig and the record's conventions (what the order of records
+#: may depend on besides their columns; names, sources and notes never).
+_RIG_KEYS = ("kind", "pressure", "rig", "diagnosis")
 
 
 def _canonical_key(meas: Measurement) -> tuple[float, str, str]:
@@ -260,14 +261,15 @@ def _canonical_key(meas: Measurement) -> tuple[float, str, str]:
 
     The mean gauge pressure sum first (records of one seal at several pressure
     levels come in pressure order, as a person reads them), then a digest of the
-    columns and of the sidecar's description of the rig (its name and source file
-    left out); the name decides only between records identical in every number and
-    every rig value, whose order changes no result. File names and the order files
+    columns and of the sidecar's description of the rig (``kind``, ``pressure``,
+    ``rig``, ``diagnosis``; never its name, source or notes); the name decides only
+    between records identical in every number and every rig value, whose order
+    changes no result. File names and the order files
     are given in are no information: renamed or reordered, the same records give
     the same answer to the bit.
     """
     psum = sum((meas[k] for k in ("p1", "p2") if k in meas), np.zeros(len(meas)))
-    meta = {k: v for k, v in meas.meta.items() if k not in _NAMING_KEYS}
+    meta = {k: v for k, v in meas.meta.items() if k in _RIG_KEYS}
     names = sorted(meas.columns)
     return (float(np.mean(psum)) if len(meas) else 0.0,
             content_digest(meas.t, *(meas[n] for n in names),

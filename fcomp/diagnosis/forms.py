@@ -1,5 +1,8 @@
 """Richer forms of an accepted effect, chosen by the held-out data.
 
+Tried only where the residual still follows a factor of the effect (a pressure law's
+``p1 + p2``: :func:`still_follows`), so a record the plain form explains pays nothing.
+
 An effect is found in its plainest form (a pressure law linear in ``p1 + p2``);
 an expert then tries the forms the physics allows (a contact force that
 saturates with the pressure, a power of the pressure, the viscous part changing
@@ -20,6 +23,7 @@ import time
 from typing import TYPE_CHECKING, Any
 
 import fcomp.diagnosis.catalogue as catalogue
+from fcomp.diagnosis.features import residual_structure
 from fcomp.diagnosis.refit import RIG_EXTRAS, fixed_names
 from fcomp.diagnosis.wording import QUALIFIES, judgement_text
 from fcomp.diagnosis.workers import refit_all
@@ -30,6 +34,27 @@ from fcomp.models.base import FrictionModel
 
 if TYPE_CHECKING:
     from fcomp.diagnosis.search import Search
+
+
+#: The residual feature that follows each factor an effect's law acts through.
+FACTOR_FEATURES = {"pressure": "p1+p2", "speed": "v", "position": "x",
+                   "distance-since-reversal": "displacement_since_reversal"}
+#: A richer form is tried when the residual still follows a factor of the effect this much
+#: (the verdict's structure strength, :class:`.verdict.VerdictRule`).
+FOLLOWS = 0.15
+
+
+def still_follows(search: Search, name: str) -> bool:
+    """Whether the current residual still follows a factor of effect ``name`` (held-out
+    strength of its feature, :func:`.features.residual_structure`, at least
+    :data:`FOLLOWS`): only then are its richer forms worth their refits."""
+    wanted = {FACTOR_FEATURES[f] for f in EFFECTS.get(name).factors if f in FACTOR_FEATURES}
+    if not wanted:
+        return True
+    g = search.ground
+    found = residual_structure(search.current.located, g.data, g.segmentation, g.split.train,
+                               g.split.test)
+    return any(f.feature in wanted and f.strength >= FOLLOWS for f in found)
 
 
 def replaced(model: FrictionModel, effect: Effect) -> FrictionModel:
@@ -44,7 +69,7 @@ def refine(search: Search, name: str) -> None:
     forms = EFFECTS.get(name).refined_forms()
     current = search.current
     own = next((e for e in current.model.effects if e.name == name), None)
-    if not forms or own is None:
+    if not forms or own is None or not still_follows(search, name):
         return
     ctx = search.context()
     data = search.ground.data
@@ -115,4 +140,4 @@ def _entry(name: str, form: str | None, rms: float, z: float, qualifies: bool, r
             "kept": kept}
 
 
-__all__ = ["refine", "replaced"]
+__all__ = ["FACTOR_FEATURES", "refine", "replaced", "still_follows"]

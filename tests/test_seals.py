@@ -147,8 +147,9 @@ def test_transition_times_of_a_known_ramp_and_the_band_that_keeps_it() -> None:
     fc = event_band(fs, 1.0, float(np.percentile(times, 25)), 0.01, lambda f: 0.0)
     kept = zero_phase_lowpass(force, fs, fc, 2, label="F")
     assert np.median(transition_times(t, v, kept)) < 1.15 * np.median(times)
-    # a noisy position keeps its noise-limited band
+    # a noisy position keeps its noise-limited band, and a band above the events is kept
     assert event_band(fs, 1.0, width, 0.01, lambda f: 1.0) == 1.0
+    assert event_band(1000.0, 200.0, 0.3, 0.1, lambda f: 0.0) == 200.0
 
 
 def test_the_oring_records_are_derived_in_the_band_of_their_transitions() -> None:

@@ -109,6 +109,8 @@ def event_band(fs: float, fc: float, t_event: float | None, speed: float,
     if t_event is None or not t_event > 0:
         return fc
     want = 1.0 / t_event
+    if fc >= want:  # the band keeps the events already
+        return fc
     fine = [f * fs for f in sorted(CUTOFF_FRACTIONS) if f * fs > fc * (1 + 1e-9)
             and noise(f * fs) <= EVENT_NOISE_SHARE * speed]
     if not fine:

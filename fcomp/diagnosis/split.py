@@ -12,9 +12,10 @@ out whole pieces of the record:
     depends on it alone: not on its name, its place among the records, or the
     other records diagnosed with it. Every experiment -- every pressure level, every
     file -- is in both sets (a split *stratified* by experiment): an effect that
-    shows between operating points can be judged. Of the pattern's three phases
-    (from the experiment's own) the one that holds out nearest a third of the
-    experiment's usable samples is taken: blocks in the warm-up hold out nothing.
+    shows between operating points can be judged. Where the blocks from the second
+    hold out too few or too many of the experiment's usable samples (warm-up, a
+    short experiment), of the pattern's three phases the one nearest a third is
+    taken.
 ``experiment``
     whole experiments are held out: the 2nd, 5th, 8th, ... (every third,
     starting with the second) -- about a third of them, at least one, never
@@ -125,6 +126,8 @@ def make_split(data: DiagnosisData, valid: np.ndarray, strategy: str = "auto") -
 BLOCKS = 30
 #: Shortest block of the ``segment`` split (s).
 BLOCK_SECONDS = 1.0
+#: The share of an experiment's usable samples its held-out blocks may hold.
+HELD_RANGE = (0.2, 0.45)
 
 
 def _segment_split(data: DiagnosisData, valid: np.ndarray) -> Split:
@@ -132,8 +135,9 @@ def _segment_split(data: DiagnosisData, valid: np.ndarray) -> Split:
 
     Each experiment's blocks and pattern depend on that experiment alone: its own
     duration (:data:`BLOCKS` blocks of at least :data:`BLOCK_SECONDS`) and its own usable
-    samples (of the pattern's three phases, the one holding out nearest a third of them,
-    the first on a tie). Before, the block length came from the whole record's duration
+    samples (every third block from the second; of the pattern's three phases the one
+    holding out nearest a third of them when that holds out a share outside
+    :data:`HELD_RANGE`). Before, the block length came from the whole record's duration
     and the pattern's phase from the experiment's place in the list, so a renamed file
     (its place in the name order) or one more file changed which samples every other
     experiment held out (the same records renamed: a baseline error of 2.80 N against
@@ -150,12 +154,15 @@ def _segment_split(data: DiagnosisData, valid: np.ndarray) -> Split:
         edges = np.linspace(0, e.n, nb + 1).round().astype(int)
         ok = valid[e.start:e.stop]
         usable = max(int(ok.sum()), 1)
-        # of the three phases the one holding out nearest a third of the usable samples (a
-        # pattern whose blocks fall in the warm-up holds out too few, one that misses it
-        # too many); the first on a tie
+        # the pattern from the second block (one record alone is split as it always was),
+        # unless it holds out too few or too many of the usable samples (its blocks in the
+        # warm-up, or a short experiment): then of the three phases the one nearest a third
         patterns = [[b for b in range(nb) if (b + shift) % 3 == 1] for shift in range(3)]
-        held = min(patterns, key=lambda bs: abs(sum(int(ok[edges[b]:edges[b + 1]].sum())
-                                                    for b in bs) / usable - 1.0 / 3.0))
+        shares = [sum(int(ok[edges[b]:edges[b + 1]].sum()) for b in bs) / usable
+                  for bs in patterns]
+        pick = 0 if HELD_RANGE[0] <= shares[0] <= HELD_RANGE[1] else \
+            min(range(3), key=lambda k: abs(shares[k] - 1.0 / 3.0))
+        held = patterns[pick]
         for b in held:
             test[e.start + edges[b]:e.start + edges[b + 1]] = True
         n_blocks_all += nb

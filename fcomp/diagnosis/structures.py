@@ -89,6 +89,36 @@ class SealStructure:
                 **self.figures}
 
 
+@dataclass(frozen=True)
+class _Sliding:
+    """What every detector reads: the sign-corrected residual ``s*r``, the steady sliding
+    samples, the middle of the stroke, the reversals (a mask) and the pressure sum."""
+
+    v: np.ndarray
+    x: np.ndarray
+    sr: np.ndarray
+    use: np.ndarray
+    mid: np.ndarray
+    reversals: np.ndarray
+    psum: np.ndarray
+
+    def parts(self) -> tuple[np.ndarray, ...]:
+        """``(v, x, sr, use, mid, reversals, psum)``."""
+        return self.v, self.x, self.sr, self.use, self.mid, self.reversals, self.psum
+
+    @classmethod
+    def of(cls, r: np.ndarray, data: DiagnosisData, seg: Segmentation) -> _Sliding:
+        v, x = data.signal("v"), data.signal("x")
+        sc = data.scales
+        reversals = np.zeros(data.n, dtype=bool)
+        for k, _, rev in seg.starts:
+            if rev:
+                reversals[k] = True
+        return cls(v, x, np.sign(v) * r, seg.valid & (seg.regime == SLIDING) & (v != 0),
+                   (x > sc.x_min + MIDDLE * sc.stroke) & (x < sc.x_max - MIDDLE * sc.stroke),
+                   reversals, data.signal("p1") + data.signal("p2"))
+
+
 def _bar(p: float) -> str:
     return f"{p / 1e5:.2g} bar"
 
@@ -103,13 +133,9 @@ def end_zones(r: np.ndarray, data: DiagnosisData, seg: Segmentation, least: floa
               ) -> list[SealStructure]:
     """The largest end zone of the stroke in the sign-corrected residual (module docstring),
     per end; those of at least ``least`` newtons."""
-    v, x = data.signal("v"), data.signal("x")
-    sr = np.sign(v) * r
-    psum = data.signal("p1") + data.signal("p2")
+    v, x, sr, use, mid, _, psum = _Sliding.of(r, data, seg).parts()
     sc = data.scales
     stroke = sc.stroke
-    use = seg.valid & (seg.regime == SLIDING) & (v != 0)
-    mid = (x > sc.x_min + MIDDLE * stroke) & (x < sc.x_max - MIDDLE * stroke)
     out = []
     for end, sign, name in ((sc.x_max, 1, "extended"), (sc.x_min, -1, "retracted")):
         best: tuple[float, float, int] | None = None  # (excess, width, experiment)
@@ -142,16 +168,7 @@ def stroke_creep(r: np.ndarray, F_hat: np.ndarray, data: DiagnosisData, seg: Seg
                  least: float) -> list[SealStructure]:
     """The level's creep from stroke to stroke (module docstring): the experiment with the
     largest significant change, if it is at least ``least`` newtons."""
-    v, x = data.signal("v"), data.signal("x")
-    sr = np.sign(v) * r
-    psum = data.signal("p1") + data.signal("p2")
-    sc = data.scales
-    use = seg.valid & (seg.regime == SLIDING) & (v != 0)
-    mid = (x > sc.x_min + MIDDLE * sc.stroke) & (x < sc.x_max - MIDDLE * sc.stroke)
-    reversals = np.zeros(data.n, dtype=bool)
-    for k, _, rev in seg.starts:
-        if rev:
-            reversals[k] = True
+    v, x, sr, use, mid, reversals, psum = _Sliding.of(r, data, seg).parts()
     best: tuple[float, float, int, int] | None = None  # (change, share, experiment, strokes)
     for i, e in enumerate(data.experiments):
         sl = slice(e.start, e.stop)
@@ -195,16 +212,9 @@ def stroke_ripple(r: np.ndarray, data: DiagnosisData, seg: Segmentation, least: 
     ``least`` newtons."""
     if not data.available.get("x", False):
         return []
-    v, x = data.signal("v"), data.signal("x")
-    sr = np.sign(v) * r
+    v, x, sr, use, mid, reversals, _ = _Sliding.of(r, data, seg).parts()
     sc = data.scales
     stroke = sc.stroke
-    use = seg.valid & (seg.regime == SLIDING) & (v != 0)
-    mid = (x > sc.x_min + MIDDLE * stroke) & (x < sc.x_max - MIDDLE * stroke)
-    reversals = np.zeros(data.n, dtype=bool)
-    for k, _, rev in seg.starts:
-        if rev:
-            reversals[k] = True
     run = np.cumsum(reversals) + 1000 * data.experiment_index()
     bin_width = max(2.0 * sc.resolution, stroke / 2000.0)
     best: tuple[float, float, float] | None = None  # (amplitude, period, prominence)
@@ -258,12 +268,7 @@ def experiment_levels(r: np.ndarray, data: DiagnosisData, seg: Segmentation, lea
     spread by at least ``least`` newtons (RMS about their mean)."""
     if len(data.experiments) < 2:
         return []
-    v, x = data.signal("v"), data.signal("x")
-    sr = np.sign(v) * r
-    psum = data.signal("p1") + data.signal("p2")
-    sc = data.scales
-    use = seg.valid & (seg.regime == SLIDING) & (v != 0)
-    mid = (x > sc.x_min + MIDDLE * sc.stroke) & (x < sc.x_max - MIDDLE * sc.stroke)
+    v, _, sr, use, mid, _, psum = _Sliding.of(r, data, seg).parts()
     best: tuple[float, list[tuple[int, float]], str] | None = None
     for sign, name in ((1, "extending"), (-1, "retracting")):
         means = []

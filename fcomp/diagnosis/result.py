@@ -25,6 +25,7 @@ from fcomp.diagnosis.residuals import regime_errors
 from fcomp.diagnosis.rule import Ground
 from fcomp.diagnosis.search import Candidate, Search, Step
 from fcomp.diagnosis.split import Split
+from fcomp.diagnosis.structure import StructureLeft, structure_left
 from fcomp.diagnosis.verdict import Verdict, VerdictRule, conclude
 from fcomp.diagnosis.wording import dependence_text, verdict_text
 from fcomp.effects import EFFECTS
@@ -38,7 +39,8 @@ class DiagnosisResult:
     """One diagnosis's findings (attributes as :class:`.loop.Diagnosis`'s ``*_`` ones).
 
     ``check`` is ``{"ran": bool, "why": str}`` (the baseline check) and ``other``
-    the other baseline's result when it ran.
+    the other baseline's result when it ran; ``structure`` says what the structure
+    left in the final residual follows (:mod:`.structure`).
     """
 
     baseline_name: str
@@ -59,6 +61,7 @@ class DiagnosisResult:
     final_warnings: tuple[FitWarning, ...]
     check: Mapping[str, Any] | None = None
     other: DiagnosisResult | None = None
+    structure: StructureLeft | None = None
 
     @classmethod
     def of(cls, search: Search, baseline_name: str, rule: VerdictRule) -> DiagnosisResult:
@@ -80,13 +83,15 @@ class DiagnosisResult:
         warnings = (first + final if fit is not base else first) + list(g.split.warnings)
         verdict = conclude(fit, g, search.disturbances, final, rule)
         test = g.split.test
+        left = structure_left(fit, g.data, g.segmentation, g.split.train, test, verdict,
+                              search.disturbances)
         return cls(baseline_name, g, search.noise_floor, base, fit, tuple(steps),
                    tuple(search.candidates), tuple(tuple(t) for t in search.ties),
                    tuple(search.added), tuple(search.removed), dict(search.skipped),
                    tuple(search.disturbances), verdict,
                    {"baseline": regime_errors(base.residual, g.segmentation, test),
                     "final": regime_errors(fit.residual, g.segmentation, test)},
-                   tuple(warnings), tuple(final))
+                   tuple(warnings), tuple(final), structure=left)
 
     @property
     def doubts(self) -> list[str]:
@@ -269,6 +274,11 @@ class FittedAttributes:
     @property
     def residual_features_(self) -> list[FeatureStrength]:
         return list(self._result.verdict.features)
+
+    @property
+    def structure_left_(self) -> StructureLeft | None:
+        """What the structure left in the final residual follows (:mod:`.structure`)."""
+        return self._result.structure
 
     @property
     def event_structure_(self) -> EventStructure | None:

@@ -118,8 +118,10 @@ def to_dict(result: DiagnosisResult) -> dict[str, Any]:
         "baseline_dependent": bool(result.dependence and result.dependence["dependent"]),
         "baseline_check": dict(result.check or {}),
         "other_baseline": result.dependence,
-        "residual_features": [{"feature": f.feature, "strength": round(f.strength, 4)}
+        "residual_features": [{"feature": f.feature, "strength": round(f.strength, 4),
+                               "rms": _num(result.verdict.rms_final * math.sqrt(f.strength))}
                               for f in result.verdict.features],
+        "structure_left": None if result.structure is None else result.structure.to_dict(),
         "model": result.fit.model.describe(),
         "params": {k: _num(v) for k, v in result.fit.values.items()},
         "model_params": {k: _num(float(v)) for k, v in result.fit.model.flat_params().items()},

@@ -3,7 +3,7 @@
 A diagnosis reads one or several measurements. Each is cut into
 *experiments* -- runs whose friction states start afresh -- where its
 ``experiment`` column changes (a user column, data-format.md keeps it) and at
-time gaps longer than :data:`GAP_FACTOR` median sample intervals (a logger's
+time gaps longer than :data:`GAP_FACTOR` sample intervals (:func:`fcomp.reconstruction.sampling_interval`; a logger's
 pause, inside a labelled experiment too). Per experiment the force to match and the motion come from
 :func:`fcomp.identification.target.fit_data` (a measured ``F``; else the
 friction reconstructed as ``p1*A1 - p2*A2 - m*a + F_ext``, models.md 2; else
@@ -50,7 +50,7 @@ from fcomp.errors import FcompError
 from fcomp.identification.plausibility import RigContext
 from fcomp.identification.target import FitData, fit_data
 from fcomp.measurement import Measurement
-from fcomp.reconstruction import driving_force
+from fcomp.reconstruction import driving_force, interval_of, sampling_interval
 
 #: A time step longer than this many median steps starts a new experiment.
 GAP_FACTOR = 20.0
@@ -158,8 +158,7 @@ def _cut(meas: Measurement) -> list[Measurement]:
     during the pause is unknown, so the friction states start afresh after it)."""
     t = meas.t
     dt = np.diff(t)
-    med = float(np.median(dt)) if dt.size else 0.0
-    gaps = dt > GAP_FACTOR * med
+    gaps = dt > GAP_FACTOR * sampling_interval(t)
     if "experiment" in meas:
         gaps |= np.diff(meas["experiment"]) != 0
     change = np.nonzero(gaps)[0] + 1
@@ -355,7 +354,7 @@ def _scales(experiments: list[Experiment]) -> Scales:
                              1e-3)),
         p_mid=float(np.mean(psum)),
         p_span=float(np.percentile(psum, 99.0) - np.percentile(psum, 1.0)),
-        dt=float(np.median(dts)),
+        dt=interval_of(dts),
         duration=float(sum(e.data.sig["t"][-1] - e.data.sig["t"][0] for e in experiments)),
     )
 

@@ -108,6 +108,11 @@ PIECE_MIN = 16
 GROWTH_MIN = 0.03
 #: The carried variance is at most this many times that of the longest pieces.
 GROWTH_CAP = 4.0
+#: The shortest pieces' variance is at least this share of the longest pieces' (broadband) ...
+BROADBAND = 0.25
+#: ... and the growth over the longer half of the lengths at least this share of that over
+#: the shorter half (steady, not levelling off).
+STEADY = 0.5
 
 
 @dataclass(frozen=True)
@@ -136,7 +141,9 @@ def long_memory(y: np.ndarray, runs: list[tuple[int, int]], degree: int, target:
     least :data:`PIECES_MIN` pieces, :data:`LENGTHS_MIN` lengths); a weighted line in
     ``log2(length)`` (weights the square roots of the piece counts) whose slope is at least
     :data:`GROWTH_MIN` of the longest pieces' variance, with the variance rising at every
-    doubling but one. ``target`` is the length (samples) the floor must hold for."""
+    doubling but one, the shortest pieces holding :data:`BROADBAND` of it and the growth
+    not levelling off (:data:`STEADY`). ``target`` is the length (samples) the floor must
+    hold for."""
     longest = max((b - a for a, b in runs), default=0)
     levels: list[tuple[int, int, float]] = []
     n = PIECE_MIN
@@ -159,8 +166,16 @@ def long_memory(y: np.ndarray, runs: list[tuple[int, int]], degree: int, target:
     v = np.array([lv[2] for lv in levels])
     w = np.sqrt([lv[1] for lv in levels])
     slope, _ = np.polyfit(x, v, 1, w=w)
+    half = len(levels) // 2
+    low = np.polyfit(x[:half + 1], v[:half + 1], 1)[0]
+    high = np.polyfit(x[half:], v[half:], 1)[0]
     rises = int(np.sum(np.diff(v) > 0))
-    if not (slope >= GROWTH_MIN * v[-1] and rises >= len(levels) - 2):
+    # 1/f noise: broadband (the shortest pieces hold much of it), growing by about the same
+    # amount at every doubling; a line (a pump) or a smooth structure at rest grows from
+    # almost nothing and levels off once the pieces span it (a 32 Hz line: 0.06 of the
+    # longest pieces' variance on pieces of 16 samples)
+    if not (slope >= GROWTH_MIN * v[-1] and rises >= len(levels) - 2
+            and v[0] >= BROADBAND * v[-1] and high >= STEADY * low):
         return None
     return LongMemory(float(slope), float(v[-1]), int(levels[-1][0]), int(target))
 

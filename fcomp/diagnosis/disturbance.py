@@ -296,6 +296,7 @@ def find(residual: np.ndarray, prediction: np.ndarray, data: DiagnosisData,
     if data.steady_state:
         return []
     w_all = np.ones(residual.size) if weights is None else np.clip(weights, 0.0, 1.0)
+    w_all = np.where(data.bridged, 0.0, w_all)  # inserted across a pause: no measurement
     gated = residual * np.sqrt(w_all)
     t_all = data.signal("t")
     feats = {"v": data.signal("v"), "x": data.signal("x"), "model": prediction}

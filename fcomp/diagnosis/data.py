@@ -35,6 +35,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+import fcomp.diagnosis.pauses as pauses
 from fcomp.conditioning import (
     Conditioning,
     Motion,
@@ -46,7 +47,6 @@ from fcomp.conditioning import (
     rest_noise,
     sample_rate,
 )
-import fcomp.diagnosis.pauses as pauses
 from fcomp.errors import FcompError
 from fcomp.identification.plausibility import RigContext
 from fcomp.identification.target import FitData, fit_data

@@ -219,6 +219,24 @@ def of_comparison(doc: Mapping[str, Any]) -> Conclusion:
     return Conclusion(finding, level, tuple(reasons), tuple(steps))
 
 
+def structure_words(follows: Sequence[Mapping[str, Any]]) -> str:
+    """What the structure left follows (a diagnosis JSON's ``structure_left.follows``), the
+    first two in words with their size: ``"time (strength 0.62, 1.3 N RMS; +0.18 N per s,
+    7.2 N over the record)"``."""
+    parts = []
+    for f in follows[:2]:
+        size = f"strength {f['strength']:.2f}, {_num(f.get('rms'))} RMS"
+        if f.get("slope") is not None:
+            size += (f"; {f['slope']:+.3g} N per {f['slope_per']}, {_num(f.get('change'))} "
+                     "over the record")
+        elif f.get("note"):
+            size += f"; {f['note']}"
+        elif f.get("change") is not None:
+            size += f"; {_num(f.get('change'))} peak to peak"
+        parts.append(f"{f['words']} ({size})")
+    return " and ".join(parts)
+
+
 def of_diagnosis(doc: Mapping[str, Any]) -> Conclusion:
     """The conclusion of a diagnosis's JSON (``fcomp diagnose --json``)."""
     added, base, final = doc.get("added") or [], doc.get("baseline"), doc.get("model")
@@ -235,10 +253,12 @@ def of_diagnosis(doc: Mapping[str, Any]) -> Conclusion:
         same = (f" (one with {', '.join(top['same_as'])} on this record's fixed stroke)"
                 if top.get("same_as") else "")
         named = [st["name"] for st in doc.get("structures") or []]
+        follows = (doc.get("structure_left") or {}).get("follows") or []
         finding = (f"{final} leaves structure no catalogue effect explains: held-out RMS "
                    f"{_num(rf)} against a noise floor of {_num(floor)}"
                    + (f" (after adding {', '.join(added)})" if added else "")
-                   + (f"; the residual follows {top['feature']}{same}" if top.get("feature")
+                   + (f"; it follows {structure_words(follows)}" if follows else
+                      f"; the residual follows {top['feature']}{same}" if top.get("feature")
                       else "")
                    + (f"; named: {', '.join(dict.fromkeys(named))}" if named else ""))
     final_warnings = [w for w in doc.get("warnings", []) if context(w.get("message", ""))
@@ -276,6 +296,9 @@ def of_diagnosis(doc: Mapping[str, Any]) -> Conclusion:
         steps.append("use the final model: --save-model MODEL.json, then fcomp simulate / "
                      "fcomp compensate --controller-friction MODEL.json")
     if not explained:
+        for exp in ((doc.get("structure_left") or {}).get("next_experiments") or [])[:2]:
+            steps.append(f"to tell more ({exp['because'].replace('_', ' ')}): "
+                         f"{exp['experiment']}")
         steps.append("look at the residual against each feature (--report DIR) and write the "
                      "effect (docs/effects.md)")
     return Conclusion(finding, level, tuple(reasons), tuple(steps))

@@ -34,8 +34,8 @@ from fcomp.diagnosis.design import record_design
 from fcomp.diagnosis.pairs import pairs_of, promising
 from fcomp.diagnosis.regimes import segment
 from fcomp.diagnosis.rule import AcceptanceRule, Failure, Judgement
+from fcomp.diagnosis.seal_structures import seal_structures
 from fcomp.diagnosis.split import make_split
-from fcomp.diagnosis.structures import seal_structures
 from fcomp.effects import make_effect
 from fcomp.errors import FcompWarning
 from fcomp.identification.plausibility import FitWarning

@@ -3,7 +3,7 @@
 A diagnosis reads one or several measurements. Each is cut into
 *experiments* -- runs whose friction states start afresh -- where its
 ``experiment`` column changes (a user column, data-format.md keeps it) and at
-time gaps longer than :data:`GAP_FACTOR` median sample intervals (a logger's
+time gaps longer than :data:`GAP_FACTOR` sample intervals (:func:`fcomp.reconstruction.sampling_interval`; a logger's
 pause, inside a labelled experiment too). Per experiment the force to match and the motion come from
 :func:`fcomp.identification.target.fit_data` (a measured ``F``; else the
 friction reconstructed as ``p1*A1 - p2*A2 - m*a + F_ext``, models.md 2; else
@@ -37,6 +37,7 @@ from functools import cached_property
 
 import numpy as np
 
+import fcomp.diagnosis.pauses as pauses
 from fcomp.conditioning import (
     Conditioning,
     Motion,
@@ -52,7 +53,7 @@ from fcomp.errors import FcompError
 from fcomp.identification.plausibility import RigContext
 from fcomp.identification.target import FitData, fit_data
 from fcomp.measurement import Measurement
-from fcomp.reconstruction import driving_force
+from fcomp.reconstruction import driving_force, interval_of, sampling_interval
 
 #: A time step longer than this many median steps starts a new experiment.
 GAP_FACTOR = 20.0
@@ -63,14 +64,16 @@ STEADY_STATE = "steady-state"
 
 @dataclass(frozen=True)
 class Experiment:
-    """One experiment: its fit data, its place in the concatenated arrays, and alternative
-    motions as consistent with its measured position (:func:`fcomp.conditioning.motion_ensemble`)."""
+    """One experiment: its fit data, its place in the concatenated arrays, alternative
+    motions as consistent with its measured position (:func:`fcomp.conditioning.motion_ensemble`)
+    and the samples inserted across a logger's pause (:mod:`.pauses`; None: none)."""
 
     label: str
     data: FitData
     start: int
     stop: int
     alternatives: tuple[Motion, ...] = ()
+    bridged: np.ndarray | None = None
 
     @property
     def n(self) -> int:
@@ -157,21 +160,34 @@ class DiagnosisData:
         """The force to match (N), concatenated."""
         return np.concatenate([e.data.y for e in self.experiments])
 
+    @property
+    def bridged(self) -> np.ndarray:
+        """The samples inserted across logger pauses (:mod:`.pauses`), concatenated: in no
+        fit, score, noise floor or spectrum."""
+        return np.concatenate([np.zeros(e.n, dtype=bool) if e.bridged is None else e.bridged
+                               for e in self.experiments])
+
     def experiment_index(self) -> np.ndarray:
         """Experiment number (0-based) of every sample."""
         return np.concatenate([np.full(e.n, i) for i, e in enumerate(self.experiments)])
 
 
-def _cut(meas: Measurement) -> list[Measurement]:
-    """Experiments of one measurement: where the ``experiment`` column changes, and at long
-    time gaps (a logger's pause inside a labelled experiment too: the piston's motion
-    during the pause is unknown, so the friction states start afresh after it)."""
+def _cut(meas: Measurement) -> list[tuple[Measurement, np.ndarray]]:
+    """Experiments of one measurement, each with its bridged samples: cut where the
+    ``experiment`` column changes, and at long time gaps -- a logger's pause inside a
+    labelled experiment too -- unless the motion on both sides shows what the piston did
+    through it (a rest, or a slide one way: the pause is bridged, :mod:`.pauses`); across
+    any other pause the piston's motion is unknown, so the friction states start afresh
+    after it."""
     t = meas.t
-    dt = np.diff(t)
-    med = float(np.median(dt)) if dt.size else 0.0
-    gaps = dt > GAP_FACTOR * med
+    interval = sampling_interval(t)
+    labels = np.diff(meas["experiment"]) != 0 if "experiment" in meas else \
+        np.zeros(max(len(meas) - 1, 0), dtype=bool)
+    pause = np.append((np.diff(t) > GAP_FACTOR * interval) & ~labels, False)
+    meas, bridged, pause = pauses.bridge(meas, pause, interval)
+    gaps = pause[:-1]
     if "experiment" in meas:
-        gaps |= np.diff(meas["experiment"]) != 0
+        gaps = gaps | (np.diff(meas["experiment"]) != 0)
     change = np.nonzero(gaps)[0] + 1
     bounds = [0, *change.tolist(), len(meas)]
     out = []
@@ -183,7 +199,7 @@ def _cut(meas: Measurement) -> list[Measurement]:
         sub = meas.select(mask)
         if len(bounds) > 2:
             sub.meta["name"] = f"{meas.label}[{k + 1}]"
-        out.append(sub)
+        out.append((sub, bridged[a:b]))
     if not out:
         raise FcompError(f"{meas.label}: no experiment with at least {MIN_SAMPLES} samples")
     return out
@@ -337,7 +353,8 @@ def prepare(
     p_measured = all("p1" in m or "p2" in m for m in meas_list)  # a missing one: 0 gauge
     signals: list[Conditioning] = []
     for meas in meas_list:
-        subs = [meas] if steady else _cut(meas)
+        cut = [(meas, None)] if steady else _cut(meas)
+        subs = [m for m, _ in cut]
         band = None
         if steady:
             if "v" not in meas:
@@ -351,10 +368,12 @@ def prepare(
             if "x" in meas:
                 alternatives = [tuple(motion_ensemble(m.t, m["x"], cond)) for m in subs]
             subs, band = conditioned, cond.force_cutoff_hz
-        for sub, alts in zip(subs, alternatives, strict=True):
+        for sub, alts, (_, bridged) in zip(subs, alternatives, cut, strict=True):
             d = fit_data(sub, force_cutoff_hz=band)
             sources.add(d.source)
-            experiments.append(Experiment(sub.label, d, start, start + d.n, alts))
+            experiments.append(Experiment(sub.label, d, start, start + d.n, alts,
+                                          bridged if bridged is not None and bridged.any()
+                                          else None))
             start += d.n
     if len(sources) > 1:
         raise FcompError(f"the records give the force in different ways ({', '.join(sorted(sources))}); "
@@ -394,7 +413,7 @@ def _scales(experiments: list[Experiment]) -> Scales:
                              1e-3)),
         p_mid=float(np.mean(psum)),
         p_span=float(np.percentile(psum, 99.0) - np.percentile(psum, 1.0)),
-        dt=float(np.median(dts)),
+        dt=interval_of(dts),
         duration=float(sum(e.data.sig["t"][-1] - e.data.sig["t"][0] for e in experiments)),
     )
 

@@ -241,6 +241,10 @@ def build_report(diag: Diagnosis, *, command: str | None = None) -> Report:
         rep.note(f"Verdict `unexplained-structure` -- {d['reason']}. No catalogue entry "
                  "qualified to explain it: it is reported rather than papered over with the "
                  "least-bad wrong effect.", kind=kind)
+    left = d.get("structure_left") or {}
+    figs = figures(diag)
+    if left.get("follows"):
+        structure_section(rep, left, figs["structure"])
     other = d.get("other_baseline")
     if other:
         same = ("finds the same effects" if not d["baseline_dependent"] else
@@ -292,7 +296,6 @@ def build_report(diag: Diagnosis, *, command: str | None = None) -> Report:
        "on the training part, so not the RMS of a given model on the whole record that fit and "
        "compare print).", digits=4)
 
-    figs = figures(diag)
     rep.section("1. Compare: errors per regime")
     rep.figure(figs["regimes"], "Held-out RMS error per regime (pre-sliding, reversal, "
                "sliding, dwell/break-away) for the baseline and the final model; dashed: the "
@@ -363,8 +366,9 @@ def build_report(diag: Diagnosis, *, command: str | None = None) -> Report:
             rep.paragraph(f"**{e}** -- {_physics(e)}".replace("**", ""))
     seals_sections(rep, d)
     rep.section("Residual structure left")
-    rep.table(["feature", "strength"], [[f["feature"], f["strength"]]
-                                        for f in d["residual_features"]], digits=[None, 3])
+    rep.table(["feature", "strength", "RMS it carries (N)"],
+              [[f["feature"], f["strength"], f.get("rms")] for f in d["residual_features"]],
+              digits=[None, 3, 3])
     if d.get("structures"):
         rep.bullets([st["text"] for st in d["structures"]])
     final_parameters(rep, d, parameter_units(diag.fit_.model))
@@ -429,6 +433,38 @@ def seals_sections(rep: Report, d: Mapping[str, Any]) -> Report:
             rep.note(f"{' / '.join('`' + e + '`' for e in c['effects'])}: the record's design "
                      f"cannot tell them apart ({c['why']}); to separate them, record "
                      f"{c['separates']}.", kind="warn")
+    return rep
+
+
+def structure_section(rep: Report, left: dict[str, Any], figure: Any) -> Report:
+    """The report's account of what the structure left follows (:mod:`.structure_left`, the
+    JSON's ``structure_left``): its size against the noise floor, a table of what it
+    follows with the experiment that would tell more, and ``figure`` (``structure``)."""
+    present = left.get("present")
+    rep.section("What the structure left follows", level=3)
+    rep.paragraph(
+        f"The final model's held-out RMS is {left['rms']:.3g} N against a noise floor of "
+        f"{left['noise_floor']:.3g} N: {left['excess']:.3g} N (RMS) above the noise. "
+        + ("It follows:" if present else "The strongest features (below the verdict's "
+           "rule):"))
+    rows = []
+    for f in left["follows"]:
+        size = (f"{f['slope']:+.3g} N per {f['slope_per']}, {f['change']:.3g} N over the record"
+                if f.get("slope") is not None else f"{f['change']:.3g} N peak to peak"
+                if f.get("change") is not None else "")
+        if f.get("note"):
+            size = f"{size}; {f['note']}" if size else f["note"]
+        rows.append([f["words"], f["strength"], f["own_strength"], f["rms"], size,
+                     f["experiment"]])
+    rep.table(["follows", "strength", "own strength", "RMS it carries (N)", "shape",
+               "the experiment that would tell more"], rows, digits=[None, 3, 3, 3, None, None],
+              caption="Strength: the share of the held-out residual's mean square a smooth "
+              "function of the feature explains; own strength: the same once the features "
+              "above it are taken out (features that are one phase of a periodic stroke are "
+              "one finding). Shape: the binned means of the residual signed by the direction "
+              "of motion (a friction level above the model's is positive both ways).")
+    rep.figure(figure, "The final model's held-out residual, signed by the "
+               "direction of motion, against what it follows, with its binned means.")
     return rep
 
 

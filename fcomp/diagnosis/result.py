@@ -25,9 +25,10 @@ from fcomp.diagnosis.refit import FitResult, Refit
 from fcomp.diagnosis.regimes import Segmentation
 from fcomp.diagnosis.residuals import regime_errors
 from fcomp.diagnosis.rule import Ground
+from fcomp.diagnosis.seal_structures import SealStructure, seal_structures
 from fcomp.diagnosis.search import Candidate, Search, Step
 from fcomp.diagnosis.split import Split
-from fcomp.diagnosis.structures import SealStructure, seal_structures
+from fcomp.diagnosis.structure_left import StructureLeft, structure_left
 from fcomp.diagnosis.verdict import Verdict, VerdictRule, conclude
 from fcomp.diagnosis.wording import dependence_text, verdict_text
 from fcomp.effects import EFFECTS
@@ -45,7 +46,8 @@ class DiagnosisResult:
     (:mod:`.design`) and ``confounding`` the ties it makes (:mod:`.confounding`);
     ``pairs`` the pairs judged (:mod:`.pairs`), ``refined`` the refined forms tried
     (:mod:`.forms`); ``stderr`` the final fit's standard errors; ``structures`` the seal
-    structures named in its residual (:mod:`.structures`).
+    structures named in its residual (:mod:`.seal_structures`); ``structure`` says what
+    the structure left in the final residual follows (:mod:`.structure_left`).
     """
 
     baseline_name: str
@@ -73,6 +75,7 @@ class DiagnosisResult:
     stderr: Mapping[str, float] = dataclasses.field(default_factory=dict)
     structures: tuple[SealStructure, ...] = ()
     design_held: Mapping[str, str] = dataclasses.field(default_factory=dict)
+    structure: StructureLeft | None = None
 
     @classmethod
     def of(cls, search: Search, baseline_name: str, rule: VerdictRule) -> DiagnosisResult:
@@ -99,6 +102,8 @@ class DiagnosisResult:
         warnings = (first + final if fit is not base else first) + list(g.split.warnings)
         verdict = conclude(fit, g, search.disturbances, final, rule)
         test = g.split.test
+        left = structure_left(fit, g.data, g.segmentation, g.split.train, test, verdict,
+                              search.disturbances)
         return cls(baseline_name, g, search.noise_floor, base, fit, tuple(steps),
                    tuple(search.candidates), tuple(tuple(t) for t in search.ties),
                    tuple(search.added), tuple(search.removed), dict(search.skipped),
@@ -112,7 +117,7 @@ class DiagnosisResult:
                    stderr=_stderr(refit, fit),
                    structures=tuple(seal_structures(fit.plain_residual, fit.F_hat, g.data,
                                                     g.segmentation, verdict.least)),
-                   design_held=dict(search.design_held))
+                   design_held=dict(search.design_held), structure=left)
 
     @property
     def doubts(self) -> list[str]:
@@ -307,6 +312,11 @@ class FittedAttributes:
     @property
     def residual_features_(self) -> list[FeatureStrength]:
         return list(self._result.verdict.features)
+
+    @property
+    def structure_left_(self) -> StructureLeft | None:
+        """What the structure left in the final residual follows (:mod:`.structure_left`)."""
+        return self._result.structure
 
     @property
     def event_structure_(self) -> EventStructure | None:

@@ -92,10 +92,12 @@ ONE_ON_A_FIXED_STROKE = ("x", "displacement_since_reversal")
 
 
 def merged_features(result: DiagnosisResult) -> list[dict[str, Any]]:
-    """The JSON's ``residual_features``: each feature with its strength, strongest first; on
+    """The JSON's ``residual_features``: each feature with its strength and the RMS it carries
+    (N), strongest first; on
     a fixed stroke (:attr:`.design.Design.fixed_stroke`) the position and the displacement
     since the reversal are one finding, listed once under the stronger with ``same_as``."""
-    feats = [{"feature": f.feature, "strength": round(f.strength, 4)}
+    feats: list[dict[str, Any]] = [{"feature": f.feature, "strength": round(f.strength, 4),
+              "rms": _num(result.verdict.rms_final * math.sqrt(f.strength))}
              for f in result.verdict.features]
     if result.design is None or not result.design.fixed_stroke:
         return feats
@@ -163,6 +165,7 @@ def to_dict(result: DiagnosisResult) -> dict[str, Any]:
         "baseline_check": dict(result.check or {}),
         "other_baseline": result.dependence,
         "residual_features": merged_features(result),
+        "structure_left": None if result.structure is None else result.structure.to_dict(),
         "model": result.fit.model.describe(),
         "params": {k: _num(v) for k, v in result.fit.values.items()},
         "stderr": {k: _num(v) for k, v in result.stderr.items()},

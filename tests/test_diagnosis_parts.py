@@ -560,7 +560,7 @@ def test_the_lag_of_a_pressure_channel_is_fitted_with_the_model() -> None:
         assert d.fit_.values["lag"] == got[tau]
         assert "lag" not in d._search.refit.free_names(d.fit_.model)  # held
     assert got[3e-3] == pytest.approx(3e-3, rel=0.15)
-    # a lag held at a wrong value is estimated again for a model (alone, unweighted),
+    # a lag held at a wrong value is estimated again for a model (jointly with it, unweighted),
     # and the sample weights of the later fits are left as they were
     weights = d._search.refit._weights
     d._search.refit.hold("lag", 0.0)

@@ -13,6 +13,10 @@ name                 controller
                      (:mod:`.mpc`)
 ==================== ============================================================
 
+Every controller :func:`make_controller` builds runs behind the fail-safe layer of
+:mod:`.safety` (input validation, latched safe output, recovery without re-init, the
+valve's range and rate limit).
+
 >>> from controllers import make_controller
 >>> from controllers.plant_model import ControlModel
 >>> model = ControlModel("hydraulic", make_model("nmlgm", params="seed002-type1"))  # doctest: +SKIP
@@ -32,6 +36,7 @@ from controllers.feedforward import PIDFeedforwardController
 from controllers.lugre_observer import LuGreObserverController
 from controllers.mpc import MPCController
 from controllers.pid import PIDController
+from controllers.safety import FailSafe
 from fcomp import registry
 from fcomp.registry import Registry
 
@@ -44,8 +49,11 @@ for _cls in (PIDController, PIDFeedforwardController, LuGreObserverController, E
 
 
 def make_controller(name: str, model: Any, **options: Any) -> Controller:
-    """The controller ``name`` on the controller model ``model`` with named ``options``."""
-    return CONTROLLERS.get(name)(model, **options)
+    """The controller ``name`` on the controller model ``model`` with named ``options``,
+    behind the fail-safe layer (:class:`controllers.safety.FailSafe`: its inputs validated,
+    a safe output latched after repeated faults, recovery, the valve's range and rate limit;
+    :func:`controllers.safety.unwrap` gives the law alone)."""
+    return FailSafe(CONTROLLERS.get(name)(model, **options))
 
 
 __all__ = ["CONTROLLERS", "Controller", "Reference", "make_controller"]

@@ -18,6 +18,24 @@ them in ``options``; an unknown one is refused in one line). It implements
     ``t``; returns the valve command ``u`` (A for the hydraulic servo valve,
     normalised -1..1 for the pneumatic valve), held until the next sample.
 
+and may refine (the defaults serve most controllers):
+
+:meth:`Controller.reenter` ``(t, y, ref, u)``
+    resume after the fail-safe layer (:mod:`controllers.safety`) held the valve at
+    ``u``: re-seed the states from the measurement ``y`` without a bump (default:
+    :meth:`reset`, then :meth:`applied`);
+:meth:`Controller.healthy` ``()``
+    whether its states are all finite (default True; the layer re-seeds it otherwise);
+:meth:`Controller.applied` ``(u)``
+    the command the valve was actually given after this step (the layer's range and
+    rate limits; default: nothing to do -- a controller whose estimator predicts
+    with its last command takes it from here).
+
+:func:`controllers.make_controller` returns every controller behind the fail-safe
+layer (:class:`controllers.safety.FailSafe`: input validation, latched safe output,
+recovery, range and rate limit); a controller's own ``step`` may assume valid,
+finite inputs.
+
 and keeps up to date, after every step:
 
 ``friction_estimate``
@@ -85,6 +103,23 @@ class Controller(ABC):
     @abstractmethod
     def step(self, t: float, y: np.ndarray, ref: Reference) -> float:
         """One sample: measurement ``y = [x, p1, p2]`` (m, Pa abs) -> valve command ``u``."""
+
+    def reenter(self, t: float, y: np.ndarray, ref: Reference, u: float) -> None:
+        """Resume at ``t`` from measurement ``y`` after the valve was held at command ``u``
+        (the fail-safe layer's recovery, :mod:`controllers.safety`): by default a
+        :meth:`reset` from ``y``, told the held command."""
+        self.reset(t, y, ref)
+        self.applied(u)
+
+    def healthy(self) -> bool:
+        """Whether the controller's states are all finite (the fail-safe layer re-seeds it
+        otherwise); True by default (no states to check)."""
+        return True
+
+    def applied(self, u: float) -> None:
+        """The command ``u`` the valve was given after the last step (after the fail-safe
+        layer's limits); nothing to do by default."""
+        return None
 
     def describe(self) -> str:
         return f"{self.name} at {self.rate:g} Hz on {self.model.describe()}"

@@ -194,6 +194,15 @@ class EKFController(PIDController):
         self._u_prev = u
         return u
 
+    def applied(self, u: float) -> None:
+        """The EKF predicts with the command the valve was given."""
+        self._u_prev = u
+
+    def healthy(self) -> bool:
+        kf = self.ekf.kf
+        return (super().healthy() and bool(np.all(np.isfinite(kf.x)))
+                and bool(np.all(np.isfinite(kf.P))) and np.isfinite(self._u_prev))
+
 
 def make_ekf(model: Any, dt: float, opts: dict[str, Any], substeps: int = 1) -> FrictionEKF:
     """The EKF of a :class:`~controllers.plant_model.ControlModel` with option overrides."""

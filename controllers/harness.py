@@ -36,6 +36,12 @@ reference, :attr:`controllers.tasks.Task.start`) with the chambers and valve at 
 *equilibrium* that holds the load there (solved from the plant's equations:
 no flow into either chamber, zero acceleration, friction states zero), so
 every run starts from the same physical state, not from a settling load.
+
+Every controller runs behind the fail-safe layer (:mod:`controllers.safety`); its fault
+state is recorded at every sample (:attr:`LoopResult.faults`, :attr:`LoopResult.latched`)
+and summed up in the metrics. A configuration's ``sensor_faults``
+(:class:`SensorFault`: a dropout, a stuck or wild reading over a time window) corrupt
+what the controller receives, to test that layer in closed loop.
 """
 
 from __future__ import annotations
@@ -57,6 +63,7 @@ from controllers.plant_model import (
     friction_with_mismatch,
     sliding_damping,
 )
+from controllers.safety import FailSafe
 from controllers.tasks import Task, check_fits_stroke, get_task
 from fcomp.errors import FcompError
 from fcomp.models import FrictionModel, make_model
@@ -71,6 +78,32 @@ DEFAULT_MISMATCH: dict[str, float] = {
     "Fc": 1.2, "Fs": 0.85, "vs": 1.3, "sigma2": 1.15, "sigma0": 0.5, "sigma1": 1.5,
     "tau_hp": 1.5, "tau_hn": 0.7, "T": 0.5,
 }
+
+
+@dataclass(frozen=True)
+class SensorFault:
+    """What the sensors deliver wrongly over ``[start, start + duration)`` (s): the channels
+    (``x``, ``p1``, ``p2``) read ``value`` (NaN by default: a dropout)."""
+
+    start: float
+    duration: float
+    channels: tuple[str, ...] = ("x", "p1", "p2")
+    value: float = math.nan
+
+    def __post_init__(self) -> None:
+        bad = sorted(set(self.channels) - {"x", "p1", "p2"})
+        if bad or not self.channels:
+            raise FcompError(f"sensor fault: channels are x, p1, p2, got {self.channels!r}")
+        if not (math.isfinite(self.start) and math.isfinite(self.duration)
+                and self.duration > 0):
+            raise FcompError(f"sensor fault: start and a positive duration (s), got "
+                             f"{self.start!r}, {self.duration!r}")
+
+    def apply(self, t: float, y: np.ndarray) -> None:
+        """Corrupt the measurement ``y = [x, p1, p2]`` in place if ``t`` is in the window."""
+        if self.start <= t < self.start + self.duration:
+            for c in self.channels:
+                y[("x", "p1", "p2").index(c)] = self.value
 
 
 @dataclass(frozen=True)
@@ -111,6 +144,9 @@ class LoopConfig:
         A function of the controller's model giving its tuning instead of the derived
         one (:func:`controllers.tuning.fixed_tuning`; a top-level function, so that the
         configuration pickles); default the derived tuning.
+    sensor_faults
+        Wrong sensor readings over time windows (:class:`SensorFault`), applied to what
+        the controller receives (not to the recorded true states).
     """
 
     plant: str = "hydraulic"
@@ -125,6 +161,7 @@ class LoopConfig:
     plant_file: PlantFile | None = None
     plant_factors: Mapping[str, float] = field(default_factory=dict)
     tuning: Callable[[ControlModel], Tuning] | None = None
+    sensor_faults: tuple[SensorFault, ...] = ()
 
     def __post_init__(self) -> None:
         if self.plant_file is not None:
@@ -158,6 +195,10 @@ class LoopResult:
         Per-sample flag: the controller used its fallback law.
     metrics
         :class:`~controllers.metrics.Metrics`.
+    faults
+        Faulty samples the fail-safe layer counted up to each sample.
+    latched
+        Per-sample flag: the fail-safe layer's safe output was latched.
     """
 
     controller: str
@@ -176,6 +217,8 @@ class LoopResult:
     fallbacks: np.ndarray
     metrics: Metrics
     description: str = ""
+    faults: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    latched: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
 
 
 class SensorModel:
@@ -303,8 +346,12 @@ def run_closed_loop(controller: str, task: str | Task, config: LoopConfig | None
     times = np.zeros(n + 1)
     cpu = np.zeros(n + 1)
     fb = np.zeros(n + 1, dtype=bool)
+    nfault = np.zeros(n + 1, dtype=np.int64)
+    run_faults = np.zeros(n + 1, dtype=np.int64)
+    latched = np.zeros(n + 1, dtype=bool)
+    guarded = isinstance(ctrl, FailSafe)
     state = stepper.reset()
-    y0 = sensors.measure(state[meas_idx])
+    y0 = _measure(sensors, state[meas_idx], 0.0, config.sensor_faults)
     ctrl.reset(0.0, y0, Reference(float(r[0]), float(dr[0]), float(ddr[0])))
     u_max = model.u_max
     collecting = gc.isenabled()
@@ -312,7 +359,8 @@ def run_closed_loop(controller: str, task: str | Task, config: LoopConfig | None
     try:
         for k in range(n + 1):
             X[k] = state
-            y = y0 if k == 0 else sensors.measure(state[meas_idx])
+            y = y0 if k == 0 else _measure(sensors, state[meas_idx], float(t[k]),
+                                           config.sensor_faults)
             Y[k] = y
             fut = tuple(r_pad[k + 1:k + 1 + preview]) if preview else ()
             ref = Reference(float(r[k]), float(dr[k]), float(ddr[k]), fut)
@@ -328,6 +376,10 @@ def run_closed_loop(controller: str, task: str | Task, config: LoopConfig | None
             U[k] = u
             F_hat[k] = ctrl.friction_estimate
             fb[k] = ctrl.fallback_active
+            if guarded:
+                nfault[k] = ctrl.faults
+                run_faults[k] = ctrl.consecutive_faults
+                latched[k] = ctrl.latched
             if k < n:
                 state = stepper.step(u)
     finally:
@@ -339,15 +391,29 @@ def run_closed_loop(controller: str, task: str | Task, config: LoopConfig | None
         settle=tk.windows(config.fast), reversals=tk.reversal_times(config.fast),
         reversal_window=tk.reversal_window, periodic=tk.kind == "periodic",
         fallbacks=int(fb.sum()),
+        faults=int(nfault[-1]), max_consecutive_faults=int(run_faults.max()),
+        latched_steps=int(latched.sum()),
+        latches=int(np.sum(latched[1:] & ~latched[:-1]) + latched[0]),
+        last_fault=ctrl.last_fault if guarded else None,
     )
     return LoopResult(
         controller=controller, task=tk.name, plant=config.plant, t=t, r=r,
         x=X[:, names.index("x")], v=X[:, names.index("v")], y=Y, u=U, F_true=outs["F"],
         F_hat=F_hat, solve_times=times, solve_cpu=cpu, fallbacks=fb, metrics=metrics,
-        description=ctrl.describe(),
+        description=ctrl.describe(), faults=nfault, latched=latched,
     )
 
 
-__all__ = ["DEFAULT_MISMATCH", "LoopConfig", "LoopResult", "build_loop", "control_model",
+def _measure(sensors: SensorModel, true: np.ndarray, t: float,
+             faults: tuple[SensorFault, ...]) -> np.ndarray:
+    """The sensors' reading of the true ``[x, p1, p2]`` at ``t``, corrupted by ``faults``."""
+    y = sensors.measure(true)
+    for f in faults:
+        f.apply(t, y)
+    return y
+
+
+__all__ = ["DEFAULT_MISMATCH", "LoopConfig", "LoopResult", "SensorFault", "build_loop",
+           "control_model",
            "friction_label",
            "run_closed_loop"]

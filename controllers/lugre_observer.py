@@ -114,6 +114,10 @@ class LuGreObserverController(PIDController):
         self._side = 1.0
         self.x_hat = model.friction.initial_state()
 
+    def healthy(self) -> bool:
+        return (super().healthy() and bool(np.all(np.isfinite(self.x_hat)))
+                and bool(np.isfinite(self._side)))
+
     def reset_compensation(self, y0: np.ndarray, ref: Reference) -> None:
         self.x_hat = self.model.friction.initial_state()
         self._side = 1.0

@@ -34,6 +34,13 @@ metric                            definition
 ``fallbacks`` (-)                 steps where the controller could not apply its
                                   law and used its stated fallback (MPC solve
                                   failure): counted, never hidden
+``faults`` (-)                    faulty samples the fail-safe layer counted
+                                  (:mod:`controllers.safety`: implausible inputs
+                                  held, a controller's non-finite command)
+``max_consecutive_faults`` (-)    the longest run of faulty samples
+``latched_steps`` (-)             samples the safe output was latched
+``latches`` (-)                   how often it latched
+``last_fault`` (-)                the last fault's cause (None: none)
 ================================ =================================================
 """
 
@@ -72,6 +79,11 @@ class Metrics:
     solve_time_cpu_p99: float = math.nan
     solve_time_cpu_max: float = math.nan
     solve_time_descheduled: int = 0
+    faults: int = 0
+    max_consecutive_faults: int = 0
+    latched_steps: int = 0
+    latches: int = 0
+    last_fault: str | None = None
 
     def as_dict(self) -> dict[str, Any]:
         return asdict(self)
@@ -95,6 +107,11 @@ def compute_metrics(
     periodic: bool = False,
     fallbacks: int = 0,
     cpu_times: np.ndarray | None = None,
+    faults: int = 0,
+    max_consecutive_faults: int = 0,
+    latched_steps: int = 0,
+    latches: int = 0,
+    last_fault: str | None = None,
 ) -> Metrics:
     """Metrics of a run sampled at ``t`` (s).
 
@@ -119,6 +136,8 @@ def compute_metrics(
         Number of fallback steps the controller reported.
     cpu_times
         CPU time of the controller's thread in each step (s), if measured.
+    faults, max_consecutive_faults, latched_steps, latches, last_fault
+        The fail-safe layer's record of the run (:mod:`controllers.safety`).
     """
     t = np.asarray(t, dtype=float)
     e = np.asarray(r, dtype=float) - np.asarray(x, dtype=float)
@@ -166,6 +185,8 @@ def compute_metrics(
         solve_time_cpu_p99=_quantile(ct, 0.99),
         solve_time_cpu_max=_quantile(ct, 1.0),
         solve_time_descheduled=int(np.sum(st - ct > DESCHEDULED)) if ct.size else 0,
+        faults=int(faults), max_consecutive_faults=int(max_consecutive_faults),
+        latched_steps=int(latched_steps), latches=int(latches), last_fault=last_fault,
     )
 
 

@@ -280,6 +280,25 @@ class MPCController(Controller):
                              "solved (check the limits and tolerances)")
         self.friction_estimate = 0.0
 
+    def reenter(self, t: float, y: np.ndarray, ref: Reference, u: float) -> None:
+        """Resume after the fail-safe layer held the valve at ``u``: the EKF started from the
+        measurement ``y`` (as :meth:`reset`), the warm start at ``u`` (no equilibrium solve:
+        the exported step does the same)."""
+        x0, P0 = self.model.estimator_initial(y)
+        self.ekf.reset(x0, P0)
+        self._u_prev = float(u)
+        self.solver.reset(u)
+        self.fallback_active = False
+
+    def applied(self, u: float) -> None:
+        """The EKF and the rate limits take the command the valve was given."""
+        self._u_prev = u
+
+    def healthy(self) -> bool:
+        kf, sol = self.ekf.kf, self.solver
+        parts = [kf.x, kf.P, sol.U, [self._u_prev]] + ([] if sol._lam is None else [sol._lam])
+        return all(bool(np.all(np.isfinite(p))) for p in parts)
+
     def _horizon_reference(self, ref: Reference) -> tuple[np.ndarray, np.ndarray]:
         N = self.problem.horizon
         fut = np.asarray(ref.future, dtype=float)

@@ -21,7 +21,11 @@ backward-Euler sum of ``e`` with *anti-windup* by back-calculation (gain
 the force demand exceeds what the actuator can produce
 (``[F_min, F_max]``, from the supply pressure and the piston areas) the
 integral is bled by ``kt*(F_sat - F_d)/ki`` per second, and it is frozen
-while the valve command itself saturates in the direction of the error.
+while the valve command itself saturates in the direction of the error. The integral is
+bounded besides: its force ``ki*I`` stays within ``[F_min, F_max]``
+(:func:`controllers.safety.clamp_integral`), so that nothing winds it beyond what the
+actuator can push, and after the fail-safe layer held the valve it restarts bumplessly
+(:meth:`PIDController.reenter`).
 
 Default gains place the three closed-loop poles of the nominal
 mass-plus-force-loop at ``-w`` (``w = bandwidth`` rad/s):
@@ -47,6 +51,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from controllers.base import Controller, Reference
+from controllers.safety import SCALAR, bumpless_integral, clamp_integral, integral_bounds
 from fcomp.errors import FcompError
 
 
@@ -266,6 +271,9 @@ class PIDController(Controller):
         if not self.stability_radius < 1.0:
             raise unstable(self.gains, self.stability_radius, self.dt)
         self.law = PIDLaw(self.gains, self.dt)
+        #: Bounds of the integral (:func:`controllers.safety.integral_bounds`).
+        self.integral_bounds = integral_bounds(self.gains.ki, model.force_min, model.force_max)
+        self._bumpless = False
         self.F_demand = 0.0
 
     # hooks for the compensators ------------------------------------------------
@@ -284,10 +292,21 @@ class PIDController(Controller):
     def reset(self, t0: float, y0: np.ndarray, ref: Reference) -> None:
         self.law.reset(float(y0[0]))
         self.valve.reset()
+        self._bumpless = False
         self.friction_estimate = 0.0
         self.fallbacks = 0
         self.fallback_active = False
         self.reset_compensation(y0, ref)
+
+    def healthy(self) -> bool:
+        law = self.law
+        return all(math.isfinite(v) for v in (law.integral, law.v_f, law.x_prev))
+
+    def reenter(self, t: float, y: np.ndarray, ref: Reference, u: float) -> None:
+        """Reset from ``y``; the next step sets the integral so that the force demand equals
+        the measured actuator force (bumpless: :func:`controllers.safety.bumpless_integral`)."""
+        super().reenter(t, y, ref, u)
+        self._bumpless = True
 
     def step(self, t: float, y: np.ndarray, ref: Reference) -> float:
         x = float(y[0])
@@ -296,10 +315,17 @@ class PIDController(Controller):
         F_hat = self.compensation(t, y, ref, v_f)
         self.friction_estimate = F_hat
         m = self.model
+        g = self.gains
+        if self._bumpless:
+            other = m.mass * ref.ddr + m.weight + (g.kp * e + g.kd * (ref.dr - v_f)) + F_hat
+            self.law.integral = bumpless_integral(SCALAR, m.actuator_force(y), other, g.ki,
+                                                  self.integral_bounds)
+            self._bumpless = False
         demand = m.mass * ref.ddr + m.weight + self.law.force(e, ref.dr) + F_hat
         applied = min(max(demand, m.force_min), m.force_max)
         u, sat = self.valve.command(applied, y, self.velocity_estimate(v_f))
         self.law.integrate(e, demand, applied, sat)
+        self.law.integral = clamp_integral(SCALAR, self.law.integral, self.integral_bounds)
         self.F_demand = applied
         self.last_u = u
         return u

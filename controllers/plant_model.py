@@ -39,6 +39,7 @@ import numpy as np
 
 from controllers.pid import PIDGains
 from controllers.prediction import ContinuousModel
+from controllers.safety import FAULT_LATCH, FAULT_RECOVER, safe_command
 from controllers.tuning import Margins, Tuning, check_gains, derive_tuning, force_noise, pid_gains
 from fcomp.errors import FcompError
 from fcomp.measurement import G
@@ -81,11 +82,14 @@ class Sensors:
 
 @dataclass(frozen=True)
 class PlantSettings:
-    """A plant's controller settings: rate, valve limits, sensors; explicit tuning values.
+    """A plant's controller settings: rate, valve limits, sensors; explicit tuning values; the
+    fail-safe layer's settings.
 
     The tuning fields are None unless given explicitly (a plant file's ``[control]``
     table, or an override): the tuning is otherwise derived from the plant
-    (:mod:`controllers.tuning`).
+    (:mod:`controllers.tuning`). The fail-safe fields (``safe_output``, ``fault_latch``,
+    ``fault_recover``, ``position_margin``, ``pressure_max``) are the rules' numbers of
+    :mod:`controllers.safety`, with its defaults.
     """
 
     control_rate: float
@@ -95,6 +99,23 @@ class PlantSettings:
     pid_bandwidth: float | None = None
     force_bandwidth: float | None = None
     observer_gain: float | None = None
+    safe_output: str | float = "centre"
+    fault_latch: int = FAULT_LATCH
+    fault_recover: int = FAULT_RECOVER
+    position_margin: float | None = None
+    pressure_max: float | None = None
+
+    def __post_init__(self) -> None:
+        """The fail-safe layer's settings (:mod:`controllers.safety`), one line each."""
+        safe_command(self.safe_output, self.u_max)
+        for k in ("fault_latch", "fault_recover"):
+            v = getattr(self, k)
+            if isinstance(v, bool) or not isinstance(v, int) or v < 1:
+                raise FcompError(f"{k} must be a whole number of samples >= 1, got {v!r}")
+        for k in ("position_margin", "pressure_max"):
+            v = getattr(self, k)
+            if v is not None and not (isinstance(v, int | float) and math.isfinite(v) and v > 0):
+                raise FcompError(f"{k} must be a positive number, got {v!r}")
 
     def given_tuning(self) -> dict[str, float]:
         """The tuning values given explicitly, by name."""

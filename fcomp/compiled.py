@@ -42,6 +42,7 @@ import hashlib
 import os
 import re
 import shutil
+import signal
 import stat
 import subprocess
 import tempfile
@@ -217,6 +218,31 @@ def build_library(fn: ca.Function | Sequence[ca.Function], driver: str, *,
     return _compile_cached(name, prelude + generated[f"{name}.c"] + driver, rebuild)
 
 
+def run_compiler(args: Sequence[str]) -> subprocess.CompletedProcess[str]:
+    """Run a C compiler (or a program it built) with its output captured, in a process group
+    of its own: the driver's ``cc1``, ``as`` and ``ld`` are its children, so on any
+    interruption (Ctrl-C and SIGTERM arrive as :class:`KeyboardInterrupt`) or error the
+    whole group is ended before the exception goes on -- a compiler's driver alone, killed,
+    leaves its ``cc1`` running."""
+    proc = subprocess.Popen(list(args), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True, start_new_session=True)
+    try:
+        out, err = proc.communicate()
+    except BaseException:
+        end_group(proc)
+        raise
+    return subprocess.CompletedProcess(proc.args, proc.returncode, out, err)
+
+
+def end_group(proc: subprocess.Popen[str]) -> None:
+    """End the process group a :func:`run_compiler` child leads (SIGKILL) and reap it."""
+    try:
+        os.killpg(proc.pid, signal.SIGKILL)
+    except (OSError, AttributeError):  # gone already (or no process groups here)
+        proc.kill()
+    proc.communicate()
+
+
 def _compile_cached(name: str, code: str, rebuild: bool) -> Path | None:
     """The C source ``code`` compiled into the cache as ``NAME_HASH.so`` (verified, module
     docstring); ``None`` without a working compiler or usable cache."""
@@ -234,10 +260,7 @@ def _compile_cached(name: str, code: str, rebuild: bool) -> Path | None:
             return lib
         src.write_text(code)
         out = Path(tmp) / "lib.so"
-        proc = subprocess.run(
-            [cc, "-O2", "-fPIC", "-shared", str(src), "-o", str(out), "-lm"],
-            capture_output=True, text=True,
-        )
+        proc = run_compiler([cc, "-O2", "-fPIC", "-shared", str(src), "-o", str(out), "-lm"])
         if proc.returncode != 0:
             return None  # a broken toolchain must not break the package: use the VM
         from fcomp.outputs import write_files

@@ -101,7 +101,20 @@ _CONTROL = {
     "pid_bandwidth": _k("control:pid_bandwidth", "rad/s", "PID bandwidth", False),
     "force_bandwidth": _k("control:force_bandwidth", "rad/s", "force-loop bandwidth", False),
     "observer_gain": _k("control:observer_gain", "1/s", "LuGre observer gain", False),
+    # the fail-safe layer (controllers.safety; docs/plants.md, "Plant files")
+    "safe_output": _k("control:safe_output", "command unit", 'command after repeated input '
+                      'faults: "centre", "hold" or a command within +-u_max', False),
+    "fault_latch": _k("control:fault_latch", "samples", "faulty samples in a row that latch "
+                      "the safe output", False),
+    "fault_recover": _k("control:fault_recover", "samples", "good samples in a row that end "
+                        "the latch", False),
+    "position_margin": _k("control:position_margin", "m", "plausible position reading beyond "
+                          "the stroke", False),
+    "pressure_max": _k("control:pressure_max", "Pa", "highest plausible pressure reading "
+                       "(absolute)", False),
 }
+#: Named safe outputs of ``[control] safe_output`` (besides a number).
+SAFE_OUTPUTS = ("centre", "hold")
 _LINES = {
     "V10": _k("plant:V10", "m^3", "dead volume, cap side"),
     "V20": _k("plant:V20", "m^3", "dead volume, rod side"),
@@ -183,8 +196,10 @@ class PlantFile:
     sensors : dict of str to float
         ``x_noise``, ``x_quantum`` (m), ``p_noise``, ``p_quantum`` (Pa).
     control : dict of str to float
-        ``control_rate`` (Hz), ``u_max``, ``du_max`` and the tuning given
-        (``pid_bandwidth``, ``force_bandwidth``, ``observer_gain``).
+        ``control_rate`` (Hz), ``u_max``, ``du_max``, the tuning given
+        (``pid_bandwidth``, ``force_bandwidth``, ``observer_gain``) and the fail-safe
+        layer's settings given (``safe_output``, a name or a number; ``fault_latch``,
+        ``fault_recover``, whole numbers; ``position_margin``, ``pressure_max``).
     rig : dict
         The ``[rig]`` table as a sidecar writes it.
     """
@@ -311,6 +326,8 @@ def parse_plant(doc: Mapping[str, Any], label: str, default_name: str = "plant")
                 problems.append(f"{label}: [rig] orientation must be one of "
                                 f"{', '.join(ORIENTATIONS)}, got {value!r}")
             continue
+        if target == "control:safe_output" and isinstance(value, str):
+            continue  # a name: _fail_safe_keys
         if isinstance(value, bool) or not isinstance(value, int | float) \
                 or not math.isfinite(value):
             problems.append(f"{label}: [{table}] {key} = {value!r} is not a finite number "
@@ -322,13 +339,14 @@ def parse_plant(doc: Mapping[str, Any], label: str, default_name: str = "plant")
     sensors = {t.split(":", 1)[1]: v for t, v in numbers.items() if t.startswith("sensors:")}
     control = {t.split(":", 1)[1]: v for t, v in numbers.items() if t.startswith("control:")}
     for target, v in numbers.items():
-        if target.startswith(("sensors:", "control:")):
+        if target.startswith(("sensors:", "control:")) and target != "control:safe_output":
             table, key, spec, _ = given[target]
             low_ok = v >= 0 if target.startswith("sensors:") else v > 0
             if not low_ok:
                 bound = ">= 0" if target.startswith("sensors:") else "> 0"
                 problems.append(f"{label}: [{table}] {key} = {v:g} {spec.unit} must be {bound} "
                                 f"({spec.doc})")
+    _fail_safe_keys(given, control, label, problems)
     orientation = given["rig:orientation"][3] if "rig:orientation" in given else "horizontal"
     values["orient"] = ORIENTATIONS.get(orientation, 0.0)
     pf = PlantFile(kind=kind, name=str(doc.get("name", default_name)), label=label,
@@ -340,6 +358,34 @@ def parse_plant(doc: Mapping[str, Any], label: str, default_name: str = "plant")
     if problems:
         raise PlantFileError(problems)
     return pf
+
+
+def _fail_safe_keys(given: dict[str, tuple[str, str, Key, Any]], control: dict[str, Any],
+                    label: str, problems: list[str]) -> None:
+    """The ``[control]`` keys of the fail-safe layer (:mod:`controllers.safety`):
+    ``safe_output`` one of :data:`SAFE_OUTPUTS` or a command within ``+-u_max`` (the
+    number itself is checked with the others), the counts whole numbers of samples."""
+    if "control:safe_output" in given:
+        value = given["control:safe_output"][3]
+        if isinstance(value, str):
+            if value not in SAFE_OUTPUTS:
+                problems.append(f"{label}: [control] safe_output = {value!r} must be one of "
+                                f"{', '.join(map(repr, SAFE_OUTPUTS))} or a command (a number)")
+            else:
+                control["safe_output"] = value
+        elif "safe_output" in control:
+            u_max = control.get("u_max")
+            if u_max is not None and abs(control["safe_output"]) > u_max:
+                problems.append(f"{label}: [control] safe_output = {control['safe_output']:g} "
+                                f"is outside the valve's range +-{u_max:g} ([valve] u_max)")
+    for key in ("fault_latch", "fault_recover"):
+        v = control.get(key)
+        if v is not None and v > 0:
+            if not float(v).is_integer() or v > 1e9:
+                problems.append(f"{label}: [control] {key} = {v:g} must be a whole number of "
+                                "samples (1 to 1e9)")
+            else:
+                control[key] = int(v)
 
 
 def _plant_values(cls: type[OdePlant], numbers: dict[str, float],
@@ -441,5 +487,5 @@ def _cross_checks(pf: PlantFile, given: dict[str, tuple[str, str, Key, Any]]) ->
     return out
 
 
-__all__ = ["KINDS", "PlantFile", "PlantFileError", "builtin_path", "builtin_plant_file",
+__all__ = ["KINDS", "SAFE_OUTPUTS", "PlantFile", "PlantFileError", "builtin_path", "builtin_plant_file",
            "parse_plant", "read_plant_file", "template"]

@@ -157,6 +157,10 @@ def _write_lab(lab: Path) -> None:
         "exp_key.csv": good, "exp_key.toml": "experiment = 1.5\n[rig]\nmass = 1.0\n",
         "top_mass.csv": good, "top_mass.toml": "mass = 1.0\n",
         "huge_fit.json": '{"model": "coulomb-viscous", "params": {"Fc": 1.0, "B": 1e308}}\n',
+        "lugre_1e308.json": json.dumps({"format": "fcomp-model", "version": 1, "model": "lugre",
+                                        "params": {"Fc": 1e308, "Fs": 1e308, "vs": 0.008,
+                                                   "n": 1.0, "sigma2": 900.0, "sigma0": 2e6,
+                                                   "sigma1": 300.0}}),
         "patm_bar.csv": good, "patm_bar.toml": "p_atm = 1.013\n",
         "typo.csv": good, "typo.toml": "[rig]\nmas = 2.0\n",
         "absneg.csv": "t,x,p1\n0,0,-1000\n1,0.01,200000\n",
@@ -267,6 +271,10 @@ class Case:
     env: dict[str, str] = field(default_factory=dict)
 
 
+#: What ``fcomp export ... -o c --json c.json`` writes (files before their folder).
+EXPORT_FILES = ("c.json", "c/.fcomp-output", "c/fcomp_ctrl.h", "c/fcomp_ctrl.c",
+                "c/fcomp_ctrl_bench.c", "c/example.c", "c/Makefile", "c/fcomp_ctrl_casadi.c",
+                "c/fcomp_ctrl_casadi.h")
 SIM = "simulate motion --friction coulomb --input sine:amplitude=0.01,frequency=1 " \
       "--duration 0.2 --rate 100"
 SIM_NO_INPUT = "simulate motion --friction coulomb --duration 0.2 --rate 100"
@@ -739,6 +747,22 @@ CASES: dict[str, Case] = {
         env={"FCOMP_CACHE": "good.csv"}),
     "warn-import-repeated-times": Case("import zillen z_repeat.csv -o w.csv", code=0,
                                        outputs=("w.csv", "w.toml"), warnings=("rows-dropped",)),
+    # ---- export (issue 42, items 6, 8, 10, 16) ----
+    "export-onto-a-foreign-folder": Case("export pid -o mine", match="holds files fcomp did "
+                                         "not write"),
+    "export-compiler-without-output": Case(
+        "export pid --duration 0.05 -o c --json c.json", code=0, outputs=(*EXPORT_FILES, "c"),
+        warnings=("export",), env={"FCOMP_CC": "true"}),
+    "export-timing-steps-huge": Case("export pid -o c --timing-steps 1000000000000",
+                                     match="--timing-steps 1000000000000: time 100000 to"),
+    "export-friction-1e308": Case("export pid --friction lugre_1e308.json -o c",
+                                  match="gives -1e+308 N at -0.1 m/s, beyond the actuator's"),
+    "export-friction-beyond-the-force-range": Case(
+        "export pid --friction lugre --set Fc=2e4 --set Fs=2e4 -o c",
+        match="beyond the actuator's whole force range"),
+    "export-mpc-rate-said": Case("export mpc --plant pneumatic --option horizon=3 --option "
+                                 "qp_iterations=3 --duration 0.05 -o c --json c.json", code=0,
+                                 outputs=(*EXPORT_FILES, "c"), warnings=("export",)),
 }
 
 
@@ -1108,22 +1132,29 @@ LONG_COMMANDS = [
 ]
 
 
+def _processes() -> dict[int, list[bytes]]:
+    """Every living (not zombie) process: pid -> the fields of /proc/PID/stat after the
+    command name (state, ppid, pgrp, ...)."""
+    out = {}
+    for entry in os.listdir("/proc"):
+        if not entry.isdigit():
+            continue
+        try:
+            stat = (Path("/proc") / entry / "stat").read_bytes()
+        except OSError:
+            continue
+        fields = stat[stat.rfind(b")") + 2:].split()
+        if fields[0] != b"Z":
+            out[int(entry)] = fields
+    return out
+
+
 def _group_gone(pgid: int, seconds: float) -> bool:
     """Whether every process of the group ``pgid`` has ended within ``seconds`` (ended
     ones that nobody reaps count as ended)."""
     end = time.monotonic() + seconds
     while time.monotonic() < end:
-        alive = []
-        for entry in os.listdir("/proc"):
-            if not entry.isdigit():
-                continue
-            try:
-                stat = (Path("/proc") / entry / "stat").read_bytes()
-            except OSError:
-                continue
-            fields = stat[stat.rfind(b")") + 2:].split()
-            if int(fields[3]) == pgid and fields[0] != b"Z":
-                alive.append(int(entry))
+        alive = [pid for pid, fields in _processes().items() if int(fields[2]) == pgid]
         if not alive:
             return True
         time.sleep(0.1)
@@ -1176,6 +1207,77 @@ def test_a_signal_stops_a_long_command_at_once(tmp_path: Path, label: str, args:
     assert snapshot(tmp_path) == before
 
 
+def _descendants(root: int) -> dict[int, str]:
+    """The living descendants of process ``root``: pid -> command line (from /proc)."""
+    parent = {pid: int(fields[1]) for pid, fields in _processes().items()}
+    out = {}
+    for pid in parent:
+        p, hops = parent.get(pid), 0
+        while p not in (None, 0, 1, root) and hops < 64:
+            p, hops = parent.get(p), hops + 1
+        if p == root:
+            try:
+                out[pid] = (Path("/proc") / str(pid) / "cmdline").read_bytes().replace(
+                    b"\0", b" ").decode(errors="replace")
+            except OSError:
+                continue
+    return out
+
+
+def _alive(pids: list[int]) -> list[int]:
+    living = _processes()
+    return [pid for pid in pids if pid in living]
+
+
+@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs /proc (Linux)")
+@pytest.mark.parametrize(("sig", "code", "line", "args", "marker"), [
+    (signal.SIGINT, 130, "fcomp: interrupted",
+     ["export", "mpc", "--option", "horizon=4", "--option", "qp_iterations=5"], "cc1"),
+    (signal.SIGTERM, 143, "fcomp: terminated", ["export", "mpc"], "fcomp_ctrl_casadi.c"),
+], ids=["ctrl-c-kernel-compile", "sigterm-export-compile"])
+@pytest.mark.slow
+def test_interrupting_export_ends_the_whole_compiler(tmp_path: Path, sig: int, code: int,
+                                                     line: str, args: list[str],
+                                                     marker: str) -> None:
+    """Issue 42 item 4: Ctrl-C (to the process group, as a terminal sends it) while the
+    controller's kernels compile, SIGTERM while the export's C compiles: the compiler runs
+    in a process group of its own, ended whole -- no ``cc1`` left running (5 of 9 runs
+    left one before) -- with the command's one line, exit status, and nothing written."""
+    env = _env(FCOMP_CACHE=str(tmp_path / "cache"))  # a fresh cache: the kernels compile
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "fcomp.cli.main", *args, "-o", "c", "--no-progress"],
+        cwd=tmp_path, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+        start_new_session=True, preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    compilers: list[int] = []
+    end = time.monotonic() + 300
+    try:
+        while not compilers and time.monotonic() < end and proc.poll() is None:
+            found = _descendants(proc.pid)
+            if any("cc1" in c and marker in c for c in found.values()):
+                compilers = list(found)
+            else:
+                time.sleep(0.02)
+        assert compilers, f"no compiler ({marker}) seen before {args} ended"
+        if sig == signal.SIGINT:
+            os.killpg(proc.pid, sig)
+        else:
+            proc.send_signal(sig)
+        out, err = proc.communicate(timeout=60)
+        gone_by = time.monotonic() + 2  # cc1 on the MPC's C alone runs for a minute
+        while _alive(compilers) and time.monotonic() < gone_by:
+            time.sleep(0.05)
+        left = _alive(compilers)
+    finally:
+        for pid in _alive(compilers):
+            with contextlib.suppress(OSError):
+                os.kill(pid, signal.SIGKILL)
+        if proc.poll() is None:
+            proc.kill()
+    assert not left, f"compiler processes left running: {left}"
+    assert proc.returncode == code and err.decode() == line + "\n", err.decode()
+    assert not (tmp_path / "c").exists()
+
+
 def test_messages_show_plain_numbers() -> None:
     from fcomp.cli.main import plain
 
@@ -1184,7 +1286,7 @@ def test_messages_show_plain_numbers() -> None:
 
 def test_case_count() -> None:
     """The closing note of issue 12 gives this count: table cases plus the tests above."""
-    extra = 7 + len(SUBPROCESS) + 2
+    extra = 7 + len(SUBPROCESS) + 2 + 2
     assert len(CASES) + extra >= 150
     print(f"{len(CASES)} table cases + {extra} interrupt/process cases")
 

@@ -52,6 +52,13 @@ def test_export_is_equivalent_and_timed(controller: str, tmp_path: Path,
     assert doc["steps_checked"] == 601
     assert doc["timed_steps"] >= 100_000
     assert 0 < doc["step_time_median"] <= doc["step_time_max"]
+    assert doc["step_time_clock"] == "cpu"
+    assert 0 < doc["step_time_wall_median"] <= doc["step_time_wall_max"]
+    assert doc["rate"] == doc["plant_rate"] == 1000.0 and doc["sample_time"] == 1e-3
+    fc = doc["fault_check"]
+    assert fc["equivalent"] and fc["same_faults"] and fc["within_limits"]
+    assert (fc["faults"], fc["latches"], fc["recoveries"]) == (33, 2, 2)
+    assert doc["fail_safe"]["safe_output"] == "centre"
     assert doc["warnings"] == []
     for name in FILES:
         assert (out / name).is_file()
@@ -61,13 +68,18 @@ def test_export_is_equivalent_and_timed(controller: str, tmp_path: Path,
 def test_the_check_sees_a_different_controller(tmp_path: Path) -> None:
     """The compiled observer with gain 0.5 checked against a Python observer with gain 0.6."""
     from controllers import make_controller
-    from controllers.export import CompiledController, check_equivalence, step_function, write_c
+    from controllers.export import (
+        CompiledController,
+        check_equivalence,
+        guarded_step_function,
+        write_c,
+    )
     from controllers.plant_model import ControlModel
     from fcomp.models import make_model
 
     model = ControlModel("hydraulic", make_model("nmlgm", params="seed002-type1"))
     ctrl = make_controller("lugre-observer", model, observer_gain=0.5)
-    step = step_function(ctrl)
+    step = guarded_step_function(ctrl)
     write_c(step, tmp_path / "c", controller="lugre-observer", plant=model.describe(),
             unit="A", u_max=model.u_max, dt=ctrl.dt, y_example=[0.1, 1e6, 1e6], r_example=0.1)
     cc = find_compiler()
@@ -162,16 +174,26 @@ def test_the_example_builds_and_runs(tmp_path: Path, capsys: pytest.CaptureFixtu
     subprocess.run(["make", "-s", f"CC={cc}"], cwd=out, check=True, capture_output=True)
     run = subprocess.run([str(out / "example")], capture_output=True, text=True, check=True)
     assert "step 4: u =" in run.stdout and "step time over 100000 steps" in run.stdout
+    assert "after a dropout of 5 samples: faults 5, latched 1, cause 7, u = 0" in run.stdout
+    assert "(CPU time of the step)" in run.stdout and "wall-clock worst" in run.stdout
 
 
 def test_mpc_from_the_command_line(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
     """A short-horizon MPC (counts given as numbers on the command line) exports, is
-    equivalent to its fixed-iteration Python form, and says which form that is."""
+    equivalent to its fixed-iteration Python form, and says which form that is; its rate
+    (250 Hz here, the plant's 1 kHz) is said on the console and in the JSON (issue 42,
+    item 16)."""
     code, out, err = _run(["export", "mpc", "--option", "horizon=4", "--option", "rate=250",
                            "--option", "qp_iterations=8", "--duration", "0.2", "-o",
                            str(tmp_path / "c"), "--json", "-"], capsys)
     assert code == 0, err
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and "mpc runs at 250 Hz (a step every 4 ms), the plant's [control] " \
+        "rate is 1000 Hz" in lines[0], err
     doc = json.loads(out)
+    assert (doc["rate"], doc["plant_rate"], doc["sample_time"]) == (250.0, 1000.0, 0.004)
+    assert [w["code"] for w in doc["warnings"]] == ["export"]
+    assert doc["fault_check"]["equivalent"] is True
     assert doc["equivalent"] is True and doc["max_rel_diff"] <= 1e-9
     assert doc["python_reference"] == "controllers.mpc_fixed.FixedIterationMPC"
     assert "8 ADMM iterations" in doc["step"]
@@ -191,3 +213,40 @@ def test_a_failing_compiler_still_leaves_the_code(tmp_path: Path, capsys: pytest
     lines = err.strip().splitlines()
     assert len(lines) == 1 and "failed on the generated code" in lines[0]
     assert (tmp_path / "c" / "fcomp_ctrl_casadi.c").is_file()
+
+
+def test_the_console_tells_the_rate_the_layer_and_the_times(tmp_path: Path,
+                                                             capsys: pytest.CaptureFixture
+                                                             ) -> None:
+    """Issue 42 item 16: the console says the rate, the fail-safe layer, the hostile check,
+    and the step time as the step's own CPU time beside the wall-clock worst, named so."""
+    code, out, err = _run(["export", "pid", "-o", str(tmp_path / "c"), "--duration", "0.2"],
+                          capsys)
+    assert code == 0 and err == ""
+    assert "runs at 1000 Hz: call it every 1 ms" in out
+    assert "fail-safe layer: safe output centre after 5 faulty samples in a row" in out
+    assert "on hostile input 0 over" in out and "2 latches, 2 recoveries" in out
+    assert "compiled step time (CPU time of the step): median" in out
+    assert "wall-clock worst" in out and "other processes" in out
+
+
+def test_a_check_that_is_not_a_number_is_refused(tmp_path: Path,
+                                                 monkeypatch: pytest.MonkeyPatch) -> None:
+    """Issue 42 item 10: a check whose difference is NaN is never a result ("equivalent: NO
+    (nan)", exit 0, before): one line, and nothing claimed."""
+    import controllers.export.pipeline as pipeline
+    from controllers.plant_model import ControlModel
+    from fcomp.errors import FcompError
+    from fcomp.models import make_model
+
+    real = pipeline.check_equivalence
+
+    def poisoned(*args, **kwargs):  # type: ignore[no-untyped-def]
+        res = real(*args, **kwargs)
+        res.u_step[3] = float("nan")
+        return res
+
+    monkeypatch.setattr(pipeline, "check_equivalence", poisoned)
+    model = ControlModel("hydraulic", make_model("nmlgm", params="seed002-type1"))
+    with pytest.raises(FcompError, match="gave no number"):
+        pipeline.export_controller("pid", model, tmp_path / "c", duration=0.05)

@@ -9,7 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from controllers import CONTROLLERS
-from controllers.export import EXPORTABLE, export_controller
+from controllers.export import EXPORTABLE, MAX_TIMING_STEPS, export_controller
 from controllers.plant_model import ControlModel
 from controllers.tasks import TASKS
 from fcomp.cli import common
@@ -55,16 +55,30 @@ def control_model(args: argparse.Namespace) -> Any:
 
 def summary(doc: dict[str, Any]) -> str:
     lines = [f"export {doc['controller']} on {doc['plant']}: {len(doc['files'])} files in "
-             f"{doc['folder']}", f"  step: {doc['step']}"]
+             f"{doc['folder']}", f"  step: {doc['step']}",
+             f"  runs at {doc['rate']:g} Hz: call it every {1e3 * doc['sample_time']:g} ms"
+             + ("" if doc["rate"] == doc["plant_rate"] else
+                f" (the plant file's [control] rate is {doc['plant_rate']:g} Hz)")]
+    fs = doc["fail_safe"]
+    lines.append(f"  fail-safe layer: safe output {fs['safe_output']} after "
+                 f"{fs['fault_latch']} faulty samples in a row, resumes after "
+                 f"{fs['fault_recover']} good ones")
     if doc["equivalent"] is None:
         lines.append("  not compiled, checked or timed (see the warning)")
     else:
+        fc = doc["fault_check"]
         lines.append(f"  equivalent to the Python controller ({doc['python_reference']}): "
                      f"{'yes' if doc['equivalent'] else 'NO'} (max relative difference "
                      f"{doc['max_rel_diff']:.3g} step by step, {doc['free_run_max_rel_diff']:.3g} "
-                     f"free-running, over {doc['steps_checked']} closed-loop steps)")
-        lines.append(f"  compiled step time: median {doc['step_time_median'] * 1e6:.3g} us, "
-                     f"max {doc['step_time_max'] * 1e6:.3g} us over {doc['timed_steps']} steps")
+                     f"free-running, over {doc['steps_checked']} closed-loop steps; on hostile "
+                     f"input {fc['max_rel_diff']:.3g} over {fc['samples']} steps, {fc['faults']} "
+                     f"faults, {fc['latches']} latches, {fc['recoveries']} recoveries, fault "
+                     f"states {'the same' if fc['same_faults'] else 'DIFFERENT'})")
+        lines.append(f"  compiled step time (CPU time of the step): median "
+                     f"{doc['step_time_median'] * 1e6:.3g} us, max "
+                     f"{doc['step_time_max'] * 1e6:.3g} us over {doc['timed_steps']} steps; "
+                     f"wall-clock worst {doc['step_time_wall_max'] * 1e6:.3g} us (with the time "
+                     "the processor was given to other processes)")
     return "\n".join(lines)
 
 
@@ -75,6 +89,9 @@ def run(args: argparse.Namespace) -> int:
         raise FcompError(f"export: controller {args.controller} is not exported (exported: "
                          f"{', '.join(EXPORTABLE)})")
     TASKS.get(args.task)
+    if not 100_000 <= args.timing_steps <= MAX_TIMING_STEPS:
+        raise FcompError(f"--timing-steps {args.timing_steps}: time 100000 to "
+                         f"{MAX_TIMING_STEPS} steps (two times of each are kept in memory)")
     out = json_target(args.json)
     if not args.output.strip():
         raise FcompError("-o: no folder name given (an empty argument)")

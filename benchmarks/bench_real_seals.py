@@ -13,7 +13,12 @@ floor), wall time. The cases:
 * ``circle`` and ``circle-reversed``: the Circle files at 2, 4, 6 bar, in that order
   and in the order 6, 4, 2;
 * ``kdn``, ``napn``: the KDN and NAPN seals at 1, 3, 5, 7 bar;
-* ``oring-circle``: O-ring and Circle together, 1 to 7 bar.
+* ``oring-circle``: O-ring and Circle together, 1 to 7 bar, and ``oring-circle-1-6``
+  the same without the 7 bar file;
+* ``oring-renamed``: the O-ring files copied under other names (``run_a`` .. ``run_d``)
+  and given in the order 7, 5, 3, 1 bar; ``oring-mass``: the O-ring files with an
+  irrelevant ``rig.mass = 0.1`` kg written in their sidecars. Both must answer as
+  ``oring`` does.
 
 **The prediction** (``--predict``). For each seal, the diagnosis of 1, 3 and 5 bar
 alone (``--save-model``), its final model (with its measurement terms, as fitted)
@@ -47,10 +52,15 @@ ZILLEN = {"oring": [f"O-ring_{k}bar.csv" for k in (1, 3, 5, 7)],
           "napn": [f"NAPN_{k}bar.csv" for k in (1, 3, 5, 7)],
           "oring-circle": ["O-ring_1bar.csv", "Circle_2bar.csv", "O-ring_3bar.csv",
                            "Circle_4bar.csv", "O-ring_5bar.csv", "Circle_6bar.csv",
-                           "O-ring_7bar.csv"]}
+                           "O-ring_7bar.csv"],
+          "oring-circle-1-6": ["O-ring_1bar.csv", "Circle_2bar.csv", "O-ring_3bar.csv",
+                               "Circle_4bar.csv", "O-ring_5bar.csv", "Circle_6bar.csv"],
+          "oring-renamed": [f"O-ring_{k}bar.csv" for k in (7, 5, 3, 1)],
+          "oring-mass": [f"O-ring_{k}bar.csv" for k in (1, 3, 5, 7)]}
 BASELINE = {"emps": "coulomb-viscous", "oring": "lugre", "circle": "coulomb-viscous",
             "circle-reversed": "coulomb-viscous", "kdn": "coulomb-viscous",
-            "napn": "coulomb-viscous", "oring-circle": "lugre"}
+            "napn": "coulomb-viscous", "oring-circle": "lugre", "oring-circle-1-6": "lugre",
+            "oring-renamed": "lugre", "oring-mass": "lugre"}
 #: The seals whose 7 bar level is predicted from 1, 3 and 5 bar.
 PREDICTED = {"O-ring": "O-ring_{}bar.csv", "KDN": "KDN_{}bar.csv", "NAPN": "NAPN_{}bar.csv"}
 
@@ -71,6 +81,28 @@ def imported(folder: Path) -> dict[str, Path]:
     _cli(["import", "emps", str(datasets.path("emps", "DATA_EMPS.mat")), "-o", str(emps)],
          folder, None)
     out["emps"] = emps
+    return out
+
+
+def variant(case: str, files: list[Path], folder: Path) -> list[Path]:
+    """The case's files as it gives them: ``oring-renamed`` copies them under other names
+    (the sidecar's ``name`` too), ``oring-mass`` writes ``rig.mass = 0.1`` kg in copies of
+    their sidecars; every other case its files unchanged."""
+    if case not in ("oring-renamed", "oring-mass"):
+        return files
+    out = []
+    for k, f in enumerate(files):
+        stem = f"run_{'abcd'[k]}" if case == "oring-renamed" else f"{f.stem}_mass"
+        dst = folder / case / f"{stem}.csv"
+        dst.parent.mkdir(exist_ok=True)
+        dst.write_bytes(f.read_bytes())
+        side = f.with_suffix(".toml").read_text()
+        if case == "oring-renamed":
+            side = side.replace(f'name = "{f.stem}"', f'name = "{stem}"', 1)
+        else:
+            side = side.replace("[rig]\n", "[rig]\nmass = 0.1\n", 1)
+        dst.with_suffix(".toml").write_text(side)
+        out.append(dst)
     return out
 
 
@@ -203,7 +235,8 @@ def main(argv: list[str] | None = None) -> int:
         rows: list[dict] = []
         if not args.no_table:
             for case in args.cases.split(","):
-                files = [paths["emps"]] if case == "emps" else [paths[n] for n in ZILLEN[case]]
+                files = ([paths["emps"]] if case == "emps" else
+                         variant(case, [paths[n] for n in ZILLEN[case]], folder))
                 bases = ([BASELINE.get(case, "lugre")] if case == "emps" or not args.baselines
                          else args.baselines.split(","))
                 for base in bases:

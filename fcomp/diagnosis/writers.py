@@ -93,12 +93,12 @@ ONE_ON_A_FIXED_STROKE = ("x", "displacement_since_reversal")
 
 def merged_features(result: DiagnosisResult) -> list[dict[str, Any]]:
     """The JSON's ``residual_features``: each feature with its strength and the RMS it carries
-    (N), strongest first; on
-    a fixed stroke (:attr:`.design.Design.fixed_stroke`) the position and the displacement
+    (N), strongest first; on a fixed stroke (:attr:`.design.Design.fixed_stroke`) the position and the displacement
     since the reversal are one finding, listed once under the stronger with ``same_as``."""
-    feats: list[dict[str, Any]] = [{"feature": f.feature, "strength": round(f.strength, 4),
-              "rms": _num(result.verdict.rms_final * math.sqrt(f.strength))}
-             for f in result.verdict.features]
+    feats: list[dict[str, Any]] = [
+        {"feature": f.feature, "strength": round(f.strength, 4),
+         "rms": _num(result.verdict.rms_final * math.sqrt(f.strength))}
+        for f in result.verdict.features]
     if result.design is None or not result.design.fixed_stroke:
         return feats
     pair = [f for f in feats if f["feature"] in ONE_ON_A_FIXED_STROKE]

@@ -93,8 +93,9 @@ ONE_ON_A_FIXED_STROKE = ("x", "displacement_since_reversal")
 
 def merged_features(result: DiagnosisResult) -> list[dict[str, Any]]:
     """The JSON's ``residual_features``: each feature with its strength and the RMS it carries
-    (N), strongest first; on a fixed stroke (:attr:`.design.Design.fixed_stroke`) the position and the displacement
-    since the reversal are one finding, listed once under the stronger with ``same_as``."""
+    (N), strongest first; on a fixed stroke (:attr:`.design.Design.fixed_stroke`) the
+    position and the displacement since the reversal are one finding, listed once under
+    the stronger with ``same_as``."""
     feats: list[dict[str, Any]] = [
         {"feature": f.feature, "strength": round(f.strength, 4),
          "rms": _num(result.verdict.rms_final * math.sqrt(f.strength))}

@@ -11,7 +11,12 @@ from scipy import integrate, stats
 
 from fcomp.diagnosis.data import prepare, sessions
 from fcomp.diagnosis.result import same_findings as _same_findings
-from fcomp.diagnosis.scoring import prediction_band, scored_residual, tolerant_residual
+from fcomp.diagnosis.scoring import (
+    fit_weights,
+    prediction_band,
+    scored_residual,
+    tolerant_residual,
+)
 from fcomp.measurement import Measurement
 
 
@@ -60,6 +65,17 @@ def test_a_wider_band_never_scores_better_in_expectation() -> None:
                                            np.full(y.size, c + w / 2), [0])[0] ** 2))
            for w in (0.0, 2.0, 27.0)]
     assert tol[2] < tol[1] < tol[0]
+
+
+def test_fit_weights_rise_outside_the_band_and_stay_finite_on_a_zero_floor() -> None:
+    """``w = w_band + (1 - w_band)*d^2/(d^2 + (2 sigma)^2)``: 1 inside a zero-width band,
+    half-way back to 1 at ``d = 2 sigma``, and finite with a noise floor of zero (exact
+    steady-state points: 0/0 made every weight NaN and the baseline fit failed)."""
+    w = fit_weights(np.array([0.0, 4.0, 4.0]), 1.0, np.array([0.0, 0.0, 2.0]))
+    w_band = 1.0 / (1.0 + 2.0**2)
+    np.testing.assert_allclose(w, [1.0, w_band, w_band + (1.0 - w_band) * 0.5])
+    z = fit_weights(np.array([1.0, 1.0]), 0.0, np.array([0.0, 1.0]))
+    assert np.all(np.isfinite(z)) and z[1] == 1.0 and z[0] < 1e-100
 
 
 def test_the_timing_band_widens_by_the_window_within_an_experiment_only() -> None:

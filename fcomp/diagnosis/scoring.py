@@ -55,7 +55,9 @@ def fit_weights(spread: np.ndarray, noise: float, outside: np.ndarray | None = N
     if outside is None:
         return w
     d2 = np.asarray(outside, dtype=float) ** 2
-    return w + (1.0 - w) * d2 / (d2 + (2.0 * max(noise, 1e-300)) ** 2)
+    # a floor of zero (exact steady-state points) must not make 0/0 where d = 0
+    scale2 = max((2.0 * noise) ** 2, np.finfo(float).tiny)
+    return w + (1.0 - w) * d2 / (d2 + scale2)
 
 
 #: Largest timing tolerance (s) of :func:`tolerant_residual`.

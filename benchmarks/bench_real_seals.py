@@ -74,12 +74,14 @@ def imported(folder: Path) -> dict[str, Path]:
         p.format(k) for p in PREDICTED.values() for k in (1, 3, 5, 7)}
     for name in sorted(names):
         dst = folder / name
-        _cli(["import", "zillen", str(datasets.path("zillen", name)), "-o", str(dst)],
-             folder, None)
+        if not dst.exists():  # a kept folder (--keep) is imported once
+            _cli(["import", "zillen", str(datasets.path("zillen", name)), "-o", str(dst)],
+                 folder, None)
         out[name] = dst
     emps = folder / "emps.csv"
-    _cli(["import", "emps", str(datasets.path("emps", "DATA_EMPS.mat")), "-o", str(emps)],
-         folder, None)
+    if not emps.exists():
+        _cli(["import", "emps", str(datasets.path("emps", "DATA_EMPS.mat")), "-o", str(emps)],
+             folder, None)
     out["emps"] = emps
     return out
 
@@ -169,9 +171,11 @@ def levels(model_file: Path, record: Path) -> dict[str, dict[str, float]]:
     return out
 
 
-def predict(paths: dict[str, Path], folder: Path, jobs: int) -> list[dict]:
+def predict(paths: dict[str, Path], folder: Path, jobs: int,
+            seals: tuple[str, ...] = tuple(PREDICTED)) -> list[dict]:
     rows = []
-    for seal, pattern in PREDICTED.items():
+    for seal in seals:
+        pattern = PREDICTED[seal]
         files = [paths[pattern.format(k)] for k in (1, 3, 5)]
         model = folder / f"{seal}_135.json"
         wall, doc = diagnose(files, "lugre", folder / f"{seal}_135_diag.json", jobs,
@@ -224,6 +228,8 @@ def main(argv: list[str] | None = None) -> int:
                    "case's own)")
     p.add_argument("--predict", action="store_true", help="also predict 7 bar from 1-5 bar")
     p.add_argument("--no-table", action="store_true", help="only the prediction")
+    p.add_argument("--seals", default=",".join(PREDICTED),
+                   help="comma-separated seals whose 7 bar level is predicted (default all)")
     p.add_argument("--jobs", type=int, default=2)
     p.add_argument("--json", default=None, metavar="OUT")
     p.add_argument("--keep", default=None, metavar="DIR", help="work in DIR and keep it")
@@ -244,7 +250,8 @@ def main(argv: list[str] | None = None) -> int:
                     rows.append(row(case, [f.name for f in files], base, doc, wall))
                     print(table(rows[-1:]).splitlines()[-1], flush=True)
             print(table(rows))
-        preds = predict(paths, folder, args.jobs) if args.predict else []
+        preds = (predict(paths, folder, args.jobs, tuple(args.seals.split(",")))
+                 if args.predict else [])
         if preds:
             print(prediction_table(preds))
         if args.json:

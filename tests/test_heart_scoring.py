@@ -12,8 +12,8 @@ from scipy import integrate, stats
 from fcomp.diagnosis.data import prepare, sessions
 from fcomp.diagnosis.result import same_findings as _same_findings
 from fcomp.diagnosis.scoring import (
-    fit_weights,
     prediction_band,
+    sample_weights,
     scored_residual,
     tolerant_residual,
 )
@@ -67,15 +67,14 @@ def test_a_wider_band_never_scores_better_in_expectation() -> None:
     assert tol[2] < tol[1] < tol[0]
 
 
-def test_fit_weights_rise_outside_the_band_and_stay_finite_on_a_zero_floor() -> None:
-    """``w = w_band + (1 - w_band)*d^2/(d^2 + (2 sigma)^2)``: 1 inside a zero-width band,
-    half-way back to 1 at ``d = 2 sigma``, and finite with a noise floor of zero (exact
-    steady-state points: 0/0 made every weight NaN and the baseline fit failed)."""
-    w = fit_weights(np.array([0.0, 4.0, 4.0]), 1.0, np.array([0.0, 0.0, 2.0]))
-    w_band = 1.0 / (1.0 + 2.0**2)
-    np.testing.assert_allclose(w, [1.0, w_band, w_band + (1.0 - w_band) * 0.5])
-    z = fit_weights(np.array([1.0, 1.0]), 0.0, np.array([0.0, 1.0]))
-    assert np.all(np.isfinite(z)) and z[1] == 1.0 and z[0] < 1e-100
+def test_sample_weights_follow_the_band_and_stay_finite_on_a_zero_floor() -> None:
+    """``w = 1/(1 + (spread/(2 sigma))^2)``: 1 where the band has no width, 1/2 where it is
+    two noise floors wide, and finite with a noise floor of zero (exact steady-state
+    points)."""
+    np.testing.assert_allclose(sample_weights(np.array([0.0, 2.0, 4.0]), 1.0),
+                               [1.0, 0.5, 0.2])
+    z = sample_weights(np.array([0.0, 1.0]), 0.0)
+    assert np.all(np.isfinite(z)) and z[0] == 1.0 and z[1] < 1e-100
 
 
 def test_the_timing_band_widens_by_the_window_within_an_experiment_only() -> None:

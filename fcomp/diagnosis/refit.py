@@ -47,8 +47,8 @@ import numpy as np
 from fcomp.diagnosis.boxes import BoxState, DataBoxes
 from fcomp.diagnosis.data import DiagnosisData, Experiment
 from fcomp.diagnosis.scoring import (
-    fit_weights,
     prediction_band,
+    sample_weights,
     scored_residual,
     timing_windows,
 )
@@ -319,8 +319,7 @@ class Refit:
         values = {k: v for k, v in fit.values.items() if k not in self.held}
         return self.result(fit.model, values, fit.n_params, fit.converged, fit.nfev)
 
-    def set_weights(self, spread: np.ndarray, noise: float,
-                    outside: np.ndarray | None = None) -> None:
+    def set_weights(self, spread: np.ndarray, noise: float) -> None:
         """Weigh each sample by how well the measured motion fixes the prediction there.
 
         ``w = 1/(1 + (spread/(2*noise))^2)`` with ``spread`` the width of the band
@@ -330,12 +329,9 @@ class Refit:
         uncertainty of an event, or differs along motions as consistent with
         the position, a sample says little about the parameters and would
         otherwise dominate the squares (a static law's 500 N step one sample
-        early). Where the measurement lies far outside that band (``outside``, the
-        tolerant residual), no timing shift explains it and the weight rises back towards 1
-        (:func:`.scoring.fit_weights`). Fits after this weigh their residuals by
-        ``sqrt(w)``.
+        early). Fits after this weigh their residuals by ``sqrt(w)``.
         """
-        self._weights = fit_weights(spread, noise, outside)
+        self._weights = sample_weights(spread, noise)
         self._weighted = {}
 
     # ------------------------------------------------------------ predict

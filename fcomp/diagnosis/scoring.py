@@ -37,29 +37,6 @@ def sample_weights(spread: np.ndarray, noise: float) -> np.ndarray:
     return 1.0 / (1.0 + ratio**2)
 
 
-def fit_weights(spread: np.ndarray, noise: float, outside: np.ndarray | None = None
-                ) -> np.ndarray:
-    """The fits' sample weights: :func:`sample_weights`, raised back towards 1 where the
-    measurement lies far outside the band the model could predict,
-
-    ``w = w_band + (1 - w_band)*d^2/(d^2 + (2*noise)^2)``
-
-    with ``d`` the distance of the measurement from the band (``outside``, the tolerant
-    residual, :func:`tolerant_residual`). The band weights distrust the samples where a
-    law's jump within the timing window of an event leaves the prediction uncertain; a
-    measurement there that no timing shift reaches -- a break-away after a long dwell 38-40 N
-    above a static map whose band is 7-18 N wide -- tells what the model lacks, and at the
-    band's weight (0.002-0.03) the dwell law that explains it was fitted to 0.33 N.
-    """
-    w = sample_weights(spread, noise)
-    if outside is None:
-        return w
-    d2 = np.asarray(outside, dtype=float) ** 2
-    # a floor of zero (exact steady-state points) must not make 0/0 where d = 0
-    scale2 = max((2.0 * noise) ** 2, np.finfo(float).tiny)
-    return w + (1.0 - w) * d2 / (d2 + scale2)
-
-
 #: Largest timing tolerance (s) of :func:`tolerant_residual`.
 MAX_TIMING = 0.02
 

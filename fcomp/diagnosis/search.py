@@ -195,7 +195,7 @@ class Search:
             self.refit.hold("lag", first.values["lag"])
         # the fits from here on weigh samples by how well the motion fixes the prediction
         if first.spread is not None:
-            self.refit.set_weights(first.spread, self.ground.noise, first.tolerant)
+            self.refit.set_weights(first.spread, self.ground.noise)
         self.baseline_fit = self.fit = self.polish(self.refit.fit(model, [first.values, *starts]))
         self.tick(f"baseline {model.describe()}")
 
@@ -212,7 +212,7 @@ class Search:
         if fit.plain is None or not self._take_lines(fit):
             return
         if fit.spread is not None:
-            self.refit.set_weights(fit.spread, self.ground.noise, fit.tolerant)
+            self.refit.set_weights(fit.spread, self.ground.noise)
         self.tick("periodic disturbance removed")
         self.fit = self.polish(self.refit.fit(fit.model, [fit.values], list(fit.values)))
         assert self.baseline_fit is not None
@@ -492,7 +492,7 @@ class Search:
             fit = self.refit.rescore(fit)
         if fit.spread is None:
             return fit
-        self.refit.set_weights(fit.spread, self.ground.noise, fit.tolerant)
+        self.refit.set_weights(fit.spread, self.ground.noise)
         return self.polish(fit, fresh=True)
 
     def polish(self, fit: FitResult, fresh: bool = False) -> FitResult:

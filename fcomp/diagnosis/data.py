@@ -65,8 +65,10 @@ STEADY_STATE = "steady-state"
 @dataclass(frozen=True)
 class Experiment:
     """One experiment: its fit data, its place in the concatenated arrays, alternative
-    motions as consistent with its measured position (:func:`fcomp.conditioning.motion_ensemble`)
-    and the samples inserted across a logger's pause (:mod:`.pauses`; None: none)."""
+    motions as consistent with its measured position (:func:`fcomp.conditioning.motion_ensemble`),
+    the samples inserted across a logger's pause (:mod:`.pauses`; None: none), and the
+    experiment of the record's design it is a piece of (``design``: the pieces of one file
+    cut at logger pauses share it, whether or not a pause is bridged; -1: its own)."""
 
     label: str
     data: FitData
@@ -74,6 +76,7 @@ class Experiment:
     stop: int
     alternatives: tuple[Motion, ...] = ()
     bridged: np.ndarray | None = None
+    design: int = -1
 
     @property
     def n(self) -> int:
@@ -172,8 +175,10 @@ class DiagnosisData:
         return np.concatenate([np.full(e.n, i) for i, e in enumerate(self.experiments)])
 
 
-def _cut(meas: Measurement) -> list[tuple[Measurement, np.ndarray]]:
-    """Experiments of one measurement, each with its bridged samples: cut where the
+def _cut(meas: Measurement) -> list[tuple[Measurement, np.ndarray, int]]:
+    """Experiments of one measurement, each with its bridged samples and the number of the
+    experiment of the record's design it belongs to (the runs between changes of the
+    ``experiment`` column; a logger's pause never starts one): cut where the
     ``experiment`` column changes, and at long time gaps -- a logger's pause inside a
     labelled experiment too -- unless the motion on both sides shows what the piston did
     through it (a rest, or a slide one way: the pause is bridged, :mod:`.pauses`); across
@@ -186,8 +191,11 @@ def _cut(meas: Measurement) -> list[tuple[Measurement, np.ndarray]]:
     pause = np.append((np.diff(t) > GAP_FACTOR * interval) & ~labels, False)
     meas, bridged, pause = pauses.bridge(meas, pause, interval)
     gaps = pause[:-1]
+    design = np.zeros(len(meas), dtype=int)
     if "experiment" in meas:
-        gaps = gaps | (np.diff(meas["experiment"]) != 0)
+        runs = np.diff(meas["experiment"]) != 0
+        gaps = gaps | runs
+        design[1:] = np.cumsum(runs)
     change = np.nonzero(gaps)[0] + 1
     bounds = [0, *change.tolist(), len(meas)]
     out = []
@@ -199,7 +207,7 @@ def _cut(meas: Measurement) -> list[tuple[Measurement, np.ndarray]]:
         sub = meas.select(mask)
         if len(bounds) > 2:
             sub.meta["name"] = f"{meas.label}[{k + 1}]"
-        out.append((sub, bridged[a:b]))
+        out.append((sub, bridged[a:b], int(design[a])))
     if not out:
         raise FcompError(f"{meas.label}: no experiment with at least {MIN_SAMPLES} samples")
     return out
@@ -352,9 +360,10 @@ def prepare(
     x_measured = all("x" in m for m in meas_list)
     p_measured = all("p1" in m or "p2" in m for m in meas_list)  # a missing one: 0 gauge
     signals: list[Conditioning] = []
+    n_designs = 0
     for meas in meas_list:
-        cut = [(meas, None)] if steady else _cut(meas)
-        subs = [m for m, _ in cut]
+        cut = [(meas, None, 0)] if steady else _cut(meas)
+        subs = [m for m, _, _ in cut]
         band = None
         if steady:
             if "v" not in meas:
@@ -368,12 +377,14 @@ def prepare(
             if "x" in meas:
                 alternatives = [tuple(motion_ensemble(m.t, m["x"], cond)) for m in subs]
             subs, band = conditioned, cond.force_cutoff_hz
-        for sub, alts, (_, bridged) in zip(subs, alternatives, cut, strict=True):
+        designs: dict[int, int] = {}
+        for sub, alts, (_, bridged, unit) in zip(subs, alternatives, cut, strict=True):
             d = fit_data(sub, force_cutoff_hz=band)
             sources.add(d.source)
             experiments.append(Experiment(sub.label, d, start, start + d.n, alts,
                                           bridged if bridged is not None and bridged.any()
-                                          else None))
+                                          else None, designs.setdefault(unit, n_designs)))
+            n_designs = max(n_designs, experiments[-1].design + 1)
             start += d.n
     if len(sources) > 1:
         raise FcompError(f"the records give the force in different ways ({', '.join(sorted(sources))}); "

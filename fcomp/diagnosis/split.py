@@ -6,7 +6,9 @@ on samples whose neighbours it was fitted to. The diagnosis therefore holds
 out whole pieces of the record:
 
 ``segment`` (the default, ``auto``)
-    each experiment is cut into contiguous blocks of about
+    each experiment of the record's design (a file, or a run of its ``experiment``
+    column; the pieces a logger's pauses cut it into together) is cut into contiguous
+    blocks of about
     ``max(1 s, its duration/30)`` (at least three blocks per experiment, at least
     20 samples each); every third block is held out, so that an experiment's split
     depends on it alone: not on its name, its place among the records, or the
@@ -130,8 +132,21 @@ BLOCK_SECONDS = 1.0
 HELD_RANGE = (0.2, 0.45)
 
 
+def _units(data: DiagnosisData) -> list[list[int]]:
+    """The experiments of the record's design, each as the indices of its pieces: the pieces
+    of one file cut at logger pauses together (:attr:`.data.Experiment.design`)."""
+    units: list[list[int]] = []
+    for i, e in enumerate(data.experiments):
+        if e.design >= 0 and units and data.experiments[units[-1][-1]].design == e.design:
+            units[-1].append(i)
+        else:
+            units.append([i])
+    return units
+
+
 def _segment_split(data: DiagnosisData, valid: np.ndarray) -> Split:
-    """Every experiment cut into its own blocks, every third held out (module docstring).
+    """Every experiment of the record's design cut into its own blocks, every third held
+    out (module docstring).
 
     Each experiment's blocks and pattern depend on that experiment alone: its own
     duration (:data:`BLOCKS` blocks of at least :data:`BLOCK_SECONDS`) and its own usable
@@ -142,17 +157,27 @@ def _segment_split(data: DiagnosisData, valid: np.ndarray) -> Split:
     (its place in the name order) or one more file changed which samples every other
     experiment held out (the same records renamed: a baseline error of 2.80 N against
     2.94 N). One experiment alone is split as before.
+
+    The experiment is the design's (a file, or a run of its ``experiment`` column), not
+    the pieces a logger's pauses cut it into: its blocks are counted over its measured
+    samples, never over those inserted across a bridged pause, so whether a pause is
+    bridged or cuts (:mod:`.pauses`) the same samples are held out. Split by piece, a
+    pause bridged in one O-ring file (four pieces became three) moved every block of that
+    file and turned the pair found on 1, 3, 5 bar into nothing added.
     """
     test = np.zeros(data.n, dtype=bool)
+    bridged = data.bridged
     n_blocks_all, lengths = 0, []
-    for e in data.experiments:
-        t = e.data.sig["t"]
-        dur = float(t[-1] - t[0])
+    for unit in _units(data):
+        pieces = [data.experiments[i] for i in unit]
+        at = np.concatenate([np.arange(e.start, e.stop) for e in pieces])
+        at = at[~bridged[at]]
+        dur = float(pieces[-1].data.sig["t"][-1] - pieces[0].data.sig["t"][0])
         target = max(BLOCK_SECONDS, dur / BLOCKS)
         nb = max(3, int(round(dur / target)))
-        nb = max(1, min(nb, e.n // MIN_BLOCK))
-        edges = np.linspace(0, e.n, nb + 1).round().astype(int)
-        ok = valid[e.start:e.stop]
+        nb = max(1, min(nb, at.size // MIN_BLOCK))
+        edges = np.linspace(0, at.size, nb + 1).round().astype(int)
+        ok = valid[at]
         usable = max(int(ok.sum()), 1)
         # the pattern from the second block (one record alone is split as it always was),
         # unless it holds out too few or too many of the usable samples (its blocks in the
@@ -162,9 +187,8 @@ def _segment_split(data: DiagnosisData, valid: np.ndarray) -> Split:
                   for bs in patterns]
         pick = 0 if HELD_RANGE[0] <= shares[0] <= HELD_RANGE[1] else \
             min(range(3), key=lambda k: abs(shares[k] - 1.0 / 3.0))
-        held = patterns[pick]
-        for b in held:
-            test[e.start + edges[b]:e.start + edges[b + 1]] = True
+        for b in patterns[pick]:
+            test[at[edges[b]:edges[b + 1]]] = True
         n_blocks_all += nb
         lengths.append(dur / nb)
     typical = float(np.median(lengths)) if lengths else BLOCK_SECONDS

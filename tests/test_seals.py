@@ -351,3 +351,30 @@ def test_the_conclusion_names_the_design_tie_the_structures_and_one_feature() ->
     assert any("varies speed and pressure together): record the same retracting speed"
                in s for s in c.next_steps)
     assert not any("area-error: a" in s for s in c.next_steps)  # the design's experiment
+
+
+def test_a_value_at_its_bound_has_no_standard_error(tmp_path: Path) -> None:
+    """An O-ring's Fs at its bound came out with a standard error of 1.3e38 N (the Jacobian's
+    column there says nothing of the data): it is null in the JSON and the model file, "-"
+    in the report, and flagged; the other values keep theirs."""
+    from fcomp.diagnosis.refit import FitUncertainty
+    from fcomp.diagnosis.report import final_parameters
+    from fcomp.diagnosis.result import _stderr
+    from fcomp.models.document import model_document
+    from fcomp.report import Report
+
+    class AtBound:
+        def uncertainty(self, fit: object) -> FitUncertainty:
+            return FitUncertainty({"Fc": 0.23, "Fs": 1.3e38, "sigma2": 14.0}, {}, {}, {})
+
+    flags = [FitWarning("at-bound", "Fs", "final model lugre: Fs = 4 N is at its upper bound"),
+             FitWarning("interval-crosses-zero", "sigma2", "final model lugre: through zero")]
+    stderr = _stderr(AtBound(), None, flags)  # type: ignore[arg-type]
+    assert stderr["Fc"] == 0.23 and stderr["sigma2"] == 14.0 and math.isnan(stderr["Fs"])
+    doc = model_document(make_model("lugre", params="canudas1995"), stderr=stderr,
+                         undetermined={"Fs": "at-bound: Fs = 4 N is at its upper bound"})
+    assert doc["stderr"] == {"Fc": 0.23, "Fs": None, "sigma2": 14.0}
+    assert "1.3e+38" not in json.dumps(doc)
+    rep = final_parameters(Report("d"), {"params": {"Fc": 1.66, "Fs": 4.0},
+                                         "stderr": doc["stderr"], "model_file": doc}, {})
+    assert "1.3e" not in rep.to_html() and "at-bound" in rep.to_html()

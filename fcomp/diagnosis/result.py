@@ -9,6 +9,7 @@ the JSON and the report are written from it (:mod:`.writers`, :mod:`.report`).
 from __future__ import annotations
 
 import dataclasses
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -114,7 +115,7 @@ class DiagnosisResult:
                    confounding=tuple(dict(c) for c in search.confounding),
                    pairs=tuple(dict(p) for p in search.pairs),
                    refined=tuple(dict(f) for f in search.refined),
-                   stderr=_stderr(refit, fit),
+                   stderr=_stderr(refit, fit, final),
                    structures=tuple(seal_structures(fit.plain_residual, fit.F_hat, g.data,
                                                     g.segmentation, verdict.least)),
                    design_held=dict(search.design_held), structure=left)
@@ -164,13 +165,25 @@ class DiagnosisResult:
         return verdict_text(self.verdict) + dependence_text(self.dependence)
 
 
-def _stderr(refit: Refit, fit: FitResult) -> dict[str, float]:
+def _stderr(refit: Refit, fit: FitResult, warnings: Sequence[FitWarning]
+            ) -> dict[str, float]:
     """The standard errors of ``fit``'s fitted parameters (:meth:`.Refit.uncertainty`; NaN
-    where the record does not determine one; empty when they cannot be computed)."""
+    where the record does not determine one; empty when they cannot be computed).
+
+    A value at a bound of its box (an ``at-bound`` warning of ``fit``, ``warnings``) has no
+    standard error: the Jacobian's column there says nothing of the data (1.3e38 N for an
+    O-ring's ``Fs`` at its bound), so it is NaN -- null in the JSON and the model file, "-"
+    in the report -- and the flag says why."""
     try:
-        return refit.uncertainty(fit).stderr
+        stderr = dict(refit.uncertainty(fit).stderr)
     except (FcompError, ValueError, ArithmeticError, np.linalg.LinAlgError):
         return {}
+    for w in warnings:
+        if w.code == "at-bound" and w.parameter:
+            for name in w.parameter.split(","):
+                if name.strip() in stderr:
+                    stderr[name.strip()] = math.nan
+    return stderr
 
 
 def _fit_warnings(refit: Refit, ground: Ground, fit: FitResult, what: str,

@@ -31,6 +31,7 @@ from typing import Any
 
 import fcomp.diagnosis.catalogue as catalogue
 import fcomp.diagnosis.disturbance as disturbance
+import fcomp.diagnosis.forms as richer_forms
 import fcomp.diagnosis.pairs as pairs
 from fcomp.diagnosis.design import Design
 from fcomp.diagnosis.noise import NoiseFloor, effective_sample_size, noise_floor
@@ -294,6 +295,10 @@ class Search:
                 good = [c for c in ranked if c.qualifies]
             if step_no == 0 and not self.added:
                 self.candidates = ranked
+            if not good:  # a law of another form (:mod:`.forms`), in its plain one's place
+                good = self._richer(ranked)
+                ranked = _ranked([*good, *(c for c in ranked
+                                           if c.effect not in {g.effect for g in good})])
             if not good:
                 if self._pair(ranked):  # two effects missing at once (:mod:`.pairs`)
                     continue
@@ -316,6 +321,18 @@ class Search:
             self.fit = fit
             self.added.append(best.effect)
             self.keep_held()
+
+    def _richer(self, ranked: list[Candidate]) -> list[Candidate]:
+        """The step's promising candidates in their richer forms that qualify, best first
+        (:func:`.forms.candidate_forms`)."""
+        found = richer_forms.candidate_forms(self, [(c.effect, c.fit) for c in
+                                                    pairs.promising(ranked, self.rule)
+                                                    if c.fit is not None])
+        best: dict[str, Candidate] = {}
+        for name, form, fit, j in found:  # of an effect's forms, the best that qualifies
+            if j.qualifies and (name not in best or fit.rms_test < best[name].rms_heldout):
+                best[name] = Candidate(name, fit, fit.rms_test, j, form=form)
+        return _ranked(list(best.values()))
 
     def _pair(self, ranked: list[Candidate]) -> bool:
         """Add the best qualifying pair of the step's promising candidates (:mod:`.pairs`),

@@ -378,3 +378,38 @@ def test_a_value_at_its_bound_has_no_standard_error(tmp_path: Path) -> None:
     rep = final_parameters(Report("d"), {"params": {"Fc": 1.66, "Fs": 4.0},
                                          "stderr": doc["stderr"], "model_file": doc}, {})
     assert "1.3e" not in rep.to_html() and "at-bound" in rep.to_html()
+
+
+def test_a_bridged_or_cut_pause_holds_out_the_same_samples(monkeypatch: pytest.MonkeyPatch
+                                                            ) -> None:
+    """The O-ring 3 bar file pauses 0.3 s mid-slide (12 mm/s both sides): bridged, it is one
+    experiment; cut, two pieces. The held-out blocks are the file's (the experiment of its
+    design), counted over its measured samples: the same samples are held out either way,
+    and the same as for the file alone (a split by piece moved every block of the file and
+    turned the pair found on 1, 3, 5 bar into nothing added)."""
+    import fcomp.diagnosis.pauses as pauses
+    from fcomp.diagnosis.split import _segment_split
+
+    recs = [datasets.load("zillen", f"O-ring_{k}bar.csv") for k in (1, 3)]
+
+    def held(data: DiagnosisData) -> tuple[np.ndarray, np.ndarray]:
+        measured = ~data.bridged
+        split = _segment_split(data, measured)
+        t = data.signal("t")
+        return t[split.test], t[split.train]
+
+    bridged = prepare(recs)
+    assert bridged.bridged.sum() == 29 and len(bridged.experiments) == 2
+    monkeypatch.setattr(pauses, "kind", lambda *a, **k: None)
+    cut = prepare(recs)
+    assert len(cut.experiments) == 3 and cut.experiments[1].design == cut.experiments[2].design
+    one, two = held(bridged), held(cut)
+    for a, b in zip(one, two, strict=True):
+        np.testing.assert_array_equal(a, b)
+    e = bridged.experiments[1]  # the 3 bar file, with the 1 bar one and bridged, or alone and cut
+    with_other = _segment_split(bridged, ~bridged.bridged).test[e.start:e.stop]
+    with_other = with_other[~bridged.bridged[e.start:e.stop]]
+    by_itself = prepare(recs[1:])  # alone and cut
+    np.testing.assert_array_equal(with_other, _segment_split(by_itself,
+                                                             ~by_itself.bridged).test)
+    assert 0.3 < len(one[0]) / (len(one[0]) + len(one[1])) < 0.36

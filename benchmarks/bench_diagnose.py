@@ -31,6 +31,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import resource
 import statistics
 import subprocess
 import sys
@@ -57,18 +58,29 @@ def checkout(rev: str, into: Path) -> Path:
     return into
 
 
+#: CPU seconds of the last :func:`run` (the command and every process it waited for): on a
+#: machine other work loads, the CPU time moves less than the wall time.
+LAST_CPU = [0.0]
+
+
+def _children_cpu() -> float:
+    ru = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return ru.ru_utime + ru.ru_stime
+
+
 def run(args: list[str], out: Path, cache: Path, pythonpath: Path | None) -> tuple[float, dict]:
     env = dict(os.environ, FCOMP_CACHE=str(cache))
     env["PYTHONPATH"] = str(pythonpath if pythonpath is not None else REPO)
     cmd = [sys.executable, "-m", "fcomp.cli.main", "diagnose", *args, "--no-progress",
            "--json", str(out)]
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), _children_cpu()
     # run away from the checkout: ``python -m`` puts the working directory first on
     # sys.path, before PYTHONPATH, so run from the repository the baseline side would
     # import this checkout's package (as it did until 2026-11-27: both sides ran this code)
     proc = subprocess.run(cmd, env=env, cwd=out.parent, capture_output=True, text=True,
                           check=False)
     wall = time.perf_counter() - t0
+    LAST_CPU[0] = _children_cpu() - c0
     if proc.returncode != 0:
         raise SystemExit(f"fcomp diagnose failed ({proc.returncode}): {proc.stderr[-2000:]}")
     return wall, json.loads(out.read_text())
@@ -108,6 +120,7 @@ def main() -> None:
         out = tmpd / "out.json"
         for case in args.cases.split(","):
             times: dict[str, list[float]] = {s: [] for s in sides}
+            cpus: dict[str, list[float]] = {s: [] for s in sides}
             docs: dict[str, dict] = {}
             for side, path in sides.items():  # fill each side's compile cache
                 run(cases[case], out, tmpd / f"cache-{len(docs)}-{case}", path)
@@ -116,17 +129,21 @@ def main() -> None:
                 for i, (side, path) in enumerate(sides.items()):
                     w, docs[side] = run(cases[case], out, tmpd / f"cache-{i}-{case}", path)
                     times[side].append(w)
-                    print(f"{case} run {k + 1}, {side}: {w:.1f} s", flush=True)
+                    cpus[side].append(LAST_CPU[0])
+                    print(f"{case} run {k + 1}, {side}: {w:.1f} s ({LAST_CPU[0]:.1f} s CPU; "
+                          f"load {os.getloadavg()[0]:.1f})", flush=True)
             print(f"\n{case} ({'60' if case == 'synthetic' and not args.quick else ''}"
                   f"{' s at 1 kHz' if case == 'synthetic' else '4 files from lugre'}), "
                   f"{os.cpu_count()} CPUs, {repeats} repeat(s), warm, medians:")
             med = {s: statistics.median(v) for s, v in times.items()}
             for side in sides:
                 print(f"  {side:22s}: {med[side]:7.1f} s  (goal {GOALS[case]:.0f} s: "
-                      f"{med[side] / GOALS[case]:.2f}x)  {answer(docs[side])}")
+                      f"{med[side] / GOALS[case]:.2f}x; CPU "
+                      f"{statistics.median(cpus[side]):.1f} s)  {answer(docs[side])}")
             if len(sides) == 2:
                 a, b = list(med.values())
-                print(f"  ratio this/baseline     : {a / b:.2f}\n")
+                ca, cb = (statistics.median(v) for v in cpus.values())
+                print(f"  ratio this/baseline     : {a / b:.2f} wall, {ca / cb:.2f} CPU\n")
 
 
 if __name__ == "__main__":

@@ -30,6 +30,14 @@ short and why, and the time per case.
         --conditions pulsation,vertical,pink-noise --rows all       # other rigs and loggers
     python benchmarks/bench_diagnosis_matrix.py --conditions soft-presliding --list
     python benchmarks/bench_diagnosis_matrix.py --cases-from old1.json,old2.json --json new.json
+    python benchmarks/bench_diagnosis_matrix.py --seed-list 301 --per-row 4 --rows all \
+        --conditions plain,gapped-stamps --code /tmp/main-checkout     # another revision
+
+``--per-row K`` draws ``K`` cases of every row (seeded), so each row's share rests on
+the same number of cases. ``--code DIR`` diagnoses with the package of another checkout
+(``DIR/fcomp``): each record is written to a CSV file and ``fcomp diagnose`` runs on it in
+a fresh process with ``PYTHONPATH=DIR`` (``--jobs 1 --no-baseline-check``), so one
+generator and one judge -- this checkout's -- score two revisions on the same records.
 """
 
 from __future__ import annotations
@@ -37,7 +45,9 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import subprocess
 import sys
+import tempfile
 import time
 from collections import Counter, defaultdict
 from concurrent.futures import ProcessPoolExecutor, as_completed
@@ -48,24 +58,56 @@ import numpy as np
 from fcomp.synthetic.matrix import CASE_FIELDS, CONDITIONS, Case, cases, judge, record
 
 
-def run_case(case: Case) -> dict:
-    """Generate the record of ``case``, diagnose it, judge it (a worker process)."""
+def _diagnose_in(code: str, rec: Any, baseline: str) -> tuple[dict, float]:
+    """``fcomp diagnose`` of the package under ``code`` on ``rec`` in a fresh process: the
+    JSON (or ``{"error": ...}``) and the CPU seconds (user + system) it took."""
+    with tempfile.TemporaryDirectory() as tmp:
+        csv, out = os.path.join(tmp, "case.csv"), os.path.join(tmp, "out.json")
+        rec.measurement.write(csv)
+        env = dict(os.environ, PYTHONPATH=os.path.abspath(code))
+        before = os.times()
+        proc = subprocess.run([sys.executable, "-m", "fcomp.cli.main", "diagnose", csv,
+                               "--friction", baseline, "--jobs", "1", "--no-baseline-check",
+                               "--no-progress", "--json", out], env=env, cwd=tmp,
+                              capture_output=True, text=True, check=False)
+        after = os.times()
+        cpu = (after.children_user - before.children_user
+               + after.children_system - before.children_system)
+        if proc.returncode != 0:
+            return {"error": (proc.stderr.strip().splitlines() or ["exit status "
+                                                                   f"{proc.returncode}"])[-1]}, cpu
+        with open(out) as fh:
+            return json.load(fh), cpu
+
+
+def run_case(case: Case, code: str | None = None) -> dict:
+    """Generate the record of ``case``, diagnose it, judge it (a worker process).
+
+    ``code``: diagnose with the package of that checkout, in a fresh process
+    (:func:`_diagnose_in`); ``None``: with this one, here.
+    """
     from fcomp.diagnosis import Diagnosis
 
     t0 = time.perf_counter()
     rec = record(case)
     t1 = time.perf_counter()
     out: dict[str, Any] = {"case": case.as_dict()}
-    try:
-        # the matrix judges the added effects and the verdict; the baseline check
-        # (a second diagnosis from the other kind of baseline) changes neither
-        d = Diagnosis(case.baseline, n_jobs=1, check_baseline=False).fit(rec.measurement)
-        doc = d.to_dict()
-    except Exception as exc:  # a failure is a wrong answer, with its reason
-        doc = {"error": f"{type(exc).__name__}: {exc}"}
+    c0 = time.process_time()
+    cpu = None
+    if code is not None:
+        doc, cpu = _diagnose_in(code, rec, case.baseline)
+    else:
+        try:
+            # the matrix judges the added effects and the verdict; the baseline check
+            # (a second diagnosis from the other kind of baseline) changes neither
+            d = Diagnosis(case.baseline, n_jobs=1, check_baseline=False).fit(rec.measurement)
+            doc = d.to_dict()
+        except Exception as exc:  # a failure is a wrong answer, with its reason
+            doc = {"error": f"{type(exc).__name__}: {exc}"}
+        cpu = time.process_time() - c0
     t2 = time.perf_counter()
     right, why = judge(case, doc, rec.truth.noise_std)
-    out.update(right=right, why=why, generate_s=t1 - t0, diagnose_s=t2 - t1,
+    out.update(right=right, why=why, generate_s=t1 - t0, diagnose_s=t2 - t1, cpu_s=cpu,
                added=doc.get("added"), verdict=doc.get("verdict"), reason=doc.get("reason"),
                rms_baseline=doc.get("rms_baseline"), rms_final=doc.get("rms_final"),
                noise_floor=doc.get("noise_floor"), ties=doc.get("ties"),
@@ -128,8 +170,10 @@ def report(results: list[dict]) -> str:
                          f"{c['seed']} [{c['shape']}] {c.get('condition', 'plain')}: {r['why']}")
     ts = np.array([r["diagnose_s"] for r in results])
     gs = np.array([r["generate_s"] for r in results])
-    lines.append(f"\ntime per case: diagnose median {np.median(ts):.1f} s, max {ts.max():.1f} s; "
-                 f"generate median {np.median(gs):.2f} s")
+    cs = np.array([r.get("cpu_s") or np.nan for r in results])
+    lines.append(f"\ntime per case: diagnose median {np.median(ts):.1f} s wall, "
+                 f"{np.nanmedian(cs) if np.isfinite(cs).any() else np.nan:.1f} s CPU, max "
+                 f"{ts.max():.1f} s wall; generate median {np.median(gs):.2f} s")
     return "\n".join(lines)
 
 
@@ -149,6 +193,11 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--json", default=None, help="write every case's result here")
     ap.add_argument("--sample", type=int, default=None,
                     help="run this many cases drawn at random (seeded) from the selection")
+    ap.add_argument("--per-row", type=int, default=None,
+                    help="run this many cases of every row, drawn at random (seeded)")
+    ap.add_argument("--code", default=None,
+                    help="diagnose with the package of this checkout (its directory holding "
+                         "fcomp/), in a fresh process per case")
     ap.add_argument("--list", action="store_true", help="list the cases and stop")
     ap.add_argument("--cases-from", default=None,
                     help="comma-separated JSON files of earlier runs (--json): run their "
@@ -169,6 +218,14 @@ def main(argv: list[str] | None = None) -> int:
                     if key not in earlier:
                         todo.append(Case(**r["case"]))
                     earlier[key] = bool(r["right"])
+    elif args.per_row is not None:
+        rng = np.random.default_rng(sum(seeds))
+        by_row: dict[str, list[int]] = defaultdict(list)
+        for i, c in enumerate(todo):
+            by_row[c.row].append(i)
+        keep = sorted(int(i) for row in sorted(by_row) for i in rng.choice(
+            by_row[row], min(args.per_row, len(by_row[row])), replace=False))
+        todo = [todo[i] for i in keep]
     elif args.sample is not None and args.sample < len(todo):
         keep = np.random.default_rng(sum(seeds)).choice(len(todo), args.sample, replace=False)
         todo = [todo[i] for i in sorted(keep)]
@@ -181,7 +238,7 @@ def main(argv: list[str] | None = None) -> int:
     results = []
     t0 = time.perf_counter()
     with ProcessPoolExecutor(max_workers=args.jobs) as pool:
-        futs = [pool.submit(run_case, c) for c in todo]
+        futs = [pool.submit(run_case, c, args.code) for c in todo]
         for k, fut in enumerate(as_completed(futs), 1):
             r = fut.result()
             results.append(r)

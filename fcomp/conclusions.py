@@ -159,8 +159,11 @@ def _experiments(items: Iterable[Mapping[str, Any]]) -> list[str]:
             for exp, ps in found.items()]
 
 
-def fit_flags(warnings: Sequence[Mapping[str, Any]]) -> tuple[str, list[str], list[str]]:
-    """``(confidence, reasons, next steps)`` of a fit from its warnings."""
+def fit_flags(warnings: Sequence[Mapping[str, Any]], mass_option: str | None = "--mass"
+              ) -> tuple[str, list[str], list[str]]:
+    """``(confidence, reasons, next steps)`` of a fit from its warnings; ``mass_option`` is
+    the command's option that gives the moving mass (None: it has none, the sidecar's
+    ``rig.mass`` alone)."""
     by = {c: [w for w in warnings if w.get("code") == c] for c in
           ("not-converged", *UNDETERMINED, "mass-implausible")}
     reasons: list[str] = []
@@ -185,7 +188,8 @@ def fit_flags(warnings: Sequence[Mapping[str, Any]]) -> tuple[str, list[str], li
         level = _lowest(level, "medium")
     steps = _experiments(w for c in UNDETERMINED for w in by[c])
     if by["mass-implausible"]:
-        steps.append("give the moving mass (rig.mass in the sidecar, or --mass)")
+        steps.append("give the moving mass (rig.mass in the sidecar"
+                     + (f", or {mass_option})" if mass_option else ")"))
     return level, reasons, steps
 
 
@@ -253,6 +257,24 @@ def of_comparison(doc: Mapping[str, Any]) -> Conclusion:
                       outcome="good" if at_noise else "mixed")
 
 
+def structure_words(follows: Sequence[Mapping[str, Any]]) -> str:
+    """What the structure left follows (a diagnosis JSON's ``structure_left.follows``), the
+    first two in words with their size: ``"time (strength 0.62, 1.3 N RMS; +0.18 N per s,
+    7.2 N over the record)"``."""
+    parts = []
+    for f in follows[:2]:
+        size = f"strength {f['strength']:.2f}, {_num(f.get('rms'))} RMS"
+        if f.get("slope") is not None:
+            size += (f"; {f['slope']:+.3g} N per {f['slope_per']}, {_num(f.get('change'))} "
+                     "over the record")
+        elif f.get("note"):
+            size += f"; {f['note']}"
+        elif f.get("change") is not None:
+            size += f"; {_num(f.get('change'))} peak to peak"
+        parts.append(f"{f['words']} ({size})")
+    return " and ".join(parts)
+
+
 def of_diagnosis(doc: Mapping[str, Any]) -> Conclusion:
     """The conclusion of a diagnosis's JSON (``fcomp diagnose --json``)."""
     added, base, final = doc.get("added") or [], doc.get("baseline"), doc.get("model")
@@ -266,13 +288,20 @@ def of_diagnosis(doc: Mapping[str, Any]) -> Conclusion:
                    f"noise (floor {_num(floor)}); no missing effect found")
     else:
         top = (doc.get("residual_features") or [{}])[0]
+        same = (f" (one with {', '.join(top['same_as'])} on this record's fixed stroke)"
+                if top.get("same_as") else "")
+        named = [st["name"] for st in doc.get("structures") or []]
+        follows = (doc.get("structure_left") or {}).get("follows") or []
         finding = (f"{final} leaves structure no catalogue effect explains: held-out RMS "
                    f"{_num(rf)} against a noise floor of {_num(floor)}"
                    + (f" (after adding {', '.join(added)})" if added else "")
-                   + (f"; the residual follows {top['feature']}" if top.get("feature") else ""))
+                   + (f"; it follows {structure_words(follows)}" if follows else
+                      f"; the residual follows {top['feature']}{same}" if top.get("feature")
+                      else "")
+                   + (f"; named: {', '.join(dict.fromkeys(named))}" if named else ""))
     final_warnings = [w for w in doc.get("warnings", []) if context(w.get("message", ""))
                       == "final model"]
-    level, flags, steps = fit_flags(final_warnings)
+    level, flags, steps = fit_flags(final_warnings, mass_option=None)  # diagnose: no --mass
     reasons: list[str] = []
     if doc.get("baseline_dependent"):
         other = doc.get("other_baseline") or {}
@@ -291,14 +320,23 @@ def of_diagnosis(doc: Mapping[str, Any]) -> Conclusion:
     for tie in doc.get("ties") or []:
         reasons.append(f"{' / '.join(tie)} fit equally well (confounded)")
         level = _lowest(level, "medium")
+        # where the record's design confounds them, the experiment that separates the factors
+        design = [c for c in doc.get("confounding") or [] if set(c["effects"]) <= set(tie)]
         exps = (doc.get("tie_experiments") or {}).get(tie[0], {})
-        if exps:
+        for c in design:
+            steps.append(f"to tell {' from '.join(c['effects'])} (the record varies "
+                         f"{' and '.join(c['factors'])} together): record {c['separates']}")
+        covered = {e for c in design for e in c["effects"]}
+        if exps and not set(tie) <= covered:
             steps.append(f"to tell {' from '.join(tie)}: record "
                          + "; ".join(f"{e}: {x}" for e, x in exps.items()))
     if level != "low" and explained:
         steps.append("use the final model: --save-model MODEL.json, then fcomp simulate / "
                      "fcomp compensate --controller-friction MODEL.json")
     if not explained:
+        for exp in ((doc.get("structure_left") or {}).get("next_experiments") or [])[:2]:
+            steps.append(f"to tell more ({exp['because'].replace('_', ' ')}): "
+                         f"{exp['experiment']}")
         steps.append("look at the residual against each feature (--report DIR) and write the "
                      "effect (docs/effects.md)")
     return Conclusion(finding, level, tuple(reasons), tuple(steps),
@@ -315,7 +353,7 @@ MEANING: dict[str, str] = {
     "not-identified": "not determined by the record (standard errors far above the values, or "
                       "parameters that trade off)",
     "mass-implausible": "fitted masses implausible for the rig: give rig.mass in the sidecar "
-                        "or --mass",
+                        "(fcomp fit and fcomp compare also take --mass)",
     "not-converged": "fits that did not converge: the values are where the solver stopped",
     "heldout-coverage": "parts of the motion with too few held-out samples to be judged",
     "unknown-key": "sidecar keys the format does not read: they are kept but not used",

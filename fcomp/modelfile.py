@@ -52,7 +52,8 @@ from fcomp.parameters import MAX_VALUE, ParamSet, finite_number
 
 #: Keys of a model file (``format`` .. ``source``).
 KEYS = ("format", "version", "model", "description", "features", "effects", "params",
-        "stderr", "measurement_terms", "fitted_range", "source")
+        "stderr", "measurement_terms", "fitted_range", "source",
+        "undetermined")
 #: Keys of one entry of ``effects``.
 EFFECT_KEYS = ("name", "config", "module", "params")
 
@@ -75,6 +76,9 @@ class ModelFile:
         ``mass`` (kg), ``offset`` (N), ``lag`` (s) of ``measurement_terms``.
     stderr : dict of str to float
         Standard errors by flat name (those given).
+    undetermined : dict of str to str
+        Parameters the record did not determine -> why (the file's ``undetermined``):
+        :func:`load_model` warns about them (``undetermined``).
     source : dict
         Where the model comes from.
     document : dict
@@ -88,6 +92,16 @@ class ModelFile:
     stderr: dict[str, float] = field(default_factory=dict)
     source: dict[str, Any] = field(default_factory=dict)
     document: dict[str, Any] = field(default_factory=dict)
+    undetermined: dict[str, str] = field(default_factory=dict)
+
+    def undetermined_note(self) -> str:
+        """One line naming the values the record did not determine (empty: none)."""
+        if not self.undetermined:
+            return ""
+        return (f"{self.label}: {', '.join(self.undetermined)} not determined by the record "
+                "the model was fitted to (at a bound, not identified, or an interval through "
+                "zero): their values shape the friction only where that record did; the "
+                "file's \"undetermined\" says why for each")
 
     @property
     def measurement_terms(self) -> list[str]:
@@ -205,13 +219,12 @@ def read_model(source: str | Path | Mapping[str, Any],
         doc = dict(doc["model_file"])  # the JSON of fcomp fit / diagnose
     _check_header(doc, label)
     params = _values(doc.get("params", {}), label, "params")
-    model = _build(doc, params, label)
+    model, m_effects = _build(doc, params, label)
     terms = _section(doc.get("measurement_terms", {}), label, "measurement_terms")
     unknown = sorted(set(terms) - {"effects", "params", "note"})
     if unknown:
         raise FileFormatError(f"{label}: measurement_terms has an unknown key {unknown[0]!r} "
                               "(known: effects, params, note)")
-    m_effects = []
     for i, entry in enumerate(_list(terms.get("effects", []), label,
                                     "measurement_terms.effects")):
         where = f"measurement_terms.effects[{i}]"
@@ -227,6 +240,11 @@ def read_model(source: str | Path | Mapping[str, Any],
     stderr = _values({k: v for k, v in _section(doc.get("stderr", {}), label,
                                                  "stderr").items() if v is not None},
                      label, "stderr")
+    undetermined = _section(doc.get("undetermined", {}), label, "undetermined")
+    bad_u = [k for k, v in undetermined.items() if not isinstance(v, str)]
+    if bad_u:
+        raise FileFormatError(f"{label}: undetermined.{bad_u[0]} must be text (why the value "
+                              "is not determined)")
     if "fitted_range" in doc:
         try:
             model = model.with_fitted_range(doc["fitted_range"])
@@ -237,7 +255,7 @@ def read_model(source: str | Path | Mapping[str, Any],
                      measurement_params=m_params,
                      stderr=stderr,
                      source=dict(_section(doc.get("source", {}), label, "source")),
-                     document=doc)
+                     document=doc, undetermined=dict(undetermined))
 
 
 def load_model(source: str | Path | Mapping[str, Any],
@@ -262,6 +280,8 @@ def load_model(source: str | Path | Mapping[str, Any],
     FrictionModel
     """
     mf = read_model(source, effects_module)
+    if mf.undetermined:
+        warnings.warn(FcompWarning("undetermined", mf.undetermined_note()), stacklevel=2)
     if measurement_terms:
         return mf.measured_model()
     if mf.measurement_terms:
@@ -401,21 +421,30 @@ def _effect(cls: type[Effect], values: Mapping[str, float], config: Mapping[str,
         raise FileFormatError(f"{label}: {where} ({cls.name}): {exc}") from None
 
 
-def _build(doc: Mapping[str, Any], params: dict[str, float], label: str) -> FrictionModel:
-    """The model of ``doc``: the named model, its effects attached in order, its values."""
+def _build(doc: Mapping[str, Any], params: dict[str, float], label: str
+           ) -> tuple[FrictionModel, list[Effect]]:
+    """The model of ``doc`` (the named model, its effects attached in order, its values) and
+    the measurement effects listed among its ``effects``.
+
+    An effect of the measurement belongs in ``measurement_terms.effects``; a file written
+    when it was still counted a friction effect (``area-error`` before it was known as an
+    error of the force reconstruction) lists it among ``effects`` with its values in
+    ``params``: it is read as the measurement term it is.
+    """
     try:
         MODELS.get(doc["model"])
     except UnknownNameError as exc:
         raise FileFormatError(f"{label}: {exc}") from None
     model = make_model(doc["model"])
     consumed: set[str] = set()
+    measured: list[Effect] = []
     for i, entry in enumerate(_list(doc.get("effects", []), label, "effects")):
         cls, config = _effect_class(entry, label, f"effects[{i}]")
-        if cls.of_measurement:
-            raise FileFormatError(f"{label}: effect {cls.name!r} describes the measurement: "
-                                  "it belongs in measurement_terms.effects")
         effect = _effect(cls, params, config, label, f"effects[{i}]")
         consumed |= {k for k in params if k in _accepts(effect.params)}
+        if cls.of_measurement:
+            measured.append(effect)
+            continue
         try:
             model = effect.attach(model)
         except (ValueError, FcompError) as exc:
@@ -431,7 +460,7 @@ def _build(doc: Mapping[str, Any], params: dict[str, float], label: str) -> Fric
         raise FileFormatError(f"{label}: the model and its effects give the features "
                               f"{sorted(fam.features)}, the file says {sorted(features)} (the "
                               "order does not matter)")
-    return model
+    return model, measured
 
 
 def _with_values(model: FrictionModel, params: Mapping[str, float], consumed: set[str],

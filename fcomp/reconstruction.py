@@ -62,6 +62,40 @@ UNIFORM_TOL = 0.01
 MAX_GRID = 50_000_000
 
 
+#: Intervals per block of :func:`sampling_interval`.
+INTERVAL_BLOCK = 64
+
+
+def sampling_interval(t: np.ndarray) -> float:
+    """The interval (s) a record's stamps sample at: the median interval, unless it is less
+    than half the typical mean interval over blocks of :data:`INTERVAL_BLOCK` intervals (the
+    median of the blocks' means), which is then taken.
+
+    The median stands for a logger's interval whether it is uniform, jittered or
+    alternates short and long intervals, and ignores its pauses. A logger that takes its
+    samples in bursts (a buffered or polled acquisition stamping the true sample times: a
+    few samples a tenth of the mean interval apart, then a wait) has most intervals far
+    shorter than its rate: with their median as the interval every wait between bursts
+    was a "pause" that cut the record into pieces of a burst each (at least 20 samples
+    kept: most of the record thrown away), and a grid at that interval would hold ten
+    times the samples. The blocks' means see through the bursts and, being a median, not
+    the pauses.
+    """
+    return interval_of(np.diff(np.asarray(t, dtype=float)))
+
+
+def interval_of(dt: np.ndarray) -> float:
+    """:func:`sampling_interval` of the intervals ``dt`` (s) themselves."""
+    if not dt.size:
+        return 0.0
+    med = float(np.median(dt))
+    m = dt.size // INTERVAL_BLOCK
+    if m < 1:
+        return med
+    typical = float(np.median(dt[: m * INTERVAL_BLOCK].reshape(m, INTERVAL_BLOCK).mean(axis=1)))
+    return typical if med < 0.5 * typical else med
+
+
 def _grid(t: np.ndarray, label: str) -> tuple[np.ndarray, bool]:
     """The uniform time grid the filter runs on, and whether it is ``t`` itself."""
     n = t.size
@@ -70,7 +104,7 @@ def _grid(t: np.ndarray, label: str) -> tuple[np.ndarray, bool]:
     dt = np.diff(t)
     if np.max(np.abs(dt - mean)) <= UNIFORM_TOL * mean:
         return t, True
-    h = float(np.median(dt))
+    h = sampling_interval(t)
     m = int(math.floor(span / h + 1e-9)) + 1
     if m > MAX_GRID:
         raise FcompError(f"{label}: sampling too irregular to resample (median interval {h:g} s "

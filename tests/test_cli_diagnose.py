@@ -44,7 +44,11 @@ def test_contract_json_and_report(pressure_csv: Path, tmp_path: Path, capsys) ->
     assert {"effect", "rms_heldout"} <= set(doc["candidates"][0])
     heldout = [c["rms_heldout"] for c in doc["candidates"] if c["rms_heldout"] is not None]
     assert heldout == sorted(heldout)  # best first
-    assert all({"feature", "strength"} == set(f) for f in doc["residual_features"])
+    for f in doc["residual_features"]:  # the contract's two keys, extended (issues 41, 43)
+        assert {"feature", "strength"} <= set(f) <= {"feature", "strength", "rms", "same_as"}
+        # the RMS a feature carries: its share of the final held-out mean square
+        assert f["rms"] == pytest.approx(doc["rms_final"] * f["strength"] ** 0.5, rel=1e-3,
+                                         abs=0.01 * doc["rms_final"])
     assert 0.2 < doc["noise_floor"] < 0.8  # the generator's noise is 0.4 N
     html = (rep / "report.html").read_text()
     assert html.count('<img src="data:image/png;base64,') >= 7

@@ -20,10 +20,12 @@ from __future__ import annotations
 
 from functools import cache
 
+import numpy as np
 import pytest
 
 from fcomp.diagnosis import Diagnosis
 from fcomp.diagnosis.features import trimmed_rms
+from fcomp.diagnosis.scoring import score_noise_share
 from fcomp.synthetic import generate
 
 pytestmark = pytest.mark.slow  # builds the study site or runs long diagnoses
@@ -105,7 +107,21 @@ def test_two_hidden_effects_are_both_found() -> None:
     assert d.verdict_ == "explained"
     falls = [s.rms_before - s.rms_after for s in d.steps_ if s.accepted]
     assert len(falls) == 2 and all(f > 0 for f in falls)
-    assert d.rms_final_ < 0.15 * d.rms_baseline_
+    # the error falls by more than 85 %: on the plain held-out residual y - F_hat, whose floor
+    # is the noise (the split holds out every experiment's blocks, so the baseline is fitted
+    # at every pressure level and its error is 2.7 N, not the 6.6 N of a split by the whole
+    # record; the deciding score of even the right model is above the noise where its
+    # prediction is known only within its timing band, 0.50 N here for a 0.40 N floor,
+    # so 15 % of 2.7 N in that score would ask for less than the truth scores) ...
+    test = d.split_.test
+    plain_base = float(np.sqrt(np.mean(d.baseline_fit_.plain_residual[test] ** 2)))
+    plain_final = float(np.sqrt(np.mean(d.fit_.plain_residual[test] ** 2)))
+    assert plain_final < 0.15 * plain_base, (plain_final, plain_base)
+    # ... and the deciding error is what the right model scores with the final model's
+    # timing band and the noise floor (:func:`fcomp.diagnosis.scoring.score_noise_share`)
+    floor = d.noise_floor_.value
+    right = floor * np.sqrt(score_noise_share(d.fit_.timing_spread[test], floor))
+    assert d.rms_final_ < 1.1 * right, (d.rms_final_, right)
 
 
 def test_nothing_hidden_adds_nothing() -> None:

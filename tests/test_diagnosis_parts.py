@@ -53,21 +53,26 @@ def test_experiments_from_column_and_from_time_gaps(record) -> None:
     assert data.available["x"] and data.available["p1"]
 
 
-def test_a_logger_pause_inside_a_labelled_experiment_is_a_break() -> None:
+def test_a_logger_pause_inside_a_labelled_experiment_is_a_break_or_a_bridge() -> None:
     """A pause of the logger inside an experiment the ``experiment`` column labels as one
-    (generated with ``stamps="gapped"``: a 0.2-0.6 s pause in the middle half of each) cuts it:
-    the piston moved during the pause, so the model must start afresh after it. Every
-    piece starts where a stamp interval is longer than 20 median ones, or where the
-    label changes, and nowhere else."""
-    m = generate([], duration=12.0, seed=3, stamps="gapped").measurement
+    (generated with ``stamps="gapped"``: a 0.2-0.6 s pause in the middle half of each) cuts it
+    -- the piston moved during the pause, so the model must start afresh after it --
+    unless the motion on both sides shows a rest or a slide one way through it, which is
+    then bridged (:mod:`fcomp.diagnosis.pauses`). Every piece starts at a label change or
+    at an unbridged pause, and nowhere else."""
+    m = generate([], duration=12.0, seed=4, stamps="gapped").measurement
     t, label = m.t, m["experiment"]
     dt = np.diff(t)
     breaks = np.flatnonzero((dt > 20 * np.median(dt)) | (np.diff(label) != 0)) + 1
     pauses = np.flatnonzero((dt > 20 * np.median(dt)) & (np.diff(label) == 0))
     assert pauses.size == 3  # one per labelled experiment
-    data = prepare(m)
+    data = prepare(m)  # seed 4: each pause hides a turn, a start or a stop
+    assert not data.bridged.any()
     assert [e.start for e in data.experiments] == [0, *breaks.tolist()]
     assert len(data.experiments) == 6
+    m3 = generate([], duration=12.0, seed=3, stamps="gapped").measurement
+    data3 = prepare(m3)  # seed 3: one pause inside a slide, bridged; the others cut
+    assert len(data3.experiments) == 5 and data3.bridged.any()
 
 
 def test_cutoff_follows_the_position_noise() -> None:
@@ -555,7 +560,7 @@ def test_the_lag_of_a_pressure_channel_is_fitted_with_the_model() -> None:
         assert d.fit_.values["lag"] == got[tau]
         assert "lag" not in d._search.refit.free_names(d.fit_.model)  # held
     assert got[3e-3] == pytest.approx(3e-3, rel=0.15)
-    # a lag held at a wrong value is estimated again for a model (alone, unweighted),
+    # a lag held at a wrong value is estimated again for a model (jointly with it, unweighted),
     # and the sample weights of the later fits are left as they were
     weights = d._search.refit._weights
     d._search.refit.hold("lag", 0.0)

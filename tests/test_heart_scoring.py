@@ -11,7 +11,12 @@ from scipy import integrate, stats
 
 from fcomp.diagnosis.data import prepare, sessions
 from fcomp.diagnosis.result import same_findings as _same_findings
-from fcomp.diagnosis.scoring import prediction_band, scored_residual, tolerant_residual
+from fcomp.diagnosis.scoring import (
+    prediction_band,
+    sample_weights,
+    scored_residual,
+    tolerant_residual,
+)
 from fcomp.measurement import Measurement
 
 
@@ -62,6 +67,16 @@ def test_a_wider_band_never_scores_better_in_expectation() -> None:
     assert tol[2] < tol[1] < tol[0]
 
 
+def test_sample_weights_follow_the_band_and_stay_finite_on_a_zero_floor() -> None:
+    """``w = 1/(1 + (spread/(2 sigma))^2)``: 1 where the band has no width, 1/2 where it is
+    two noise floors wide, and finite with a noise floor of zero (exact steady-state
+    points)."""
+    np.testing.assert_allclose(sample_weights(np.array([0.0, 2.0, 4.0]), 1.0),
+                               [1.0, 0.5, 0.2])
+    z = sample_weights(np.array([0.0, 1.0]), 0.0)
+    assert np.all(np.isfinite(z)) and z[0] == 1.0 and z[1] < 1e-100
+
+
 def test_the_timing_band_widens_by_the_window_within_an_experiment_only() -> None:
     lo = np.array([0.0, 0.0, 10.0, 0.0, 0.0, 0.0])
     low, high = prediction_band(lo, lo, [0, 3], np.array([1, 1, 1, 1, 1, 1]))
@@ -83,7 +98,8 @@ def test_files_are_experiments_in_any_order_and_stamps_make_the_clock() -> None:
     one = prepare([a, b, c])
     two = prepare([c, a, b])
     np.testing.assert_array_equal(one.y, two.y)
-    assert one.labels == two.labels == ["a", "b", "c"]
+    # ordered by their content, not their names or the order given (issue 43)
+    assert one.labels == two.labels and sorted(one.labels) == ["a", "b", "c"]
     # files that each start at zero are sessions of their own
     assert sorted(map(sorted, sessions(one))) == [[0], [1], [2]]
     # a logger whose clock runs on: one session, in the stamps' order, whatever the names

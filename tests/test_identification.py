@@ -103,15 +103,18 @@ def test_kept_sensitivities_stay_within_their_byte_budget(monkeypatch) -> None:
     that equals the bytes it holds and never exceeds its budget."""
     from fcomp.identification import sensitivity as sens
 
-    monkeypatch.setattr(sens, "_KEPT", [])
+    monkeypatch.setattr(sens, "_KEPT", {})
     monkeypatch.setattr(sens, "_KEPT_BYTES", [0])
     monkeypatch.setattr(sens, "KEEP_BYTES", 10 * 8 * 101)
     record = (object(),)
     for k in range(25):
         sens._keep((k,), record, np.zeros(100), np.zeros((100, 1 + k % 3)))
-        held = sum(e[2].nbytes + e[3].nbytes for e in sens._KEPT)
+        held = sum(e[1].nbytes + e[2].nbytes for e in sens._KEPT.values())
         assert sens._KEPT_BYTES[0] == held <= sens.KEEP_BYTES
     assert sens._kept((24,), record) is not None and sens._kept((0,), record) is None
+    sens._keep((24,), record, np.ones(100), np.ones((100, 1)))  # the same key again: replaced
+    assert sens._kept((24,), record)[0][0] == 1.0
+    assert sens._KEPT_BYTES[0] == sum(e[1].nbytes + e[2].nbytes for e in sens._KEPT.values())
 
 
 def test_successive_halving_races_the_starts_and_keeps_the_best_valley() -> None:

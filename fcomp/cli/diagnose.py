@@ -96,12 +96,19 @@ def summary(doc: dict) -> str:
              f"(noise floor {doc['noise_floor']:.3g} N, {doc['noise_method']}; {doc['split']})"]
     for i, s in enumerate(doc["steps"], 1):
         tag = "accepted" if s["accepted"] else "rejected"
+        if s.get("pair"):
+            partners = [e for e in s["pair"] if e != s["effect"]]
+            tag += f" as a pair with {', '.join(partners)} (neither qualified alone)"
         if s.get("removed"):
             tag = "accepted, then removed (redundant once later effects were in)"
         if s.get("forced"):
             tag = "added on request" + ("" if s["accepted"] else " (the rule would reject it)")
+        if s.get("form") and s["accepted"] and any(
+                f.get("kept") and f["effect"] == s["effect"] for f in doc.get("forms") or []):
+            tag += f", in its {s['form']} form"
         after = "-" if s["rms_after"] is None else f"{s['rms_after']:.4g}"
         lines.append(f"step {i}: + {s['effect']:22s} {s['rms_before']:.4g} -> {after} N  {tag}")
+    lines += _forms_lines(doc)
     if doc["ties"]:
         for t in doc["ties"]:
             both = [e for e in t if e in doc["added"]]
@@ -116,6 +123,11 @@ def summary(doc: dict) -> str:
                  + (f" (plain y - F: {plain['baseline']:.4g} -> {plain['final']:.4g} N)"
                     if plain.get("final") is not None and plain.get("baseline") is not None
                     else ""))
+    for c in doc.get("confounding") or []:
+        lines.append(f"confounded by the record's design: {' / '.join(c['effects'])}: "
+                     f"{c['why']}; to separate them: record {c['separates']}")
+    for st in doc.get("structures") or []:
+        lines.append(f"named in what is left: {st['text']}")
     for d in doc.get("disturbances") or []:
         lines.append(f"periodic disturbance: {d['frequency_hz']:.4g} Hz, amplitude "
                      f"{d['amplitude']:.3g} N (follows no motion; taken off the force)")
@@ -131,6 +143,21 @@ def summary(doc: dict) -> str:
     lines.append(f"verdict: {doc['verdict']}, because:")
     lines += [f"  - {part}" for part in _clauses(doc["reason"])]
     return "\n".join(lines)
+
+
+def _forms_lines(doc: dict) -> list[str]:
+    """One line per accepted effect whose richer forms were tried (:mod:`fcomp.diagnosis.forms`)."""
+    out = []
+    by: dict[str, list[dict]] = {}
+    for f in doc.get("forms") or []:
+        by.setdefault(f["effect"], []).append(f)
+    for effect, forms in by.items():
+        parts = [f"{f['form']} {'kept' if f['kept'] else 'not kept'} ("
+                 + ("-" if f["rms_heldout"] is None else f"{f['rms_heldout']:.4g} N")
+                 + ("" if f["kept"] or f["qualifies"] else f": {f['reason'].split(';')[0]}")
+                 + ")" for f in forms]
+        out.append(f"forms of {effect} tried: " + "; ".join(parts))
+    return out
 
 
 def run(args: argparse.Namespace) -> int:

@@ -9,6 +9,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from fcomp.conditioning.events import event_band, event_time_scale
 from fcomp.conditioning.position import (
     MIN_REST,
     band,
@@ -62,6 +63,10 @@ class Conditioning:
         Band of the parallel filtering of force and prediction (None: unfiltered).
     label : str
         The record's name (set by the caller).
+    event_time_s : s or None
+        The time scale of the record's events (the faster quartile of the force's
+        10-90 % transitions at its reversals, :mod:`fcomp.conditioning.events`) that
+        raised ``cutoff_hz``; None when not measured.
     """
 
     velocity: str
@@ -77,6 +82,7 @@ class Conditioning:
     force: str = ""
     force_cutoff_hz: float | None = None
     label: str = ""
+    event_time_s: float | None = None
 
     def to_dict(self) -> dict:
         """Plain JSON-ready values (nan -> None)."""
@@ -100,7 +106,8 @@ class Motion:
 
 
 def condition_motion(pieces: Sequence[tuple[np.ndarray, np.ndarray | None, np.ndarray | None]],
-                     *, cutoff_hz: float | None = None
+                     *, cutoff_hz: float | None = None,
+                     forces: Sequence[np.ndarray] | None = None
                      ) -> tuple[list[Motion], Conditioning]:
     """The conditioned motion of every piece of one record, and how it was made.
 
@@ -112,7 +119,13 @@ def condition_motion(pieces: Sequence[tuple[np.ndarray, np.ndarray | None, np.nd
         ``v`` column is pooled over the pieces.
     cutoff_hz
         Band of the derivation filter (default :func:`default_cutoff` of the
-        longest piece, or a tenth of the sample rate without a position).
+        longest piece, raised to keep the record's events where ``forces`` are
+        given (:func:`~fcomp.conditioning.events.event_band`), or a tenth of the
+        sample rate without a position).
+    forces
+        The raw force of each piece (a load cell, or the driving force), whose
+        transitions at the reversals set the events' time scale
+        (:func:`~fcomp.conditioning.events.event_time_scale`).
     """
     t0, x0, v0 = max(pieces, key=lambda p: p[0].size)
     fs = sample_rate(t0)
@@ -122,6 +135,13 @@ def condition_motion(pieces: Sequence[tuple[np.ndarray, np.ndarray | None, np.nd
         return _from_velocity(pieces, cutoff_hz if cutoff_hz is not None else 0.1 * fs)
     fc = cutoff_hz if cutoff_hz is not None else default_cutoff(t0, x0)
     sx = max(position_noise(x) for _, x, _ in pieces if x is not None)
+    t_event, raised = None, ""
+    if cutoff_hz is None and forces is not None:
+        fc_noise = fc
+        fc, t_event = _event_band(pieces, forces, fc, fs, sx, speed_scale(t0, x0))
+        if fc > fc_noise and t_event is not None:
+            raised = (f"; band {fc:.3g} Hz, not {fc_noise:.3g} Hz, to keep the force's "
+                      f"transitions at the reversals ({1e3 * t_event:.0f} ms)")
     q = min(resolution(x) for _, x, _ in pieces if x is not None)
     derived = []
     for t, x, _ in pieces:
@@ -148,8 +168,25 @@ def condition_motion(pieces: Sequence[tuple[np.ndarray, np.ndarray | None, np.nd
             a = np.gradient(v, t)
         out.append(Motion(np.where(rest, 0.0, v), np.where(rest, 0.0, a), rest))
     share = float(np.mean(np.concatenate([m.rest for m in out])))
-    return out, Conditioning(velocity, reason, fc, cross, q, sx, vx_noise, cal, "position",
-                             share)
+    return out, Conditioning(velocity, reason + raised, fc, cross, q, sx, vx_noise, cal,
+                             "position", share, event_time_s=t_event)
+
+
+def _event_band(pieces: Sequence[tuple[np.ndarray, np.ndarray | None, np.ndarray | None]],
+                forces: Sequence[np.ndarray], fc: float, fs: float, sx: float,
+                speed: float) -> tuple[float, float | None]:
+    """The derivation band ``fc`` raised to keep the record's events, and their time scale
+    (:mod:`fcomp.conditioning.events`): the reversals read off ``dx/dt`` in the
+    noise-limited band ``fc``, their transitions off the raw ``forces``."""
+    found = []
+    for (t, x, _), f in zip(pieces, forces, strict=True):
+        if x is None or f is None or t.size < 4 * MIN_REST:
+            continue
+        _, v, _ = differentiate(t, x, cutoff_hz=fc, label="x")
+        found.append((t, v, f))
+    t_event = event_time_scale(found)
+    return event_band(fs, fc, t_event, speed,
+                      lambda f: derived_velocity_noise(sx, f, fs)), t_event
 
 
 def _from_velocity(pieces: Sequence[tuple[np.ndarray, np.ndarray | None, np.ndarray | None]],

@@ -160,7 +160,8 @@ def configured(name: str, data: DiagnosisData, params: dict[str, float] | None =
 def form_of(name: str, form: str | None) -> DiagnosisForm:
     """The form of effect ``name`` labelled ``form`` (:meth:`~fcomp.effects.Effect.diagnosis_forms`);
     a label it does not list is taken as its configuration ``form``."""
-    for f in EFFECTS.get(name).diagnosis_forms():
+    cls = EFFECTS.get(name)
+    for f in (*cls.diagnosis_forms(), *cls.refined_forms()):
         if f.name == form:
             return f
     return DiagnosisForm(form, {"form": form} if form is not None else {})
@@ -232,6 +233,17 @@ def propose(name: str, ctx: Context, form: str | None = None) -> Proposal:
         for st in starts:  # a held term stays at its no-op value
             st.update({n: noop.get(n, 0.0) for n in held})
     return Proposal(name, models[0], starts, free, form=form)
+
+
+def held_of(name: str, form: str | None, ctx: Context) -> list[str]:
+    """What effect ``name`` in ``form`` holds on the record of ``ctx``: its
+    :meth:`~fcomp.effects.Effect.held` parameters and its form's."""
+    shape = form_of(name, form)
+    try:
+        effect = configured(name, ctx.data, None, **shape.config)
+        return [*effect.held(ctx.view), *shape.held]
+    except (FcompError, ValueError, KeyError):
+        return list(shape.held)
 
 
 def _at_bound(ctx: Context, values: dict[str, float]) -> list[str]:

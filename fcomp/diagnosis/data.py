@@ -3,7 +3,7 @@
 A diagnosis reads one or several measurements. Each is cut into
 *experiments* -- runs whose friction states start afresh -- where its
 ``experiment`` column changes (a user column, data-format.md keeps it) and at
-time gaps longer than :data:`GAP_FACTOR` median sample intervals (a logger's
+time gaps longer than :data:`GAP_FACTOR` sample intervals (:func:`fcomp.reconstruction.sampling_interval`; a logger's
 pause, inside a labelled experiment too). Per experiment the force to match and the motion come from
 :func:`fcomp.identification.target.fit_data` (a measured ``F``; else the
 friction reconstructed as ``p1*A1 - p2*A2 - m*a + F_ext``, models.md 2; else
@@ -29,12 +29,15 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
+import json
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
+import fcomp.diagnosis.pauses as pauses
 from fcomp.conditioning import (
     Conditioning,
     Motion,
@@ -50,7 +53,7 @@ from fcomp.errors import FcompError
 from fcomp.identification.plausibility import RigContext
 from fcomp.identification.target import FitData, fit_data
 from fcomp.measurement import Measurement
-from fcomp.reconstruction import driving_force
+from fcomp.reconstruction import driving_force, interval_of, sampling_interval
 
 #: A time step longer than this many median steps starts a new experiment.
 GAP_FACTOR = 20.0
@@ -61,18 +64,31 @@ STEADY_STATE = "steady-state"
 
 @dataclass(frozen=True)
 class Experiment:
-    """One experiment: its fit data, its place in the concatenated arrays, and alternative
-    motions as consistent with its measured position (:func:`fcomp.conditioning.motion_ensemble`)."""
+    """One experiment: its fit data, its place in the concatenated arrays, alternative
+    motions as consistent with its measured position (:func:`fcomp.conditioning.motion_ensemble`),
+    the samples inserted across a logger's pause (:mod:`.pauses`; None: none), and the
+    experiment of the record's design it is a piece of (``design``: the pieces of one file
+    cut at logger pauses share it, whether or not a pause is bridged; -1: its own)."""
 
     label: str
     data: FitData
     start: int
     stop: int
     alternatives: tuple[Motion, ...] = ()
+    bridged: np.ndarray | None = None
+    design: int = -1
 
     @property
     def n(self) -> int:
         return self.stop - self.start
+
+    @cached_property
+    def digest(self) -> str:
+        """A digest of the experiment's stamps, motion and force (:func:`content_digest`):
+        what choices that must not depend on names or order (the held-out blocks, the
+        sessions) are keyed on."""
+        s = self.data.sig
+        return content_digest(s["t"], s["x"], s["v"], self.data.y)
 
 
 @dataclass
@@ -147,21 +163,39 @@ class DiagnosisData:
         """The force to match (N), concatenated."""
         return np.concatenate([e.data.y for e in self.experiments])
 
+    @property
+    def bridged(self) -> np.ndarray:
+        """The samples inserted across logger pauses (:mod:`.pauses`), concatenated: in no
+        fit, score, noise floor or spectrum."""
+        return np.concatenate([np.zeros(e.n, dtype=bool) if e.bridged is None else e.bridged
+                               for e in self.experiments])
+
     def experiment_index(self) -> np.ndarray:
         """Experiment number (0-based) of every sample."""
         return np.concatenate([np.full(e.n, i) for i, e in enumerate(self.experiments)])
 
 
-def _cut(meas: Measurement) -> list[Measurement]:
-    """Experiments of one measurement: where the ``experiment`` column changes, and at long
-    time gaps (a logger's pause inside a labelled experiment too: the piston's motion
-    during the pause is unknown, so the friction states start afresh after it)."""
+def _cut(meas: Measurement) -> list[tuple[Measurement, np.ndarray, int]]:
+    """Experiments of one measurement, each with its bridged samples and the number of the
+    experiment of the record's design it belongs to (the runs between changes of the
+    ``experiment`` column; a logger's pause never starts one): cut where the
+    ``experiment`` column changes, and at long time gaps -- a logger's pause inside a
+    labelled experiment too -- unless the motion on both sides shows what the piston did
+    through it (a rest, or a slide one way: the pause is bridged, :mod:`.pauses`); across
+    any other pause the piston's motion is unknown, so the friction states start afresh
+    after it."""
     t = meas.t
-    dt = np.diff(t)
-    med = float(np.median(dt)) if dt.size else 0.0
-    gaps = dt > GAP_FACTOR * med
+    interval = sampling_interval(t)
+    labels = np.diff(meas["experiment"]) != 0 if "experiment" in meas else \
+        np.zeros(max(len(meas) - 1, 0), dtype=bool)
+    pause = np.append((np.diff(t) > GAP_FACTOR * interval) & ~labels, False)
+    meas, bridged, pause = pauses.bridge(meas, pause, interval)
+    gaps = pause[:-1]
+    design = np.zeros(len(meas), dtype=int)
     if "experiment" in meas:
-        gaps |= np.diff(meas["experiment"]) != 0
+        runs = np.diff(meas["experiment"]) != 0
+        gaps = gaps | runs
+        design[1:] = np.cumsum(runs)
     change = np.nonzero(gaps)[0] + 1
     bounds = [0, *change.tolist(), len(meas)]
     out = []
@@ -173,7 +207,7 @@ def _cut(meas: Measurement) -> list[Measurement]:
         sub = meas.select(mask)
         if len(bounds) > 2:
             sub.meta["name"] = f"{meas.label}[{k + 1}]"
-        out.append(sub)
+        out.append((sub, bridged[a:b], int(design[a])))
     if not out:
         raise FcompError(f"{meas.label}: no experiment with at least {MIN_SAMPLES} samples")
     return out
@@ -186,7 +220,11 @@ def _condition(subs: list[Measurement], cutoff_hz: float | None
         raise FcompError(f"{subs[0].label}: a diagnosis needs a position 'x' or velocity 'v' "
                          "column")
     pieces = [(m.t, m.get("x"), m.get("v")) for m in subs]
-    motions, cond = condition_motion(pieces, cutoff_hz=cutoff_hz)
+    # the raw force whose transitions at the reversals the band must keep
+    forces = None
+    if all("F" in m or any(k in m for k in ("p1", "p2", "F_ext")) for m in subs):
+        forces = [m["F"] if "F" in m else driving_force(m) for m in subs]
+    motions, cond = condition_motion(pieces, cutoff_hz=cutoff_hz, forces=forces)
     out = []
     for m, mo in zip(subs, motions, strict=True):
         a = np.where(mo.rest, 0.0, m["a"]) if "a" in m else mo.a
@@ -228,14 +266,39 @@ def _force_channels(meas: Measurement) -> set[str]:
     return {k for k in ("p1", "p2", "F_ext") if k in meas}
 
 
-def _canonical_key(meas: Measurement) -> tuple[str, str]:
-    """A key that orders records by name, and records of one name by their content."""
+def content_digest(*arrays: np.ndarray, text: str = "") -> str:
+    """A digest of numbers (and ``text``): what a record holds, never what it is called."""
     digest = hashlib.sha1(usedforsecurity=False)
-    digest.update(np.ascontiguousarray(meas.t, dtype=float).tobytes())
-    for name in sorted(meas.columns):
-        digest.update(name.encode())
-        digest.update(np.ascontiguousarray(meas[name], dtype=float).tobytes())
-    return meas.label, digest.hexdigest()
+    digest.update(text.encode())
+    for a in arrays:
+        digest.update(np.ascontiguousarray(a, dtype=float).tobytes())
+    return digest.hexdigest()
+
+
+#: Sidecar keys that describe the rig and the record's conventions (what the order of records
+#: may depend on besides their columns; names, sources and notes never).
+_RIG_KEYS = ("kind", "pressure", "rig", "diagnosis")
+
+
+def _canonical_key(meas: Measurement) -> tuple[float, str, str]:
+    """A key that orders records by what they hold, never by their names.
+
+    The mean gauge pressure sum first (records of one seal at several pressure
+    levels come in pressure order, as a person reads them), then a digest of the
+    columns and of the sidecar's description of the rig (``kind``, ``pressure``,
+    ``rig``, ``diagnosis``; never its name, source or notes); the name decides only
+    between records identical in every number and every rig value, whose order
+    changes no result. File names and the order files
+    are given in are no information: renamed or reordered, the same records give
+    the same answer to the bit.
+    """
+    psum = sum((meas[k] for k in ("p1", "p2") if k in meas), np.zeros(len(meas)))
+    meta = {k: v for k, v in meas.meta.items() if k in _RIG_KEYS}
+    names = sorted(meas.columns)
+    return (float(np.mean(psum)) if len(meas) else 0.0,
+            content_digest(meas.t, *(meas[n] for n in names),
+                           text=json.dumps([names, meta], sort_keys=True, default=str)),
+            meas.label)
 
 
 def sessions(data: DiagnosisData) -> list[list[int]]:
@@ -245,13 +308,13 @@ def sessions(data: DiagnosisData) -> list[list[int]]:
     experiment continues a session when its first stamp comes after the
     session's last one (the pieces of one file cut at logger pauses, or files
     of one logger whose clock runs on). Of several sessions it could continue,
-    the one that ended last (ties by label); experiments whose stamps overlap
+    the one that ended last (ties by content); experiments whose stamps overlap
     (files that each start at zero) are sessions of their own. The grouping
-    depends on the stamps and labels alone, never on the order the files were
-    given. Returns lists of experiment indices, each in time order.
+    depends on the stamps and contents alone, never on names or on the order the
+    files were given. Returns lists of experiment indices, each in time order.
     """
     t = data.signal("t")
-    spans = sorted(((float(t[e.start]), float(t[e.stop - 1]), e.label, i)
+    spans = sorted(((float(t[e.start]), float(t[e.stop - 1]), e.digest, i)
                     for i, e in enumerate(data.experiments)))
     groups: list[list[int]] = []
     ends: list[tuple[float, str]] = []
@@ -297,8 +360,10 @@ def prepare(
     x_measured = all("x" in m for m in meas_list)
     p_measured = all("p1" in m or "p2" in m for m in meas_list)  # a missing one: 0 gauge
     signals: list[Conditioning] = []
+    n_designs = 0
     for meas in meas_list:
-        subs = [meas] if steady else _cut(meas)
+        cut = [(meas, None, 0)] if steady else _cut(meas)
+        subs = [m for m, _, _ in cut]
         band = None
         if steady:
             if "v" not in meas:
@@ -312,10 +377,14 @@ def prepare(
             if "x" in meas:
                 alternatives = [tuple(motion_ensemble(m.t, m["x"], cond)) for m in subs]
             subs, band = conditioned, cond.force_cutoff_hz
-        for sub, alts in zip(subs, alternatives, strict=True):
+        designs: dict[int, int] = {}
+        for sub, alts, (_, bridged, unit) in zip(subs, alternatives, cut, strict=True):
             d = fit_data(sub, force_cutoff_hz=band)
             sources.add(d.source)
-            experiments.append(Experiment(sub.label, d, start, start + d.n, alts))
+            experiments.append(Experiment(sub.label, d, start, start + d.n, alts,
+                                          bridged if bridged is not None and bridged.any()
+                                          else None, designs.setdefault(unit, n_designs)))
+            n_designs = max(n_designs, experiments[-1].design + 1)
             start += d.n
     if len(sources) > 1:
         raise FcompError(f"the records give the force in different ways ({', '.join(sorted(sources))}); "
@@ -355,7 +424,7 @@ def _scales(experiments: list[Experiment]) -> Scales:
                              1e-3)),
         p_mid=float(np.mean(psum)),
         p_span=float(np.percentile(psum, 99.0) - np.percentile(psum, 1.0)),
-        dt=float(np.median(dts)),
+        dt=interval_of(dts),
         duration=float(sum(e.data.sig["t"][-1] - e.data.sig["t"][0] for e in experiments)),
     )
 

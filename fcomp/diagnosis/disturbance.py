@@ -80,9 +80,10 @@ from typing import Any
 import numpy as np
 from scipy import stats
 from scipy.ndimage import median_filter
-from scipy.signal import csd
+from scipy.signal import get_window
 
 from fcomp.diagnosis.data import DiagnosisData
+from fcomp.reconstruction import sampling_interval
 
 #: Shortest experiment (s) whose spectrum is searched.
 MIN_SECONDS = 2.0
@@ -162,27 +163,55 @@ class Disturbance:
 
 def _uniform(t: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, float]:
     """``y`` on a uniform grid of the median interval (itself when already uniform)."""
-    dt = float(np.median(np.diff(t)))
+    dt = sampling_interval(t)
     if np.allclose(np.diff(t), dt, rtol=1e-3, atol=0.0):
         return y, dt
     grid = t[0] + dt * np.arange(int(math.floor((t[-1] - t[0]) / dt)) + 1)
     return np.interp(grid, t, y), dt
 
 
-def _welch(a: np.ndarray, b: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray, int] | None:
-    """``(f, S_ab, K)``: the Welch cross spectrum of ``a`` and ``b`` on a uniform grid of
-    ``dt`` (the power spectrum where ``b`` is ``a``; Hann windows of about
-    :data:`WINDOW_SECONDS`, half overlap, linear detrend) and its number of windows (None:
-    too short)."""
+@dataclass(frozen=True)
+class _Frames:
+    """A signal's Welch frames: the discrete Fourier transforms of its Hann-windowed,
+    linearly detrended windows of ``nper`` samples at half overlap (:func:`_frames`)."""
+
+    X: np.ndarray
+    nper: int
+    dt: float
+    windows: int
+    norm: float
+
+
+def _frames(a: np.ndarray, dt: float) -> _Frames | None:
+    """The Welch frames of ``a`` on a uniform grid of ``dt`` (windows of about
+    :data:`WINDOW_SECONDS`; None: too short for :data:`MIN_WINDOWS` of them): every window
+    at once, so that a signal's frames are computed once for its power spectrum and for
+    its cross spectrum with every other (scipy's ``csd`` transformed both signals again on
+    every call, and detrended window by window: 5 % of a diagnosis of the O-ring files)."""
     nper = int(round(WINDOW_SECONDS / dt))
     if a.size < nper or nper < 16:
         return None
     k = 1 + (a.size - nper) // (nper // 2)
     if k < MIN_WINDOWS:
         return None
-    f, S = csd(a, b, fs=1.0 / dt, window="hann", nperseg=nper, noverlap=nper // 2,
-               detrend="linear")
-    return f, (S.real if b is a else S), k
+    step = nper - nper // 2
+    count = 1 + (a.size - nper) // step
+    seg = np.lib.stride_tricks.sliding_window_view(a, nper)[::step][:count]
+    tt = np.arange(nper) - 0.5 * (nper - 1)
+    seg = (seg - seg.mean(axis=1, keepdims=True)
+           - np.outer(seg @ tt / float(tt @ tt), tt))
+    win = get_window("hann", nper)
+    return _Frames(np.fft.rfft(seg * win, axis=1), nper, dt, k, float(win @ win))
+
+
+def _cross(fa: _Frames, fb: _Frames) -> tuple[np.ndarray, np.ndarray, int]:
+    """``(f, S_ab, K)``: the Welch cross spectral density of two signals' frames (one-sided,
+    scipy's ``csd`` with ``scaling="density"``; the power spectrum, real, where ``fb`` is
+    ``fa``) and the number of windows."""
+    S = np.mean(np.conj(fa.X) * fb.X, axis=0) * (fa.dt / fa.norm)
+    S[1:-1 if fa.nper % 2 == 0 else None] *= 2.0
+    f = np.fft.rfftfreq(fa.nper, fa.dt)
+    return f, (S.real if fb is fa else S), fa.windows
 
 
 def _prominence(f: np.ndarray, P: np.ndarray) -> np.ndarray:
@@ -267,6 +296,7 @@ def find(residual: np.ndarray, prediction: np.ndarray, data: DiagnosisData,
     if data.steady_state:
         return []
     w_all = np.ones(residual.size) if weights is None else np.clip(weights, 0.0, 1.0)
+    w_all = np.where(data.bridged, 0.0, w_all)  # inserted across a pause: no measurement
     gated = residual * np.sqrt(w_all)
     t_all = data.signal("t")
     feats = {"v": data.signal("v"), "x": data.signal("x"), "model": prediction}
@@ -290,10 +320,10 @@ def find(residual: np.ndarray, prediction: np.ndarray, data: DiagnosisData,
         r = gated[e.start:e.stop]
         pieces.append((t, r, idx))  # fitted wherever long enough, searched where K windows fit
         ru, dt = _uniform(t, r)
-        spec = _welch(ru, ru, dt)
-        if spec is None:
+        fr = _frames(ru, dt)
+        if fr is None:
             continue
-        f, P, k = spec
+        f, P, k = _cross(fr, fr)
         grid = (f.size, round(float(f[1] - f[0]), 9))
         signals = [*feats.values(), *laws.values()]
         acc = pooled.setdefault(grid, [f, np.zeros_like(P), 0,
@@ -302,9 +332,9 @@ def find(residual: np.ndarray, prediction: np.ndarray, data: DiagnosisData,
         acc[1] += k * P
         acc[2] += k
         for j, sig in enumerate(signals):  # each resampled once: its spectrum and the cross one
-            su = _uniform(t, sig[e.start:e.stop])[0]
-            auto, cross = _welch(su, su, dt), _welch(ru, su, dt)
-            assert auto is not None and cross is not None  # the residual's length and grid
+            fs_ = _frames(_uniform(t, sig[e.start:e.stop])[0], dt)
+            assert fs_ is not None  # the residual's length and grid
+            auto, cross = _cross(fs_, fs_), _cross(fr, fs_)
             acc[3][j] += k * auto[1]
             acc[4][j] += k * cross[1]
     for f, P, k, motion_P, cross_P in pooled.values():

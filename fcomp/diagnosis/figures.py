@@ -18,6 +18,9 @@ Figures
 ``candidates``     first-step candidates: held-out RMS after adding each
 ``error_fall``     held-out RMS after each step, with the noise floor
 ``before_after``   a held-out stretch: measured, baseline and final force
+``structure``      what the structure left in the final residual follows: the
+                   direction-signed held-out residual against each feature listed
+                   (:mod:`fcomp.diagnosis.structure_left`), its binned means and size
 """
 
 from __future__ import annotations
@@ -308,6 +311,49 @@ def fig_before_after(obj: Diagnosis | View) -> Figure:
     return fig
 
 
+def fig_structure(diag: Diagnosis) -> Figure:
+    """What the structure left follows: the final model's held-out residual, signed by the
+    direction of motion (a friction level above the model's is positive both ways), against
+    each feature the structure report lists (:attr:`.loop.Diagnosis.structure_left_`), with
+    its binned means; each panel is titled with the strength and the newtons it carries.
+    Nothing listed: the strongest feature, titled as such."""
+    check_fitted(diag)
+    left = diag.structure_left_
+    vw = view(diag)
+    feats = feature_values(vw.data, vw.segmentation)
+    names = [f.feature for f in (left.follows if left is not None else ()) if f.feature in feats]
+    titles = {f.feature: f"strength {f.strength:.2f}, {f.rms:.3g} N RMS"
+              for f in (left.follows if left is not None else ())}
+    if not names and diag.residual_features_:
+        top = diag.residual_features_[0]
+        names = [top.feature] if top.feature in feats else []
+        titles[top.feature] = f"strongest: strength {top.strength:.2f} (below the rule)"
+    if "time_since_event" in titles and "time_since_reversal" in feats:
+        names = ["time_since_reversal", *[n for n in names if n != "time_since_reversal"]]
+        titles["time_since_reversal"] = titles.get("time_since_reversal",
+                                                   titles["time_since_event"])
+    names = names[:3]
+    fig, axes = fs.new_figure(height=3.2, ncols=max(len(names), 1), squeeze=False)
+    te = vw.judged & (vw.data.signal("s") != 0)
+    r = vw.data.signal("s") * vw.last.fit.plain_residual
+    for i, name in enumerate(names):
+        ax = axes[0, i]
+        shown = fs.scaled(name, feats[name][te])
+        ax.plot(shown, r[te], ".", ms=1.5, alpha=0.35, color=_COLORS["final"])
+        cx, cy = fs.binned_means(shown, r[te])
+        ax.plot(cx, cy, "-", color=_COLORS["baseline"], lw=1.8, label="binned mean")
+        ax.axhline(0.0, color="0.5", lw=0.6)
+        ax.set_xlabel(fs.label(name.replace("_", " "), name))
+        ax.set_title(titles.get(name, ""))
+        ax.xaxis.set_major_locator(MaxNLocator(nbins=5))
+    if not names:
+        fs.text_inside(axes[0, 0], 0.5, "no structure left")
+    axes[0, 0].set_ylabel("residual x sign(v) (N)")
+    if names:
+        fs.legend_above(axes[0, 0])
+    return fig
+
+
 FIGURES: dict[str, Callable[[Any], Figure]] = {
     "regimes": fig_regimes,
     "residuals": fig_residuals,
@@ -316,6 +362,7 @@ FIGURES: dict[str, Callable[[Any], Figure]] = {
     "candidates": fig_candidates,
     "error_fall": fig_error_fall,
     "before_after": fig_before_after,
+    "structure": fig_structure,
 }
 
 

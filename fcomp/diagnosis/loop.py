@@ -44,8 +44,12 @@ from typing import Any
 import numpy as np
 
 import fcomp.diagnosis.revision as revision
+from fcomp.diagnosis.beside import CheckBeside, check_beside
+from fcomp.diagnosis.confounding import design_ties
 from fcomp.diagnosis.data import DiagnosisData, prepare
+from fcomp.diagnosis.design import held_by_design, record_design
 from fcomp.diagnosis.features import FeatureStrength, trimmed_rms
+from fcomp.diagnosis.forms import refine
 from fcomp.diagnosis.noise import NoiseFloor, noise_floor
 from fcomp.diagnosis.refit import Refit
 from fcomp.diagnosis.regimes import Segmentation, segment
@@ -140,17 +144,26 @@ def diagnose(config: DiagnosisConfig, data: Measurement | Sequence[Measurement] 
     floor = noise_floor(data, seg)
     refit = Refit(data, split, seg.d_pre, max_nfev=config.max_nfev,
                   max_samples=config.max_samples, noise=floor.value)
+    design = record_design(data, seg)
     search = Search(refit, Ground.of(data, seg, split, floor.value), floor, config.rule, pool,
-                    tick, config.max_nfev, config.max_samples)
+                    tick, config.max_nfev, config.max_samples, design=design,
+                    design_held=held_by_design(design))
+    refit.keep(list(search.design_held))  # what the design cannot determine, from the start
     search.fit_baseline(model)
     for effect in config.add:
         search.force(effect if isinstance(effect, str) else effect.name,
                      effect if isinstance(effect, Effect) else None)
     if config.search:
         search.run(names, config.max_steps)
+    for effect in list(search.added):  # each effect's richer forms, in the model as it ended
+        refine(search, effect)
+    if config.search:
+        revision.drop_no_ops(search)
         revision.backward(search)
         revision.swaps(search, names)
         revision.partners_in_model(search)
+        assert search.design is not None
+        design_ties(search, search.design)
     search.late_disturbances()
     return DiagnosisResult.of(search, name, config.verdict_rule), search
 
@@ -181,13 +194,15 @@ def check_support(model: FrictionModel, data: DiagnosisData, seg: Segmentation) 
 
 
 def baseline_check(config: DiagnosisConfig, result: DiagnosisResult, pool: Executor | None,
-                   tick: Tick) -> DiagnosisResult:
+                   tick: Tick, beside: CheckBeside | None = None) -> DiagnosisResult:
     """``result`` with the baseline check ``config.check_baseline`` asks for.
 
     ``True`` always, ``False`` never, ``"auto"`` when the first answer is doubtful
     (:attr:`.result.DiagnosisResult.doubts`): the same configuration from a baseline
-    of the other kind (:func:`.result.other_baseline`), on the same workers, its fits
-    counted by ``tick`` as the first answer's were (one bar for the whole diagnosis).
+    of the other kind (:func:`.result.other_baseline`), its fits counted by ``tick`` as
+    the first answer's were (one bar for the whole diagnosis). ``beside`` is that check
+    started beside the first diagnosis (:mod:`.beside`): its answer is taken when the
+    check is needed; else the check runs now, on the same workers.
     """
     doubts = result.doubts
     if config.check_baseline is False:
@@ -199,7 +214,9 @@ def baseline_check(config: DiagnosisConfig, result: DiagnosisResult, pool: Execu
     why = "asked for" if config.check_baseline is True else "; ".join(doubts)
     other_name = other_baseline(result.baseline_fit.model, result.ground)
     other = None  # none applies, or it does not fit these data
-    if other_name is not None:
+    if beside is not None and other_name == beside.baseline:
+        other = beside.result()
+    elif other_name is not None:
         second = dataclasses.replace(config, baseline=other_name, add=(), check_baseline=False)
         tick(f"baseline check: {other_name}")
         with contextlib.suppress(FcompError):
@@ -374,8 +391,12 @@ class Diagnosis(FittedAttributes):
         with (worker_pool(config.n_jobs, config.scheduler,
                           len(config.names) if config.search else 0) as pool,
               counter("diagnose", enabled=self.progress, unit="fit") as tick):
-            result, search = diagnose(config, data, pool, tick)
-            result = baseline_check(config, result, pool, tick)
+            if not isinstance(data, DiagnosisData):
+                data = prepare(data, cutoff_hz=config.cutoff_hz)
+            with check_beside(diagnose, config, data, tick) as beside:
+                result, search = diagnose(config, data, pool,
+                                          tick if beside is None else beside.tick)
+                result = baseline_check(config, result, pool, tick, beside)
         search.pool, search.tick = None, quiet
         self._search = search
         self.result_ = result

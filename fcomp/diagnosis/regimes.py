@@ -178,7 +178,7 @@ def segment(data: DiagnosisData) -> Segmentation:
         regime[sl], valid[sl], tsr[sl], dsr[sl], dwell[sl] = r, ok, a, b, c
         starts += [(e.start + k, dw, rev) for k, dw, rev in st]
     unresolved = unresolved_rests(data)
-    valid &= ~unresolved
+    valid &= ~unresolved & ~data.bridged  # samples inserted across a logger's pause: no data
     return Segmentation(regime, valid, tsr, dsr, dwell, v_rest, d_pre, t_dwell, starts,
                         int(unresolved.sum()))
 

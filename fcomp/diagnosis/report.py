@@ -11,6 +11,7 @@ the notebook summaries. All errors are in newtons, on held-out data.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, cast
 
@@ -245,6 +246,10 @@ def build_report(diag: Diagnosis, *, command: str | None = None) -> Report:
         rep.note(f"Verdict `unexplained-structure` -- {d['reason']}. No catalogue entry "
                  "qualified to explain it: it is reported rather than papered over with the "
                  "least-bad wrong effect.", kind=kind)
+    left = d.get("structure_left") or {}
+    figs = figures(diag)
+    if left.get("follows"):
+        structure_section(rep, left, figs["structure"])
     other = d.get("other_baseline")
     if other:
         same = ("finds the same effects" if not d["baseline_dependent"] else
@@ -296,7 +301,6 @@ def build_report(diag: Diagnosis, *, command: str | None = None) -> Report:
        "on the training part, so not the RMS of a given model on the whole record that fit and "
        "compare print).", digits=4)
 
-    figs = figures(diag)
     rep.section("1. Compare: errors per regime")
     rep.figure(figs["regimes"], "Held-out RMS error per regime (pre-sliding, reversal, "
                "sliding, dwell/break-away) for the baseline and the final model; dashed: the "
@@ -365,11 +369,107 @@ def build_report(diag: Diagnosis, *, command: str | None = None) -> Report:
         rep.section("The physics of the added effects", level=3)
         for e in d["added"]:
             rep.paragraph(f"**{e}** -- {_physics(e)}".replace("**", ""))
+    seals_sections(rep, d)
     rep.section("Residual structure left")
-    rep.table(["feature", "strength"], [[f["feature"], f["strength"]]
-                                        for f in d["residual_features"]], digits=[None, 3])
-    rep.parameters({k: v for k, v in d["params"].items()}, heading="Final parameters",
-                   units=parameter_units(diag.fit_.model))
+    rep.table(["feature", "strength", "RMS it carries (N)"],
+              [[f["feature"], f["strength"], f.get("rms")] for f in d["residual_features"]],
+              digits=[None, 3, 3])
+    if d.get("structures"):
+        rep.bullets([st["text"] for st in d["structures"]])
+    final_parameters(rep, d, parameter_units(diag.fit_.model))
+    return rep
+
+
+def final_parameters(rep: Report, d: Mapping[str, Any], units: Mapping[str, str]) -> Report:
+    """The final parameters with their standard errors and what the record did not determine
+    (the JSON's ``params``, ``stderr`` and the model file's ``undetermined``)."""
+    rep.section("Final parameters")
+    stderr = d.get("stderr") or {}
+    undetermined = (d.get("model_file") or {}).get("undetermined") or {}
+    rows = []
+    for k, v in d["params"].items():
+        se = stderr.get(k)
+        flag = undetermined.get(k, "")
+        rows.append([k, v, "-" if se is None or flag.startswith("at-bound") else se,
+                     units.get(k, "") or "-", flag.split(":", 1)[0] if flag else ""])
+    for k in d.get("held_by_design") or {}:
+        if k not in d["params"] and k in (d.get("model_params") or {}):
+            rows.append([k, d["model_params"][k], "-", units.get(k, "") or "-", "held"])
+    return rep.table(["parameter", "value", "standard error", "unit", "not determined"], rows,
+                     caption="Standard errors: batch-means (HAC) from the final fit's Jacobian "
+                     "on the training samples, as fcomp fit's. A value at a bound of its box, "
+                     "not identified, with an interval through zero or held by the record's "
+                     "design is not determined by the record: the model file lists it under "
+                     "`undetermined`, and loading it warns.", digits=[None, 4, 3, None, None])
+
+
+def seals_sections(rep: Report, d: Mapping[str, Any]) -> Report:
+    """Pairs, forms, the record's design and its ties (issue 43), where the diagnosis has
+    them."""
+    if d.get("pairs"):
+        rep.section("Effects found in pairs", level=3)
+        rep.table(["pair", "held-out RMS alone (N)", "together (N)", "z", "qualifies",
+                   "added"],
+                  [[" + ".join(p["effects"]), " / ".join(f"{r:.4g}" for r in p["rms_alone"]),
+                    p["rms_together"], p["z"], p["qualifies"], p["accepted"]]
+                   for p in d["pairs"]],
+                  caption="Where no single candidate qualified, the promising ones (significant "
+                  "falls short only of their size) refitted in pairs; a pair is added when it "
+                  "qualifies and each member qualifies against the other alone.",
+                  digits=[None, None, 4, 2, None, None])
+    if d.get("forms"):
+        rep.section("Forms of the effects tried", level=3)
+        rep.table(["effect", "form", "held-out RMS before (N)", "after (N)", "kept", "why not"],
+                  [[f["effect"], f["form"], f["rms_before"], f["rms_heldout"], f["kept"],
+                    "" if f["kept"] else short_reason(f["reason"])] for f in d["forms"]],
+                  caption="Richer forms of an accepted effect, each refitted in place of the "
+                  "one accepted and kept only when the acceptance rule accepts it against that "
+                  "form on the held-out data.", digits=[None, None, 4, 4, None, None])
+    design = d.get("design") or {}
+    if design.get("confounded"):
+        rep.section("What the record's design varies together", level=3)
+        rep.table(["factors", "what the record does", "to separate them, record"],
+                  [[" / ".join(c["factors"]), c["why"], c["separates"]]
+                   for c in design["confounded"]],
+                  caption="Laws in factors a record varies together give the same force on it; "
+                  "effects acting through them are reported as a tie (the JSON's "
+                  "`confounding`).")
+        for c in d.get("confounding") or []:
+            rep.note(f"{' / '.join('`' + e + '`' for e in c['effects'])}: the record's design "
+                     f"cannot tell them apart ({c['why']}); to separate them, record "
+                     f"{c['separates']}.", kind="warn")
+    return rep
+
+
+def structure_section(rep: Report, left: dict[str, Any], figure: Any) -> Report:
+    """The report's account of what the structure left follows (:mod:`.structure_left`, the
+    JSON's ``structure_left``): its size against the noise floor, a table of what it
+    follows with the experiment that would tell more, and ``figure`` (``structure``)."""
+    present = left.get("present")
+    rep.section("What the structure left follows", level=3)
+    rep.paragraph(
+        f"The final model's held-out RMS is {left['rms']:.3g} N against a noise floor of "
+        f"{left['noise_floor']:.3g} N: {left['excess']:.3g} N (RMS) above the noise. "
+        + ("It follows:" if present else "The strongest features (below the verdict's "
+           "rule):"))
+    rows = []
+    for f in left["follows"]:
+        size = (f"{f['slope']:+.3g} N per {f['slope_per']}, {f['change']:.3g} N over the record"
+                if f.get("slope") is not None else f"{f['change']:.3g} N peak to peak"
+                if f.get("change") is not None else "")
+        if f.get("note"):
+            size = f"{size}; {f['note']}" if size else f["note"]
+        rows.append([f["words"], f["strength"], f["own_strength"], f["rms"], size,
+                     f["experiment"]])
+    rep.table(["follows", "strength", "own strength", "RMS it carries (N)", "shape",
+               "the experiment that would tell more"], rows, digits=[None, 3, 3, 3, None, None],
+              caption="Strength: the share of the held-out residual's mean square a smooth "
+              "function of the feature explains; own strength: the same once the features "
+              "above it are taken out (features that are one phase of a periodic stroke are "
+              "one finding). Shape: the binned means of the residual signed by the direction "
+              "of motion (a friction level above the model's is positive both ways).")
+    rep.figure(figure, "The final model's held-out residual, signed by the "
+               "direction of motion, against what it follows, with its binned means.")
     return rep
 
 

@@ -9,13 +9,16 @@ the JSON and the report are written from it (:mod:`.writers`, :mod:`.report`).
 from __future__ import annotations
 
 import dataclasses
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
+from fcomp.diagnosis.advice import reword
 from fcomp.diagnosis.data import DiagnosisData
+from fcomp.diagnosis.design import Design
 from fcomp.diagnosis.disturbance import Disturbance
 from fcomp.diagnosis.features import EventRing, EventStructure, FeatureStrength
 from fcomp.diagnosis.noise import NoiseFloor
@@ -23,8 +26,10 @@ from fcomp.diagnosis.refit import FitResult, Refit
 from fcomp.diagnosis.regimes import Segmentation
 from fcomp.diagnosis.residuals import regime_errors
 from fcomp.diagnosis.rule import Ground
+from fcomp.diagnosis.seal_structures import SealStructure, seal_structures
 from fcomp.diagnosis.search import Candidate, Search, Step
 from fcomp.diagnosis.split import Split
+from fcomp.diagnosis.structure_left import StructureLeft, structure_left
 from fcomp.diagnosis.verdict import Verdict, VerdictRule, conclude
 from fcomp.diagnosis.wording import dependence_text, verdict_text
 from fcomp.effects import EFFECTS
@@ -38,7 +43,12 @@ class DiagnosisResult:
     """One diagnosis's findings (attributes as :class:`.loop.Diagnosis`'s ``*_`` ones).
 
     ``check`` is ``{"ran": bool, "why": str}`` (the baseline check) and ``other``
-    the other baseline's result when it ran.
+    the other baseline's result when it ran; ``design`` the record's design
+    (:mod:`.design`) and ``confounding`` the ties it makes (:mod:`.confounding`);
+    ``pairs`` the pairs judged (:mod:`.pairs`), ``refined`` the refined forms tried
+    (:mod:`.forms`); ``stderr`` the final fit's standard errors; ``structures`` the seal
+    structures named in its residual (:mod:`.seal_structures`); ``structure`` says what
+    the structure left in the final residual follows (:mod:`.structure_left`).
     """
 
     baseline_name: str
@@ -59,6 +69,14 @@ class DiagnosisResult:
     final_warnings: tuple[FitWarning, ...]
     check: Mapping[str, Any] | None = None
     other: DiagnosisResult | None = None
+    design: Design | None = None
+    confounding: tuple[Mapping[str, Any], ...] = ()
+    pairs: tuple[Mapping[str, Any], ...] = ()
+    refined: tuple[Mapping[str, Any], ...] = ()
+    stderr: Mapping[str, float] = dataclasses.field(default_factory=dict)
+    structures: tuple[SealStructure, ...] = ()
+    design_held: Mapping[str, str] = dataclasses.field(default_factory=dict)
+    structure: StructureLeft | None = None
 
     @classmethod
     def of(cls, search: Search, baseline_name: str, rule: VerdictRule) -> DiagnosisResult:
@@ -66,27 +84,41 @@ class DiagnosisResult:
         assert search.baseline_fit is not None
         g, fit, base = search.ground, search.current, search.baseline_fit
         refit = search.refit
-        first = _fit_warnings(refit, g, base, f"baseline {baseline_name}")
+        # nothing added: the baseline is the final model, and its flags are the final fit's
+        first = _fit_warnings(refit, g, base, f"baseline {baseline_name}" if fit is not base
+                              else f"final model {baseline_name} (the baseline, nothing "
+                              "added)", search.design)
         final = first
         steps = list(search.steps)
         for i, st in enumerate(steps):
             if st.accepted and st.fit is not None and st.fit is not fit:
                 steps[i] = dataclasses.replace(
-                    st, warnings=tuple(_fit_warnings(refit, g, st.fit, f"after + {st.effect}")))
+                    st, warnings=tuple(_fit_warnings(refit, g, st.fit, f"after + {st.effect}",
+                                                     search.design)))
         if fit is not base:
-            final = _fit_warnings(refit, g, fit, f"final model {fit.model.describe()}")
+            final = _fit_warnings(refit, g, fit, f"final model {fit.model.describe()}",
+                                  search.design)
             steps = [dataclasses.replace(st, warnings=tuple(final)) if st.fit is fit else st
                      for st in steps]
         warnings = (first + final if fit is not base else first) + list(g.split.warnings)
         verdict = conclude(fit, g, search.disturbances, final, rule)
         test = g.split.test
+        left = structure_left(fit, g.data, g.segmentation, g.split.train, test, verdict,
+                              search.disturbances)
         return cls(baseline_name, g, search.noise_floor, base, fit, tuple(steps),
                    tuple(search.candidates), tuple(tuple(t) for t in search.ties),
                    tuple(search.added), tuple(search.removed), dict(search.skipped),
                    tuple(search.disturbances), verdict,
                    {"baseline": regime_errors(base.residual, g.segmentation, test),
                     "final": regime_errors(fit.residual, g.segmentation, test)},
-                   tuple(warnings), tuple(final))
+                   tuple(warnings), tuple(final), design=search.design,
+                   confounding=tuple(dict(c) for c in search.confounding),
+                   pairs=tuple(dict(p) for p in search.pairs),
+                   refined=tuple(dict(f) for f in search.refined),
+                   stderr=_stderr(refit, fit, final),
+                   structures=tuple(seal_structures(fit.plain_residual, fit.F_hat, g.data,
+                                                    g.segmentation, verdict.least)),
+                   design_held=dict(search.design_held), structure=left)
 
     @property
     def doubts(self) -> list[str]:
@@ -133,12 +165,36 @@ class DiagnosisResult:
         return verdict_text(self.verdict) + dependence_text(self.dependence)
 
 
-def _fit_warnings(refit: Refit, ground: Ground, fit: FitResult, what: str) -> list[FitWarning]:
-    """The plausibility warnings of one fit of the diagnosis, each naming the fit."""
+def _stderr(refit: Refit, fit: FitResult, warnings: Sequence[FitWarning]
+            ) -> dict[str, float]:
+    """The standard errors of ``fit``'s fitted parameters (:meth:`.Refit.uncertainty`; NaN
+    where the record does not determine one; empty when they cannot be computed).
+
+    A value at a bound of its box (an ``at-bound`` warning of ``fit``, ``warnings``) has no
+    standard error: the Jacobian's column there says nothing of the data (1.3e38 N for an
+    O-ring's ``Fs`` at its bound), so it is NaN -- null in the JSON and the model file, "-"
+    in the report -- and the flag says why."""
+    try:
+        stderr = dict(refit.uncertainty(fit).stderr)
+    except (FcompError, ValueError, ArithmeticError, np.linalg.LinAlgError):
+        return {}
+    for w in warnings:
+        if w.code == "at-bound" and w.parameter:
+            for name in w.parameter.split(","):
+                if name.strip() in stderr:
+                    stderr[name.strip()] = math.nan
+    return stderr
+
+
+def _fit_warnings(refit: Refit, ground: Ground, fit: FitResult, what: str,
+                  design: Design | None = None) -> list[FitWarning]:
+    """The plausibility warnings of one fit of the diagnosis, each naming the fit, their
+    advice matched to the record's design and the diagnosis's options (:mod:`.advice`)."""
     try:
         found = refit.plausibility(fit, ground.data.rig)
     except (FcompError, ValueError, ArithmeticError, np.linalg.LinAlgError):
         return []
+    found = reword(found, design, ground.data.kind)
     return [FitWarning(w.code, w.parameter, f"{what}: {w.message}") for w in found]
 
 
@@ -269,6 +325,11 @@ class FittedAttributes:
     @property
     def residual_features_(self) -> list[FeatureStrength]:
         return list(self._result.verdict.features)
+
+    @property
+    def structure_left_(self) -> StructureLeft | None:
+        """What the structure left in the final residual follows (:mod:`.structure_left`)."""
+        return self._result.structure
 
     @property
     def event_structure_(self) -> EventStructure | None:

@@ -16,6 +16,8 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Sequence
 
+import numpy as np
+
 import fcomp.diagnosis.catalogue as catalogue
 from fcomp.diagnosis.refit import RIG_EXTRAS, FitResult
 from fcomp.diagnosis.search import Search
@@ -35,6 +37,18 @@ def rebuilt(search: Search, names: Sequence[str]) -> FitResult:
     error 84 N where the same structure had reached 60 N), and the effect taken
     out would look needed when it is not, or not needed when it is.
     """
+    model, start = reduced(search, names)
+    known = [f for f in _known_fits(search, model) if set(f.values) == set(start)]
+    # the parameters fitted now that remain (terms held for the record stay held)
+    fit = search.polish(search.refit.fit(model, [start, *(f.values for f in known)],
+                                         list(start)))
+    # and never a worse fit than one of that structure already seen
+    return min([fit, *known], key=lambda f: f.rms_train)
+
+
+def reduced(search: Search, names: Sequence[str]) -> tuple[FrictionModel, dict[str, float]]:
+    """The baseline with the effects ``names`` (in order), each configured with its current
+    values, and the current values of what it fits (the start of :func:`rebuilt`)."""
     assert search.baseline_fit is not None
     current = search.current
     model = search.baseline_fit.model
@@ -50,13 +64,7 @@ def rebuilt(search: Search, names: Sequence[str]) -> FitResult:
             n, search.ground.data, values or None,
             **catalogue.form_of(n, search.forms.get(n)).config))
     flat = model.flat_params()
-    start = {k: v for k, v in current.values.items() if k in flat or k in RIG_EXTRAS}
-    known = [f for f in _known_fits(search, model) if set(f.values) == set(start)]
-    # the parameters fitted now that remain (terms held for the record stay held)
-    fit = search.polish(search.refit.fit(model, [start, *(f.values for f in known)],
-                                         list(start)))
-    # and never a worse fit than one of that structure already seen
-    return min([fit, *known], key=lambda f: f.rms_train)
+    return model, {k: v for k, v in current.values.items() if k in flat or k in RIG_EXTRAS}
 
 
 def _known_fits(search: Search, model: FrictionModel) -> list[FitResult]:
@@ -69,6 +77,7 @@ def _known_fits(search: Search, model: FrictionModel) -> list[FitResult]:
 def _mark_removed(search: Search, effect: str, why: str, *, forced_too: bool) -> None:
     """Take ``effect`` out of the lists and mark the step that added it not accepted."""
     search.added = [n for n in search.added if n != effect]
+    search.keep_held()
     search.removed.append(effect)
     search.ties = [t for t in search.ties if t[0] != effect]  # its tie went with it
     for i, st in enumerate(search.steps):
@@ -98,6 +107,38 @@ def backward(search: Search) -> None:
             continue
         search.fit = reduced
         _mark_removed(search, effect, judgement_text(verdict), forced_too=False)
+
+
+def drop_no_ops(search: Search) -> None:
+    """Take out searched effects whose fitted law does nothing on the record.
+
+    An effect accepted early can end, once later effects carry what it stood in for,
+    with its own law degenerate: a Stribeck curve whose break-away level equals the
+    Coulomb level (``Fs - Fc`` of 0.3 mN on the NAPN seal, its speed at a bound of its
+    box) changes no prediction. The backward check refits the model without it and can
+    land in a worse optimum that makes it look needed (NAPN: the level trading against
+    the pressure slope, 0.83 against 0.73 N). Here no refit decides: the model without
+    the effect, with every other value as fitted, predicts the same force within a tenth
+    of the noise floor (RMS over the usable samples) -- the effect is a no-op and goes.
+    """
+    g = search.ground
+    usable = g.split.train | g.split.test
+    for effect in [s.effect for s in search.steps if s.accepted and not s.forced]:
+        if effect not in search.added:
+            continue
+        try:
+            model, start = reduced(search, [n for n in search.added if n != effect])
+            without = search.refit.result(model, start, len(start))
+        except (FcompError, ValueError):
+            continue
+        change = search.current.F_hat[usable] - without.F_hat[usable]
+        if float(np.sqrt(np.mean(change**2))) >= search.rule.fall_noise * g.noise:
+            continue
+        search.tick(f"{effect} does nothing")
+        search.fit = search.polish(without)
+        _mark_removed(search, effect, "its fitted law does nothing on this record: without it, "
+                      "every other value as fitted, the prediction changes by less than a "
+                      "tenth of the noise floor", forced_too=False)
 
 
 def swaps(search: Search, names: Sequence[str]) -> None:

@@ -20,14 +20,20 @@ search (backward, swaps, partners) are in :mod:`.revision`.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import math
+import time
 from collections.abc import Sequence
 from concurrent.futures import Executor
 from dataclasses import dataclass, field
+from typing import Any
 
 import fcomp.diagnosis.catalogue as catalogue
 import fcomp.diagnosis.disturbance as disturbance
+import fcomp.diagnosis.forms as richer_forms
+import fcomp.diagnosis.pairs as pairs
+from fcomp.diagnosis.design import Design
 from fcomp.diagnosis.noise import NoiseFloor, effective_sample_size, noise_floor
 from fcomp.diagnosis.refit import RIG_EXTRAS, FitResult, Refit
 from fcomp.diagnosis.rule import AcceptanceRule, Ground, Judgement, delta_bic
@@ -110,6 +116,10 @@ class Step:
     fit: FitResult | None = None
     removed: str = ""
     warnings: tuple[FitWarning, ...] = ()
+    #: the two effects of a pair found together (:mod:`.pairs`), empty for a single
+    pair: tuple[str, ...] = ()
+    #: the form of the effect kept (a refined form, :mod:`.forms`; None: its first)
+    form: str | None = None
 
 
 @dataclass
@@ -154,6 +164,16 @@ class Search:
     forms: dict[str, str | None] = field(default_factory=dict)
     instances: dict[str, Effect] = field(default_factory=dict)
     seconds: dict[tuple[str, str | None], float] = field(default_factory=dict)
+    #: the record's design (:mod:`.design`) and the ties it makes (:mod:`.confounding`)
+    design: Design | None = None
+    confounding: list[dict[str, Any]] = field(default_factory=list)
+    #: the pairs judged where no single candidate qualified (:mod:`.pairs`)
+    pairs: list[dict[str, Any]] = field(default_factory=list)
+    #: the refined forms of accepted effects tried (:mod:`.forms`)
+    refined: list[dict[str, Any]] = field(default_factory=list)
+    #: parameters the record's design cannot determine, held in every fit -> why
+    #: (:func:`.design.held_by_design`)
+    design_held: dict[str, str] = field(default_factory=dict)
 
     # --------------------------------------------------------------- baseline
     @property
@@ -229,11 +249,12 @@ class Search:
         self.noise_floor = noise_floor(data, g.segmentation)
         self.ground = Ground.of(data, g.segmentation, g.split, self.noise_floor.value)
         self.disturbances = [*self.disturbances, *(d for _, d in keep)]
-        held = dict(self.refit.held)
+        held, kept = dict(self.refit.held), set(self.refit.kept)
         self.refit = Refit(data, g.split, g.segmentation.d_pre, max_nfev=self.max_nfev,
                            max_samples=self.max_samples, noise=self.noise_floor.value)
         for name, value in held.items():
             self.refit.hold(name, value)
+        self.refit.kept = set(kept)
         return True
 
     # ------------------------------------------------------------------ steps
@@ -274,7 +295,13 @@ class Search:
                 good = [c for c in ranked if c.qualifies]
             if step_no == 0 and not self.added:
                 self.candidates = ranked
+            if not good:  # a law of another form (:mod:`.forms`), in its plain one's place
+                good = self._richer(ranked)
+                ranked = _ranked([*good, *(c for c in ranked
+                                           if c.effect not in {g.effect for g in good})])
             if not good:
+                if self._pair(ranked):  # two effects missing at once (:mod:`.pairs`)
+                    continue
                 best = ranked[0]
                 self.steps.append(Step(best.effect, self.current.rms_test, best.rms_heldout,
                                        False, candidates=tuple(ranked)))
@@ -287,11 +314,70 @@ class Search:
             fit = self.reweighted(self.polish(best.fit))
             self.forms[best.effect] = best.form
             self.steps.append(Step(best.effect, self.current.rms_test, fit.rms_test, True,
-                                   candidates=tuple(ranked), tie=tuple(tie), fit=fit))
+                                   candidates=tuple(ranked), tie=tuple(tie), fit=fit,
+                                   form=best.form))
             if len(tie) > 1:
                 self.ties.append(tie)
             self.fit = fit
             self.added.append(best.effect)
+            self.keep_held()
+
+    def _richer(self, ranked: list[Candidate]) -> list[Candidate]:
+        """The step's promising candidates in their richer forms that qualify, best first
+        (:func:`.forms.candidate_forms`)."""
+        found = richer_forms.candidate_forms(self, [(c.effect, c.fit) for c in
+                                                    pairs.promising(ranked, self.rule)
+                                                    if c.fit is not None])
+        best: dict[str, Candidate] = {}
+        for name, form, fit, j in found:  # of an effect's forms, the best that qualifies
+            if j.qualifies and (name not in best or fit.rms_test < best[name].rms_heldout):
+                best[name] = Candidate(name, fit, fit.rms_test, j, form=form)
+        return _ranked(list(best.values()))
+
+    def _pair(self, ranked: list[Candidate]) -> bool:
+        """Add the best qualifying pair of the step's promising candidates (:mod:`.pairs`),
+        as two steps; whether one was added."""
+        t0 = time.perf_counter()
+        found, judged, self.pool = pairs.find_pair(
+            ranked, refit=self.refit, ground=self.ground, rule=self.rule,
+            current=self.current, context=self.context, pool=self.pool, tick=self.tick,
+            seconds=self.seconds)
+        took = time.perf_counter() - t0  # the pair search's cost, reported with each pair
+        self.pairs += [{**p.to_dict(), "accepted": p is found, "seconds": took}
+                       for p in judged]
+        if found is None:
+            return False
+        first = next(c for c in ranked if c.effect == found.effects[0])
+        fit = self.reweighted(self.polish(found.fit))
+        before = self.current.rms_test
+        for name, form in zip(found.effects, found.forms, strict=True):
+            self.forms[name] = form
+        self.steps.append(Step(found.effects[0], before, first.rms_heldout, True,
+                               candidates=tuple(ranked), fit=None, pair=found.effects,
+                               form=found.forms[0]))
+        self.steps.append(Step(found.effects[1], first.rms_heldout, fit.rms_test, True,
+                               candidates=(), fit=fit, pair=found.effects,
+                               form=found.forms[1]))
+        self.fit = fit
+        self.added += list(found.effects)
+        self.keep_held()
+        return True
+
+    def keep_held(self) -> None:
+        """Keep what the effects in the model hold (their :meth:`~fcomp.effects.Effect.held`
+        parameters and their form's) at their no-op values in every later fit
+        (:meth:`.Refit.keep`): the candidates of later steps refit the whole model."""
+        ctx = self.context()
+        names: set[str] = set(self.design_held)
+        for name in self.added:
+            effect = self.instances.get(name)
+            if effect is None:
+                names |= set(catalogue.held_of(name, self.forms.get(name), ctx))
+                continue
+            names |= set(catalogue.form_of(name, self.forms.get(name)).held)
+            with contextlib.suppress(FcompError, ValueError, KeyError):
+                names |= set(effect.held(ctx.view))
+        self.refit.kept = names
 
     def evaluate(self, names: Sequence[str], fit: FitResult | None = None) -> list[Candidate]:
         """Refit ``fit + effect`` (default the current fit) for every name and judge it."""
@@ -362,6 +448,7 @@ class Search:
                                candidates=(cand,), fit=fit))
         self.fit = fit
         self.added.append(name)
+        self.keep_held()
 
     def _control(self, best: Candidate) -> bool:
         """Refit the current model from the best candidate's values; True if that alone helps.

@@ -82,7 +82,7 @@ def model_file(result: DiagnosisResult, source: Mapping[str, Any] | None = None
     data = result.ground.data
     seen = signal_ranges([e.data.sig for e in data.experiments], data.available)
     return model_document(result.fit.model.with_fitted_range(seen), measurement=result.fit.values,
-                          stderr=result.fit.stderr,
+                          stderr=dict(result.stderr), undetermined=undetermined(result),
                           source={"diagnosis": {"baseline": result.baseline_name,
                                                 "added": list(result.added),
                                                 "verdict": result.verdict.verdict,
@@ -125,6 +125,50 @@ def rivals(result: DiagnosisResult) -> list[dict[str, Any]]:
     return out
 
 
+#: Features that are one on a fixed stroke (every run reverses at the stroke's ends): the
+#: position and the displacement since the reversal follow each other in each direction.
+ONE_ON_A_FIXED_STROKE = ("x", "displacement_since_reversal")
+
+
+def merged_features(result: DiagnosisResult) -> list[dict[str, Any]]:
+    """The JSON's ``residual_features``: each feature with its strength and the RMS it carries
+    (N), strongest first; on a fixed stroke (:attr:`.design.Design.fixed_stroke`) the
+    position and the displacement since the reversal are one finding, listed once under
+    the stronger with ``same_as``."""
+    feats: list[dict[str, Any]] = [
+        {"feature": f.feature, "strength": round(f.strength, 4),
+         "rms": _num(result.verdict.rms_final * math.sqrt(f.strength))}
+        for f in result.verdict.features]
+    if result.design is None or not result.design.fixed_stroke:
+        return feats
+    pair = [f for f in feats if f["feature"] in ONE_ON_A_FIXED_STROKE]
+    if len(pair) < 2:
+        return feats
+    keep, drop = pair[0], pair[1]  # strongest first
+    keep["same_as"] = [drop["feature"]]
+    return [f for f in feats if f is not drop]
+
+
+#: Plausibility codes of a value the record does not determine.
+UNDETERMINED = ("at-bound", "not-identified", "interval-crosses-zero")
+
+
+def undetermined(result: DiagnosisResult) -> dict[str, str]:
+    """The final model's parameters the record did not determine -> why (the final fit's
+    ``at-bound``, ``not-identified`` and ``interval-crosses-zero`` warnings), for the model
+    file's ``undetermined``."""
+    flat = result.fit.model.flat_params()
+    out: dict[str, str] = {k: f"{why} (value {flat[k]:.4g})"
+                           for k, why in result.design_held.items() if k in flat}
+    for w in result.final_warnings:
+        if w.code not in UNDETERMINED or not w.parameter:
+            continue
+        why = w.message.split(": ", 1)[-1]
+        for name in w.parameter.split(","):
+            out.setdefault(name.strip(), f"{w.code}: {why}")
+    return out
+
+
 def to_dict(result: DiagnosisResult) -> dict[str, Any]:
     """The JSON of ``fcomp diagnose`` (public contract, plus extra keys)."""
     test = result.ground.split.test
@@ -142,6 +186,8 @@ def to_dict(result: DiagnosisResult) -> dict[str, Any]:
                    _num(s.rms_after), "accepted": bool(s.accepted), "forced": s.forced,
                    "removed": bool(s.removed),
                    "removed_because": s.removed or None,
+                   "pair": list(s.pair) or None,
+                   "form": s.form,
                    "candidates": [_candidate(c) for c in s.candidates],
                    "warnings": [w.to_dict() for w in s.warnings]}
                   for s in result.steps],
@@ -158,14 +204,21 @@ def to_dict(result: DiagnosisResult) -> dict[str, Any]:
         "baseline_dependent": bool(result.dependence and result.dependence["dependent"]),
         "baseline_check": dict(result.check or {}),
         "other_baseline": result.dependence,
-        "residual_features": [{"feature": f.feature, "strength": round(f.strength, 4)}
-                              for f in result.verdict.features],
+        "residual_features": merged_features(result),
+        "structure_left": None if result.structure is None else result.structure.to_dict(),
         "model": result.fit.model.describe(),
         "params": {k: _num(v) for k, v in result.fit.values.items()},
+        "stderr": {k: _num(v) for k, v in result.stderr.items()},
+        "held_by_design": dict(result.design_held),
         "model_params": {k: _num(float(v)) for k, v in result.fit.model.flat_params().items()},
         "regimes": dict(result.regimes),
         "tie_experiments": {t[0]: {e: EFFECTS.get(e).experiment_for(data.kind) for e in t}
                             for t in result.ties},
+        "design": None if result.design is None else result.design.to_dict(),
+        "confounding": [dict(c) for c in result.confounding],
+        "pairs": [dict(p) for p in result.pairs],
+        "forms": [dict(f) for f in result.refined],
+        "structures": [st.to_dict() for st in result.structures],
         "skipped": dict(result.skipped),
         "split": result.ground.split.description,
         "noise_method": result.noise_floor.method,

@@ -59,10 +59,19 @@ class AreaError(Effect):
     the force left. A chamber whose pressure is constant over the record
     (vented: ``p2 = 0``) leaves its coefficient a constant force the record
     cannot tell from an offset: it is held at 0 (:meth:`held`).
+
+    It is an error of the *measurement* (the areas the force is reconstructed
+    with), not a friction of the seal: a model file keeps it among its
+    measurement terms, used when the model is compared with its record and
+    dropped when the model is plant friction or a compensator's model.
     """
 
     name = "area-error"
     Params = AreaErrorParams
+    factors = ("pressure",)
+    # the areas of the force reconstruction, not the seal: a model file keeps it among its
+    # measurement terms (a plant's or a compensator's friction must not carry dA*p)
+    of_measurement = True
     needs = ("p1", "p2")
     # the pressure force of a reconstructed record is F + m*a: an area error scales the
     # inertia term as a mass error does (at rest, with a = 0, only the area error is left)

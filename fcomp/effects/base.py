@@ -67,6 +67,12 @@ starts after a dwell, whether the mass is fitted.
     whether the effect needs a motion (a memory or the acceleration);
     effects with ``states`` are dynamic anyway. Not a candidate for
     steady-state points;
+``factors`` (class attribute, default ``()``)
+    the operating factors the effect's law acts through (``speed``,
+    ``direction``, ``pressure``, ``position``, ``distance-since-reversal``): where the
+    record varies two factors together (one speed per direction, a speed that
+    falls with the pressure), effects acting through them are reported as a tie
+    with the experiment that separates them (:mod:`fcomp.diagnosis.design`);
 ``acts_in`` (class attribute, default ``()``: anywhere)
     the motion regimes its signature lives in, named as
     :data:`fcomp.diagnosis.regimes.REGIMES` names them (``"pre-sliding"``,
@@ -84,6 +90,11 @@ starts after a dwell, whether the mass is fitted.
     diagnosis refits side by side, of which it keeps the one the information
     criterion prefers; each a label, a configuration and the parameters it
     holds at their no-op values (:class:`~fcomp.effects.record.DiagnosisForm`);
+:meth:`refined_forms` ``() -> tuple[DiagnosisForm, ...]``
+    class method (default none): richer forms tried once the effect is
+    accepted, each kept only when the acceptance rule accepts it against the
+    form it would replace, on held-out data (the saturating and power laws of
+    ``pressure-dependence``);
 :meth:`forms_for` ``(model) -> tuple[DiagnosisForm, ...]``
     class method (default :meth:`diagnosis_forms`): those of the forms that are
     different laws on ``model`` (two forms can coincide on a simpler model);
@@ -177,6 +188,10 @@ class Effect(PlainValue):
     needs: ClassVar[tuple[str, ...]] = ()
     #: needs a motion (memory, acceleration): not a candidate for steady-state points
     dynamic: ClassVar[bool] = False
+    #: the operating factors its law acts through (``speed``, ``direction``, ``pressure``,
+    #: ``position``, ``distance-since-reversal``; :mod:`fcomp.diagnosis.design`): a record
+    #: that varies two factors together cannot tell the laws in them apart
+    factors: ClassVar[tuple[str, ...]] = ()
     #: the motion regimes its signature lives in (empty: anywhere; module docstring)
     acts_in: ClassVar[tuple[str, ...]] = ()
     #: the laws the effect can take, chosen by the configuration ``form=``; the first is
@@ -266,6 +281,13 @@ class Effect(PlainValue):
         from fcomp.effects.record import DiagnosisForm
 
         return (DiagnosisForm(),)
+
+    @classmethod
+    def refined_forms(cls) -> tuple[DiagnosisForm, ...]:
+        """Richer forms a diagnosis tries once the effect is accepted (default none): each
+        is refitted in place of the form accepted and kept only when the acceptance rule
+        accepts it against that form on the held-out data (a saturating pressure law)."""
+        return ()
 
     @classmethod
     def forms_for(cls, model: FrictionModel) -> tuple[DiagnosisForm, ...]:

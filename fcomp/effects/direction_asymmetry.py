@@ -41,6 +41,7 @@ class DirectionAsymmetry(Effect):
 
     name = "direction-asymmetry"
     Params = DirectionAsymmetryParams
+    factors = ("direction",)
     confounded = ("force-offset", "area-error")
     signature = "residual even in v: same-sign offset in both directions, step at reversals"
     experiment = "the same speed profile in both directions of travel, with the force zero " \

@@ -69,6 +69,7 @@ class NonlocalMemory(StructuralEffect):
     name = "nonlocal-memory"
     FORMS: ClassVar[tuple[str, ...]] = ("hysteresis", "maxwell-slip")
     Params = NonlocalMemoryParams
+    factors = ("distance-since-reversal",)
     signature = ("small-displacement residual following travel since reversal; minor-loop "
                  "offsets erased past earlier reversal points")
     experiment = "small displacement cycles with nested minor loops (seed 000 Figs. 10, 16)"

@@ -70,6 +70,7 @@ class PositionDependence(Effect):
     name = "position-dependence"
     Params = PositionDependenceParams
     CONFIG = ("x_min", "x_max")
+    factors = ("position",)
     needs = ("x",)
     signature = "residual a function of x, repeated stroke after stroke (smooth or local)"
     experiment = "the same slow stroke repeated, break-away measured along the stroke"

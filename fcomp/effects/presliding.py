@@ -60,6 +60,7 @@ class Presliding(StructuralEffect):
     adds = frozenset({"presliding", "damping", "bristle-exponent"})
     marks = frozenset({"presliding", "damping"})
     Params = PreslidingParams
+    factors = ("distance-since-reversal",)
     signature = "residual spikes at reversals that follow displacement since reversal"
     experiment = "small-amplitude displacement cycles (well below break-away)"
     dynamic = True

@@ -43,6 +43,7 @@ class Stribeck(StructuralEffect):
     adds = frozenset({"stribeck", "stribeck-form"})
     marks = frozenset({"stribeck"})
     Params = StribeckEffectParams
+    factors = ("speed",)
     signature = "residual hump at low |v| decaying with speed; peaks after starts"
     experiment = "slow constant-speed runs (0.1-10 vs) in both directions"
 

@@ -41,6 +41,7 @@ class Viscous(StructuralEffect):
     adds = frozenset({"viscous", "viscous-power"})
     marks = frozenset({"viscous"})
     Params = ViscousParams
+    factors = ("speed",)
     signature = "residual linear and odd in v, largest at high speed"
     experiment = "constant-speed runs at several speeds in both directions"
 

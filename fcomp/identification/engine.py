@@ -66,9 +66,13 @@ __all__ = ["ALWAYS_FIXED", "EXTRA_SPECS", "HOLD_RELATIVE_ERROR", "METHODS", "SEG
 
 
 def default_free(model: FrictionModel) -> list[str]:
-    """Flat names fitted by default: every finite parameter but :data:`ALWAYS_FIXED`."""
+    """Flat names fitted by default: every finite parameter but :data:`ALWAYS_FIXED` and
+    those its effects hold fixed (``Effect.fixed``: a reference pressure, the parameters
+    a law's form does not use)."""
+    fixed = {n for e in model.effects for n in getattr(e, "fixed", ())}
     return [n for n, v in model.flat_params().items()
-            if base_name(n) not in ALWAYS_FIXED and math.isfinite(v)]
+            if base_name(n) not in ALWAYS_FIXED and base_name(n) not in fixed
+            and math.isfinite(v)]
 
 
 def equality_constraints(model: FrictionModel,

@@ -29,7 +29,7 @@ residuals and the prediction).
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 
 import casadi as ca
 import numpy as np
@@ -40,7 +40,9 @@ from fcomp.models.base import SIGNAL_NAMES, FrictionModel, Signals
 from fcomp.models.stepping import friction_step, midpoint_signals, structure_key
 from fcomp.parameters import ParamValues
 
-_LOOPS: dict[tuple, tuple[Loop, ca.Function, tuple[str, ...]]] = {}
+#: The force at the initial state and its derivatives (:func:`_first`).
+First = Callable[[np.ndarray, np.ndarray, np.ndarray], tuple[float, np.ndarray]]
+_LOOPS: dict[tuple, tuple[Loop, First, tuple[str, ...]]] = {}
 
 #: Extra parameters a compiled loop may carry to serve a narrower set (fraction of it, at
 #: least one): each costs ~1/len(free) of an evaluation, a new compilation ~10 evaluations.
@@ -49,7 +51,10 @@ WIDER = 0.2
 
 #: Bytes of results kept for reuse (the module docstring).
 KEEP_BYTES = 64 * 2**20
-_KEPT: list[tuple[tuple, tuple, np.ndarray, np.ndarray]] = []  # (key, record, F, G), newest last
+#: (key, id of the record's first array) -> (record, F, G), oldest first (insertion order):
+#: a dict, so a look-up is one hash, not a scan of every result kept (a scan with tuple
+#: comparisons took 5 % of a diagnosis of the O-ring files)
+_KEPT: dict[tuple, tuple[tuple, np.ndarray, np.ndarray]] = {}
 _KEPT_BYTES = [0]  # their bytes (kept as a running sum: summing on every keep cost 3 %)
 
 
@@ -59,23 +64,26 @@ def _same(a: tuple, b: tuple) -> bool:
 
 
 def _kept(key: tuple, record: tuple) -> tuple[np.ndarray, np.ndarray] | None:
-    for k, rec, F, G in _KEPT:
-        if k == key and _same(rec, record):
-            return F, G
+    hit = _KEPT.get((key, id(record[0])))
+    if hit is not None and _same(hit[0], record):
+        return hit[1], hit[2]
     return None
 
 
 def _keep(key: tuple, record: tuple, F: np.ndarray, G: np.ndarray) -> None:
     F.setflags(write=False)
     G.setflags(write=False)
-    _KEPT.append((key, record, F, G))
+    old = _KEPT.pop((key, id(record[0])), None)
+    if old is not None:
+        _KEPT_BYTES[0] -= old[1].nbytes + old[2].nbytes
+    _KEPT[(key, id(record[0]))] = (record, F, G)
     _KEPT_BYTES[0] += F.nbytes + G.nbytes
     while _KEPT and _KEPT_BYTES[0] > KEEP_BYTES:
-        _, _, F0, G0 = _KEPT.pop(0)
+        _, F0, G0 = _KEPT.pop(next(iter(_KEPT)))
         _KEPT_BYTES[0] -= F0.nbytes + G0.nbytes
 
 
-def _wider(key: tuple) -> tuple[Loop, ca.Function, tuple[str, ...]] | None:
+def _wider(key: tuple) -> tuple[Loop, First, tuple[str, ...]] | None:
     """A loop already built for the same model, substeps and mode whose parameters include
     ``key``'s, with at most :data:`WIDER` more; ``None`` if there is none."""
     structure, free, substeps, compiled = key
@@ -87,8 +95,8 @@ def _wider(key: tuple) -> tuple[Loop, ca.Function, tuple[str, ...]] | None:
     return None
 
 
-def _build(model: FrictionModel, free: tuple[str, ...], substeps: int,
-           compiled: bool) -> tuple[Loop, ca.Function]:
+def _build(model: FrictionModel, free: tuple[str, ...], substeps: int, compiled: bool
+           ) -> tuple[Loop, First]:
     names = list(model.flat_params())
     fi = [names.index(n) for n in free]
     nx, nf = model.n_states, len(free)
@@ -113,7 +121,31 @@ def _build(model: FrictionModel, free: tuple[str, ...], substeps: int,
         Fn, _, Fp = force(ca.SX(0, 1), u, p)
         out = ca.vertcat(Fn, Fp.T)
     step = ca.Function("fcomp_sens_step", [w, u, dt, p], [out])
-    return stepping_loop(step, compiled=compiled), force
+    return stepping_loop(step, compiled=compiled), _first(force, nx, nf, len(SIGNAL_NAMES),
+                                                          compiled)
+
+
+def _first(force: ca.Function, nx: int, nf: int, ns: int, compiled: bool) -> First:
+    """``first(x0, u, p) -> (F0, dF0/dp)``: the force at the initial state and its derivatives
+    (the state's sensitivities start at zero), as a compiled one-sample loop: CasADi's own
+    call from Python cost 6 % of a diagnosis, once per evaluation."""
+    w = ca.SX.sym("w", nx + nx * nf + 1 + nf)
+    u = ca.SX.sym("u", 2 * ns)
+    dt = ca.SX.sym("dt")
+    p = ca.SX.sym("p", force.size1_in(2))
+    Fn, _, Fp = force(w[:nx], u, p)
+    out = ca.densify(ca.vertcat(w[:nx + nx * nf], Fn, Fp.T))  # every entry written
+    loop = stepping_loop(ca.Function("fcomp_sens_first", [w, u, dt, p], [out]),
+                         compiled=compiled)
+    zero_dt = np.zeros(1)
+
+    def first(x0: np.ndarray, u0: np.ndarray, pvec: np.ndarray) -> tuple[float, np.ndarray]:
+        w0 = np.zeros(nx + nx * nf + 1 + nf)
+        w0[:nx] = x0
+        W = loop(w0, u0.reshape(1, -1), zero_dt, pvec)
+        return float(W[1, nx + nx * nf]), W[1, nx + nx * nf + 1:]
+
+    return first
 
 
 class SensitivityLoop:
@@ -185,7 +217,7 @@ class SensitivityLoop:
             w0 = np.zeros(nx + nx * nf + 1 + nf)
             w0[:nx] = x0
             W = self._loop(w0, U, dt, pvec)
-            F0, _, G0 = self._force(x0, np.concatenate([s0, s0]), pvec)
+            F0, G0 = self._force(x0, np.concatenate([s0, s0]), pvec)
             F = W[:, nx + nx * nf].copy()  # compact copies: W (with the states) is let go
             G = np.ascontiguousarray(W[:, nx + nx * nf + 1 :])
             F[0] = float(F0)

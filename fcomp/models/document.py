@@ -9,6 +9,7 @@ The format (``docs/model-file.md``; read back by :mod:`fcomp.modelfile`)::
      "effects": [{"name": "pressure-dependence", "config": {}}, ...],
      "params": {"Fc": 120.0, ..., "kp": 1e-7},   # flat names, SI units
      "stderr": {"Fc": 1.2, ...},            # optional
+     "undetermined": {"n": "at a bound ..."},  # optional: values not to be trusted
      "measurement_terms": {"effects": [...], "params": {"mass": 3.1}, "note": "..."},
      "source": {"program": "fcomp 0.1.0", ...}}
 
@@ -102,7 +103,8 @@ def _effect_entry(effect: Any) -> dict[str, Any]:
 
 def model_document(model: FrictionModel, *, stderr: Mapping[str, float] | None = None,
                    measurement: Mapping[str, float] | None = None,
-                   source: Mapping[str, Any] | None = None) -> dict[str, Any]:
+                   source: Mapping[str, Any] | None = None,
+                   undetermined: Mapping[str, str] | None = None) -> dict[str, Any]:
     """The model file's JSON document of ``model`` (module docstring).
 
     Parameters
@@ -120,6 +122,10 @@ def model_document(model: FrictionModel, *, stderr: Mapping[str, float] | None =
         (:attr:`~fcomp.models.base.FrictionModel.measurement`).
     source : mapping, optional
         Where the model comes from (``command``, ``data``, ...), JSON values.
+    undetermined : mapping of str to str, optional
+        Parameters the record did not determine (at a bound of the box searched, not
+        identified, an interval through zero) -> why, in words: written as
+        ``undetermined`` so that a reader is warned before using them.
 
     Returns
     -------
@@ -166,6 +172,9 @@ def model_document(model: FrictionModel, *, stderr: Mapping[str, float] | None =
         known = set(params) | set(extras) | dropped
         doc["stderr"] = {k: (None if math.isnan(float(v)) else number(v, f"stderr.{k}"))
                          for k, v in stderr.items() if k in known}
+    if undetermined:
+        known = set(params) | set(extras) | dropped
+        doc["undetermined"] = {k: str(v) for k, v in undetermined.items() if k in known}
     if measured or extras:
         doc["measurement_terms"] = {"effects": measured, "params": extras,
                                     "note": MEASUREMENT_NOTE}

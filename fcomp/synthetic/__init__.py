@@ -170,7 +170,14 @@ def generate(
         How the logger stamps its samples (:data:`STAMPS`): ``"uniform"``;
         ``"irregular"``, intervals of 0.5, 1 and 1.5 nominal intervals drawn at random
         (exact stamps of a logger polled by a non-real-time task); ``"gapped"``, uniform
-        with logger pauses of 0.2-0.6 s inside every experiment.
+        with logger pauses of 0.2-0.6 s inside every experiment; ``"jitter"``, every
+        interval the nominal one times a log-normal factor (a scheduler's jitter, 35 %
+        spread, down to a tenth of the nominal interval); ``"bursts"``, samples taken in
+        bursts of 4-16 at a tenth to a fifth of the nominal interval and a wait between
+        bursts, the mean rate nominal (a buffered or polled acquisition whose true sample
+        times are stamped: most intervals far shorter than the mean); ``"drops"``, uniform
+        with 2 % of the samples lost singly and runs of 5-15 lost samples (a logger that
+        misses samples under load, shorter than a pause).
     pulsation
         ``(frequency Hz, amplitude N)``: a periodic disturbance unrelated to the motion
         (a pump's pulsation, mains hum) on the force channel -- on the load cell, or on
@@ -325,7 +332,15 @@ def soften(P: TruthParams, laws: Mapping[str, Law], bristle: float
 
 
 #: The logger's stamping (:func:`generate`'s ``stamps``).
-STAMPS = ("uniform", "irregular", "gapped")
+STAMPS = ("uniform", "irregular", "gapped", "jitter", "bursts", "drops")
+#: Spread (standard deviation of the log) of a ``"jitter"`` logger's intervals.
+JITTER_SPREAD = 0.35
+#: Samples per burst and their spacing (nominal intervals) of a ``"bursts"`` logger.
+BURST_SIZE = (4, 16)
+BURST_SPACING = (0.1, 0.2)
+#: Share of single lost samples, and the runs of lost samples (count, length), of ``"drops"``.
+DROP_SHARE = 0.02
+DROP_RUNS = (3, (5, 15))
 #: Length (s) of the logger pauses of ``stamps="gapped"``, drawn uniformly.
 GAP_SPAN = (0.2, 0.6)
 
@@ -342,6 +357,32 @@ def sample_indices(stamps: str, n_fine: int, fine: int, experiment: np.ndarray, 
     uniform = np.arange(0, n_fine, fine)
     if stamps == "uniform":
         return uniform
+    if stamps == "jitter":  # each interval the nominal times a log-normal factor, >= 1 fine step
+        steps = np.maximum(np.rint(fine * np.exp(rng.normal(0.0, JITTER_SPREAD,
+                                                            2 * n_fine // fine + 2))), 1)
+        idx = np.concatenate([[0], np.cumsum(steps.astype(int))])
+        return idx[idx < n_fine]
+    if stamps == "bursts":  # bursts at a fast clock, a wait between: the mean rate nominal
+        out, k = [], 0
+        while k < n_fine:
+            size = int(rng.integers(BURST_SIZE[0], BURST_SIZE[1] + 1))
+            gap = max(1, int(round(fine * rng.uniform(*BURST_SPACING))))
+            out += [k + j * gap for j in range(size)]
+            k += size * fine
+        idx = np.array(out)
+        return idx[idx < n_fine]
+    if stamps == "drops":  # single lost samples and a few short runs of them
+        keep = rng.random(uniform.size) >= DROP_SHARE
+        count, (lo, hi) = DROP_RUNS
+        for e in np.unique(experiment[uniform]):
+            where = np.flatnonzero(experiment[uniform] == e)
+            for _ in range(count):
+                length = int(rng.integers(lo, hi + 1))
+                if where.size > 4 * length:
+                    a = int(rng.integers(where.size // 8, where.size - length))
+                    keep[where[a:a + length]] = False
+        keep[0] = True
+        return uniform[keep]
     if stamps == "irregular":
         half = max(fine // 2, 1)
         steps = rng.choice([half, fine, fine + half], size=2 * n_fine // fine + 2)

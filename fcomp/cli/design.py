@@ -60,7 +60,7 @@ def summary(doc: dict) -> str:
             lines.append(f"  {q['kind']} {q['label']}: predicted separation "
                          f"{q['predicted_separation']:.3g} noise floors (T = "
                          f"{q['predicted_T']:.3g})")
-    for f, e in zip(doc["experiments"], doc["programme"]):
+    for f, e in zip(doc["experiments"], doc["programme"], strict=False):
         lines.append(f"  {f}: {e['duration']:.1f} s at {e['level'] / 1e5:.3g} bar: "
                      + "; ".join(e["primitives"]))
     return "\n".join(lines)
@@ -87,13 +87,15 @@ def run(args: argparse.Namespace) -> int:
                          models=[("DIAG.json", args.diagnosis)])
     rig = read_rig(args.rig)
     result = design(args.diagnosis, rig, noise=args.noise)
-    if not result.experiments_:
+    blocked = any(w["code"] == "limits-block" for w in result.warnings_)
+    if not result.experiments_ and not blocked:
         raise FcompError("nothing to design: " + "; ".join(w["message"]
                                                             for w in result.warnings_))
     name = "experiment_{}"
     files = []
     assert folder is not None
-    with staged_folder(folder, "-o", "programme", note="fcomp design") as tmp:
+    with staged_folder(folder, "-o", "programme", note="fcomp design") as tmp:  # (empty when
+        # the rig's limits block every question: the warnings say which limit)
         for k, e in enumerate(result.experiments_, start=1):
             m = measurement(e, rig, name.format(k), "pneumatic-cylinder")
             m.write(tmp / f"{name.format(k)}.csv")

@@ -50,7 +50,7 @@ def alternative(model: FrictionModel, effect: str, probes: Sequence[dict[str, np
             m = model.with_effects(eff.with_params(**{name: trial}))
         except (ValueError, TypeError):
             continue
-        dmax = max(float(np.max(np.abs(force(m, s) - b))) for s, b in zip(probes, base))
+        dmax = max(float(np.max(np.abs(force(m, s) - b))) for s, b in zip(probes, base, strict=False))
         if dmax > 1e-9 * max(level, 1.0):  # the effect's leading term: its first parameter
             best = (dmax, name, trial - value)  # that moves the force
             break

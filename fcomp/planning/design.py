@@ -94,17 +94,41 @@ def _prepare(dx: Diagnosed, rig: Rig, sigma: float, warnings: list[dict[str, str
     for q in qs:
         if q.kind == "untested":
             alt = alternative(dx.model, q.label, probes, base, sigma,
-                              p_ref if p_ref is not None else rig.levels()[0])
+                              p_ref if p_ref is not None else
+                              rig.levels()[0] * (2 if rig.double_acting else 1))
             if alt is None:
-                warnings.append({"code": "not-designable", "message":
-                                 f"{q.label}: no motion within the rig's limits moves its "
-                                 "force; left out"})
+                warnings.append(_untestable(dx, rig, q.label, sigma, p_ref))
                 continue
             q.models[q.label] = alt[0]
             q.notes.append(f"designed against {q.label} at {alt[1]}")
         elif q.kind == "parameter":
             q.models = {"final": dx.model}
     return [q for q in qs if q.kind == "parameter" or len(q.models) > 1]
+
+
+def _untestable(dx: Diagnosed, rig: Rig, effect: str, sigma: float, p_ref: float | None
+                ) -> dict[str, str]:
+    """Why an untested effect cannot be designed for: the limit that blocks it and what a
+    wider one would do (a ``limits-block`` warning), or that no limit tried helps."""
+    lv = rig.levels()
+    wider = {"pressure levels": rig.relaxed(levels_given=(), pressure_min=0.5 * min(lv),
+                                            pressure_max=max(2 * max(lv), min(lv) + 2e5)),
+             "speed_max": rig.relaxed(speed_max=3 * rig.speed_max, accel_max=3 * rig.accel_max),
+             "stroke": rig.relaxed(stroke=2 * rig.stroke)}
+    for what, r in wider.items():
+        probes = [signals(b, r) for b in candidates(r) if b.kind != "run" or b.speed == r.speed_max]
+        base = [force(dx.model, s) for s in probes]
+        ref = p_ref if p_ref is not None else lv[0] * (2 if rig.double_acting else 1)
+        if alternative(dx.model, effect, probes, base, sigma, ref) is not None:
+            now = (f"{len(lv)} level(s) {', '.join(f'{p / 1e5:.3g}' for p in lv)} bar"
+                   if what == "pressure levels" else f"{getattr(rig, what)}")
+            then = (f"{r.pressure_min / 1e5:.3g}-{r.pressure_max / 1e5:.3g} bar"
+                    if what == "pressure levels" else f"{getattr(r, what)}")
+            return {"code": "limits-block", "message":
+                    f"{effect}: the rig's {what} block it ({now}: no motion the rig can run "
+                    f"moves its force); with {what} {then} the programme could test it"}
+    return {"code": "not-designable", "message": f"{effect}: no motion within the rig's "
+            "limits, nor with wider pressures, speeds or stroke, moves its force; left out"}
 
 
 def _blocked(sc: Any, rig: Rig, dx: Diagnosed, q: Question, i: int, other: str,

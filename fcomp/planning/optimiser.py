@@ -68,7 +68,7 @@ def score(rig: Rig, questions: list[Question], sigma: float, mass_from_pressures
         ref = forces(q.models[names[0]])
         for other in names[1:]:
             fo = forces(q.models[other])
-            sc.T[(i, other)] = np.array([t_criterion(a, b, sigma) for a, b in zip(ref, fo)])
+            sc.T[(i, other)] = np.array([t_criterion(a, b, sigma) for a, b in zip(ref, fo, strict=False)])
     for i, q in enumerate(questions):
         if q.kind != "parameter" or q.parameter is None or not q.models:
             continue
@@ -107,8 +107,8 @@ def choose(sc: Scores, rig: Rig, questions: list[Question]) -> list[int]:
     budget = EXPERIMENTS_MAX * rig.duration_max * 0.9
     before = {i: q.stderr_before for i, q in enumerate(questions) if q.kind == "parameter"}
     T = {k: 0.0 for k in sc.T}
-    info = {i: 0.0 for i in sc.info}
-    chosen: list[int] = []
+    info = {i: 0.0 for i in sc.info if np.any(sc.info[i] > 0)}  # a value no motion informs
+    chosen: list[int] = []                                       # is no goal
     used = 0.0
     least = min(rig.duration_max, budget)  # at least one whole experiment to re-diagnose
     while used < budget and (used < least or not _done(T, info, before)):

@@ -1,0 +1,158 @@
+"""fcomp design: the rig file, the diagnosis read, the programme physical, refusals."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from fcomp.cli.main import main
+from fcomp.errors import FcompError
+from fcomp.planning import TEMPLATE, design
+from fcomp.planning.rig import rig_from
+
+RIG = """[rig]
+bore = 0.032
+rod = 0.012
+mass = 1.2
+orientation = "horizontal"
+
+[limits]
+stroke = 0.2
+speed_max = 0.2
+accel_max = 4.0
+pressure_min = 1.5e5
+pressure_max = 2.5e5
+duration_max = 20.0
+rate = 500.0
+"""
+
+
+def _diagnosis() -> dict:
+    """A diagnosis by hand (the JSON's fields): lugre, pressure untested at one level."""
+    import fcomp
+
+    m = fcomp.make_model("lugre", params="canudas1995")
+    doc = m.save  # noqa: F841  (the model document below)
+    from fcomp.models.document import model_document
+
+    return {"verdict": "explained", "noise_floor": 0.05, "added": [], "ties": [],
+            "skipped": {"pressure-dependence": "needs p1: p1 + p2 hardly varies",
+                        "stribeck": "already part of lugre"},
+            "warnings": [], "signals": {"force": "F"},
+            "model_file": model_document(m, source={"data": []})}
+
+
+@pytest.fixture(scope="module")
+def result():
+    return design(_diagnosis(), rig_from(__import__("tomllib").loads(RIG)))
+
+
+def test_programme_is_physical(result):
+    rig = result.rig_
+    assert result.experiments_
+    for e in result.experiments_:
+        s = e.signals
+        dt = np.diff(s["t"])
+        assert np.allclose(dt, 1 / rig.rate)
+        assert s["x"].min() >= 0 and s["x"].max() <= rig.stroke
+        v = np.diff(s["x"]) / dt
+        assert np.max(np.abs(v)) <= rig.speed_max * 1.02
+        a = np.diff(v) / dt[1:]
+        assert np.max(np.abs(a)) <= rig.accel_max * 1.1
+        assert e.duration <= rig.duration_max
+        assert abs(v[0]) < 1e-9 and abs(v[-1]) < 1e-3  # starts and ends at rest
+        assert set(np.unique(s["p1"])) <= set(rig.levels())
+
+
+def test_untested_pressure_is_designed_for(result):
+    q = [q for q in result.questions_ if q["kind"] == "untested"]
+    assert [x["label"] for x in q] == ["pressure-dependence"]
+    assert q[0]["predicted_separation"] > 1.0
+    # the separation needs a level other than the record's: the programme leaves it
+    levels = {e.level for e in result.experiments_}
+    assert levels - {1.5e5}
+
+
+def test_one_level_blocks_pressure_and_says_so():
+    rig = RIG.replace("pressure_max = 2.5e5", "pressure_max = 1.5e5")
+    doc = _diagnosis()
+    r = design(doc, rig_from(__import__("tomllib").loads(rig)))
+    msgs = [w["message"] for w in r.warnings_ if w["code"] == "limits-block"]
+    assert msgs and "pressure" in msgs[0]
+
+
+def test_template_is_a_valid_rig():
+    import tomllib
+
+    rig_from(tomllib.loads(TEMPLATE))
+
+
+@pytest.mark.parametrize("edit, what", [
+    (("stroke = 0.2", "stroke = 0"), "stroke"),
+    (("speed_max = 0.2", "speed_max = 0"), "speed_max"),
+    (("accel_max = 4.0", "accel_max = -4.0"), "accel_max"),
+    (("rate = 500.0", "rate = 20.0"), "rate"),
+    (("rate = 500.0", "rate = nan"), "rate"),
+    (("duration_max = 20.0\n", ""), "duration_max"),
+    (("rate = 500.0", "rate = 500.0\nspeed = 3"), "unknown"),
+    (("stroke = 0.2", "stroke = 0.2\nstroke = 0.3"), "TOML"),
+])
+def test_bad_rig_files_exit_2(tmp_path: Path, capsys, edit, what):
+    (tmp_path / "d.json").write_text(json.dumps(_diagnosis()))
+    (tmp_path / "rig.toml").write_text(RIG.replace(*edit))
+    code = main([ "design", str(tmp_path / "d.json"), "--rig", str(tmp_path / "rig.toml"),
+                 "-o", str(tmp_path / "out")])
+    err = capsys.readouterr().err
+    assert code == 2 and what in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("text", ['{"a": 1}', "[1, 2]", "not json",
+                                  '{"verdict": "x", "verdict": "y"}'])
+def test_bad_diagnoses_exit_2(tmp_path: Path, capsys, text):
+    (tmp_path / "d.json").write_text(text)
+    (tmp_path / "rig.toml").write_text(RIG)
+    code = main(["design", str(tmp_path / "d.json"), "--rig", str(tmp_path / "rig.toml"),
+                 "-o", str(tmp_path / "out")])
+    assert code == 2 and not (tmp_path / "out").exists()
+    assert len(capsys.readouterr().err.strip().splitlines()) == 1
+
+
+def test_output_onto_input_refused(tmp_path: Path, capsys):
+    (tmp_path / "d.json").write_text(json.dumps(_diagnosis()))
+    (tmp_path / "rig.toml").write_text(RIG)
+    code = main(["design", str(tmp_path / "d.json"), "--rig", str(tmp_path / "rig.toml"),
+                 "-o", str(tmp_path / "out"), "--json", str(tmp_path / "d.json")])
+    assert code == 2
+    assert json.loads((tmp_path / "d.json").read_text())["verdict"] == "explained"
+
+
+def test_cli_writes_programme_files(tmp_path: Path):
+    from fcomp.measurement import Measurement
+
+    (tmp_path / "d.json").write_text(json.dumps(_diagnosis()))
+    (tmp_path / "rig.toml").write_text(RIG)
+    code = main(["design", str(tmp_path / "d.json"), "--rig", str(tmp_path / "rig.toml"),
+                 "-o", str(tmp_path / "out"), "--json", str(tmp_path / "des.json")])
+    assert code == 0
+    doc = json.loads((tmp_path / "des.json").read_text())
+    assert doc["experiments"] and doc["questions"][0]["kind"] == "untested"
+    m = Measurement.read(doc["experiments"][0])
+    assert list(m.columns)[:4] == ["t", "x", "p1", "p2"]
+    assert m.meta["rig"]["bore"] == 0.032
+
+
+def test_template_cli(capsys):
+    assert main(["design", "--template"]) == 0
+    assert "[limits]" in capsys.readouterr().out
+
+
+def test_fcomp_design_is_public():
+    import fcomp
+
+    assert fcomp.design is design
+    with pytest.raises(FcompError):
+        design({"nope": 1}, rig_from(__import__("tomllib").loads(RIG)))

@@ -48,8 +48,8 @@ if TYPE_CHECKING:
     from fcomp.identification import FrictionFit
     from fcomp.measurement import Measurement
     from fcomp.modelfile import load_model
-    from fcomp.planning import design
     from fcomp.models import FrictionModel, make_model
+    from fcomp.planning import design
     from fcomp.synthetic import generate
     from fcomp.trajectory import friction_along_motion
 

@@ -227,7 +227,7 @@ def design(diagnosis: Mapping[str, Any] | str | Path, rig: Rig | Mapping[str, An
             continue
         names = list(q.models)
         ref = [force(q.models[names[0]], e.signals) for e in exps]
-        rivals = []
+        rivals: list[dict[str, Any]] = []
         for other in names[1:]:
             fo = [force(q.models[other], e.signals) for e in exps]
             a, b = np.concatenate(ref or [np.zeros(0)]), np.concatenate(fo or [np.zeros(0)])
@@ -240,8 +240,8 @@ def design(diagnosis: Mapping[str, Any] | str | Path, rig: Rig | Mapping[str, An
                 warnings.append({"code": "limits-block", "message": why})
             rivals.append(item)
         entry.update({"rivals": names, "label": q.label, "pairs": rivals,
-                      "predicted_separation": min(p["predicted_separation"] for p in rivals),
-                      "predicted_T": min(p["predicted_T"] for p in rivals)})
+                      "predicted_separation": min(float(p["predicted_separation"]) for p in rivals),
+                      "predicted_T": min(float(p["predicted_T"]) for p in rivals)})
         out.append(entry)
     from fcomp.models.document import model_document
 

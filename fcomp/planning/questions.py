@@ -133,7 +133,7 @@ def untested(doc: Mapping[str, Any], final: FrictionModel) -> list[Question]:
 
     out = []
     skipped = doc.get("skipped") or {}
-    have = {e.name for e in final.effects} | set(final.features)
+    have = {e.name for e in final.effects} | set(getattr(final, "features", ()) or ())
     for effect, reason in skipped.items() if isinstance(skipped, Mapping) else ():
         if any(s in str(reason) for s in NOT_A_QUESTION) or effect in have:
             continue

@@ -136,8 +136,11 @@ def test_cli_writes_programme_files(tmp_path: Path):
     (tmp_path / "d.json").write_text(json.dumps(_diagnosis()))
     (tmp_path / "rig.toml").write_text(RIG)
     code = main(["design", str(tmp_path / "d.json"), "--rig", str(tmp_path / "rig.toml"),
-                 "-o", str(tmp_path / "out"), "--json", str(tmp_path / "des.json")])
+                 "-o", str(tmp_path / "out"), "--json", str(tmp_path / "des.json"),
+                 "--report", str(tmp_path / "rep")])
     assert code == 0
+    html = (tmp_path / "rep" / "report.html").read_text()
+    assert html.index("Conclusion:") < html.index("<img")
     doc = json.loads((tmp_path / "des.json").read_text())
     assert doc["experiments"] and doc["questions"][0]["kind"] == "untested"
     m = Measurement.read(doc["experiments"][0])

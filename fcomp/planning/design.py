@@ -54,6 +54,7 @@ class DesignResult:
     noise_: float
     models_: dict[str, dict[str, Any]] = field(default_factory=dict, repr=False)
     files_: list[str] = field(default_factory=list)
+    _questions: list[Question] = field(default_factory=list, repr=False)
 
     def as_dict(self) -> dict[str, Any]:
         """The JSON of ``fcomp design`` (``experiments``, ``questions``, ``warnings``)."""
@@ -199,17 +200,21 @@ def design(diagnosis: Mapping[str, Any] | str | Path, rig: Rig | Mapping[str, An
         warnings.append({"code": "nothing-to-design", "message": "the diagnosis leaves no "
                          "open question (no tie, no untested effect, no undetermined value)"})
         return DesignResult([], [], warnings, r, sigma)
-    sc = score(r, qs, sigma, mass)
+    sc = score(r, qs, sigma, mass, stderr=dx.stderr)
     chosen = choose(sc, r, qs)
     exps = pack([sc.blocks[j] for j in chosen], r)
+    se_after = np.zeros(0)
+    if sc.joint:
+        model = next(q.models["final"] for q in qs if q.kind == "parameter")
+        info = sum((lambda J: J.T @ J)(jacobian(model, e.signals, sc.joint, mass))
+                   for e in exps) / sigma**2
+        se_after = predicted_stderr(np.asarray(info), sc.prior)
     out = []
     for i, q in enumerate(qs):
         entry: dict[str, Any] = {"kind": q.kind, "reason": q.reason, "notes": list(q.notes)}
         if q.kind == "parameter":
-            model = q.models["final"]
-            inf = sum(float(np.sum(jacobian(model, e.signals, [q.parameter or ""], mass) ** 2))
-                      for e in exps) / sigma**2
-            after = float(predicted_stderr(np.array([[inf]]), [q.stderr_before])[0])
+            k = sc.asked[i]
+            after = float(se_after[k]) if se_after.size else math.inf
             entry.update({"parameter": q.parameter, "value": q.value,
                           "stderr_before": q.stderr_before,
                           "stderr_after": after if math.isfinite(after) else None,
@@ -218,11 +223,13 @@ def design(diagnosis: Mapping[str, Any] | str | Path, rig: Rig | Mapping[str, An
                           "interval_after": 1.96 * after if math.isfinite(after) else None,
                           "predicted_shrink": (q.stderr_before / after
                                                if q.stderr_before and math.isfinite(after)
-                                               else None)})
-            if not math.isfinite(after) or inf == 0:
+                                               else None),
+                          "estimated_with": list(sc.joint)})
+            if not math.isfinite(after) or not (q.stderr_before is None
+                                                or after < q.stderr_before * 0.99):
                 warnings.append({"code": "limits-block", "message":
                                  f"{q.parameter}: no motion within the rig's limits carries "
-                                 "information on it"})
+                                 "information on it beyond the record's"})
             out.append(entry)
             continue
         names = list(q.models)
@@ -247,7 +254,9 @@ def design(diagnosis: Mapping[str, Any] | str | Path, rig: Rig | Mapping[str, An
 
     models = {f"{q.label}:{n}": model_document(m) for q in qs if q.kind != "parameter"
               for n, m in q.models.items()}
-    return DesignResult(exps, out, warnings, r, sigma, models_=models)
+    res = DesignResult(exps, out, warnings, r, sigma, models_=models)
+    res._questions = qs  # the questions with their models, in the order of questions_
+    return res
 
 
 def _no_duplicates(pairs: list[tuple[str, Any]]) -> dict[str, Any]:

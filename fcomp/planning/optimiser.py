@@ -15,6 +15,7 @@ spent (Fedorov's sequential construction; Atkinson, Donev & Tobias 2007, ch. 11)
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -38,17 +39,38 @@ EXPERIMENTS_MAX = 6
 
 @dataclass
 class Scores:
-    """Per candidate: the T-criterion per (question, rival) and the information per
-    parameter question (the diagonal, the parameter alone)."""
+    """Per candidate: the T-criterion per (question, rival), and the Fisher information of
+    the joint parameters ``joint`` (the fitted ones and those asked about: a parameter's
+    interval after the programme counts what the others take from it)."""
 
     blocks: list[Block]
     seconds: np.ndarray
     T: dict[tuple[int, str], np.ndarray] = field(default_factory=dict)
-    info: dict[int, np.ndarray] = field(default_factory=dict)
+    joint: list[str] = field(default_factory=list)
+    prior: list[float | None] = field(default_factory=list)
+    info: np.ndarray = field(default_factory=lambda: np.zeros((0, 0, 0)))
+    asked: dict[int, int] = field(default_factory=dict)
+
+
+def joint_parameters(questions: list[Question], stderr: Mapping[str, float]
+                     ) -> tuple[list[str], list[float | None], dict[int, int]]:
+    """The parameters estimated together: those the diagnosis fitted (a standard error
+    given) and those asked about; their prior standard errors; question -> index."""
+    names = [k for k, v in stderr.items() if isinstance(v, (int, float)) and v > 0]
+    asked: dict[int, int] = {}
+    for i, q in enumerate(questions):
+        if q.kind == "parameter" and q.parameter is not None:
+            if q.parameter not in names:
+                names.append(q.parameter)
+            asked[i] = names.index(q.parameter)
+    prior = [float(stderr[n]) if isinstance(stderr.get(n), (int, float)) else None
+             for n in names]
+    return names, prior, asked
 
 
 def score(rig: Rig, questions: list[Question], sigma: float, mass_from_pressures: bool,
-          blocks: list[Block] | None = None) -> Scores:
+          blocks: list[Block] | None = None, stderr: Mapping[str, float] | None = None
+          ) -> Scores:
     """Score every candidate primitive on every question."""
     blocks = candidates(rig) if blocks is None else blocks
     sc = Scores(blocks, np.array([b.v.size / rig.rate for b in blocks]))
@@ -68,58 +90,69 @@ def score(rig: Rig, questions: list[Question], sigma: float, mass_from_pressures
         ref = forces(q.models[names[0]])
         for other in names[1:]:
             fo = forces(q.models[other])
-            sc.T[(i, other)] = np.array([t_criterion(a, b, sigma) for a, b in zip(ref, fo, strict=False)])
-    for i, q in enumerate(questions):
-        if q.kind != "parameter" or q.parameter is None or not q.models:
-            continue
-        model = next(iter(q.models.values()))
-        sc.info[i] = np.array([float(np.sum(jacobian(model, s, [q.parameter],
-                                                     mass_from_pressures) ** 2)) / sigma**2
-                               for s in sigs])
+            sc.T[(i, other)] = np.array([t_criterion(a, b, sigma)
+                                         for a, b in zip(ref, fo, strict=True)])
+    asked = [q for q in questions if q.kind == "parameter" and q.models]
+    if asked:
+        sc.joint, sc.prior, sc.asked = joint_parameters(questions, stderr or {})
+        model = next(iter(asked[0].models.values()))
+        mats = []
+        for s in sigs:
+            J = jacobian(model, s, sc.joint, mass_from_pressures)
+            mats.append(J.T @ J / sigma**2)
+        sc.info = np.array(mats)
     return sc
 
 
-def _objective(T: dict[tuple[int, str], float], info: dict[int, float],
-               before: dict[int, float | None]) -> float:
+def _stderr(sc: Scores, total: np.ndarray) -> np.ndarray:
+    return predicted_stderr(total, sc.prior)
+
+
+def _objective(sc: Scores, T: dict[tuple[int, str], float], total: np.ndarray,
+               goals: dict[int, int]) -> float:
     val = sum(np.log1p(t / T_TARGET) for t in T.values())
-    for i, inf in info.items():
-        se = predicted_stderr(np.array([[inf]]), [before.get(i)])[0]
-        se0 = before.get(i)
-        ref = se0 if se0 else 1.0
-        val += float(np.log(ref / se)) if np.isfinite(se) else 0.0
+    if goals:
+        se = _stderr(sc, total)
+        for k in goals.values():
+            ref = sc.prior[k] or 1.0
+            if np.isfinite(se[k]) and se[k] > 0:
+                val += float(np.log(ref / se[k]))
     return float(val)
 
 
-def _done(T: dict[tuple[int, str], float], info: dict[int, float],
-          before: dict[int, float | None]) -> bool:
+def _done(sc: Scores, T: dict[tuple[int, str], float], total: np.ndarray,
+          goals: dict[int, int]) -> bool:
     if any(t < T_TARGET for t in T.values()):
         return False
-    for i, inf in info.items():
-        se0 = before.get(i)
-        se = predicted_stderr(np.array([[inf]]), [se0])[0]
-        if se0 is None or not se * SHRINK <= se0:
-            return False
+    if goals:
+        se = _stderr(sc, total)
+        for k in goals.values():
+            p = sc.prior[k]
+            if p is None or not se[k] * SHRINK <= p:
+                return False
     return True
 
 
 def choose(sc: Scores, rig: Rig, questions: list[Question]) -> list[int]:
     """The chosen primitives' indices (greedy, gain per second, within the budget)."""
     budget = EXPERIMENTS_MAX * rig.duration_max * 0.9
-    before = {i: q.stderr_before for i, q in enumerate(questions) if q.kind == "parameter"}
     T = {k: 0.0 for k in sc.T}
-    info = {i: 0.0 for i in sc.info if np.any(sc.info[i] > 0)}  # a value no motion informs
-    chosen: list[int] = []                                       # is no goal
+    k_joint = len(sc.joint)
+    total = np.zeros((k_joint, k_joint))
+    # a value no motion informs is no goal
+    goals = {i: k for i, k in sc.asked.items() if sc.info.size and np.any(sc.info[:, k, k] > 0)}
+    chosen: list[int] = []
     used = 0.0
     least = min(rig.duration_max, budget)  # at least one whole experiment to re-diagnose
-    while used < budget and (used < least or not _done(T, info, before)):
-        base = _objective(T, info, before)
+    while used < budget and (used < least or not _done(sc, T, total, goals)):
+        base = _objective(sc, T, total, goals)
         best, gain = -1, 0.0
         for j in range(len(sc.blocks)):
             if used + sc.seconds[j] > budget:
                 continue
             T2 = {k: T[k] + sc.T[k][j] for k in T}
-            I2 = {i: info[i] + sc.info[i][j] for i in info}
-            g = (_objective(T2, I2, before) - base) / sc.seconds[j]
+            tot2 = total + sc.info[j] if k_joint else total
+            g = (_objective(sc, T2, tot2, goals) - base) / sc.seconds[j]
             if j in chosen:
                 g *= 0.5  # a repeat tells less than a new primitive (the model may be wrong)
             if g > gain:
@@ -129,7 +162,8 @@ def choose(sc: Scores, rig: Rig, questions: list[Question]) -> list[int]:
         chosen.append(best)
         used += sc.seconds[best]
         T = {k: T[k] + sc.T[k][best] for k in T}
-        info = {i: info[i] + sc.info[i][best] for i in info}
+        if k_joint:
+            total = total + sc.info[best]
     return chosen
 
 

@@ -27,7 +27,7 @@ from fcomp.models.base import FrictionModel
 #: The warning codes that make a parameter an open question.
 UNDETERMINED = ("at-bound", "not-identified", "interval-crosses-zero")
 #: Skip reasons that are no question (the effect is in the model already).
-NOT_A_QUESTION = ("already part of", "not applicable")
+NOT_A_QUESTION = ("already part of", "not applicable", "measured directly", "no area enters")
 #: Keys every diagnose JSON has.
 REQUIRED = ("verdict", "noise_floor", "model_file", "added")
 
@@ -59,6 +59,7 @@ class Diagnosed:
     source: str
     questions: list[Question]
     skipped_notes: list[str]
+    stderr: dict[str, float] = field(default_factory=dict)
 
 
 def _check(doc: Any, label: str) -> Mapping[str, Any]:
@@ -177,4 +178,7 @@ def read_diagnosis(doc: Any, label: str = "diagnosis") -> Diagnosed:
              if any(s in str(r) for s in NOT_A_QUESTION)]
     return Diagnosed(model=final, noise_floor=float(doc["noise_floor"]), data=data,
                      kind=str(doc.get("kind") or "pneumatic-cylinder"),
-                     source=str(sig.get("force") or "F"), questions=qs, skipped_notes=notes)
+                     source=str(sig.get("force") or "F"), questions=qs, skipped_notes=notes,
+                     stderr={k: float(v) for k, v in
+                             (doc["model_file"].get("stderr") or {}).items()
+                             if isinstance(v, (int, float)) and math.isfinite(v) and v > 0})

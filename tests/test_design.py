@@ -159,3 +159,40 @@ def test_fcomp_design_is_public():
     assert fcomp.design is design
     with pytest.raises(FcompError):
         design({"nope": 1}, rig_from(__import__("tomllib").loads(RIG)))
+
+
+@pytest.mark.slow
+def test_recorded_programme_tests_the_untested_effect(tmp_path: Path):
+    """End to end: a one-level record (pressure-dependence untested), the design, the
+    programme recorded with a lip-seal pressure law of fcomp.synthetic (written apart from
+    fcomp.effects; another seed, another noise), the re-diagnosis adds the effect."""
+    import fcomp
+    from fcomp.measurement import Measurement
+    from fcomp.planning.programme import measurement
+    from fcomp.synthetic import generate
+    from fcomp.synthetic.motion import along
+
+    law, rate = "pressure-dependence:lip-seal", 250.0
+    old = generate([law], base="lugre", experiments=2, duration=10.0, pressures=[3e5],
+                   seed=5, noise_std=0.3, rate=rate).measurement
+    cands = ["pressure-dependence", "direction-asymmetry"]
+    d0 = fcomp.diagnose([old], "lugre", candidates=cands, check_baseline=False, progress=False)
+    doc = {**d0.to_dict(), "model_file": d0.model_file({"data": []})}
+    assert "pressure-dependence" in doc["skipped"] and not doc["added"]
+    rig = rig_from(__import__("tomllib").loads(
+        RIG.replace("rate = 500.0", f"rate = {rate}").replace("duration_max = 20.0",
+                                                               "duration_max = 12.0")))
+    res = design(doc, rig)
+    q = next(x for x in res.questions_ if x.get("label") == "pressure-dependence")
+    assert q["predicted_separation"] > 1
+    progs = []
+    for k, e in enumerate(res.experiments_, 1):
+        measurement(e, rig, f"e{k}", "pneumatic-cylinder").write(tmp_path / f"e{k}.csv")
+        progs.append(Measurement.read(tmp_path / f"e{k}.csv").columns)
+    plan = along([p["t"] for p in progs], [p["x"] for p in progs],
+                 [p["p1"] + p["p2"] for p in progs], 1.0 / rate / 10)
+    new = generate([law], base="lugre", pressures=[3e5], seed=105, plan=plan, rate=rate,
+                   noise_std=0.5).measurement
+    d1 = fcomp.diagnose([old, new], "lugre", candidates=cands, check_baseline=False,
+                        progress=False)
+    assert "pressure-dependence" in d1.to_dict()["added"]

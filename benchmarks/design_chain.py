@@ -45,7 +45,7 @@ def diagnose(paths: list[Path]) -> dict:
 
 
 def case(law: str, seed: int, work: Path, noise: float, rate: float) -> dict:
-    levels = CASES[law]
+    levels = CASES.get(law)
     effect = law.split(":")[0]
     rig_doc = json.loads(json.dumps(RIG))
     rig_doc["limits"]["rate"] = rate

@@ -25,7 +25,7 @@ from fcomp.planning.alternatives import alternative
 from fcomp.planning.criteria import force, jacobian, predicted_stderr, separation, t_criterion
 from fcomp.planning.optimiser import T_BLOCKED, T_TARGET, bound, choose, score
 from fcomp.planning.primitives import candidates, signals
-from fcomp.planning.programme import Experiment, pack
+from fcomp.planning.programme import Experiment, described, pack
 from fcomp.planning.questions import Diagnosed, Question, read_diagnosis
 from fcomp.planning.rig import Rig, read_rig, rig_from
 
@@ -61,7 +61,7 @@ class DesignResult:
         return {"experiments": list(self.files_) or
                 [f"experiment_{k + 1}.csv" for k in range(len(self.experiments_))],
                 "programme": [{"level": e.level, "duration": e.duration,
-                               "primitives": [b.describe() for b in e.blocks]}
+                               "primitives": described(e.blocks)}
                               for e in self.experiments_],
                 "questions": self.questions_, "warnings": self.warnings_,
                 "noise_floor": self.noise_, "rig": self.rig_.as_dict(),

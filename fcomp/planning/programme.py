@@ -66,6 +66,14 @@ def pack(blocks: list[Block], rig: Rig) -> list[Experiment]:
     return out
 
 
+def described(blocks: tuple[Block, ...] | list[Block]) -> list[str]:
+    """The primitives in words, repeats counted (``3 x constant-speed run ...``)."""
+    counts: dict[str, int] = {}
+    for b in blocks:
+        counts[b.describe()] = counts.get(b.describe(), 0) + 1
+    return [f"{n} x {d}" if n > 1 else d for d, n in counts.items()]
+
+
 def measurement(exp: Experiment, rig: Rig, name: str, kind: str) -> Measurement:
     """The experiment as a programme file (``t``, ``x``, ``p1`` [, ``p2``])."""
     cols = {"t": exp.signals["t"], "x": exp.signals["x"], "p1": exp.signals["p1"]}
@@ -73,7 +81,7 @@ def measurement(exp: Experiment, rig: Rig, name: str, kind: str) -> Measurement:
         cols["p2"] = exp.signals["p2"]
     meta = {"name": name, "kind": kind, "pressure": "gauge", "rig": rig.sidecar(),
             "programme": {"generator": "fcomp design", "level": exp.level,
-                          "primitives": [b.describe() for b in exp.blocks],
+                          "primitives": described(exp.blocks),
                           "note": "x is the position to follow; p1 (p2) the pressure(s) to "
                                   "hold; record F (or the pressures) while running it"}}
     return Measurement(cols, meta)

@@ -97,8 +97,31 @@ def _swapped(final: FrictionModel, tied: str, rival: FrictionModel, effect: str
     return final._rebuild(final.params, (*kept, theirs[0]))
 
 
+def _step_ties(doc: Mapping[str, Any], label: str) -> list[Question]:
+    """The ties with every tied effect's model as fitted at its step (``tie_models``)."""
+    out = []
+    for t in doc.get("tie_models") or []:
+        if not isinstance(t, Mapping) or not isinstance(t.get("effects"), Mapping):
+            continue
+        eff = t["effects"]
+        chosen = str(t.get("chosen") or next(iter(eff)))
+        order = [chosen, *[e for e in eff if e != chosen]]
+        q = Question("tie", " vs ".join(order),
+                     {e: _model(eff[e], label) for e in order if isinstance(eff[e], Mapping)},
+                     reason=f"{chosen} was added at step {t.get('step')}; "
+                            f"{', '.join(order[1:])} fit as well")
+        q.notes.append("each rival as the diagnosis fitted it at that step (the same effects "
+                       "before it)")
+        if len(q.models) > 1:
+            out.append(q)
+    return out
+
+
 def ties(doc: Mapping[str, Any], final: FrictionModel, label: str) -> list[Question]:
-    """One question per tie, opposing the final model and each rival the diagnosis fitted."""
+    """One question per tie: the tied effects' models as fitted at their step when the
+    diagnosis wrote them (``tie_models``), else the final model and each rival."""
+    if doc.get("tie_models"):
+        return _step_ties(doc, label)
     rivals = ((doc["model_file"].get("source") or {}).get("diagnosis") or {}).get("rivals") or []
     out = []
     for tie in doc.get("ties") or []:
@@ -116,10 +139,14 @@ def ties(doc: Mapping[str, Any], final: FrictionModel, label: str) -> list[Quest
             for eff in tie[1:]:
                 if eff in names and eff not in q.models:
                     swapped = _swapped(final, first, rival, eff)
-                    if swapped is None:
-                        q.notes.append(f"{eff}: the rival as the diagnosis fitted it (a "
-                                       "structural term: not swapped into the final model)")
-                    q.models[eff] = swapped or rival
+                    if swapped is None:  # a structural term: the rival, with the effects
+                        later = [e for e in final.effects  # the final model added beside
+                                 if e.name not in names and e.name != first]
+                        swapped = rival.with_effects(*later) if later else rival
+                        q.notes.append(f"{eff}: the rival as the diagnosis fitted it"
+                                       + (f", with {', '.join(e.name for e in later)} as "
+                                          "in the final model" if later else ""))
+                    q.models[eff] = swapped
         missing = [e for e in tie[1:] if e not in q.models]
         if missing:
             q.notes.append(f"no fitted rival for {', '.join(map(str, missing))} in the "

@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 
 from fcomp.planning.criteria import force
+from fcomp.planning.programme import described
 
 
 def conclusion(doc: dict[str, Any]) -> Any:
@@ -63,8 +64,8 @@ def write_report(result: Any, folder: str | Path, command: str | None = None) ->
         rep.section(f"Experiment {k}: {Path(name).name}")
         s = exp.signals
         with figstyle.style():
-            fig, axes = figstyle.new_figure(2 + len(qs) * 0 + (1 if qs else 0) * 1, nrows=2
-                                            + (1 if qs else 0), sharex=True)
+            fig, axes = figstyle.new_figure(6.0 if qs else 3.6, nrows=3 if qs else 2,
+                                            sharex=True)
             ax = np.atleast_1d(axes)
             ax[0].plot(s["t"], s["x"] * 1e3)
             ax[0].set_ylabel("x (mm)")
@@ -81,7 +82,7 @@ def write_report(result: Any, folder: str | Path, command: str | None = None) ->
             ax[-1].set_xlabel("t (s)")
         rep.figure(fig, f"Experiment {k} at {exp.level / 1e5:.3g} bar: the position to follow, "
                    "the pressures to hold, and each question's models' predicted friction "
-                   "along it. " + "; ".join(b.describe() for b in exp.blocks[:6]))
+                   "along it. " + "; ".join(described(exp.blocks)))
     path = Path(folder) / "report.html"
     rep.write(path)
     return path

@@ -196,3 +196,33 @@ def test_recorded_programme_tests_the_untested_effect(tmp_path: Path):
     d1 = fcomp.diagnose([old, new], "lugre", candidates=cands, check_baseline=False,
                         progress=False)
     assert "pressure-dependence" in d1.to_dict()["added"]
+
+
+def test_tie_opposes_the_models_fitted_at_the_step():
+    """A tie written with its step's models: the design opposes them, and a pair that
+    differs only with pressure is separated only by levels other than the record's."""
+    import tomllib
+
+    import fcomp
+    from fcomp.models.document import model_document
+
+    base = fcomp.make_model("lugre", params="canudas1995")
+    a = base.with_effects(fcomp.make_effect("direction-asymmetry").with_params(r_neg=1.1))
+    b = base.with_effects(fcomp.make_effect("pressure-dependence").with_params(
+        kp=2e-6, p_ref=3e5))
+    doc = {**_diagnosis(), "ties": [["direction-asymmetry", "pressure-dependence"]],
+           "skipped": {},
+           "tie_models": [{"step": 1, "chosen": "direction-asymmetry",
+                           "effects": {"direction-asymmetry": model_document(a),
+                                       "pressure-dependence": model_document(b)}}]}
+    r = design(doc, rig_from(tomllib.loads(RIG)))
+    q = r.questions_[0]
+    assert q["kind"] == "tie" and q["rivals"] == ["direction-asymmetry", "pressure-dependence"]
+    assert q["predicted_separation"] > 1
+    # by hand: along a run both ways at one level, the two differ by the asymmetry and the
+    # pressure factor; the predicted T is the sum of squares of that difference
+    from fcomp.planning.criteria import force, t_criterion
+
+    total = sum(t_criterion(force(a, e.signals), force(b, e.signals), r.noise_)
+                for e in r.experiments_)
+    assert total == pytest.approx(q["predicted_T"], rel=1e-9)

@@ -121,13 +121,19 @@ def test_bad_diagnoses_exit_2(tmp_path: Path, capsys, text):
     assert len(capsys.readouterr().err.strip().splitlines()) == 1
 
 
-def test_output_onto_input_refused(tmp_path: Path, capsys):
+@pytest.mark.parametrize("target", ["json-on-diag", "json-on-rig", "dir-holding-rig"])
+def test_output_onto_input_refused(tmp_path: Path, capsys, target):
     (tmp_path / "d.json").write_text(json.dumps(_diagnosis()))
     (tmp_path / "rig.toml").write_text(RIG)
+    extra = {"json-on-diag": ["-o", str(tmp_path / "out"), "--json", str(tmp_path / "d.json")],
+             "json-on-rig": ["-o", str(tmp_path / "out"), "--json", str(tmp_path / "rig.toml")],
+             "dir-holding-rig": ["-o", str(tmp_path)]}[target]
     code = main(["design", str(tmp_path / "d.json"), "--rig", str(tmp_path / "rig.toml"),
-                 "-o", str(tmp_path / "out"), "--json", str(tmp_path / "d.json")])
+                 *extra])
     assert code == 2
     assert json.loads((tmp_path / "d.json").read_text())["verdict"] == "explained"
+    assert (tmp_path / "rig.toml").read_text() == RIG
+    assert len(capsys.readouterr().err.strip().splitlines()) == 1
 
 
 def test_cli_writes_programme_files(tmp_path: Path):

@@ -82,9 +82,14 @@ def run(args: argparse.Namespace) -> int:
     out = json_target(args.json)
     report = common.report_dir(args.report)
     folder = common.report_dir(args.output, "-o")
-    common.guard_outputs([], None, [("--json", out)],
-                         [("-o", folder, "programme"), ("--report", report, "report")],
-                         models=[("DIAG.json", args.diagnosis)])
+    from fcomp.cli.targets import check_outputs
+    from fcomp.outputs import InputSet
+
+    inputs = InputSet()
+    inputs.file(args.diagnosis, "DIAG.json")
+    inputs.file(args.rig, "--rig")
+    check_outputs(inputs, [("--json", out)],
+                  [("-o", folder, "programme"), ("--report", report, "report")])
     rig = read_rig(args.rig)
     result = design(args.diagnosis, rig, noise=args.noise)
     blocked = any(w["code"] == "limits-block" for w in result.warnings_)

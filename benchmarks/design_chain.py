@@ -69,6 +69,8 @@ def case(law: str, seed: int, work: Path, noise: float, rate: float) -> dict:
                    plan=plan, rate=rate, noise_std=noise).measurement
     new.write(work / "new.csv")
     doc1 = diagnose([work / "old.csv", work / "new.csv"])
+    (work / "before.json").write_text(json.dumps(doc0, default=str))
+    (work / "after.json").write_text(json.dumps(doc1, default=str))
     y = new.columns["F"]
     ex = new.columns["experiment"]
     out = {"law": law, "seed": seed, "noise": noise, "rate": rate, "design_s": t_design,
@@ -119,6 +121,7 @@ def main() -> None:
     ap.add_argument("--noise", type=float, nargs="+", default=[0.4, 0.8])
     ap.add_argument("--rate", type=float, nargs="+", default=[500.0, 1000.0])
     ap.add_argument("--out", default=None)
+    ap.add_argument("--keep", default=None, help="keep each case's files under this folder")
     a = ap.parse_args()
     rows = []
     k = 0
@@ -127,8 +130,10 @@ def main() -> None:
             noise, rate = a.noise[k % len(a.noise)], a.rate[(k // 2) % len(a.rate)]
             k += 1
             with tempfile.TemporaryDirectory() as d:
+                work = Path(a.keep) / f"{law.replace(':', '_')}_{s}" if a.keep else Path(d)
+                work.mkdir(parents=True, exist_ok=True)
                 try:
-                    r = case(law, s, Path(d), noise, rate)
+                    r = case(law, s, work, noise, rate)
                 except Exception as exc:  # noqa: BLE001  (a benchmark reports, never stops)
                     r = {"law": law, "seed": s, "error": repr(exc)}
             print(json.dumps(r), flush=True)

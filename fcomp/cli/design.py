@@ -58,8 +58,9 @@ def summary(doc: dict) -> str:
                          f"{'?' if a is None else f'{a:.3g}'}")
         else:
             lines.append(f"  {q['kind']} {q['label']}: predicted separation "
-                         f"{q['predicted_separation']:.3g} noise floors (T = "
-                         f"{q['predicted_T']:.3g})")
+                         f"{q['predicted_separation']:.3g} noise floors, "
+                         f"{q['predicted_separation_refit']:.3g} once the rival's values "
+                         "are refitted along the programme")
     for f, e in zip(doc["experiments"], doc["programme"], strict=False):
         lines.append(f"  {f}: {e['duration']:.1f} s at {e['level'] / 1e5:.3g} bar: "
                      + "; ".join(e["primitives"]))

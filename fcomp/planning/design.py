@@ -23,7 +23,16 @@ import numpy as np
 from fcomp.errors import FcompError
 from fcomp.planning.alternatives import alternative
 from fcomp.planning.criteria import force, jacobian, predicted_stderr, separation, t_criterion
-from fcomp.planning.optimiser import T_BLOCKED, T_TARGET, bound, choose, score
+from fcomp.planning.optimiser import (
+    T_BLOCKED,
+    T_TARGET,
+    bound,
+    choose,
+    free_names,
+    refit_T,
+    refitted,
+    score,
+)
 from fcomp.planning.primitives import candidates, signals
 from fcomp.planning.programme import Experiment, described, pack
 from fcomp.planning.questions import Diagnosed, Question, read_diagnosis
@@ -239,8 +248,15 @@ def design(diagnosis: Mapping[str, Any] | str | Path, rig: Rig | Mapping[str, An
             fo = [force(q.models[other], e.signals) for e in exps]
             a, b = np.concatenate(ref or [np.zeros(0)]), np.concatenate(fo or [np.zeros(0)])
             T = t_criterion(a, b, sigma)
+            _, rival = refitted(q, other)
+            free = free_names(rival)
+            Js = [jacobian(rival, e.signals, free, False) for e in exps]  # type: ignore[arg-type]
+            J = np.vstack(Js) if Js else np.zeros((0, len(free)))
+            Tr = refit_T(T, J.T @ (a - b) / sigma**2, J.T @ J / sigma**2)
             item = {"rival": other, "predicted_separation": separation(a, b, sigma),
-                    "predicted_T": T, "answered": T >= T_TARGET}
+                    "predicted_T": T, "predicted_T_refit": Tr,
+                    "predicted_separation_refit": float(np.sqrt(Tr / max(a.size, 1))),
+                    "refitted": refitted(q, other)[0], "answered": Tr >= T_TARGET}
             if bound(sc, r, (i, other)) < T_BLOCKED:
                 why = _blocked(sc, r, dx, q, i, other, sigma, mass)
                 item["blocked"] = why
@@ -248,7 +264,9 @@ def design(diagnosis: Mapping[str, Any] | str | Path, rig: Rig | Mapping[str, An
             rivals.append(item)
         entry.update({"rivals": names, "label": q.label, "pairs": rivals,
                       "predicted_separation": min(float(p["predicted_separation"]) for p in rivals),
-                      "predicted_T": min(float(p["predicted_T"]) for p in rivals)})
+                      "predicted_T": min(float(p["predicted_T"]) for p in rivals),
+                      "predicted_separation_refit": min(float(p["predicted_separation_refit"])
+                                                        for p in rivals)})
         out.append(entry)
     from fcomp.models.document import model_document
 

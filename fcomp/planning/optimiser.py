@@ -7,7 +7,9 @@ programme grows one primitive at a time, the one with the largest gain per secon
 
     sum_q log(1 + T_q / T_TARGET)  +  sum_p log(se_before_p / se_after_p)
 
-(a balanced design: a question already answered gains little), until every tie and
+(a balanced design: a question already answered gains little), with ``T_q`` the
+T-criterion after the rival's values are refitted along the programme (:func:`refit_T`: a
+difference the rival can take up by changing its values tells nothing), until every tie and
 untested effect reaches :data:`T_TARGET`, every parameter's standard error has fallen by
 :data:`SHRINK`, or the budget (:data:`EXPERIMENTS_MAX` experiments of ``duration_max``) is
 spent (Fedorov's sequential construction; Atkinson, Donev & Tobias 2007, ch. 11).
@@ -50,6 +52,36 @@ class Scores:
     prior: list[float | None] = field(default_factory=list)
     info: np.ndarray = field(default_factory=lambda: np.zeros((0, 0, 0)))
     asked: dict[int, int] = field(default_factory=dict)
+    #: per pair: the refitted rival's sensitivities, ``h_b = J_b^T dF_b / sigma^2`` and
+    #: ``G_b = J_b^T J_b / sigma^2`` per block (:func:`refit_T`)
+    H: dict[tuple[int, str], np.ndarray] = field(default_factory=dict)
+    G: dict[tuple[int, str], np.ndarray] = field(default_factory=dict)
+
+
+def refit_T(T: float, h: np.ndarray, G: np.ndarray) -> float:
+    """The T-criterion once the rival's parameters are refitted along the motion
+    (linearised, Atkinson & Fedorov 1975): ``T - h^T G^+ h`` -- what of the force
+    difference no change of the rival's values can take up."""
+    if h.size == 0:
+        return T
+    ridge = 1e-9 * max(float(np.trace(G)), 1e-300)
+    sol = np.linalg.lstsq(G + ridge * np.eye(G.shape[0]), h, rcond=None)[0]
+    return max(float(T - h @ sol), 0.0)
+
+
+def refitted(q: Question, other: str) -> tuple[str, object]:
+    """Which model of a pair is refitted: the rival of a tie, the model without the effect
+    for an untested one (could the model without it mimic it?)."""
+    names = list(q.models)
+    name = names[0] if q.kind == "untested" else other
+    return name, q.models[name]
+
+
+def free_names(model: object) -> list[str]:
+    """The values a refit may change: every finite parameter but the fixed references."""
+    fixed = {n for e in getattr(model, "effects", ()) for n in getattr(e, "fixed", ())}
+    flat = model.flat_params()  # type: ignore[attr-defined]
+    return [n for n, v in flat.items() if n not in fixed and np.isfinite(v) and v != 0]
 
 
 def joint_parameters(questions: list[Question], stderr: Mapping[str, float]
@@ -92,6 +124,12 @@ def score(rig: Rig, questions: list[Question], sigma: float, mass_from_pressures
             fo = forces(q.models[other])
             sc.T[(i, other)] = np.array([t_criterion(a, b, sigma)
                                          for a, b in zip(ref, fo, strict=True)])
+            _, rival = refitted(q, other)
+            free = free_names(rival)
+            Js = [jacobian(rival, s, free, False) for s in sigs]  # type: ignore[arg-type]
+            sc.H[(i, other)] = np.array([J.T @ (a - b) / sigma**2
+                                         for J, a, b in zip(Js, ref, fo, strict=True)])
+            sc.G[(i, other)] = np.array([J.T @ J / sigma**2 for J in Js])
     asked = [q for q in questions if q.kind == "parameter" and q.models]
     if asked:
         sc.joint, sc.prior, sc.asked = joint_parameters(questions, stderr or {})
@@ -108,9 +146,19 @@ def _stderr(sc: Scores, total: np.ndarray) -> np.ndarray:
     return predicted_stderr(total, sc.prior)
 
 
-def _objective(sc: Scores, T: dict[tuple[int, str], float], total: np.ndarray,
-               goals: dict[int, int]) -> float:
-    val = sum(np.log1p(t / T_TARGET) for t in T.values())
+Acc = dict[tuple[int, str], tuple[float, np.ndarray, np.ndarray]]
+
+
+def _adjusted(acc: Acc) -> dict[tuple[int, str], float]:
+    return {k: refit_T(*v) for k, v in acc.items()}
+
+
+def _add(sc: Scores, acc: Acc, j: int) -> Acc:
+    return {k: (t + sc.T[k][j], h + sc.H[k][j], G + sc.G[k][j]) for k, (t, h, G) in acc.items()}
+
+
+def _objective(sc: Scores, acc: Acc, total: np.ndarray, goals: dict[int, int]) -> float:
+    val = sum(np.log1p(t / T_TARGET) for t in _adjusted(acc).values())
     if goals:
         se = _stderr(sc, total)
         for k in goals.values():
@@ -120,9 +168,8 @@ def _objective(sc: Scores, T: dict[tuple[int, str], float], total: np.ndarray,
     return float(val)
 
 
-def _done(sc: Scores, T: dict[tuple[int, str], float], total: np.ndarray,
-          goals: dict[int, int]) -> bool:
-    if any(t < T_TARGET for t in T.values()):
+def _done(sc: Scores, acc: Acc, total: np.ndarray, goals: dict[int, int]) -> bool:
+    if any(t < T_TARGET for t in _adjusted(acc).values()):
         return False
     if goals:
         se = _stderr(sc, total)
@@ -136,7 +183,8 @@ def _done(sc: Scores, T: dict[tuple[int, str], float], total: np.ndarray,
 def choose(sc: Scores, rig: Rig, questions: list[Question]) -> list[int]:
     """The chosen primitives' indices (greedy, gain per second, within the budget)."""
     budget = EXPERIMENTS_MAX * rig.duration_max * 0.9
-    T = {k: 0.0 for k in sc.T}
+    acc: Acc = {k: (0.0, np.zeros(sc.H[k].shape[1]), np.zeros(sc.G[k].shape[1:]))
+                for k in sc.T}
     k_joint = len(sc.joint)
     total = np.zeros((k_joint, k_joint))
     # a value no motion informs is no goal
@@ -144,15 +192,14 @@ def choose(sc: Scores, rig: Rig, questions: list[Question]) -> list[int]:
     chosen: list[int] = []
     used = 0.0
     least = min(rig.duration_max, budget)  # at least one whole experiment to re-diagnose
-    while used < budget and (used < least or not _done(sc, T, total, goals)):
-        base = _objective(sc, T, total, goals)
+    while used < budget and (used < least or not _done(sc, acc, total, goals)):
+        base = _objective(sc, acc, total, goals)
         best, gain = -1, 0.0
         for j in range(len(sc.blocks)):
             if used + sc.seconds[j] > budget:
                 continue
-            T2 = {k: T[k] + sc.T[k][j] for k in T}
             tot2 = total + sc.info[j] if k_joint else total
-            g = (_objective(sc, T2, tot2, goals) - base) / sc.seconds[j]
+            g = (_objective(sc, _add(sc, acc, j), tot2, goals) - base) / sc.seconds[j]
             if j in chosen:
                 g *= 0.5  # a repeat tells less than a new primitive (the model may be wrong)
             if g > gain:
@@ -161,7 +208,7 @@ def choose(sc: Scores, rig: Rig, questions: list[Question]) -> list[int]:
             break
         chosen.append(best)
         used += sc.seconds[best]
-        T = {k: T[k] + sc.T[k][best] for k in T}
+        acc = _add(sc, acc, best)
         if k_joint:
             total = total + sc.info[best]
     return chosen

@@ -101,6 +101,13 @@ def case(law: str, seed: int, work: Path, noise: float, rate: float) -> dict:
             if q["kind"] == "tie":
                 row["resolved"] = (effect in doc1["added"] and not any(
                     effect in t and len(t) > 1 for t in doc1["ties"]))
+                # the re-diagnosis's own evidence: each tied effect's held-out RMS at the
+                # step that added one of them (the tie rule aside)
+                step = next((st for st in doc1["steps"] if st["effect"] in names), None)
+                held = {c["effect"]: c["rms_heldout"] for c in (step or {}).get("candidates", [])
+                        if c["effect"] in names}
+                row["heldout_rms"] = held
+                row["heldout_favours_truth"] = bool(held) and min(held, key=held.get) == effect
             else:
                 added = names[1] in doc1["added"]
                 row["resolved"] = added == (names[1] == effect)
@@ -142,6 +149,10 @@ def main() -> None:
     for kind in ("tie", "untested", "parameter"):
         mine = [q for q in qs if q["kind"] == kind]
         print(f"{kind}: resolved {sum(q['resolved'] for q in mine)}/{len(mine)}")
+    ties = [q for q in qs if q["kind"] == "tie"]
+    if ties:
+        print(f"tie: the truth's held-out RMS the lowest at its step in "
+              f"{sum(q['heldout_favours_truth'] for q in ties)}/{len(ties)}")
     ratios = [q["achieved"] / q["predicted"] for q in qs if q["kind"] != "parameter"
               and q["predicted"] and q["achieved"] is not None]
     if ratios:

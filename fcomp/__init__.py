@@ -28,6 +28,7 @@ name                      what it is
 ``compare``               one model beside records (``Comparison``)
 ``compare_plant``         the plant domain (``PlantComparison``)
 ``diagnose``, ``Diagnosis`` the missing-physics search
+``design``                the next experiment for a diagnosis's open questions
 ``AcceptanceRule``        the thresholds that accept an effect (``Diagnosis(rule=...)``)
 ``generate``              a synthetic record with hidden effects
 ========================= ==========================================================
@@ -48,6 +49,7 @@ if TYPE_CHECKING:
     from fcomp.measurement import Measurement
     from fcomp.modelfile import load_model
     from fcomp.models import FrictionModel, make_model
+    from fcomp.planning import design
     from fcomp.synthetic import generate
     from fcomp.trajectory import friction_along_motion
 
@@ -62,12 +64,12 @@ _API: dict[str, str] = {
     "Comparison": "fcomp.diagnosis", "compare": "fcomp.api",
     "compare_plant": "fcomp.api", "PlantComparison": "fcomp.api",
     "fit": "fcomp.api", "diagnose": "fcomp.api", "simulate": "fcomp.api", "read": "fcomp.api",
-    "generate": "fcomp.synthetic",
+    "generate": "fcomp.synthetic", "design": "fcomp.planning",
 }
 
 __all__ = [
     "AcceptanceRule", "Comparison", "Diagnosis", "Effect", "FrictionFit", "FrictionModel", "Measurement",
-    "PlantComparison", "__version__", "compare", "compare_plant", "diagnose", "fit",
+    "PlantComparison", "__version__", "compare", "compare_plant", "design", "diagnose", "fit",
     "friction_along_motion", "generate", "load_model", "make_effect", "make_model", "read",
     "register_effect", "simulate",
 ]

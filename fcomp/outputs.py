@@ -327,6 +327,7 @@ FOLDER_KINDS: dict[str, tuple[str, ...]] = {
     "study": ("summary.json", "*.html", "fig-*.png", "*.png", "*.svg"),
     "report": ("report.html", "*.png", "*.svg"),
     "demo": ("demo-*.csv", "demo-*.toml", "demo.png"),
+    "programme": ("experiment_*.csv", "experiment_*.toml"),
     "export": ("fcomp_ctrl*.c", "fcomp_ctrl*.h", "example.c", "example", "Makefile", "*.o",
                "libfcomp_ctrl.a", "libfcomp_ctrl.so"),
 }

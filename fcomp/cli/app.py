@@ -39,7 +39,7 @@ from fcomp.cli.signals import STOPPED, Interrupted
 from fcomp.errors import FcompError
 from fcomp.version import __version__
 
-COMMANDS = ("simulate", "fit", "compare", "diagnose", "sweep", "compensate", "study", "plant",
+COMMANDS = ("simulate", "fit", "compare", "diagnose", "design", "sweep", "compensate", "study", "plant",
             "export", "import_", "demo", "list_")
 
 

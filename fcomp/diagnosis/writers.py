@@ -169,6 +169,24 @@ def undetermined(result: DiagnosisResult) -> dict[str, str]:
     return out
 
 
+def tie_models(result: DiagnosisResult) -> list[dict[str, Any]]:
+    """Every tie of an accepted step with each tied effect's model as fitted at that step
+    (the same earlier effects under each; ``fcomp design`` opposes them): ``[{"step",
+    "effects": {effect: model document}}]``."""
+    from fcomp.models.document import model_document
+
+    out: list[dict[str, Any]] = []
+    for i, st in enumerate(result.steps, start=1):
+        if not (st.accepted and st.tie):
+            continue
+        models = {c.effect: model_document(c.fit.model, measurement=c.fit.values)
+                  for c in st.candidates
+                  if c.fit is not None and (c.effect == st.effect or c.effect in st.tie)}
+        if len(models) > 1:
+            out.append({"step": i, "chosen": st.effect, "effects": models})
+    return out
+
+
 def to_dict(result: DiagnosisResult) -> dict[str, Any]:
     """The JSON of ``fcomp diagnose`` (public contract, plus extra keys)."""
     test = result.ground.split.test
@@ -226,4 +244,5 @@ def to_dict(result: DiagnosisResult) -> dict[str, Any]:
         "units": "N",
         "warnings": [w.to_dict() for w in result.warnings],
         "model_file": model_file(result),
+        "tie_models": tie_models(result),
     }

@@ -70,7 +70,7 @@ from fcomp.synthetic.catalogue import (
 )
 from fcomp.synthetic.friction import BASES, check_compatible, truth_friction
 from fcomp.synthetic.laws import G, recording_errors
-from fcomp.synthetic.motion import MOTIONS, plan_record
+from fcomp.synthetic.motion import MOTIONS, Motion, plan_record
 from fcomp.synthetic.records import SyntheticRecord, SyntheticTruth
 from fcomp.synthetic.scales import SCALES, Scale, Sensors, TruthParams, get_scale
 from fcomp.synthetic.sensors import (
@@ -117,6 +117,7 @@ def generate(
     orientation: str = "horizontal",
     motion: str = "standard",
     bristle: float | None = None,
+    plan: Motion | None = None,
 ) -> SyntheticRecord:
     """A synthetic rig measurement with ``hidden`` effects.
 
@@ -211,6 +212,11 @@ def generate(
         soft seal: ``bristle=1.5e4`` on the pneumatic rig (a 25 mm pneumatic seal, a
         presliding range ``Fc/sigma0`` of 2 mm instead of 0.15 mm).
 
+    plan
+        A given fine-grid motion (:class:`fcomp.synthetic.motion.Motion`, e.g. a designed
+        programme recorded: :func:`fcomp.synthetic.motion.along`) instead of the scheduled
+        one; ``experiments``, ``duration`` and ``motion`` are then not used.
+
     The default arguments give the original generator's record, bit for bit.
     """
     if experiments < 1 or duration <= 0 or (rate is not None and rate <= 0) or fine < 1:
@@ -263,10 +269,14 @@ def generate(
     levels = list(sc.pressures if pressures is None else pressures)
     rng = np.random.default_rng(seed)
     dt = 1.0 / rate / fine
-    plan = plan_record(rng, experiments=experiments, duration=duration, dt=dt,
-                       stroke=P.stroke, levels=levels, a_max=sc.a_max,
-                       loop_amplitude=sc.loop_amplitude, motion=motion,
-                       presliding_amplitude=sc.presliding_amplitude)
+    if plan is None:
+        plan = plan_record(rng, experiments=experiments, duration=duration, dt=dt,
+                           stroke=P.stroke, levels=levels, a_max=sc.a_max,
+                           loop_amplitude=sc.loop_amplitude, motion=motion,
+                           presliding_amplitude=sc.presliding_amplitude)
+    elif abs(plan.dt - dt) > 1e-9 * dt:
+        raise FcompError(f"the given plan's fine step {plan.dt:g} s is not 1/(rate*fine) = "
+                         f"{dt:g} s")
     S_mid = float(np.mean(levels))
     # friction: the state is carried from experiment to experiment (same rig, same seal)
     gravity = G * ORIENTATIONS[orient]  # g*s: the weight m*g*s opposes extension

@@ -279,3 +279,27 @@ def plan_record(rng: np.random.Generator, *, experiments: int, duration: float, 
     cat = {k: np.concatenate(v) for k, v in parts.items()}
     return Motion(t=cat["t"], x=cat["x"], v=cat["v"], a=cat["a"], S=cat["S"],
                   experiment=cat["e"], dt=dt)
+
+
+def along(t: Sequence[np.ndarray], x: Sequence[np.ndarray], S: Sequence[np.ndarray],
+          dt: float) -> Motion:
+    """A fine-grid :class:`Motion` through given sampled experiments (position ``x`` at the
+    times ``t``, pressure sum ``S``): ``x`` interpolated linearly onto the grid of step ``dt``,
+    ``v`` and ``a`` its differences; the experiments one after the other with a one-second
+    gap, as :func:`plan_record` lays them out."""
+    parts: dict[str, list[np.ndarray]] = {k: [] for k in ("t", "v", "a", "x", "S", "e")}
+    t_start = 0.0
+    for e, (te, xe, se) in enumerate(zip(t, x, S, strict=True)):
+        grid = te[0] + np.arange(int(round((te[-1] - te[0]) / dt)) + 1) * dt
+        xs = np.interp(grid, te, xe)
+        v = np.diff(xs, append=xs[-1]) / dt
+        parts["t"].append(t_start + grid - te[0])
+        parts["x"].append(xs)
+        parts["v"].append(v)
+        parts["a"].append(np.gradient(v, dt))
+        parts["S"].append(np.interp(grid, te, se))
+        parts["e"].append(np.full(grid.size, e + 1.0))
+        t_start = parts["t"][-1][-1] + 1.0
+    cat = {k: np.concatenate(v) for k, v in parts.items()}
+    return Motion(t=cat["t"], x=cat["x"], v=cat["v"], a=cat["a"], S=cat["S"],
+                  experiment=cat["e"], dt=dt)

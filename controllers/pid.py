@@ -15,8 +15,9 @@ cut-off ``derivative_cutoff`` Hz; backward Euler)::
 
     v_f[k] = (Tf*v_f[k-1] + x[k] - x[k-1]) / (Tf + dt),   Tf = 1/(2*pi*f_d)
 
-and ``F_hat`` the friction estimate (0 for ``pid``) *with its lead through the
-force loop* (:meth:`PIDController.friction_demand`): the force loop of
+and ``F_hat`` the friction estimate (0 for ``pid``), *with its lead through the
+force loop* where :attr:`PIDController.friction_lead` (off by default: the tuning's
+closed forms do not include it; :meth:`PIDController.friction_demand`): the force loop of
 :mod:`controllers.force_to_valve` follows its demand with the first-order lag
 ``1/(1 + s/w_F)``, so an estimate added as it is arrives ``1/w_F`` late (5 ms on
 the hydraulic servo) -- at a reversal, where the friction turns over in tens of
@@ -198,6 +199,12 @@ class PIDController(Controller):
 
     name: ClassVar[str] = "pid"
     uses_friction: ClassVar[bool] = False
+    #: Whether the friction estimate is fed with its lead through the force loop
+    #: (:meth:`friction_demand`). Off: the tuning's closed forms of the compensators'
+    #: paths (:mod:`controllers.loop_analysis.observer`) do not include the lead's state,
+    #: so with it on the loop as it runs would differ from the loop the tuning derived
+    #: (``fcomp plant check`` analyses the step as coded either way).
+    friction_lead: ClassVar[bool] = False
     options: ClassVar[tuple[str, ...]] = (
         "rate", "bandwidth", "kp", "ki", "kd", "derivative_cutoff", "kt", "force_bandwidth",
         "velocity_compensation",
@@ -274,11 +281,13 @@ class PIDController(Controller):
         return v_f
 
     def friction_demand(self, F_hat: float) -> float:
-        """The friction estimate as force demand: ``F_hat`` and its lead through the force
-        loop, ``(F_hat - F_hat_prev)/(dt*w_F)`` (module docstring; no lead on the first
-        sample after a reset)."""
+        """The friction estimate as force demand: ``F_hat`` and, where :attr:`friction_lead`,
+        its lead through the force loop, ``(F_hat - F_hat_prev)/(dt*w_F)`` (module
+        docstring; no lead on the first sample after a reset)."""
         prev = F_hat if self._F_prev is None else self._F_prev
-        self._F_prev = F_hat
+        self._F_prev = F_hat  # also marks the controller as stepped since its reset
+        if not self.friction_lead:
+            return F_hat
         return F_hat + (F_hat - prev) / (self.dt * self.valve.bandwidth)
 
     # contract ---------------------------------------------------------------------

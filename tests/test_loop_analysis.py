@@ -164,7 +164,7 @@ def _controller_state(ctrl) -> tuple[callable, callable]:
             ctrl._u_prev = float(v[n])
 
         parts.append((n + 1, lambda: list(kf.x[:, 0]) + [ctrl._u_prev], set_ekf))
-    if ctrl.uses_friction:  # the friction estimate's lead: the previous estimate, last
+    if ctrl.uses_friction and ctrl.friction_lead:  # the estimate's lead: the previous one
         parts.append((1, lambda: [0.0 if ctrl._F_prev is None else ctrl._F_prev],
                       lambda v: setattr(ctrl, "_F_prev", float(v[0]))))
 

@@ -58,7 +58,7 @@ def python_state(ctrl: Any) -> np.ndarray:
                   np.asarray(kf.P, dtype=float).ravel(order="F"), np.array([ctrl._u_prev])]
     elif isinstance(ctrl, PIDFeedforwardController) and ctrl.dynamic:
         parts += [np.asarray(ctrl.x_ff, dtype=float).ravel(), np.array([ctrl._side])]
-    if ctrl.uses_friction:
+    if ctrl.uses_friction and ctrl.friction_lead:
         parts.append(np.array([0.0 if ctrl._F_prev is None else ctrl._F_prev]))
     return np.concatenate(parts)
 

@@ -252,7 +252,7 @@ def _pid_law(ctrl: Any) -> _Law:
         note = "PID + static friction feedforward + force-to-valve inversion"
     else:
         note = "PID + force-to-valve inversion"
-    lead = bool(ctrl.uses_friction)
+    lead = bool(ctrl.uses_friction and ctrl.friction_lead)
     if lead:  # PIDController.friction_demand: the previous estimate, last
         layout += [("F_prev", 1)]
     state0 = np.zeros(sum(k for _, k in layout))

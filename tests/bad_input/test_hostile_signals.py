@@ -11,9 +11,9 @@ exist", "the first signal was taken" (the process now ignores further ones).
 from __future__ import annotations
 
 import contextlib
-import multiprocessing.context
 import os
 import signal
+import subprocess
 import sys
 import time
 from collections.abc import Iterator
@@ -116,28 +116,53 @@ def _ended(procs: list, seconds: float = 30.0) -> bool:  # type: ignore[type-arg
     return not any(p.is_alive() for p in procs)
 
 
-def test_a_signal_as_a_pool_starts_a_worker_does_not_leave_it_running(
-        monkeypatch: pytest.MonkeyPatch) -> None:
+_POOL_STARTS = """
+import multiprocessing.context, os, signal, time
+from fcomp.cli import signals
+from fcomp.cli.signals import Terminated
+from fcomp.parallel import process_pool, stopping
+
+started = []
+original = multiprocessing.context.ForkProcess.start
+
+
+def start_then_signal(self):
+    original(self)
+    started.append(self)
+    os.kill(os.getpid(), signal.SIGTERM)  # lands right after the worker's start
+
+
+multiprocessing.context.ForkProcess.start = start_then_signal
+signals.install()
+try:
+    with stopping(process_pool(2)) as pool:
+        pool.submit(time.sleep, 30.0).result()
+    print("not terminated")
+except Terminated:
+    print("terminated")
+end = time.monotonic() + 30.0
+for p in started:
+    p.join(max(0.0, end - time.monotonic()))
+print("started", len(started), "alive", sum(p.is_alive() for p in started))
+"""
+
+
+def test_a_signal_as_a_pool_starts_a_worker_does_not_leave_it_running() -> None:
     """SIGTERM landing just after a worker process was started but before the pool had it
     on its list: the worker was not ended, and the command hung at exit waiting for it
     (the closing note of issue 27). The pool now holds the signals while it starts and
-    registers a worker, so the stop ends every worker it started."""
-    from fcomp.cli.signals import Terminated
-    from fcomp.parallel import process_pool, stopping
-
-    started: list[multiprocessing.process.BaseProcess] = []
-    original = multiprocessing.context.ForkProcess.start
-
-    def start_then_signal(self: multiprocessing.process.BaseProcess) -> None:
-        original(self)
-        started.append(self)
-        os.kill(os.getpid(), signal.SIGTERM)  # lands right after the worker's start
-
-    monkeypatch.setattr(multiprocessing.context.ForkProcess, "start", start_then_signal)
-    with _fcomp_signals(), pytest.raises(Terminated), stopping(process_pool(2)) as pool:
-        pool.submit(_sleep, 30.0).result()
-    assert started, "no worker was started"
-    assert _ended(started), "a worker started as the signal landed is still running"
+    registers a worker, so the stop ends every worker it started. Run in a fresh
+    interpreter: the pool's start method and the signal handling are process-wide, and a
+    test runner's worker process carries what earlier tests left there."""
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    proc = subprocess.run([sys.executable, "-c", _POOL_STARTS], env=env, capture_output=True,
+                          text=True, timeout=180)
+    lines = proc.stdout.split()
+    assert "terminated" in proc.stdout.splitlines(), (proc.stdout, proc.stderr)
+    started = int(lines[lines.index("started") + 1])
+    alive = int(lines[lines.index("alive") + 1])
+    assert started >= 1, "no worker was started"
+    assert alive == 0, "a worker started as the signal landed is still running"
 
 
 def test_the_stop_runs_whole_through_a_second_signal(monkeypatch: pytest.MonkeyPatch) -> None:

@@ -23,6 +23,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers.plant_files import edited as _edit
 
 from controllers import make_controller
 from controllers.base import Reference
@@ -43,7 +44,7 @@ from fcomp.models import make_model
 from plants.check import frictionless
 from plants.equilibrium import equilibrium
 from plants.linearise import Linearisation, linearise
-from plants.planfile import PlantFileError, builtin_path, builtin_plant_file, read_plant_file
+from plants.planfile import PlantFileError, builtin_plant_file, read_plant_file
 from plants.uncertainty import Uncertainty
 
 KINDS = ("hydraulic", "pneumatic")
@@ -406,16 +407,6 @@ def test_the_harness_applies_the_computation_delay() -> None:
 
 
 # ------------------------------------------------------------------ plant files
-def _edit(kind: str, tmp_path: Path, *changes: tuple[str, str]) -> Path:
-    text = builtin_path(kind).read_text()
-    for old, new in changes:
-        assert old in text, old
-        text = text.replace(old, new)
-    path = tmp_path / f"{kind}-edited.toml"
-    path.write_text(text)
-    return path
-
-
 def test_uncertainty_and_delay_are_read_with_their_defaults(tmp_path: Path) -> None:
     pf = builtin_plant_file("hydraulic")
     assert pf.control["delay"] == 1 and pf.ranges == Uncertainty.default("hydraulic")

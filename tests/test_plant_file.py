@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers.plant_files import edited as _edit
 
 from controllers.harness import LoopConfig, build_loop
 from controllers.plant_model import ControlModel, plant_settings
@@ -56,16 +57,6 @@ def test_the_printed_template_loads(kind: str, tmp_path: Path, capsys) -> None:
     path = tmp_path / "mine.toml"
     path.write_text(text)
     assert read_plant_file(path).values == builtin_plant_file(kind).values
-
-
-def _edit(kind: str, tmp_path: Path, *changes: tuple[str, str]) -> Path:
-    text = builtin_path(kind).read_text()
-    for old, new in changes:
-        assert old in text, old
-        text = text.replace(old, new)
-    path = tmp_path / f"{kind}-edited.toml"
-    path.write_text(text)
-    return path
 
 
 def test_a_valve_rating_gives_the_orifice_flow_gain(tmp_path: Path) -> None:

@@ -221,7 +221,45 @@ def pool_context(spawn: bool = False) -> multiprocessing.context.BaseContext:
     this platform's start method) with workers that never run the caller's ``__main__``
     (:class:`_MainHidden`); ``fork`` copies the parent and runs nothing again."""
     method = "spawn" if spawn else multiprocessing.get_start_method()
+    if method != "fork":
+        _quiet_tracker()
     return _CONTEXTS.get(method) or multiprocessing.get_context(method)
+
+
+def _quiet_tracker() -> None:
+    """Start :mod:`multiprocessing`'s resource tracker, if it is not running yet, with its
+    standard error on the null device.
+
+    Workers started fresh (``spawn``, ``forkserver``) register their queues' semaphores
+    with the tracker, and a worker fcomp ends on purpose (a baseline check found not
+    needed, a command stopped by Ctrl-C: :func:`stop`) cannot unregister them. The tracker
+    unlinks them once every process that shares it has ended -- that is its job -- and
+    then prints ``UserWarning: resource_tracker: There appear to be 5 leaked semaphore
+    objects`` on the command's standard error, after its answer (seen at the end of every
+    ``diagnose --jobs 2`` whose check was not needed). Those lines are multiprocessing's
+    bookkeeping of a designed end, not the user's concern; the unlinking still happens.
+    A tracker already running (the caller's own) is left as it is."""
+    from multiprocessing import resource_tracker
+
+    tracker = resource_tracker._resource_tracker
+    if getattr(tracker, "_fd", None) is not None:
+        return
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+    except OSError:
+        return
+    saved = -1
+    try:
+        saved = os.dup(2)
+        os.dup2(devnull, 2)
+        resource_tracker.ensure_running()
+    except OSError:
+        pass
+    finally:
+        if saved >= 0:
+            os.dup2(saved, 2)
+            os.close(saved)
+        os.close(devnull)
 
 
 def fresh_workers(pool: Executor | None) -> bool:
@@ -323,7 +361,7 @@ def stop(pool: Executor) -> None:
     procs = list((getattr(pool, "_processes", None) or {}).values())
     pool.shutdown(wait=False, cancel_futures=True)
     pids = [p.pid for p in procs if p.is_alive() and p.pid is not None]
-    for pid in [*descendants(pids), *pids]:  # the innermost first: no new orphan meanwhile
+    for pid in [*(d for d in descendants(pids) if not _tracker(d)), *pids]:  # the innermost first: no new orphan meanwhile
         with suppress(ProcessLookupError, PermissionError):  # ended meanwhile, or not ours
             os.kill(pid, signal.SIGTERM)
 
@@ -351,10 +389,10 @@ def end_children(grace: float = END_GRACE, keep: Iterable[int] = ()) -> list[int
 
     multiprocessing.active_children()  # reaps the ended ones
     spared = {os.getpid(), *keep}
-    pids = [p for p in descendants([os.getpid()]) if p not in spared]
+    pids = [p for p in descendants([os.getpid()]) if p not in spared and not _tracker(p)]
     if os.getpgrp() == os.getpid():  # a worker's worker whose parent ended first
         pids += [p for p in group_members(os.getpid())
-                 if p not in pids and p not in spared and _ours(p)]
+                 if p not in pids and p not in spared and _ours(p) and not _tracker(p)]
     for pid in pids:
         with suppress(ProcessLookupError, PermissionError):
             os.kill(pid, signal.SIGTERM)
@@ -416,6 +454,19 @@ def _ours(pid: int) -> bool:
     except OSError:
         return False
     return theirs == own or b"multiprocessing" in theirs
+
+
+def _tracker(pid: int) -> bool:
+    """Whether ``pid`` is :mod:`multiprocessing`'s resource tracker. It is spared: it ignores
+    SIGTERM, so it would be killed -- and the next semaphore released at this process's
+    exit would start a fresh tracker that prints a ``KeyError`` traceback for each name it
+    never registered (seen after Ctrl-C in a diagnosis). Left alone, it ends by itself
+    once the processes that share it have, unlinking whatever they left."""
+    try:
+        with open(f"/proc/{pid}/cmdline", "rb") as f:
+            return b"multiprocessing.resource_tracker" in f.read()
+    except OSError:
+        return False
 
 
 def group_members(pgid: int) -> list[int]:

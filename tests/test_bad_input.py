@@ -55,6 +55,7 @@ from helpers.processes import (
     children,
     cmdline,
     env,
+    finish,
     group,
     group_gone,
     send,
@@ -1099,7 +1100,7 @@ def test_ctrl_c_during_parallel_work_is_one_line(tmp_path: Path) -> None:
     assert wait_for(lambda: len(children(proc.pid)) >= 2, proc), "no workers started"
     sent = time.monotonic()
     os.killpg(proc.pid, signal.SIGINT)
-    out, err = proc.communicate(timeout=PATIENCE)
+    out, err = finish(proc)
     print(f"stopped {time.monotonic() - sent:.1f} s after Ctrl-C")
     assert proc.returncode == 130, err.decode()
     assert err.decode().strip() == "fcomp: interrupted" and out == b""
@@ -1158,7 +1159,7 @@ def test_a_signal_stops_a_long_command_at_once(tmp_path: Path, label: str, args:
     sent = time.monotonic()
     send(proc, sig)
     try:
-        out, err = proc.communicate(timeout=PATIENCE)
+        out, err = finish(proc)
     finally:
         gone = group_gone(proc.pid)
     print(f"{label}: stopped {time.monotonic() - sent:.2f} s after {signal.Signals(sig).name}")

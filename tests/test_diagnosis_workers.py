@@ -66,3 +66,26 @@ def test_the_longest_refits_go_to_the_workers_first(record) -> None:
     assert longest_first(props, seconds) == [0, 2, 1]     # by the time each took
     del seconds[("position-dependence", props[2].form)]
     assert longest_first(props, seconds) == [2, 0, 1]     # one not timed yet goes first
+
+
+def test_a_parallel_diagnosis_leaves_nothing_of_multiprocessing_on_stderr(record, tmp_path
+                                                                         ) -> None:
+    """``diagnose --jobs 2``: the baseline check starts beside the search in a process of its
+    own with spawned workers, and is ended when the first answer needs no check. Ending it
+    left its queues' semaphores to multiprocessing's resource tracker, which printed
+    ``UserWarning: resource_tracker: There appear to be 5 leaked semaphore objects`` after
+    the command's answer, on every such run. Standard error holds the command's own lines
+    only."""
+    import subprocess
+    import sys
+
+    record.write(tmp_path / "r.csv")
+    proc = subprocess.run(
+        [sys.executable, "-m", "fcomp.cli.main", "diagnose", "r.csv", "--friction", "lugre",
+         "--jobs", "2", "--no-progress", "--json", "d.json"],
+        cwd=tmp_path, capture_output=True, text=True, timeout=900)
+    assert proc.returncode == 0, proc.stderr
+    assert "pressure-dependence" in proc.stdout
+    strays = [line for line in proc.stderr.splitlines()
+              if not line.startswith(("fcomp: ", "  "))]
+    assert strays == [], proc.stderr

@@ -119,3 +119,32 @@ def send(proc: subprocess.Popen, sig: int) -> None:
             os.killpg(proc.pid, sig)
         else:
             proc.send_signal(sig)
+
+
+def finish(proc: subprocess.Popen, limit: float = PATIENCE) -> tuple[bytes, bytes]:
+    """``proc.communicate()`` within ``limit`` s; past it, a failure that shows what was left
+    -- each process of its group with its state, the kernel function it waits in and its
+    command line, and what the command wrote so far -- rather than a bare timeout (a hang
+    seen once on a loaded machine and never again cannot be reproduced: its evidence is
+    all there is)."""
+    from fcomp.parallel import processes
+
+    try:
+        return proc.communicate(timeout=limit)
+    except subprocess.TimeoutExpired:
+        table = processes()
+        rows = []
+        for pid in [proc.pid, *group(proc.pid)]:
+            with contextlib.suppress(OSError):
+                wchan = Path(f"/proc/{pid}/wchan").read_text()
+                state = table.get(pid, ("?", 0, 0))
+                rows.append(f"  {pid} ppid {state[1]} {state[0]} {wchan or '-'}: "
+                            f"{cmdline(pid)[:160]}")
+        proc.kill()
+        with contextlib.suppress(OSError):
+            os.killpg(proc.pid, signal.SIGKILL)
+        out, err = proc.communicate()
+        raise AssertionError(
+            f"not ended after {limit:.0f} s; left:\n" + "\n".join(rows)
+            + f"\nstderr: {err.decode(errors='replace')[-2000:]}"
+            + f"\nstdout: {out.decode(errors='replace')[-500:]}") from None

@@ -532,20 +532,9 @@ def _range_warnings(warns: list[dict[str, Any]], pf: Any, cast: Sequence[Truth],
                     fast: bool, free_force: float) -> None:
     """Models run outside their fitted position window; true frictions the plant can hardly
     move (:func:`controllers.model_range.range_warnings`)."""
-    from controllers.model_range import Span, range_warnings
-    from controllers.tasks import get_task
+    from controllers.model_range import range_warnings, task_span
 
-    stroke = float(pf.values["stroke"])
-    lo, hi, vmax = math.inf, -math.inf, 0.0
-    for tk in tasks:
-        t_obj = get_task(tk) if isinstance(tk, str) else tk
-        t = np.linspace(0.0, t_obj.run_duration(fast), 2001)
-        r, dr, _ = t_obj.sample(t)
-        x0 = t_obj.start_position(stroke)
-        lo, hi = min(lo, x0 + float(r.min())), max(hi, x0 + float(r.max()))
-        vmax = max(vmax, float(np.abs(dr).max()))
-    p = 0.5 * (float(pf.values.get("ps", 0.0)) - float(pf.values.get("p_atm", 101325.0)))
-    span = Span(lo, hi, vmax, max(p, 0.0))
+    span = task_span(pf, tasks, fast)
     for truth in cast:
         for code, msg in range_warnings(truth.label, truth.model, span, truth=True,
                                         free_force=free_force):

@@ -2,33 +2,37 @@
 
 A model fitted on one record describes the seal over that record's positions,
 speeds and pressures. A closed loop on another plant file runs it wherever its
-tasks go: a ``position-dependence`` fitted on a 25 mm O-ring record over
-``x`` in [-37, 2.7] mm is a cubic in ``x`` that, at 150 mm on a 300 mm
-axis, multiplies the friction by some 200 (5 N becomes 1 kN). Whatever a
-comparison then finds is a property of the extrapolated polynomial, not of the
-seal.
+tasks go (:func:`loop_use`, :func:`task_span`): a ``position-dependence`` fitted on a
+25 mm O-ring record over ``x`` in [-37, 2.7] mm is a cubic in ``x`` that, at
+150 mm on a 300 mm axis, multiplies the friction by some 200 (5 N becomes 1 kN).
+Whatever a comparison then finds is a property of the extrapolated polynomial, not of
+the seal.
 
-:func:`range_warnings` says so, in two checks:
+Before any run of ``sweep``, ``compensate`` and ``export``, three checks say so:
 
-* **outside the fitted window**: a model whose effects are configured for a
-  position window (``x_min``, ``x_max``: the record's range the diagnosis
-  gave ``position-dependence``) and the tasks' positions outside it, with the
-  steady friction level there against its largest inside;
-* **friction beyond the force**: a true friction whose steady level at the
-  tasks' positions and speeds reaches :data:`FORCE_SHARE` of the force the
-  actuator has left after holding its load -- a plant that can hardly move.
-
-Model files that carry the ranges they were fitted on (speed, pressure)
-can add their own windows here: a check reads only :func:`position_window`.
+* **beyond the ranges a model file was fitted on** (:func:`fitted_range_warnings`):
+  the speeds, pressures and positions the file records (``fitted_range``) against
+  those the loops meet, by :func:`fcomp.modelfile.check_range`; a model whose law is
+  meaningless there is refused (:class:`fcomp.modelfile.OutOfRangeError`);
+* **outside the fitted window** (:func:`range_warnings`): a model whose effects are
+  configured for a position window (``x_min``, ``x_max``: the record's range the
+  diagnosis gave ``position-dependence``) and the tasks' positions outside it, with
+  the steady friction level there against its largest inside;
+* **friction beyond the force** (:func:`range_warnings`): a true friction whose
+  steady level at the tasks' positions and speeds reaches :data:`FORCE_SHARE` of the
+  force the actuator has left after holding its load -- a plant that can hardly move.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
+from controllers.tasks import Task, get_task
 from fcomp.models import FrictionModel
 
 #: Share of the actuator's free force (after the load) a friction level may take.
@@ -47,6 +51,40 @@ class Span:
     x_hi: float
     v_max: float
     p: float = 0.0
+
+
+def loop_use(plant_file: Any, tasks: Sequence[Task | str], fast: bool
+             ) -> dict[str, tuple[float, float]]:
+    """The positions (m), velocities (m/s) and gauge chamber pressures (Pa) a closed loop on
+    ``plant_file`` (a :class:`~plants.planfile.PlantFile`) meets on ``tasks``: the
+    references' absolute positions and speeds, and the pressures between the valve's
+    return and its supply."""
+    stroke = float(plant_file.values["stroke"])
+    xs: list[float] = []
+    vs: list[float] = []
+    for task in (get_task(t) if isinstance(t, str) else t for t in tasks):
+        t = np.linspace(0.0, task.run_duration(fast), 2001)
+        r, dr, _ = task.sample(t)
+        x = task.start_position(stroke) + r
+        xs += [float(x.min()), float(x.max())]
+        vs += [float(dr.min()), float(dr.max())]
+    v = plant_file.values
+    p_atm = float(v["p_atm"])
+    low = float(v.get("pt", p_atm)) if plant_file.kind == "hydraulic" else p_atm
+    out = {"p": (low - p_atm, float(v["ps"]) - p_atm)}
+    if xs:
+        out["x"] = (min(xs), max(xs))
+        out["v"] = (min(vs), max(vs))
+    return out
+
+
+def task_span(plant_file: Any, tasks: Sequence[Task | str], fast: bool) -> Span:
+    """The :class:`Span` of :func:`loop_use`: the positions and the largest speed the tasks
+    reach, and the chambers' gauge pressure halfway between the valve's return and supply."""
+    use = loop_use(plant_file, tasks, fast)
+    (x_lo, x_hi), (v_lo, v_hi) = use.get("x", (0.0, 0.0)), use.get("v", (0.0, 0.0))
+    p_lo, p_hi = use["p"]
+    return Span(x_lo, x_hi, max(abs(v_lo), abs(v_hi)), max(0.5 * (p_lo + p_hi), 0.0))
 
 
 def position_window(model: FrictionModel) -> tuple[float, float] | None:
@@ -101,4 +139,31 @@ def range_warnings(label: str, model: FrictionModel, span: Span, *, truth: bool,
     return out
 
 
-__all__ = ["FORCE_SHARE", "Span", "position_window", "range_warnings", "steady_level"]
+def fitted_range_warnings(specs: Iterable[tuple[str, Any]], plant_file: Any,
+                          tasks: Sequence[Task | str], fast: bool, effects: str | None = None
+                          ) -> list[tuple[str, str]]:
+    """``(option, line)`` for each model file of ``specs`` (``(option, spec)`` pairs; a
+    spec that is not a ``.json`` file is skipped) used by the loops beyond the ranges it
+    was fitted on (:func:`fcomp.modelfile.check_range`).
+
+    Raises
+    ------
+    fcomp.modelfile.OutOfRangeError
+        A model whose law is meaningless where the loops take it.
+    """
+    from fcomp.modelfile import check_range, is_model_file, read_model
+
+    use = loop_use(plant_file, tasks, fast)
+    out: list[tuple[str, str]] = []
+    seen: set[str] = set()
+    for option, spec in specs:
+        if not isinstance(spec, str) or not is_model_file(spec) or spec in seen:
+            continue
+        seen.add(spec)
+        model = read_model(spec, effects).model
+        out += [(option, line) for line in check_range(model, label=spec, **use)]
+    return out
+
+
+__all__ = ["FORCE_SHARE", "Span", "fitted_range_warnings", "loop_use", "position_window",
+           "range_warnings", "steady_level", "task_span"]

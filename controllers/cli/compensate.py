@@ -213,13 +213,13 @@ def run(args: argparse.Namespace) -> int:
 
 def _fitted_ranges(args: argparse.Namespace, plant: Any, models: list[str]) -> None:
     """Warn for each model file used beyond the ranges it was fitted on, before any run
-    (:func:`controllers.loop_range.range_warnings`)."""
+    (:func:`controllers.model_range.fitted_range_warnings`)."""
     from controllers.compensate import read_reference
-    from controllers.loop_range import range_warnings
+    from controllers.model_range import fitted_range_warnings
 
     tasks = ([read_reference(args.reference, plant.values["stroke"])] if args.reference
              else [TASKS.get(args.task)] if args.task else [TASKS.get(n) for n in TASKS.names()])
-    for option, line in range_warnings([("--friction", args.friction),
+    for option, line in fitted_range_warnings([("--friction", args.friction),
                                         *(("--controller-friction", m) for m in models)],
                                        plant, tasks, args.fast, args.effects):
         common.warn("fitted-range", line, option)

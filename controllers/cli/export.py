@@ -56,13 +56,13 @@ def control_model(args: argparse.Namespace) -> Any:
 
 def _fitted_range(args: argparse.Namespace, model: Any) -> None:
     """Warn when the model file is used beyond the ranges it was fitted on (before the
-    export: :func:`controllers.loop_range.range_warnings`)."""
-    from controllers.loop_range import range_warnings
+    export: :func:`controllers.model_range.fitted_range_warnings`)."""
+    from controllers.model_range import fitted_range_warnings
     from plants.planfile import builtin_plant_file
 
     plant_file = (read_plant_file(args.plant_params) if args.plant_params is not None
                   else builtin_plant_file(model.plant_name))
-    for option, line in range_warnings([("--friction", args.friction)], plant_file,
+    for option, line in fitted_range_warnings([("--friction", args.friction)], plant_file,
                                        [TASKS.get(args.task)], False, args.effects):
         common.warn("fitted-range", line, option)
 

@@ -13,7 +13,7 @@ import numpy as np
 from controllers import CONTROLLERS
 from controllers.conclusions import of_sweep
 from controllers.harness import LoopConfig, control_model, friction_label
-from controllers.loop_range import range_warnings
+from controllers.model_range import fitted_range_warnings
 from controllers.robustness import Grid, Sweep, distributions, draw_distribution, run_jobs
 from controllers.tasks import TASKS
 from fcomp import figstyle as fs
@@ -80,7 +80,7 @@ def _plan(args: argparse.Namespace) -> Any:
         _ = control_model(base).tuning
     names = common.name_list(args.controller_friction, "--controller-friction") or []
     frictions = tuple(_friction(f, "--controller-friction", args.effects) for f in names)
-    for option, line in range_warnings(  # the models' fitted ranges, before any run
+    for option, line in fitted_range_warnings(  # the models' fitted ranges, before any run
             [("--friction", args.friction), *(("--controller-friction", f) for f in names)],
             plant_file or builtin_plant_file(plant), [TASKS.get(args.task)], args.fast,
             args.effects):

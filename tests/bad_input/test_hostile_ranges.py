@@ -121,9 +121,9 @@ def test_compare_and_simulate_warn_beyond_the_range(lab: Path,
 
 
 def test_the_loop_use_of_a_task(lab: Path) -> None:
-    """What a closed loop asks of a model (controllers.loop_range): the tasks' absolute
+    """What a closed loop asks of a model (controllers.model_range): the tasks' absolute
     positions and speeds on the plant, the pressures between return and supply."""
-    from controllers.loop_range import loop_use
+    from controllers.model_range import loop_use
     from controllers.tasks import TASKS
     from plants.planfile import builtin_plant_file
 

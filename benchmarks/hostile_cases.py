@@ -62,6 +62,7 @@ import numpy as np
 HERE = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(HERE / "tests"))  # the suite's process helpers, shared with the runner
 from helpers import processes  # noqa: E402
+from helpers.design_inputs import RIG as DESIGN_RIG  # noqa: E402
 
 
 # ------------------------------------------------------------------ cases
@@ -168,7 +169,7 @@ def write_lab(lab: Path, root: Path) -> None:
         "empty.txt": "",
     }
     for name, content in {**files, **plant_files(hyd, pneu), **model_files(),
-                          **reference_files()}.items():
+                          **reference_files(), **design_files(root)}.items():
         p = lab / name
         p.parent.mkdir(parents=True, exist_ok=True)
         if isinstance(content, bytes):
@@ -492,6 +493,86 @@ def reference_files() -> dict[str, str | bytes]:
         "r_tiny.csv": "t,x_ref\n0,0.1\n1e-300,0.1\n",
         "r_bigint.csv": "t,x_ref\n0,0.1\n" + "1" + "0" * 5000 + ",0.1\n",
     }
+
+
+# ---- fcomp design: a diagnosis with open questions and a rig ------------------------
+#: Rig files: stem -> (edit of DESIGN_RIG (old, new), what the refusal names beside the file).
+RIGS: dict[str, tuple[tuple[str, str], str]] = {
+    "stroke-nan": (("stroke = 0.2", "stroke = nan"), "stroke"),
+    "stroke-inf": (("stroke = 0.2", "stroke = inf"), "stroke"),
+    "stroke-huge": (("stroke = 0.2", "stroke = 1e308"), "stroke"),
+    "stroke-text": (("stroke = 0.2", 'stroke = "long"'), "stroke"),
+    "stroke-list": (("stroke = 0.2", "stroke = [0.2]"), "stroke"),
+    "stroke-bigint": (("stroke = 0.2", "stroke = 1" + "0" * 400), "stroke"),
+    "speed-negative": (("speed_max = 0.2", "speed_max = -0.2"), "speed_max"),
+    "speed-huge": (("speed_max = 0.2", "speed_max = 1e300"), "speed_max"),
+    "accel-zero": (("accel_max = 4.0", "accel_max = 0"), "accel_max"),
+    "accel-huge": (("accel_max = 4.0", "accel_max = 1e300"), "accel_max"),
+    "rate-huge": (("rate = 500.0", "rate = 1e12"), "rate"),
+    "rate-inf": (("rate = 500.0", "rate = inf"), "rate"),
+    "duration-huge": (("duration_max = 20.0", "duration_max = 1e12"), "duration_max"),
+    "duration-zero": (("duration_max = 20.0", "duration_max = 0"), "duration_max"),
+    "pressure-crossed": (("pressure_max = 2.5e5", "pressure_max = 1.0e5"), "pressure"),
+    "pressure-nan": (("pressure_min = 1.5e5", "pressure_min = nan"), "pressure_min"),
+    "pressure-negative": (("pressure_min = 1.5e5", "pressure_min = -1e7"), "pressure_min"),
+    "pressure-levels-empty": (("pressure_min = 1.5e5\npressure_max = 2.5e5",
+                               "pressure_levels = []"), "pressure_levels"),
+    "pressure-levels-text": (("pressure_min = 1.5e5\npressure_max = 2.5e5",
+                              'pressure_levels = ["high"]'), "pressure_levels"),
+    "pressure-both": (("pressure_max = 2.5e5", "pressure_max = 2.5e5\n"
+                       "pressure_levels = [2e5]"), "pressure"),
+    "noise-negative": (("rate = 500.0", "rate = 500.0\nnoise = -1"), "noise"),
+    "bore-zero": (("bore = 0.032", "bore = 0"), "bore"),
+    "rod-beyond-bore": (("rod = 0.012", "rod = 0.05"), "rod"),
+    "mass-negative": (("mass = 1.2", "mass = -1.2"), "mass"),
+    "orientation-bad": (('"horizontal"', '"sideways"'), "orientation"),
+    "limits-table-missing": (("[limits]", "[limitz]"), "limit"),
+    "unknown-key": (("rate = 500.0", "rate = 500.0\nspeed = 3"), "speed"),
+    "duplicate-key": (("stroke = 0.2", "stroke = 0.2\nstroke = 0.3"), ""),
+}
+
+#: Diagnosis JSON files: stem -> (the text, or an edit of the good one: key -> value).
+DIAGS: dict[str, str | dict[str, Any]] = {
+    "notjson": "this is not JSON\n",
+    "empty": "",
+    "array": "[1, 2]",
+    "deep": "[" * 100000 + "]" * 100000,
+    "bigint": '{"verdict": "explained", "noise_floor": 1' + "0" * 5000 + "}",
+    "noise-nan": {"noise_floor": float("nan")},
+    "noise-negative": {"noise_floor": -0.05},
+    "noise-huge": {"noise_floor": 1e308},
+    "model-missing": {"model_file": None},
+    "model-unknown": {"model_file": {"format": "fcomp-model", "version": 1,
+                                     "model": "no-such-model"}},
+    "ties-text": {"ties": "area-error"},
+    "ties-unknown": {"ties": [["no-such-effect", "other-effect"]]},
+    "skipped-list": {"skipped": ["pressure-dependence"]},
+    "skipped-unknown": {"skipped": {"no-such-effect": "why"}},
+}
+
+
+def design_files(root: Path) -> dict[str, str | bytes]:
+    """``diag.json`` (a diagnosis by hand, the JSON's fields: LuGre, pressure dependence
+    untested at one level; the model document written by the tree under test), the rig
+    ``rig.toml`` and their hostile variants ``rig_STEM.toml`` and ``diag_STEM.json``."""
+    code = ("import json, sys; from fcomp.models import make_model; "
+            "from fcomp.models.document import model_document; "
+            "m = make_model('lugre', params='canudas1995'); "
+            "json.dump(model_document(m, source={'data': []}), sys.stdout)")
+    model = json.loads(subprocess.run([sys.executable, "-c", code], check=True, text=True,
+                                      capture_output=True, env=processes.env()
+                                      | {"PYTHONPATH": str(root)}).stdout)
+    good = {"verdict": "explained", "noise_floor": 0.05, "added": [], "ties": [],
+            "skipped": {"pressure-dependence": "needs p1: p1 + p2 hardly varies"},
+            "warnings": [], "signals": {"force": "F"}, "model_file": model}
+    out: dict[str, str | bytes] = {"diag.json": json.dumps(good), "rig.toml": DESIGN_RIG,
+                                   "rig_empty.toml": "", "rig_binary.toml": b"\x00\xff\x01"}
+    for stem, (edit, _) in RIGS.items():
+        assert edit[0] in DESIGN_RIG, stem
+        out[f"rig_{stem}.toml"] = DESIGN_RIG.replace(*edit)
+    for stem, d in DIAGS.items():
+        out[f"diag_{stem}.json"] = d if isinstance(d, str) else json.dumps({**good, **d})
+    return out
 
 
 # ------------------------------------------------------------------ the case table
@@ -849,6 +930,53 @@ def cases() -> list[Case]:
     add(Case("fit-json-disk-full", f"{FIT} --json /dev/full", "refuse", ("/dev/full",), "8"))
     add(Case("compensate-reference-deep", COMP.replace("--task steps ", "")
              + " --reference m_deep_list.json", "refuse", ("m_deep_list.json",), ""))
+    # ---- fcomp design (issue 40): rig files, diagnoses, options, outputs, signals ----
+    DESIGN = "design diag.json --rig rig.toml -o prog"
+    add(Case("design-ok", f"{DESIGN} --json d.json", "ok", (), owner="design",
+             check=lambda folder, out, err: None if list((folder / "prog").glob("*.csv"))
+             and (folder / "d.json").is_file() else "no programme written"))
+    add(Case("design-template", "design --template", "ok", (), owner="design",
+             check=lambda folder, out, err: None if "[limits]" in out else "no template"))
+    for stem, (_, what) in RIGS.items():
+        add(Case(f"design-rig-{stem}", DESIGN.replace("rig.toml", f"rig_{stem}.toml"),
+                 "refuse", (f"rig_{stem}.toml", *((what,) if what else ())), owner="design"))
+    for given, wrong in (("rig.toml", ("rig_empty.toml", "rig_binary.toml", "nope.toml", "mine",
+                                       "hyd.toml")),
+                         ("diag.json", ("nope.json", "mine", "lugre.json", "rec.csv"))):
+        for name in wrong:  # no file, a folder, a file of another kind
+            add(Case(f"design-{given.split('.')[0]}-given-{name.replace('.', '-')}",
+                     DESIGN.replace(given, name), "refuse", (name,), owner="design"))
+    for missing, what in (("--rig rig.toml ", "--rig"), ("-o prog", "-o")):
+        add(Case(f"design-without-{what.lstrip('-')}", DESIGN.replace(missing, "").strip(),
+                 "refuse", (what,), owner="design"))
+    for stem in DIAGS:  # an effect fcomp does not know: left out, said (an effects file's?)
+        expect, match = {"ties-unknown": ("warn", ("no-such-effect",)),
+                         "skipped-unknown": ("refuse", (f"diag_{stem}.json", "no-such-effect"))
+                         }.get(stem, ("refuse", (f"diag_{stem}.json",)))
+        add(Case(f"design-diag-{stem}", DESIGN.replace("diag.json", f"diag_{stem}.json"),
+                 expect, match, owner="design"))
+    for label, value in (("nan", "nan"), ("negative", "-1"), ("zero", "0"), ("huge", "1e308"),
+                         ("text", "loud")):
+        add(Case(f"design-noise-{label}", f"{DESIGN} --noise {value}", "refuse", ("noise",),
+                 owner="design"))
+    for label, extra, match in (
+            ("output-onto-diag", "-o diag.json", ("diag.json",)),
+            ("output-onto-rig", "-o rig.toml", ("rig.toml",)),
+            ("output-foreign-folder", "-o mine", ("mine",)),
+            ("output-read-only", "-o ro/prog", ("ro",)),
+            ("output-name-too-long", "-o " + "p" * 300, ("bytes long",)),
+            ("json-onto-diag", "-o prog --json diag.json", ("diag.json",)),
+            ("json-onto-rig", "-o prog --json rig.toml", ("rig.toml",)),
+            ("json-disk-full", "-o prog --json /dev/full", ("/dev/full",)),
+            ("json-folder", "-o prog --json mine", ("mine",)),
+            ("report-onto-diag", "-o prog --report diag.json", ("diag.json",)),
+            ("json-into-programme", "-o prog --json prog/d.json", ("prog",))):
+        add(Case(f"design-{label}", f"design diag.json --rig rig.toml {extra}", "refuse",
+                 match, owner="design", user="nobody" if "read-only" in label else None))
+    for sig, name in ((signal.SIGINT, "int"), (signal.SIGTERM, "term")):
+        for when in ("handler", 1.0, 3.0):
+            add(Case(f"design-signal-{name}-at-{when}", f"{DESIGN} --json d.json --report rep",
+                     "signal", (), owner="design", sig=(sig, when, None)))
     # ---- signals (item 4) ----
     for sig, name in ((signal.SIGINT, "int"), (signal.SIGTERM, "term")):
         for when in ("handler", 0.2, 0.5, 1.0, 1.5, 2.5):

@@ -7,27 +7,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers.design_inputs import RIG
 
 from fcomp.cli.main import main
 from fcomp.errors import FcompError
 from fcomp.planning import TEMPLATE, design
 from fcomp.planning.rig import rig_from
-
-RIG = """[rig]
-bore = 0.032
-rod = 0.012
-mass = 1.2
-orientation = "horizontal"
-
-[limits]
-stroke = 0.2
-speed_max = 0.2
-accel_max = 4.0
-pressure_min = 1.5e5
-pressure_max = 2.5e5
-duration_max = 20.0
-rate = 500.0
-"""
 
 
 def _diagnosis() -> dict:
@@ -232,3 +217,88 @@ def test_tie_opposes_the_models_fitted_at_the_step():
     total = sum(t_criterion(force(a, e.signals), force(b, e.signals), r.noise_)
                 for e in r.experiments_)
     assert total == pytest.approx(q["predicted_T"], rel=1e-9)
+
+
+# ------------------------------------------------------------------ hostile inputs
+def _run(folder: Path, diagnosis: str, rig: str, *extra: str) -> tuple[int, str]:
+    """``fcomp design d.json --rig rig.toml -o out EXTRA`` on these texts in ``folder``: its
+    exit status and standard error."""
+    import contextlib
+    import io
+
+    (folder / "d.json").write_text(diagnosis)
+    (folder / "rig.toml").write_text(rig)
+    err = io.StringIO()
+    with contextlib.redirect_stderr(err):
+        code = main(["design", str(folder / "d.json"), "--rig", str(folder / "rig.toml"),
+                     "-o", str(folder / "out"), *extra])
+    return code, err.getvalue()
+
+
+@pytest.mark.parametrize("edit, what", [
+    (("stroke = 0.2", "stroke = 1e308"), "stroke"),  # beyond any rig: a slip of unit
+    (("stroke = 0.2", "stroke = 1" + "0" * 400), "stroke"),  # an integer no float holds
+    (("speed_max = 0.2", "speed_max = 1e300"), "speed_max"),
+    (("accel_max = 4.0", "accel_max = 1e300"), "accel_max"),
+    (("rate = 500.0", "rate = 1e12"), "rate"),
+    (("duration_max = 20.0", "duration_max = 1e12"), "duration_max"),
+    (("rate = 500.0", "rate = 9e5"), "samples"),  # each within bounds, their product not
+    (("pressure_min = 1.5e5\npressure_max = 2.5e5", 'pressure_levels = ["high"]'),
+     "pressure_levels"),
+    (("rate = 500.0", "rate = 500.0\nnoise = 1e300"), "noise"),
+])
+def test_rig_values_beyond_any_rig_exit_2(tmp_path: Path, edit, what):
+    """Values no rig has (found by the hostile-case runner: a 1e12 s experiment hung, a
+    1e12 Hz logger ran out of memory, 1e308 m and a 400-digit integer were internal
+    errors): one line naming the key, nothing written."""
+    assert edit[0] in RIG
+    code, err = _run(tmp_path, json.dumps(_diagnosis()), RIG.replace(*edit))
+    assert code == 2 and what in err and "rig.toml" in err, err
+    assert len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "out").exists()
+
+
+def _edited(**changes) -> str:
+    return json.dumps({**_diagnosis(), **changes})
+
+
+@pytest.mark.parametrize("text, what", [
+    ("[" * 100000 + "]" * 100000, "nested too deep"),
+    (json.dumps(_diagnosis()).replace('"noise_floor": 0.05', '"noise_floor": 1' + "0" * 5000),
+     "5001 digits"),
+    (_edited(noise_floor=1e308), "noise_floor"),
+    (_edited(skipped=["pressure-dependence"]), "skipped"),
+    (_edited(ties="area-error"), "ties"),
+    (_edited(added={"a": 1}), "added"),
+], ids=["deep", "bigint", "noise-huge", "skipped-list", "ties-text", "added-object"])
+def test_diagnoses_of_the_wrong_shape_exit_2(tmp_path: Path, text, what):
+    """A diagnosis JSON edited by hand into shapes fcomp diagnose never writes: one line
+    naming the file and what is wrong (they were internal errors, or accepted)."""
+    code, err = _run(tmp_path, text, RIG)
+    assert code == 2 and what in err and "d.json" in err, err
+    assert len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "out").exists()
+
+
+def test_an_effect_fcomp_does_not_know_is_left_out_and_said(tmp_path: Path):
+    """A tie naming an effect of an effects file the design runs without: the tie is left
+    out with a warning naming it, the rest designed; alone, nothing to design (exit 2,
+    naming the file and the effect)."""
+    code, err = _run(tmp_path, _edited(ties=[["my-seal-law", "area-error"]]), RIG)
+    assert code == 0 and "my-seal-law" in err and "warning" in err
+    assert list((tmp_path / "out").glob("experiment_*.csv"))
+    alone = tmp_path / "alone"
+    alone.mkdir()
+    code, err = _run(alone, _edited(skipped={"my-seal-law": "one level only"}), RIG)
+    assert code == 2 and "d.json" in err and "my-seal-law" in err
+    assert not (alone / "out").exists()
+
+
+@pytest.mark.skipif(not Path("/dev/full").exists(), reason="needs /dev/full (Linux)")
+def test_a_json_that_cannot_be_written_leaves_no_programme(tmp_path: Path):
+    """Every output or none: the JSON on a full disk used to fail after the programme
+    folder was in place (a programme without its design)."""
+    code, err = _run(tmp_path, json.dumps(_diagnosis()), RIG, "--report",
+                     str(tmp_path / "rep"), "--json", "/dev/full")
+    assert code == 2 and "/dev/full" in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["d.json", "rig.toml"]

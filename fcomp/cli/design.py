@@ -14,6 +14,7 @@ sidecar); ``--json OUT`` writes ``{"experiments": [...], "questions": [{"kind", 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import sys
 
@@ -68,7 +69,7 @@ def summary(doc: dict) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
-    from fcomp.outputs import staged_folder
+    from fcomp.outputs import signals_held, staged_folder
     from fcomp.planning import TEMPLATE, design, read_rig
     from fcomp.planning.programme import measurement
 
@@ -95,24 +96,30 @@ def run(args: argparse.Namespace) -> int:
     result = design(args.diagnosis, rig, noise=args.noise)
     blocked = any(w["code"] == "limits-block" for w in result.warnings_)
     if not result.experiments_ and not blocked:
-        raise FcompError("nothing to design: " + "; ".join(w["message"]
-                                                            for w in result.warnings_))
+        raise FcompError(f"{args.diagnosis}: nothing to design: " + "; ".join(
+            w["message"] for w in result.warnings_))
     name = "experiment_{}"
-    files = []
     assert folder is not None
-    with staged_folder(folder, "-o", "programme", note="fcomp design") as tmp:  # (empty when
-        # the rig's limits block every question: the warnings say which limit)
+    # Every output or none: the programme and the report are built in temporary folders,
+    # the JSON written last; the folders replace their targets only once it is written
+    # (a full disk or a signal there leaves nothing), with Ctrl-C and SIGTERM held from
+    # the JSON's writing to the last rename.
+    with contextlib.ExitStack() as held, contextlib.ExitStack() as staged:
+        tmp = staged.enter_context(staged_folder(folder, "-o", "programme",
+                                                 note="fcomp design"))
+        # (empty when the rig's limits block every question: the warnings say which limit)
         for k, e in enumerate(result.experiments_, start=1):
             m = measurement(e, rig, name.format(k), "pneumatic-cylinder")
             m.write(tmp / f"{name.format(k)}.csv")
-            files.append(str(folder / f"{name.format(k)}.csv"))
-    result.files_ = files
-    if report is not None:
-        from fcomp.planning.report import write_report
+        result.files_ = [str(folder / f"{name.format(k)}.csv")
+                         for k in range(1, len(result.experiments_) + 1)]
+        if report is not None:
+            from fcomp.planning.report import write_report
 
-        with staged_folder(report, "--report", "report", note="fcomp design") as tmp:
-            write_report(result, tmp)
-        common.wrote(report / "report.html")
-    doc = common.with_warnings(result.as_dict())
-    emit_result(json.dumps(doc, indent=1), args.json, out, summary(doc))
+            write_report(result, staged.enter_context(
+                staged_folder(report, "--report", "report", note="fcomp design")))
+            common.wrote(report / "report.html")
+        doc = common.with_warnings(result.as_dict())
+        held.enter_context(signals_held())
+        emit_result(json.dumps(doc, indent=1), args.json, out, summary(doc))
     return 0

@@ -11,7 +11,6 @@ error).
 
 from __future__ import annotations
 
-import json
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -36,7 +35,8 @@ from fcomp.planning.optimiser import (
 from fcomp.planning.primitives import candidates, signals
 from fcomp.planning.programme import Experiment, described, pack
 from fcomp.planning.questions import Diagnosed, Question, read_diagnosis
-from fcomp.planning.rig import Rig, read_rig, rig_from
+from fcomp.planning.rig import MAXIMA, Rig, read_rig, rig_from
+from fcomp.textdata import read_json
 
 
 @dataclass
@@ -186,13 +186,8 @@ def design(diagnosis: Mapping[str, Any] | str | Path, rig: Rig | Mapping[str, An
         The force noise (N); default the rig file's ``noise``, else the diagnosis's floor.
     """
     if isinstance(diagnosis, (str, Path)):
-        try:
-            doc = json.loads(Path(diagnosis).read_text(encoding="utf-8"),
-                             object_pairs_hook=_no_duplicates)
-        except (OSError, UnicodeDecodeError) as exc:
-            raise FcompError(f"{diagnosis}: cannot read it ({exc})") from None
-        except json.JSONDecodeError as exc:
-            raise FcompError(f"{diagnosis}: not JSON ({exc.msg}, line {exc.lineno})") from None
+        doc = read_json(diagnosis, "diagnosis", hint=" (give the --json output of fcomp "
+                        "diagnose)")
         label = str(diagnosis)
     else:
         doc, label = diagnosis, "diagnosis"
@@ -200,9 +195,11 @@ def design(diagnosis: Mapping[str, Any] | str | Path, rig: Rig | Mapping[str, An
         else rig_from(rig)
     dx = read_diagnosis(doc, label)
     sigma = float(noise or r.noise or dx.noise_floor)
-    if not (math.isfinite(sigma) and sigma > 0):
-        raise FcompError(f"noise must be a positive force (N), got {sigma!r}")
-    warnings: list[dict[str, str]] = []
+    if not (math.isfinite(sigma) and 0 < sigma <= MAXIMA["noise"]):
+        raise FcompError(f"noise must be a positive force of at most {MAXIMA['noise']:g} N, "
+                         f"got {sigma!r}")
+    warnings: list[dict[str, str]] = [{"code": "unknown-effect", "message": m}
+                                      for m in dx.ignored]
     mass = dx.source != "F"
     qs = _prepare(dx, r, sigma, warnings)
     if not qs:
@@ -275,11 +272,3 @@ def design(diagnosis: Mapping[str, Any] | str | Path, rig: Rig | Mapping[str, An
     res = DesignResult(exps, out, warnings, r, sigma, models_=models)
     res._questions = qs  # the questions with their models, in the order of questions_
     return res
-
-
-def _no_duplicates(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
-    keys = [k for k, _ in pairs]
-    dup = next((k for k in keys if keys.count(k) > 1), None)
-    if dup is not None:
-        raise FcompError(f"the diagnosis JSON repeats the key {dup!r}")
-    return dict(pairs)

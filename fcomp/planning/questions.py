@@ -23,6 +23,7 @@ from typing import Any
 
 from fcomp.errors import FcompError
 from fcomp.models.base import FrictionModel
+from fcomp.planning.rig import MAXIMA
 
 #: The warning codes that make a parameter an open question.
 UNDETERMINED = ("at-bound", "not-identified", "interval-crosses-zero")
@@ -30,6 +31,8 @@ UNDETERMINED = ("at-bound", "not-identified", "interval-crosses-zero")
 NOT_A_QUESTION = ("already part of", "not applicable", "measured directly", "no area enters")
 #: Keys every diagnose JSON has.
 REQUIRED = ("verdict", "noise_floor", "model_file", "added")
+#: The largest force noise (N) a diagnosis may give: the force of a large press.
+NOISE_MAX = MAXIMA["noise"]
 
 
 @dataclass
@@ -60,6 +63,8 @@ class Diagnosed:
     questions: list[Question]
     skipped_notes: list[str]
     stderr: dict[str, float] = field(default_factory=dict)
+    #: Lines for the effects named that fcomp does not know (left out; :func:`_unknown`).
+    ignored: list[str] = field(default_factory=list)
 
 
 def _check(doc: Any, label: str) -> Mapping[str, Any]:
@@ -68,12 +73,44 @@ def _check(doc: Any, label: str) -> Mapping[str, Any]:
         raise FcompError(f"{label}: not a diagnosis (no {', '.join(missing)}); give the "
                          "--json output of fcomp diagnose")
     nf = doc["noise_floor"]
-    if isinstance(nf, bool) or not isinstance(nf, (int, float)) or not (math.isfinite(nf)
-                                                                         and nf > 0):
-        raise FcompError(f"{label}: noise_floor must be a positive number, got {nf!r}")
+    if isinstance(nf, bool) or not isinstance(nf, (int, float)) or not (
+            math.isfinite(nf) and 0 < nf <= NOISE_MAX):
+        raise FcompError(f"{label}: noise_floor must be a positive force of at most "
+                         f"{NOISE_MAX:g} N, got {nf!r}")
     if not isinstance(doc["model_file"], Mapping):
         raise FcompError(f"{label}: model_file is not a model document")
+    shapes = (("ties", "a list of lists of effect names", lambda v: isinstance(v, list) and all(
+                  isinstance(t, list) and all(isinstance(e, str) for e in t) for t in v)),
+              ("skipped", "an object of effect name: reason", lambda v: isinstance(v, Mapping)
+               and all(isinstance(r, str) for r in v.values())),
+              ("added", "a list of effect names", lambda v: isinstance(v, list)
+               and all(isinstance(e, str) for e in v)),
+              ("warnings", "a list of objects", lambda v: isinstance(v, list)),
+              ("tie_models", "a list of objects", lambda v: isinstance(v, list)),
+              ("signals", "an object", lambda v: isinstance(v, Mapping)))
+    for key, shape, ok in shapes:
+        if doc.get(key) is not None and not ok(doc[key]):
+            raise FcompError(f"{label}: {key} must be {shape}, as fcomp diagnose writes it; "
+                             f"got {type(doc[key]).__name__}")
     return doc
+
+
+def _unknown(doc: Mapping[str, Any]) -> list[str]:
+    """Lines for the effects the diagnosis names (``ties``, ``skipped``) that fcomp does not
+    know -- an effects file's, run without it: they are left out of the design."""
+    from fcomp.effects import EFFECTS
+
+    out = []
+    for tie in doc.get("ties") or []:
+        odd = [e for e in tie if e not in EFFECTS]
+        if odd:
+            out.append(f"tie {' vs '.join(tie)}: {', '.join(odd)} is no effect fcomp knows "
+                       "(an effects file's?): the tie is not designed for")
+    odd = [e for e in doc.get("skipped") or {} if e not in EFFECTS]
+    if odd:
+        out.append(f"untested {', '.join(odd)}: no effect fcomp knows (an effects file's?): "
+                   "not designed for")
+    return out
 
 
 def _model(doc: Mapping[str, Any], label: str) -> FrictionModel:
@@ -124,8 +161,10 @@ def ties(doc: Mapping[str, Any], final: FrictionModel, label: str) -> list[Quest
         return _step_ties(doc, label)
     rivals = ((doc["model_file"].get("source") or {}).get("diagnosis") or {}).get("rivals") or []
     out = []
+    from fcomp.effects import EFFECTS
+
     for tie in doc.get("ties") or []:
-        if not isinstance(tie, list) or len(tie) < 2:
+        if len(tie) < 2 or any(e not in EFFECTS for e in tie):
             continue
         first = str(tie[0])
         q = Question("tie", " vs ".join(map(str, tie)), {first: final},
@@ -208,4 +247,5 @@ def read_diagnosis(doc: Any, label: str = "diagnosis") -> Diagnosed:
                      source=str(sig.get("force") or "F"), questions=qs, skipped_notes=notes,
                      stderr={k: float(v) for k, v in
                              (doc["model_file"].get("stderr") or {}).items()
-                             if isinstance(v, (int, float)) and math.isfinite(v) and v > 0})
+                             if isinstance(v, (int, float)) and math.isfinite(v) and v > 0},
+                     ignored=_unknown(doc))

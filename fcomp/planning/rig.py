@@ -63,6 +63,18 @@ rate = 500.0                  # Hz: the logger's sample rate
 # noise = 0.4                 # N: force noise (default: the diagnosis's noise floor)
 '''
 
+#: The largest value each key may take (SI). Beyond it the file holds a slip (a unit, a
+#: digit), not a rig: a 20 m stroke, 50 m/s, 1000 g, 10 kbar, an hour per experiment, a
+#: 1 MHz logger, a 100 t moving mass, a force noise of 1 MN.
+MAXIMA = {"bore": 2.0, "rod": 2.0, "mass": 1e5, "stroke": 20.0, "speed_max": 50.0,
+          "accel_max": 1e4, "pressure_min": 1e9, "pressure_max": 1e9, "pressure_levels": 1e9,
+          "duration_max": 3600.0, "rate": 1e6, "noise": 1e6}
+#: The most samples one experiment may hold (``rate * duration_max``). The design evaluates
+#: its rivals and their information at every sample the logger takes: 2e5 samples (10 kHz
+#: for 20 s) take some 10 s and 0.5 GB on the 2-core reference machine, growing in
+#: proportion; friction programmes need a few kHz at most.
+SAMPLES_MAX = 5e5
+
 _RIG_KEYS = {"bore", "rod", "mass", "orientation"}
 _LIMIT_KEYS = {"stroke", "speed_max", "accel_max", "pressure_min", "pressure_max",
                "pressure_levels", "duration_max", "rate", "noise"}
@@ -136,14 +148,28 @@ def _number(table: Mapping[str, Any], key: str, where: str, *, positive: bool = 
             raise FcompError(f"{where}: [{where.split('[')[-1].rstrip(']')}] {key} is missing "
                              f"(fcomp design --template writes a rig file with every key)")
         return default
-    v = table[key]
-    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+    return _checked(table[key], key, where, positive)
+
+
+def _checked(v: Any, key: str, where: str, positive: bool) -> float:
+    """``v`` as the finite float ``key`` needs: a number (an integer too long for a float
+    is none), positive (or not negative), at most :data:`MAXIMA`."""
+    try:
+        f = float(v) if isinstance(v, (int, float)) and not isinstance(v, bool) else math.nan
+    except OverflowError:  # an integer of hundreds of digits
+        raise FcompError(f"{where}: {key} must be a finite number, got an integer of "
+                         f"{len(str(abs(v)))} digits") from None
+    if not math.isfinite(f):
         raise FcompError(f"{where}: {key} must be a finite number, got {v!r}")
-    if positive and not v > 0:
+    if positive and not f > 0:
         raise FcompError(f"{where}: {key} must be positive, got {v!r}")
-    if not positive and v < 0:
+    if not positive and f < 0:
         raise FcompError(f"{where}: {key} must not be negative, got {v!r}")
-    return float(v)
+    top = MAXIMA.get(key, math.inf)
+    if f > top:
+        raise FcompError(f"{where}: {key} = {f:g} is beyond any rig (at most {top:g}, SI "
+                         "units: m, m/s, m/s^2, Pa, s, Hz, kg, N); check its unit")
+    return f
 
 
 def rig_from(doc: Mapping[str, Any], label: str = "rig") -> Rig:
@@ -179,8 +205,7 @@ def rig_from(doc: Mapping[str, Any], label: str = "rig") -> Rig:
         if not isinstance(raw, list) or not raw:
             raise FcompError(f"{w_lim}: pressure_levels must be a non-empty list of pressures "
                              f"(Pa gauge), got {raw!r}")
-        levels = tuple(sorted({_number({"level": v}, "level", w_lim, positive=False) or 0.0
-                               for v in raw}))
+        levels = tuple(sorted({_checked(v, "pressure_levels", w_lim, False) for v in raw}))
         if "pressure_min" in lim or "pressure_max" in lim:
             raise FcompError(f"{w_lim}: give pressure_levels or pressure_min/pressure_max, "
                              "not both")
@@ -203,6 +228,10 @@ def rig_from(doc: Mapping[str, Any], label: str = "rig") -> Rig:
         raise FcompError(f"{w_lim}: rate {r.rate:g} Hz is below the {RATE_MIN:g} Hz a "
                          f"programme needs ({SAMPLES_PER_RAMP} samples in its shortest "
                          f"speed ramp of {RAMP_MIN:g} s)")
+    if r.rate * r.duration_max > SAMPLES_MAX:
+        raise FcompError(f"{w_lim}: rate x duration_max = {r.rate * r.duration_max:.3g} samples "
+                         f"in one experiment, more than the {SAMPLES_MAX:.0e} a design evaluates; "
+                         "lower rate (a few kHz is plenty for friction) or duration_max")
     if r.duration_max < 10 * RAMP_MIN:
         raise FcompError(f"{w_lim}: duration_max {r.duration_max:g} s is too short for one "
                          f"move and back (at least {10 * RAMP_MIN:g} s)")

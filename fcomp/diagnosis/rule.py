@@ -25,6 +25,12 @@ hold:
   (:func:`.features.drift_fall`; confounded with time);
 * the Bayesian information criterion on the training residuals, with the
   effective sample size of the candidate's residual, agrees (:func:`delta_bic`).
+
+Another qualifying candidate *ties* with the best one of a step only when the record
+cannot tell them apart (:meth:`AcceptanceRule.tie_test`): its held-out RMS is within
+``tie_share`` of the step's fall of the best one's, *and* the best one is not better by
+what any fall must show -- clear where the two predictions differ and significant by the
+same paired test, the rival in the place of the model before.
 """
 
 from __future__ import annotations
@@ -148,8 +154,9 @@ class AcceptanceRule:
         An effect declaring the regimes of its signature must take at least this
         share of its held-out fall (mean square) there.
     tie_share
-        Candidates within this share of the best candidate's fall tie with it; a
-        drift taking ``1 - tie_share`` of the fall confounds an effect with time.
+        Candidates within this share of the best candidate's fall tie with it unless
+        the held-out data tell them apart (:meth:`tie_test`); a drift taking
+        ``1 - tie_share`` of the fall confounds an effect with time.
     at_floor
         The search stops when the held-out RMS is within this factor of the noise floor.
     """
@@ -192,13 +199,7 @@ class AcceptanceRule:
         out: list[Failure] = []
         if not fall > 0:
             out.append(Failure("no-fall", {"before": before.rms_test, "after": after.rms_test}))
-        changed = np.concatenate(pieces) if pieces else np.zeros(0, dtype=int)
-        if changed.size:  # isolated timing spikes are in both and no effect explains them
-            rb, ra = paired_trimmed_rms(before.residual[changed], after.residual[changed])
-        else:
-            rb = ra = before.rms_test
-        need = max(self.fall_noise * nf, self.fall_relative * rb,
-                   self.fall_numeric * ground.data.scales.force)
+        changed, rb, ra, need = self._where_changed(before, after, pieces, ground)
         if fall > 0 and rb - ra < need:
             out.append(Failure("small-fall", {"fall": rb - ra, "need": need}))
         # the floor of the scored residual where the candidate acts: the noise, and what the
@@ -220,9 +221,108 @@ class AcceptanceRule:
             out.append(Failure("bic", {"delta_bic": dbic}))
         return Judgement(fall, z, p, dbic, tuple(out), self)
 
-    def ties_with(self, best_rms: float, best_fall: float, rms: float) -> bool:
-        """Whether a qualifying candidate of held-out RMS ``rms`` ties with the best one."""
-        return rms - best_rms <= self.tie_share * best_fall
+    def _where_changed(self, before: FitResult, after: FitResult,
+                       pieces: Sequence[np.ndarray], ground: Ground
+                       ) -> tuple[np.ndarray, float, float, float]:
+        """``(changed, rms_before, rms_after, need)`` on the held-out ``pieces`` where the
+        prediction changed: the samples, both RMS values without the 1 % of samples where
+        both residuals are largest (:func:`.features.paired_trimmed_rms`), and the fall a
+        clear one needs there (class docstring: ``fall_noise``, ``fall_relative``,
+        ``fall_numeric``)."""
+        changed = np.concatenate(pieces) if pieces else np.zeros(0, dtype=int)
+        if changed.size:  # isolated timing spikes are in both and no effect explains them
+            rb, ra = paired_trimmed_rms(before.residual[changed], after.residual[changed])
+        else:
+            rb = ra = before.rms_test
+        need = max(self.fall_noise * ground.noise, self.fall_relative * rb,
+                   self.fall_numeric * ground.data.scales.force)
+        return changed, rb, ra, need
+
+    def tie_test(self, best: FitResult, rival: FitResult, fall: float,
+                 ground: Ground) -> TieTest:
+        """Whether a qualifying ``rival`` ties with the ``best`` candidate of a step whose
+        held-out fall (from the model before the step) was ``fall`` (N).
+
+        A rival ties only when the record cannot tell the two apart: it is *close* --
+        its held-out RMS within ``tie_share`` of the fall of the best one's,
+        ``rms_rival - rms_best <= tie_share*fall`` -- and the best one is *not clearly
+        and significantly better* by the test any fall must pass (:meth:`judge`), with
+        the rival in the place of the model before: on the held-out pieces where the
+        two predictions differ by ``fall_noise`` of the noise floor (RMS), the best one's
+        RMS is below the rival's by at least ``max(fall_noise*noise_floor,
+        fall_relative*rms_rival)`` and the paired test of equal predictive accuracy of
+        Diebold & Mariano (1995) on the squared residuals, piece by piece with a
+        Newey-West variance (:func:`fall_test`), rejects "the rival predicts as well" at
+        one-sided ``p <= accept_p``.
+
+        Why no closeness against the noise floor beside the fall's share: the noise
+        floor is what the held-out residual of a model without systematic error
+        reaches, so a rival whose RMS is several noise floors above the best one's
+        carries a systematic misfit of about ``sqrt(rms_rival^2 - rms_best^2)`` that
+        the best one has not. Seen in two or more held-out pieces against the noise,
+        the paired test finds it, and the tie is broken by the data, not by a second
+        threshold. Where the test cannot find it, the difference sits in fewer than two
+        pieces or within the spread the residuals' correlation allows: one event, which
+        the rule does not take as evidence for a fall either, and a threshold on the RMS
+        would then decide on that one event. The clear-difference condition is the
+        other side: a difference below a tenth of the noise floor where the
+        predictions differ is within noise however long the record, and a tie stays a
+        tie (both candidates at the noise floor, their predictions within it).
+        """
+        pieces = changed_pieces(rival.residual, best.residual, ground.blocks,
+                                self.fall_noise * ground.noise)
+        z, p = fall_test(rival.residual, best.residual, pieces, 0.0)  # pieces chosen
+        _, rr, rb, need = self._where_changed(rival, best, pieces, ground)
+        return TieTest(gap=rival.rms_test - best.rms_test, allowed=self.tie_share * fall,
+                       difference=rr - rb, need=need, z=z, p=p, rule=self)
+
+
+@dataclass(frozen=True)
+class TieTest:
+    """What :meth:`AcceptanceRule.tie_test` found: a rival against the best candidate.
+
+    Attributes
+    ----------
+    gap, allowed : N
+        ``rms_rival - rms_best`` on the held-out samples, and the closeness allowed,
+        ``tie_share*fall``.
+    difference, need : N
+        ``rms_rival - rms_best`` (trimmed) on the held-out pieces where the two
+        predictions differ, and the difference a clear one needs there.
+    z, p : float
+        The paired test (:func:`fall_test`) of the best one against the rival,
+        one-sided: a small ``p`` says the best one predicts the held-out data better.
+    rule : AcceptanceRule
+    """
+
+    gap: float
+    allowed: float
+    difference: float
+    need: float
+    z: float
+    p: float
+    rule: AcceptanceRule
+
+    @property
+    def close(self) -> bool:
+        """Within ``tie_share`` of the step's fall."""
+        return self.gap <= self.allowed
+
+    @property
+    def separated(self) -> bool:
+        """The held-out data tell the two apart: a clear and significant difference."""
+        return self.difference >= self.need and self.p <= self.rule.accept_p
+
+    @property
+    def tie(self) -> bool:
+        """Close, and not told apart by the held-out data."""
+        return self.close and not self.separated
+
+    def to_dict(self) -> dict[str, float | bool]:
+        """The figures (N; ``z``, ``p``) and the outcome, for the JSON."""
+        return {"gap": self.gap, "allowed": self.allowed, "difference": self.difference,
+                "need": self.need, "z": self.z, "p": self.p, "close": self.close,
+                "separated": self.separated, "tie": self.tie}
 
 
 def signature_share(acts_in: Sequence[str], before: np.ndarray, after: np.ndarray,

@@ -121,9 +121,9 @@ def test_an_unfitted_diagnosis_says_to_fit_it_first() -> None:
 
 
 # ----------------------------------------------------------------------------- ties
-def _tie_ground(n_pieces: int, length: int = 50, noise: float = 0.3):
-    """A held-out record of ``n_pieces`` pieces of ``length`` samples (all held out) and its
-    ground; the record's force scale 100 N."""
+def _tie_ground(n_pieces: int, length: int = 50, noise: float = 0.3, experiments: int = 1):
+    """A held-out record of ``n_pieces`` pieces of ``length`` samples (all held out) in
+    ``experiments`` experiments of equal length, and its ground; the force scale 100 N."""
     from types import SimpleNamespace
 
     from fcomp.diagnosis.rule import Ground
@@ -131,7 +131,8 @@ def _tie_ground(n_pieces: int, length: int = 50, noise: float = 0.3):
     n = n_pieces * length
     blocks = tuple(np.arange(k * length, (k + 1) * length) for k in range(n_pieces))
     split = SimpleNamespace(train=np.zeros(n, bool), test=np.ones(n, bool))
-    data = SimpleNamespace(scales=SimpleNamespace(force=100.0))
+    data = SimpleNamespace(scales=SimpleNamespace(force=100.0), experiments=[
+        SimpleNamespace(start=k * (n_pieces // experiments) * length) for k in range(experiments)])
     return Ground(data, None, split, noise, blocks), n  # type: ignore[arg-type]
 
 
@@ -203,3 +204,25 @@ def test_a_difference_within_noise_or_seen_once_stays_a_tie() -> None:
     once[:50] = 2.0
     t = rule.tie_test(_fit(e), _fit(e + once), 30.0, ground)
     assert t.close and t.p == 1.0 and t.tie
+
+
+def test_experiments_that_contradict_each_other_keep_the_tie() -> None:
+    """Two experiments of 20 pieces: in the first the best candidate is right and the rival
+    misses by 0.6 N, in the second the rival is right and the best misses by 0.4 N. Pooled,
+    the best is clearly and significantly better; but the second experiment says the
+    contrary, significantly: each law fits one experiment, neither the record -- a tie.
+    Each experiment alone, or both agreeing, is told apart."""
+    rule = AcceptanceRule()
+    ground, n = _tie_ground(40, experiments=2)
+    rng = np.random.default_rng(3)
+    e = rng.normal(0.0, 0.3, n)
+    half = n // 2
+    miss_rival = np.concatenate([_piecewise(rng, 20, 50, 0.6), np.zeros(half)])
+    miss_best = np.concatenate([np.zeros(half), _piecewise(rng, 20, 50, 0.4)])
+    best, rival = _fit(e + miss_best), _fit(e + miss_rival)
+    t = rule.tie_test(best, rival, 5.0, ground)
+    assert t.p < 1e-6 and t.difference > t.need  # pooled: the best ahead
+    assert t.experiments == 2 and t.contrary_p < 1e-6
+    assert t.close and not t.separated and t.tie
+    agree = rule.tie_test(_fit(e), rival, 5.0, ground)
+    assert agree.separated and not agree.tie and agree.contrary_p > 0.05

@@ -45,6 +45,21 @@ def _diagnosis() -> dict:
             "model_file": model_document(m, source={"data": []})}
 
 
+def _recorded_plan(res, rig, folder: Path):
+    """The programme's experiments written as the rig's files and read back, as the motion
+    plan a synthetic rig runs them along (fcomp.synthetic.motion.along, 10 fine steps)."""
+    from fcomp.measurement import Measurement
+    from fcomp.planning.programme import measurement
+    from fcomp.synthetic.motion import along
+
+    progs = []
+    for k, e in enumerate(res.experiments_, 1):
+        measurement(e, rig, f"e{k}", "pneumatic-cylinder").write(folder / f"e{k}.csv")
+        progs.append(Measurement.read(folder / f"e{k}.csv").columns)
+    return along([p["t"] for p in progs], [p["x"] for p in progs],
+                 [p["p1"] + p["p2"] for p in progs], 1.0 / rig.rate / 10)
+
+
 @pytest.fixture(scope="module")
 def result():
     return design(_diagnosis(), rig_from(__import__("tomllib").loads(RIG)))
@@ -173,10 +188,7 @@ def test_recorded_programme_tests_the_untested_effect(tmp_path: Path):
     programme recorded with a lip-seal pressure law of fcomp.synthetic (written apart from
     fcomp.effects; another seed, another noise), the re-diagnosis adds the effect."""
     import fcomp
-    from fcomp.measurement import Measurement
-    from fcomp.planning.programme import measurement
     from fcomp.synthetic import generate
-    from fcomp.synthetic.motion import along
 
     law, rate = "pressure-dependence:lip-seal", 250.0
     old = generate([law], base="lugre", experiments=2, duration=10.0, pressures=[3e5],
@@ -191,12 +203,7 @@ def test_recorded_programme_tests_the_untested_effect(tmp_path: Path):
     res = design(doc, rig)
     q = next(x for x in res.questions_ if x.get("label") == "pressure-dependence")
     assert q["predicted_separation"] > 1
-    progs = []
-    for k, e in enumerate(res.experiments_, 1):
-        measurement(e, rig, f"e{k}", "pneumatic-cylinder").write(tmp_path / f"e{k}.csv")
-        progs.append(Measurement.read(tmp_path / f"e{k}.csv").columns)
-    plan = along([p["t"] for p in progs], [p["x"] for p in progs],
-                 [p["p1"] + p["p2"] for p in progs], 1.0 / rate / 10)
+    plan = _recorded_plan(res, rig, tmp_path)
     new = generate([law], base="lugre", pressures=[3e5], seed=105, plan=plan, rate=rate,
                    noise_std=0.5).measurement
     d1 = fcomp.diagnose([old, new], "lugre", candidates=cands, check_baseline=False,
@@ -246,10 +253,7 @@ def test_recorded_programme_breaks_a_tie_the_old_closeness_would_keep(tmp_path: 
     import tomllib
 
     import fcomp
-    from fcomp.measurement import Measurement
-    from fcomp.planning.programme import measurement
     from fcomp.synthetic import generate
-    from fcomp.synthetic.motion import along
 
     law, rate, noise = "direction-asymmetry:levels", 250.0, 0.5
     cands = ["direction-asymmetry", "pressure-dependence"]
@@ -266,12 +270,7 @@ def test_recorded_programme_breaks_a_tie_the_old_closeness_would_keep(tmp_path: 
     res = design(doc, rig)
     q = next(x for x in res.questions_ if x["kind"] == "tie")
     assert sorted(q["rivals"]) == sorted(cands) and q["pairs"][0]["answered"]
-    progs = []
-    for k, e in enumerate(res.experiments_, 1):
-        measurement(e, rig, f"e{k}", "pneumatic-cylinder").write(tmp_path / f"e{k}.csv")
-        progs.append(Measurement.read(tmp_path / f"e{k}.csv").columns)
-    plan = along([p["t"] for p in progs], [p["x"] for p in progs],
-                 [p["p1"] + p["p2"] for p in progs], 1.0 / rate / 10)
+    plan = _recorded_plan(res, rig, tmp_path)
     new = generate([law], base="lugre", seed=1032, plan=plan, rate=rate,
                    noise_std=noise).measurement
     d1 = fcomp.diagnose([old, new], "lugre", candidates=cands, check_baseline=False,

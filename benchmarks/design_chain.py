@@ -57,6 +57,10 @@ def case(law: str, seed: int, work: Path, noise: float, rate: float) -> dict:
     res = fcomp.design(doc0, rig_doc)
     t_design = time.perf_counter() - t0
     rig = rig_from(rig_doc)
+    if not res.experiments_:  # the record left no question: nothing to record
+        return {"law": law, "seed": seed, "noise": noise, "rate": rate, "design_s": t_design,
+                "programme_s": 0.0, "added_before": doc0["added"], "ties_before": doc0["ties"],
+                "added_after": doc0["added"], "ties_after": doc0["ties"], "questions": []}
     progs = []
     for k, e in enumerate(res.experiments_, 1):
         p = work / f"experiment_{k}.csv"

@@ -30,6 +30,21 @@ def _diagnosis() -> dict:
             "model_file": model_document(m, source={"data": []})}
 
 
+def _recorded_plan(res, rig, folder: Path):
+    """The programme's experiments written as the rig's files and read back, as the motion
+    plan a synthetic rig runs them along (fcomp.synthetic.motion.along, 10 fine steps)."""
+    from fcomp.measurement import Measurement
+    from fcomp.planning.programme import measurement
+    from fcomp.synthetic.motion import along
+
+    progs = []
+    for k, e in enumerate(res.experiments_, 1):
+        measurement(e, rig, f"e{k}", "pneumatic-cylinder").write(folder / f"e{k}.csv")
+        progs.append(Measurement.read(folder / f"e{k}.csv").columns)
+    return along([p["t"] for p in progs], [p["x"] for p in progs],
+                 [p["p1"] + p["p2"] for p in progs], 1.0 / rig.rate / 10)
+
+
 @pytest.fixture(scope="module")
 def result():
     return design(_diagnosis(), rig_from(__import__("tomllib").loads(RIG)))
@@ -158,10 +173,7 @@ def test_recorded_programme_tests_the_untested_effect(tmp_path: Path):
     programme recorded with a lip-seal pressure law of fcomp.synthetic (written apart from
     fcomp.effects; another seed, another noise), the re-diagnosis adds the effect."""
     import fcomp
-    from fcomp.measurement import Measurement
-    from fcomp.planning.programme import measurement
     from fcomp.synthetic import generate
-    from fcomp.synthetic.motion import along
 
     law, rate = "pressure-dependence:lip-seal", 250.0
     old = generate([law], base="lugre", experiments=2, duration=10.0, pressures=[3e5],
@@ -176,12 +188,7 @@ def test_recorded_programme_tests_the_untested_effect(tmp_path: Path):
     res = design(doc, rig)
     q = next(x for x in res.questions_ if x.get("label") == "pressure-dependence")
     assert q["predicted_separation"] > 1
-    progs = []
-    for k, e in enumerate(res.experiments_, 1):
-        measurement(e, rig, f"e{k}", "pneumatic-cylinder").write(tmp_path / f"e{k}.csv")
-        progs.append(Measurement.read(tmp_path / f"e{k}.csv").columns)
-    plan = along([p["t"] for p in progs], [p["x"] for p in progs],
-                 [p["p1"] + p["p2"] for p in progs], 1.0 / rate / 10)
+    plan = _recorded_plan(res, rig, tmp_path)
     new = generate([law], base="lugre", pressures=[3e5], seed=105, plan=plan, rate=rate,
                    noise_std=0.5).measurement
     d1 = fcomp.diagnose([old, new], "lugre", candidates=cands, check_baseline=False,
@@ -302,3 +309,64 @@ def test_a_json_that_cannot_be_written_leaves_no_programme(tmp_path: Path):
                      str(tmp_path / "rep"), "--json", "/dev/full")
     assert code == 2 and "/dev/full" in err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["d.json", "rig.toml"]
+
+
+def test_recorded_programme_breaks_a_tie_the_old_closeness_would_keep(tmp_path: Path):
+    """End to end for a tie: a record whose pressure and direction move together
+    (direction-asymmetry of the levels law, noise 0.5 N, a 250 Hz logger: off the chain's
+    defaults) fits a pressure law and the asymmetry equally well -- a tie, the paired test
+    finding no difference. The design opposes the two; the programme, recorded with the law of
+    fcomp.synthetic (written apart from fcomp.effects; another seed), is diagnosed with the
+    record: the asymmetry is chosen and the tie is gone, although the pressure law's held-out
+    RMS stays within the fall's share of it -- the held-out data tell them apart (p < 0.05),
+    which the closeness alone did not see."""
+    import tomllib
+
+    import fcomp
+    from fcomp.synthetic import generate
+
+    law, rate, noise = "direction-asymmetry:levels", 250.0, 0.5
+    cands = ["direction-asymmetry", "pressure-dependence"]
+    old = generate([law], base="lugre", experiments=2, duration=12.0, seed=32, noise_std=noise,
+                   rate=rate).measurement
+    d0 = fcomp.diagnose([old], "lugre", candidates=cands, check_baseline=False, progress=False)
+    doc = {**d0.to_dict(), "model_file": d0.model_file({"data": []})}
+    assert sorted(map(sorted, doc["ties"])) == [sorted(cands)], doc["ties"]
+    before = [t for s in doc["steps"] for t in s["tie_tests"]]
+    assert before and all(t["close"] and not t["separated"] for t in before), before
+    rig = rig_from(tomllib.loads(RIG.replace("rate = 500.0", f"rate = {rate}")
+                                 .replace("pressure_max = 2.5e5", "pressure_max = 4e5")
+                                 .replace("duration_max = 20.0", "duration_max = 12.0")))
+    res = design(doc, rig)
+    q = next(x for x in res.questions_ if x["kind"] == "tie")
+    assert sorted(q["rivals"]) == sorted(cands) and q["pairs"][0]["answered"]
+    plan = _recorded_plan(res, rig, tmp_path)
+    new = generate([law], base="lugre", seed=1032, plan=plan, rate=rate,
+                   noise_std=noise).measurement
+    d1 = fcomp.diagnose([old, new], "lugre", candidates=cands, check_baseline=False,
+                        progress=False).to_dict()
+    assert d1["added"] == ["direction-asymmetry"] and d1["ties"] == [], (d1["added"], d1["ties"])
+    (after,) = [t for s in d1["steps"] for t in s["tie_tests"]]
+    assert after["effect"] == "pressure-dependence" and after["separated"] and not after["tie"]
+    assert after["p"] < 0.05 and after["difference"] >= after["need"]
+
+
+def test_information_at_a_parameter_bound_is_one_sided():
+    """A parameter fitted to its bound (a LuGre bristle damping at 0) has no value below it:
+    its column of the Jacobian is the one-sided difference, equal to the central one of a
+    parameter entering the force linearly (sigma1 enters as sigma1*dz/dt: checked against
+    the central difference about an inner value)."""
+    import fcomp
+    from fcomp.planning.criteria import jacobian
+
+    t = np.arange(0.0, 2.0, 1e-3)
+    x = 0.05 * (1 - np.cos(2 * np.pi * 0.5 * t))
+    v = np.gradient(x, t)
+    sig = {"t": t, "x": x, "v": v, "a": np.gradient(v, t), "p1": np.full(t.size, 3e5),
+           "p2": np.full(t.size, 1e5)}
+    m = fcomp.make_model("lugre", params="canudas1995")
+    at_bound = jacobian(m.with_params(sigma1=0.0), sig, ["sigma1"], False)
+    inner = jacobian(m.with_params(sigma1=1e-6), sig, ["sigma1"], False)
+    assert np.all(np.isfinite(at_bound)) and np.max(np.abs(at_bound)) > 0
+    # the step at 0 is 1e-9 Ns/m: rounding of the force leaves about 1e-7 of the column
+    np.testing.assert_allclose(at_bound, inner, rtol=1e-3, atol=1e-4 * np.max(np.abs(inner)))

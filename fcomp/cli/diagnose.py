@@ -117,6 +117,12 @@ def summary(doc: dict) -> str:
             lines.append(f"tie (confounded, {held}): " + ", ".join(t))
             for e, exp in doc["tie_experiments"][t[0]].items():
                 lines.append(f"    {e}: {exp}")
+    for s in doc["steps"]:  # close by the fall's share, but told apart by the held-out data
+        for t in s.get("tie_tests") or []:
+            if s["accepted"] and t["close"] and t["separated"]:
+                lines.append(f"not a tie: {t['effect']} fits within the fall's share of "
+                             f"{s['effect']}, but the held-out data tell them apart (worse by "
+                             f"{t['difference']:.3g} N where they differ, p = {t['p']:.2g})")
     plain = doc.get("rms_plain") or {}
     lines.append(f"added: {', '.join(doc['added']) or 'nothing'}; final model {doc['model']}; "
                  f"held-out RMS {doc['rms_final']:.4g} N"

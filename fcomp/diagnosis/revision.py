@@ -150,8 +150,9 @@ def swaps(search: Search, names: Sequence[str]) -> None:
     few samples at rest. Once the search stops, each searched effect with a
     partner not in the model is taken out, the rest refitted, and the partner
     evaluated as a candidate in its place: if its held-out RMS comes within
-    ``tie_share`` of the fall the effect brought, the two are reported as a tie
-    (with the experiment that separates them).
+    ``tie_share`` of the fall the effect brought and the held-out data do not tell
+    it from the model with the effect (:meth:`.rule.AcceptanceRule.tie_test`), the
+    two are reported as a tie (with the experiment that separates them).
     """
     for k, step in enumerate(search.steps):
         if not step.accepted or step.forced:
@@ -174,11 +175,15 @@ def swaps(search: Search, names: Sequence[str]) -> None:
             if fit_in else []
         search.tick(f"in place of {effect}")
         fall = reduced.rms_test - full.rms_test
-        close = [c.effect for c in cands
-                 if fall > 0 and c.rms_heldout - full.rms_test <= search.rule.tie_share * fall]
-        if close:
-            search.steps[k] = dataclasses.replace(
-                step, tie=tuple(join_tie(search.ties, effect, close)))
+        if not fall > 0:
+            continue
+        tests = tuple((c.effect, search.rule.tie_test(full, c.fit, fall, search.ground))
+                      for c in cands if c.fit is not None)
+        tied = [name for name, t in tests if t.tie]
+        step = dataclasses.replace(step, tie_tests=step.tie_tests + tests)
+        if tied:
+            step = dataclasses.replace(step, tie=tuple(join_tie(search.ties, effect, tied)))
+        search.steps[k] = step
 
 
 def partners_in_model(search: Search) -> None:

@@ -9,8 +9,9 @@ At every step each applicable candidate (:mod:`.catalogue`) is added to the
 current model, the whole model refitted from data-driven starts and judged
 against the current fit by the rule. The qualifying candidate with the lowest
 held-out RMS is added; every other qualifying candidate whose held-out RMS is
-within ``tie_share`` of the best one's fall of it explains the data equally well
-and is reported with it as a *tie*. The search stops when no candidate qualifies,
+within ``tie_share`` of the best one's fall of it, and which the held-out data do not
+tell from the best one (:meth:`.rule.AcceptanceRule.tie_test`), explains the data
+equally well and is reported with it as a *tie*. The search stops when no candidate qualifies,
 when the held-out RMS is within ``at_floor`` of the noise floor (after the first
 step, always evaluated), or after ``max_steps``. Every applicable candidate is
 tried again at every step: an effect masked by a larger one can make the error
@@ -36,7 +37,7 @@ import fcomp.diagnosis.pairs as pairs
 from fcomp.diagnosis.design import Design
 from fcomp.diagnosis.noise import NoiseFloor, effective_sample_size, noise_floor
 from fcomp.diagnosis.refit import RIG_EXTRAS, FitResult, Refit
-from fcomp.diagnosis.rule import AcceptanceRule, Ground, Judgement, delta_bic
+from fcomp.diagnosis.rule import AcceptanceRule, Ground, Judgement, TieTest, delta_bic
 from fcomp.diagnosis.scoring import sample_weights
 from fcomp.diagnosis.wording import judgement_text
 from fcomp.diagnosis.workers import refit_all
@@ -120,6 +121,9 @@ class Step:
     pair: tuple[str, ...] = ()
     #: the form of the effect kept (a refined form, :mod:`.forms`; None: its first)
     form: str | None = None
+    #: each other qualifying candidate (or confounded partner tried in the effect's place,
+    #: :func:`.revision.swaps`) against the effect kept (:meth:`.rule.AcceptanceRule.tie_test`)
+    tie_tests: tuple[tuple[str, TieTest], ...] = ()
 
 
 @dataclass
@@ -307,15 +311,15 @@ class Search:
                                        False, candidates=tuple(ranked)))
                 break
             best = good[0]
-            tie = [best.effect, *(c.effect for c in good[1:]
-                                  if self.rule.ties_with(best.rms_heldout, best.fall,
-                                                         c.rms_heldout))]
             assert best.fit is not None
+            tests = tuple((c.effect, self.rule.tie_test(best.fit, c.fit, best.fall, self.ground))
+                          for c in good[1:] if c.fit is not None)
+            tie = [best.effect, *(name for name, t in tests if t.tie)]
             fit = self.reweighted(self.polish(best.fit))
             self.forms[best.effect] = best.form
             self.steps.append(Step(best.effect, self.current.rms_test, fit.rms_test, True,
                                    candidates=tuple(ranked), tie=tuple(tie), fit=fit,
-                                   form=best.form))
+                                   form=best.form, tie_tests=tests))
             if len(tie) > 1:
                 self.ties.append(tie)
             self.fit = fit

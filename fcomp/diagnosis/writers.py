@@ -207,6 +207,9 @@ def to_dict(result: DiagnosisResult) -> dict[str, Any]:
                    "pair": list(s.pair) or None,
                    "form": s.form,
                    "candidates": [_candidate(c) for c in s.candidates],
+                   "tie_tests": [{"effect": name, **{k: _num(v) if isinstance(v, float) else v
+                                                     for k, v in t.to_dict().items()}}
+                                 for name, t in s.tie_tests],
                    "warnings": [w.to_dict() for w in s.warnings]}
                   for s in result.steps],
         "candidates": [_candidate(c) for c in result.candidates],

@@ -75,11 +75,30 @@ def jacobian(model: FrictionModel, sig: Mapping[str, np.ndarray], names: Sequenc
         if n not in flat:
             cols.append(np.zeros(sig["t"].size))
             continue
-        h = step(float(flat[n]))
-        up = force(model.with_params(**{n: float(flat[n]) + h}), sig)
-        dn = force(model.with_params(**{n: float(flat[n]) - h}), sig)
-        cols.append((up - dn) / (2 * h))
+        value = float(flat[n])
+        h = step(value)
+        # central where both sides are allowed; one-sided at a bound (a bristle damping
+        # fitted to its bound of 0 has no value below it)
+        up, dn = _moved(model, sig, n, value + h), _moved(model, sig, n, value - h)
+        if up is not None and dn is not None:
+            cols.append((up - dn) / (2 * h))
+        elif up is not None:
+            cols.append((up - force(model, sig)) / h)
+        elif dn is not None:
+            cols.append((force(model, sig) - dn) / h)
+        else:
+            cols.append(np.zeros(sig["t"].size))
     return np.column_stack(cols) if cols else np.zeros((sig["t"].size, 0))
+
+
+def _moved(model: FrictionModel, sig: Mapping[str, np.ndarray], name: str,
+           value: float) -> np.ndarray | None:
+    """The force along ``sig`` with parameter ``name`` at ``value``; None outside its bounds."""
+    try:
+        moved = model.with_params(**{name: value})
+    except ValueError:
+        return None
+    return force(moved, sig)
 
 
 def predicted_stderr(info: np.ndarray, prior_se: Sequence[float | None]) -> np.ndarray:

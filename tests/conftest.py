@@ -10,7 +10,8 @@ Markers (declared in ``pyproject.toml``, ``--strict-markers``):
 ``xdist_group("site")``
     the tests reading the study site of :func:`site` / :func:`helpers.browser.study_summary`:
     with ``--dist loadgroup`` they run in one pytest-xdist worker, which builds the
-    site once (each worker process would build its own).
+    site once (each worker process would build its own). The tests using a module-scoped
+    fixture are grouped by their module the same way (:func:`pytest_collection_modifyitems`).
 
 Helpers shared by several test modules live in the package :mod:`helpers`
 (``tests/helpers/``), importable because pytest puts ``tests/`` on the path.
@@ -53,6 +54,22 @@ def pytest_xdist_auto_num_workers(config: pytest.Config) -> int | None:
     except (OSError, ValueError):
         pass
     return max(1, n)
+
+
+@pytest.hookimpl(tryfirst=True)  # before pytest-xdist reads the groups
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    """A test that uses a module-scoped fixture runs in the worker of its module's others
+    (``xdist_group`` of the module's name, unless it has a group): ``--dist loadgroup``
+    otherwise sends them to both workers, and each builds the fixture -- a compensate
+    comparison or a diagnosis of a minute, twice."""
+    for item in items:
+        if item.get_closest_marker("xdist_group") is not None:
+            continue
+        info = getattr(item, "_fixtureinfo", None)
+        defs = info.name2fixturedefs.values() if info is not None else ()
+        if any(d and str(d[-1].scope) in ("module", "Scope.Module") for d in defs):
+            module = getattr(item, "module", None)
+            item.add_marker(pytest.mark.xdist_group(getattr(module, "__name__", "module")))
 
 
 @pytest.hookimpl(trylast=True)  # after the reporter's own progress letter

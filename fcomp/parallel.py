@@ -147,16 +147,17 @@ def process_pool(workers: int, *, spawn: bool = False) -> ProcessPoolExecutor:
     on macOS and Windows) rather than forked. Its workers never run the caller's
     ``__main__`` (:func:`pool_context`) and leave Ctrl-C and SIGTERM to the parent
     (:func:`stopping`)."""
-    return _Pool(max_workers=workers, mp_context=pool_context(spawn),
+    return HeldPool(max_workers=workers, mp_context=pool_context(spawn),
                  initializer=_worker_start, initargs=(user_sources(),))
 
 
-class _Pool(ProcessPoolExecutor):
+class HeldPool(ProcessPoolExecutor):
     """A process pool that starts each worker with Ctrl-C and SIGTERM held off until the
     worker is registered in the pool: a signal landing just as a worker started used to
     leave it out of the pool's list, so :func:`stop` did not end it and the command hung
     at exit waiting for it. The worker itself starts with the signals held, too, until
-    its first act (:func:`_worker_start`) has set its own handling."""
+    its first act (:func:`worker_signals`, which every initializer must call) has set
+    its own handling."""
 
     def _spawn_process(self) -> None:
         from fcomp.outputs import signals_held
@@ -332,11 +333,19 @@ def _worker_start(sources: tuple[tuple[str, str, str], ...]) -> None:
     and the parent alone answers it (it stops the workers, :func:`stopping`: no traceback
     from each); SIGTERM ends the worker at once, whatever a forked parent installed. Then
     the user's files are executed (:func:`fcomp.usercode.load_sources`)."""
+    worker_signals()
+    load_sources(sources)
+
+
+def worker_signals() -> None:
+    """The signals of a worker of a :class:`HeldPool`: Ctrl-C ignored (the parent answers
+    it), SIGTERM at its default whatever a forked parent installed, and both released --
+    held by the parent while it started this process, so that one landing during the
+    start (an interpreter importing its modules) prints no traceback."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
-    if hasattr(signal, "pthread_sigmask"):  # held by the parent while it started this one
+    if hasattr(signal, "pthread_sigmask"):
         signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT, signal.SIGTERM})
-    load_sources(sources)
 
 
 @contextmanager
@@ -515,6 +524,6 @@ def run_tasks(fn: Callable[[T], R], items: Sequence[T], *, workers: int | None =
     return results
 
 
-__all__ = ["check_scheduler", "dask_client", "descendants", "end_children", "executor",
+__all__ = ["HeldPool", "check_scheduler", "dask_client", "descendants", "end_children", "executor",
            "fresh_workers", "group_members", "main_objects", "processes",
-           "pool_context", "process_pool", "run_tasks", "shippable", "stop", "stopping"]
+           "pool_context", "process_pool", "run_tasks", "shippable", "stop", "stopping", "worker_signals"]

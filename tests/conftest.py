@@ -107,18 +107,24 @@ def _user_code_stays_in_its_test() -> Iterator[None]:
     """What a test's user module registers (effects, models) and the list of user files the
     worker processes re-run are undone after the test: a diagnosis elsewhere in the suite
     takes every registered effect as a candidate and must not meet another test's."""
+    import sys
+
     from fcomp.effects import EFFECTS
     from fcomp.models import MODELS
-    from fcomp.usercode import USER_FILES
+    from fcomp.usercode import SOURCES, USER_FILES
 
     saved = [(reg, dict(reg._items)) for reg in (EFFECTS, MODELS)]
-    files = dict(USER_FILES)
+    files, sources = dict(USER_FILES), dict(SOURCES)
     yield
     for reg, items in saved:
         reg._items.clear()
         reg._items.update(items)
     USER_FILES.clear()
     USER_FILES.update(files)
+    for name in set(SOURCES) - set(sources):  # the user modules the test executed
+        sys.modules.pop(name, None)
+    SOURCES.clear()  # what a later test's spawned workers execute first: a sys.exit(3)
+    SOURCES.update(sources)  # plugin of another test ended a diagnosis's baseline check
 
 
 @pytest.fixture(scope="session")

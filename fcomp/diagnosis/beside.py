@@ -28,9 +28,8 @@ import contextlib
 import dataclasses
 import os
 import queue as queue_mod
-import signal
 from collections.abc import Callable, Iterator
-from concurrent.futures import Future, ProcessPoolExecutor
+from concurrent.futures import Future
 from typing import Any
 
 from fcomp.diagnosis.data import DiagnosisData
@@ -38,7 +37,7 @@ from fcomp.diagnosis.regimes import segment
 from fcomp.diagnosis.result import OTHER_BASELINE, DiagnosisResult
 from fcomp.diagnosis.workers import n_workers, worker_pool
 from fcomp.errors import FcompError
-from fcomp.parallel import main_objects, pool_context, stop
+from fcomp.parallel import HeldPool, main_objects, pool_context, stop, worker_signals
 from fcomp.progress import Tick
 from fcomp.usercode import load_sources, user_sources
 
@@ -67,8 +66,7 @@ def _start(sources: tuple[tuple[str, str, str], ...], ticks: Any, nice: int) -> 
     """The check process's first act: the signals of a pool worker (the parent answers
     Ctrl-C and ends it), its priority, its tick queue and the user's code."""
     global _TICKS
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    worker_signals()
     if nice:
         with contextlib.suppress(OSError):
             os.nice(nice)
@@ -107,7 +105,7 @@ class CheckBeside:
         ctx = pool_context(spawn=True)
         self._ticks = ctx.Queue()
         self._outer = tick
-        self._pool = ProcessPoolExecutor(
+        self._pool = HeldPool(
             max_workers=1, mp_context=ctx, initializer=_start,
             initargs=(user_sources(), self._ticks, SPECULATIVE_NICE if speculative else 0))
         self.baseline = config.baseline
